@@ -1,0 +1,71 @@
+#pragma once
+// Spectral multiscale coverage (Mathew & Mezic 2011) for one vehicle.
+//   c_k(t)  = S_k(t) / W(t),  S_k = integral F_k(x(tau)) g(t - tau) dtau,  W = integral g,
+//   g(s) = exp(-s / T) with forgetting time T (g = 1, T = infinity: the paper's plain average),
+//   B      = sum_k Lambda_k (c_k - phi_k) grad F_k(x),
+//   u      = -u_max B / |B|.
+// In a fleet the coverage of the other vehicles (their sums and time) is added to this
+// vehicle's own before forming c_k, which is Mathew & Mezic's multi-agent law.
+#include <limits>
+
+#include <Eigen/Core>
+
+#include "agents/vehicle_controller.h"
+#include "maps/spectral_basis.h"
+
+namespace sage::agents {
+
+/// Running, optionally forgetting, integral of the basis along a path.
+class CoverageAccumulator {
+ public:
+  /// size: number of coefficients; forgetting_time_s: T (> 0, infinity = none).
+  CoverageAccumulator(int size, double forgetting_time_s = std::numeric_limits<double>::infinity());
+
+  /// Decays the history by exp(-dt/T) and adds f * dt (f = F_k at the current position).
+  void Add(const Eigen::VectorXd& f, double dt_s);
+  const Eigen::VectorXd& sums() const { return sums_; }
+  double time_s() const { return time_s_; }  ///< W(t): integral of the kernel (s)
+  double forgetting_time_s() const { return forgetting_time_s_; }
+  void Reset();
+
+ private:
+  double forgetting_time_s_;
+  Eigen::VectorXd sums_;
+  double time_s_ = 0.0;
+};
+
+class ErgodicController final : public VehicleController {
+ public:
+  /// basis must outlive the controller. speed_mps: constant transit speed (> 0).
+  ErgodicController(const maps::SpectralBasis& basis, double speed_mps,
+                    double forgetting_time_s = std::numeric_limits<double>::infinity());
+
+  /// The target phi_k (flat-indexed as the basis). Takes effect on the next Command().
+  void SetTarget(const Eigen::VectorXd& phi_k);
+  /// Coverage of the rest of the fleet (sums and kernel time), added to this vehicle's own.
+  void SetFleetCoverage(const Eigen::VectorXd& sums, double time_s);
+
+  /// Integrates F_k at the state's position over the time since the last call, then returns
+  /// the SMC velocity (|u| = speed). Before any coverage exists it heads along +B of the target.
+  Eigen::Vector2d Command(const VehicleState& state, double time_s) override;
+
+  /// c_k - phi_k as of the last Command (own plus fleet coverage).
+  Eigen::VectorXd CoverageError() const;
+  /// Ergodic metric of CoverageError().
+  double Metric() const;
+  const CoverageAccumulator& coverage() const { return coverage_; }
+
+ private:
+  const maps::SpectralBasis& basis_;
+  double speed_mps_;
+  CoverageAccumulator coverage_;
+  Eigen::VectorXd target_;
+  Eigen::VectorXd fleet_sums_;
+  double fleet_time_s_ = 0.0;
+  Eigen::VectorXd f_;           // scratch: F_k(x)
+  Eigen::VectorXd weighted_;    // scratch: Lambda_k (c_k - phi_k)
+  Eigen::Vector2d last_direction_ = Eigen::Vector2d::UnitX();
+  double last_time_s_ = std::numeric_limits<double>::quiet_NaN();
+};
+
+}  // namespace sage::agents

@@ -1,0 +1,78 @@
+#pragma once
+// Box2D world of a mission: zero gravity, the XT structures as static bodies, one body per
+// vehicle. Every vehicle's motion goes through Box2D:
+//  - single_integrator: a kinematic body whose velocity is set to the command (x' = u exactly,
+//    passes through structures like the paper's point model);
+//  - bluerov2: a dynamic body with the BlueROV2 Heavy rigid-body + added mass, body-frame linear
+//    and quadratic drag and thrust limits (von Benzon et al. 2022), and a velocity controller
+//    that tracks the commanded velocity; collides with structures and other vehicles.
+#include <memory>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "agents/vehicle_controller.h"
+#include "maps/scenario.h"
+
+class b2World;
+class b2Body;
+
+namespace sage::agents {
+
+/// BlueROV2 Heavy, planar (surge u, sway v, yaw r). SI units.
+struct BlueRov2Params {
+  double mass_kg = 13.5;
+  double yaw_inertia_kgm2 = 0.37;
+  double added_mass_surge_kg = 6.36;    ///< X_udot
+  double added_mass_sway_kg = 7.12;     ///< Y_vdot
+  double added_inertia_yaw_kgm2 = 0.22; ///< N_rdot
+  double drag_linear_surge = 13.7;      ///< X_u (N s/m)
+  double drag_linear_sway = 0.0;        ///< Y_v (N s/m)
+  double drag_linear_yaw = 0.0;         ///< N_r (N m s/rad)
+  double drag_quadratic_surge = 141.0;  ///< X_uu (N s^2/m^2)
+  double drag_quadratic_sway = 217.0;   ///< Y_vv (N s^2/m^2)
+  double drag_quadratic_yaw = 1.5;      ///< N_rr (N m s^2/rad^2)
+  double max_force_surge_n = 113.0;     ///< thrust limit along body x (N)
+  double max_force_sway_n = 113.0;      ///< thrust limit along body y (N)
+  double max_torque_nm = 20.0;          ///< yaw torque limit (N m)
+  double length_m = 0.457;              ///< hull footprint for collisions
+  double width_m = 0.575;
+  double velocity_gain_per_s = 4.0;     ///< velocity loop bandwidth (1/s)
+  double heading_gain_per_s = 2.0;      ///< heading loop bandwidth (1/s): faces its direction of travel
+};
+
+class PhysicsWorld {
+ public:
+  PhysicsWorld(const maps::Workspace& workspace, const std::vector<maps::ChristmasTree>& structures,
+               BlueRov2Params rov_params = {});
+  ~PhysicsWorld();
+  PhysicsWorld(const PhysicsWorld&) = delete;
+  PhysicsWorld& operator=(const PhysicsWorld&) = delete;
+
+  /// Adds a vehicle at its start pose; returns its id (ids are never reused).
+  VehicleId AddVehicle(const maps::VehicleSpec& spec);
+  void RemoveVehicle(VehicleId id);
+  bool Contains(VehicleId id) const;
+  int vehicle_count() const;
+
+  /// Desired world-frame velocity (m/s), held until the next call.
+  void SetVelocityCommand(VehicleId id, const Eigen::Vector2d& velocity_mps);
+  /// Applies drag and thrust to every BlueROV2, then advances Box2D by dt_s.
+  void Step(double dt_s);
+  VehicleState State(VehicleId id) const;
+
+  const BlueRov2Params& rov_params() const { return rov_params_; }
+
+ private:
+  struct Vehicle;
+  Vehicle& Find(VehicleId id);
+  const Vehicle& Find(VehicleId id) const;
+  void ApplyBlueRov2Forces(Vehicle& vehicle);
+
+  BlueRov2Params rov_params_;
+  std::unique_ptr<b2World> world_;
+  std::vector<Vehicle> vehicles_;  // sorted by id
+  VehicleId next_id_ = 0;
+};
+
+}  // namespace sage::agents

@@ -1,0 +1,46 @@
+#pragma once
+// Follows an A* tour lap after lap: travels each leg at transit speed, waits at each valve for
+// wait_per_lap_s * w_i (its normalised weight), and picks up new weights at the start of the
+// next lap (the discrete re-route a fixed tour needs after a risk change).
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "agents/tour_planner.h"
+#include "agents/vehicle_controller.h"
+#include "maps/occupancy_grid.h"
+
+namespace sage::agents {
+
+class TourController final : public VehicleController {
+ public:
+  /// tour: from PlanTour over the valves; grid: to reach the tour from the start position;
+  /// weights: normalised per valve (index as the points given to PlanTour).
+  TourController(Tour tour, const maps::OccupancyGrid& grid, double speed_mps, double wait_per_lap_s,
+                 Eigen::VectorXd weights, double arrive_radius_m = 0.1);
+
+  Eigen::Vector2d Command(const VehicleState& state, double time_s) override;
+  /// New weights, used from the next lap on.
+  void SetWeights(const Eigen::VectorXd& weights);
+  int laps_completed() const { return laps_completed_; }
+
+ private:
+  // implementation-defined state
+  Tour tour_;
+  const maps::OccupancyGrid* grid_;
+  double speed_mps_;
+  double wait_per_lap_s_;
+  Eigen::VectorXd weights_;
+  Eigen::VectorXd pending_weights_;
+  double arrive_radius_m_;
+  std::vector<Eigen::Vector2d> approach_;  // path from the start to the first valve
+  std::size_t approach_index_ = 0;
+  bool on_tour_ = false;
+  int leg_ = 0;
+  std::size_t waypoint_ = 0;
+  double wait_until_s_ = -1.0;
+  bool waiting_ = false;
+  int laps_completed_ = 0;
+};
+
+}  // namespace sage::agents

@@ -1,0 +1,42 @@
+#pragma once
+// A 2-D occupancy grid of the workspace at the vehicles' operating depth: what the A* tour
+// plans on and what keeps vehicles clear of structures. Cell (i, j) covers
+// [i r, (i+1) r) x [j r, (j+1) r), r = resolution.
+#include <vector>
+
+#include <Eigen/Core>
+
+namespace sage::maps {
+
+class OccupancyGrid {
+ public:
+  OccupancyGrid(double width_m, double height_m, double resolution_m);
+
+  int cols() const { return cols_; }
+  int rows() const { return rows_; }
+  double resolution_m() const { return resolution_m_; }
+  double width_m() const { return width_m_; }
+  double height_m() const { return height_m_; }
+
+  bool InBounds(int i, int j) const { return i >= 0 && j >= 0 && i < cols_ && j < rows_; }
+  bool Occupied(int i, int j) const;  ///< out of bounds counts as occupied
+  void SetOccupied(int i, int j, bool occupied = true);
+  /// Marks every cell whose centre lies in the axis-aligned box [min, max] (m).
+  void FillBox(const Eigen::Vector2d& min_m, const Eigen::Vector2d& max_m);
+  /// A copy with every occupied cell grown by radius_m (disc).
+  OccupancyGrid Inflated(double radius_m) const;
+
+  Eigen::Vector2i CellOf(const Eigen::Vector2d& x_m) const;    ///< clamped into the grid
+  Eigen::Vector2d CenterOf(const Eigen::Vector2i& cell) const;  ///< cell centre (m)
+  int OccupiedCount() const;
+
+ private:
+  double width_m_;
+  double height_m_;
+  double resolution_m_;
+  int cols_;
+  int rows_;
+  std::vector<unsigned char> cells_;  // column-major by (i, j): i * rows_ + j
+};
+
+}  // namespace sage::maps

@@ -1,0 +1,59 @@
+#pragma once
+// The live risk field: a Gaussian mixture over the valves,
+//   phi(x, t) = (1/Z) sum_i w_i(t) N(x; mu_i, Sigma_i),
+// projected onto the cosine basis. Each valve's coefficient vector is computed once in closed
+// form (the Gaussian mirrored into the box; exact for it, see design-notes):
+//   phi_k^i = (1/h_k) 1/2 sum_{s2 = +-1} cos(kappa1 mu1 + s2 kappa2 mu2) exp(-1/2 q^T Sigma q),
+//   q = (kappa1, s2 kappa2),
+// and a weight change only re-weights the cached vectors: O(M K^2).
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "maps/spectral_basis.h"
+
+namespace sage::maps {
+
+/// One bump of the mixture: a valve's position (m) and spread (m^2, symmetric positive definite).
+struct GaussianComponent {
+  Eigen::Vector2d mean_m = Eigen::Vector2d::Zero();
+  Eigen::Matrix2d covariance_m2 = Eigen::Matrix2d::Identity();
+};
+
+class RiskField {
+ public:
+  /// Caches the closed-form coefficient vector of each component on `basis`. Weights start equal.
+  RiskField(const SpectralBasis& basis, std::vector<GaussianComponent> components);
+
+  int component_count() const { return static_cast<int>(components_.size()); }
+  const std::vector<GaussianComponent>& components() const { return components_; }
+
+  /// Sets all weights (>= 0, not all zero); they are normalised to sum 1. O(M K^2).
+  void SetWeights(const Eigen::VectorXd& weights);
+  /// Sets one raw weight and renormalises. O(M K^2).
+  void SetWeight(int component, double weight);
+  /// Normalised weights (sum 1).
+  const Eigen::VectorXd& weights() const { return weights_; }
+
+  /// phi_k of the normalised mixture, flat-indexed as SpectralBasis.
+  const Eigen::VectorXd& coefficients() const { return coefficients_; }
+  /// The cached phi_k of one unit-weight component.
+  Eigen::VectorXd ComponentCoefficients(int component) const { return per_component_.col(component); }
+
+  /// Mixture density at x (1/m^2), untruncated Gaussians, normalised weights. For plots and tests.
+  double Density(const Eigen::Vector2d& x) const;
+
+  /// Closed-form phi_k of one Gaussian (mirrored into the box) on `basis`.
+  static Eigen::VectorXd GaussianCoefficients(const SpectralBasis& basis, const GaussianComponent& g);
+
+ private:
+  void Recompute();
+
+  std::vector<GaussianComponent> components_;
+  Eigen::MatrixXd per_component_;  // size() x M
+  Eigen::VectorXd raw_weights_;
+  Eigen::VectorXd weights_;
+  Eigen::VectorXd coefficients_;
+};
+
+}  // namespace sage::maps

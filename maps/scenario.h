@@ -1,0 +1,132 @@
+#pragma once
+// A SAGE mission as written in scenarios/*.yaml: the workspace, the subsea Christmas trees
+// (XTs) with their valves, named risk profiles with timed events, the vehicles, and the
+// controller settings. Plain structs with defaults; LoadScenario() validates and throws
+// ScenarioError with one line naming file, field, value and rule.
+#include <cstdint>
+#include <limits>
+#include <map>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+namespace sage::maps {
+
+/// Bad user input (scenario file, CLI value). what() is one line meant for the user:
+/// "scenarios/x.yaml: vehicles[2].transit_speed_mps = -1: must be > 0".
+class ScenarioError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+struct Workspace {
+  double width_m = 12.0;   ///< extent along x (m), > 0; the box is [0, width] x [0, height]
+  double height_m = 10.0;  ///< extent along y (m), > 0
+};
+
+/// A point of interest on an XT.
+struct Valve {
+  std::string name;                                       ///< unique, e.g. "P1"
+  Eigen::Vector2d position_m = Eigen::Vector2d::Zero();   ///< inside the workspace, outside structures
+  Eigen::Matrix2d covariance_m2 = 0.25 * Eigen::Matrix2d::Identity();  ///< risk spread (SPD), m^2
+};
+
+/// A subsea Christmas tree: a rectangular footprint (a static obstacle) and its valves.
+struct ChristmasTree {
+  std::string name;                                       ///< unique, e.g. "XT-A"
+  Eigen::Vector2d center_m = Eigen::Vector2d::Zero();     ///< footprint centre (m)
+  Eigen::Vector2d size_m = Eigen::Vector2d(1.5, 1.5);     ///< footprint width, depth (m), > 0
+  double height_m = 2.5;                                  ///< height above seabed (m), for the OctoMap
+  std::vector<Valve> valves;
+};
+
+/// A valve's weight set at a time, e.g. a leak found at P1 at t = 150 s.
+struct RiskEvent {
+  double time_s = 0.0;  ///< mission time (s), >= 0
+  std::string valve;    ///< a valve name
+  double weight = 0.0;  ///< raw weight, >= 0
+};
+
+/// Named raw weights per valve (any positive scale; normalised on use) plus timed events.
+struct RiskProfile {
+  std::string name;
+  std::map<std::string, double> weights;  ///< every valve must have one, >= 0, not all zero
+  std::vector<RiskEvent> events;          ///< sorted by time on load
+};
+
+enum class MotionModel {
+  kSingleIntegrator,  ///< x' = u at constant speed: the paper's and reference code's model
+  kBlueRov2,          ///< Box2D dynamic body with BlueROV2 Heavy added mass, drag, thrust limits
+};
+
+struct VehicleSpec {
+  std::string name;                                      ///< unique, e.g. "rov1"
+  Eigen::Vector2d start_m = Eigen::Vector2d::Zero();     ///< start position (m)
+  double start_heading_rad = 0.0;                        ///< start heading (rad, from +x, CCW)
+  MotionModel model = MotionModel::kBlueRov2;
+  double transit_speed_mps = 0.5;                        ///< commanded speed (m/s), > 0
+};
+
+/// Ergodic (SMC) controller settings.
+struct ErgodicSettings {
+  int basis_order = 10;  ///< K, wave numbers per dimension (K^2 coefficients), 1..64
+  /// Time constant (s) of exponential forgetting of the coverage c_k; infinity = the
+  /// paper's behaviour (c_k averages over the whole mission).
+  double forgetting_time_s = std::numeric_limits<double>::infinity();
+};
+
+/// The "no starving valve" guard (the paper's named limitation): a floor on each valve's
+/// normalised weight and a revisit bound after which an overdue valve is boosted.
+struct StarvationGuard {
+  bool enabled = true;           ///< off for paper-reproduction runs
+  double weight_floor = 0.05;    ///< minimum normalised weight of any valve, in [0, 1/M)
+  double revisit_bound_s = 60.0; ///< a valve not visited for this long (s) is boosted, > 0
+};
+
+/// The A* inspection-tour baseline.
+struct AstarSettings {
+  double grid_resolution_m = 0.1;  ///< cell size of the 8-connected grid (m), > 0
+  double clearance_m = 0.35;       ///< obstacles inflated by this (m), >= 0
+  double wait_per_lap_s = 2.0;     ///< total wait per lap (s), split over valves by weight, >= 0
+};
+
+struct Scenario {
+  std::string name;                         ///< from the file name or `name:` field
+  std::string source_path;                  ///< file it was loaded from (for messages)
+  Workspace workspace;
+  std::vector<ChristmasTree> structures;
+  std::vector<RiskProfile> profiles;        ///< at least one
+  std::string default_profile;              ///< a profile name; the first profile if empty in YAML
+  std::vector<VehicleSpec> vehicles;        ///< at least one
+  double duration_s = 300.0;                ///< mission length (s), > 0
+  double control_rate_hz = 10.0;            ///< SMC / tour controller rate (Hz), > 0
+  double physics_rate_hz = 50.0;            ///< Box2D step rate (Hz), a multiple of control rate
+  double visit_radius_m = 0.5;              ///< a visit is an entry within this of a valve (m), > 0
+  double rearm_radius_m = 1.0;              ///< re-armed only after leaving this (m), > visit radius
+  std::uint64_t seed = 1;                   ///< fixed seed, same mission
+  ErgodicSettings ergodic;
+  StarvationGuard guard;
+  AstarSettings astar;
+
+  /// All valves in file order (P1..Pn), with the index of the XT each sits on.
+  std::vector<Valve> AllValves() const;
+  int ValveIndex(const std::string& name) const;  ///< -1 if none
+  const RiskProfile* FindProfile(const std::string& name) const;  ///< nullptr if none
+  /// Throws ScenarioError for the first field that breaks a rule.
+  void Validate() const;
+};
+
+/// Loads and validates a scenario. Throws ScenarioError (one line) on any problem.
+Scenario LoadScenario(const std::string& path);
+/// Parses YAML text; `source` names it in error messages.
+Scenario ParseScenario(const std::string& yaml_text, const std::string& source);
+/// Writes YAML that LoadScenario reads back to an equal Scenario.
+std::string EmitScenario(const Scenario& scenario);
+
+const char* ToString(MotionModel model);
+/// Throws ScenarioError if `text` is not "single_integrator" or "bluerov2".
+MotionModel ParseMotionModel(const std::string& text, const std::string& where);
+
+}  // namespace sage::maps

@@ -1,0 +1,41 @@
+#pragma once
+// The seabed as an OctoMap: the scenario's XT structures (boxes from the seabed up to their
+// height) inserted as occupied voxels into an octomap::OcTree. It is the source of the world's
+// obstacles: the 2-D occupancy grid the planners and vehicles use is its projection over the
+// vehicles' operating depth band. Saved as .bt so octovis can show it.
+#include <memory>
+#include <string>
+
+#include "maps/occupancy_grid.h"
+#include "maps/scenario.h"
+
+namespace octomap {
+class OcTree;
+}
+
+namespace sage::maps {
+
+class SeabedMap {
+ public:
+  /// Voxelises the scenario's structures at resolution_m (m).
+  SeabedMap(const Scenario& scenario, double resolution_m = 0.1);
+  ~SeabedMap();
+  SeabedMap(SeabedMap&&) noexcept;
+  SeabedMap& operator=(SeabedMap&&) noexcept;
+
+  const octomap::OcTree& tree() const { return *tree_; }
+  double resolution_m() const;
+
+  /// Occupied cells of the band z in [z_min_m, z_max_m] (m above seabed) projected onto a grid
+  /// of grid_resolution_m over the workspace (pruned leaves cover several cells).
+  OccupancyGrid Project(double z_min_m, double z_max_m, double grid_resolution_m) const;
+
+  /// Writes the tree as OctoMap binary (.bt). Throws std::runtime_error naming the path on failure.
+  void WriteBinary(const std::string& path) const;
+
+ private:
+  std::unique_ptr<octomap::OcTree> tree_;
+  Workspace workspace_;
+};
+
+}  // namespace sage::maps

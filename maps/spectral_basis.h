@@ -1,0 +1,51 @@
+#pragma once
+// Cosine basis of Mathew & Mezic (2011) on the box [0, L1] x [0, L2]:
+//   F_k(x) = (1/h_k) cos(k1 pi x1 / L1) cos(k2 pi x2 / L2),
+//   h_k = sqrt(L1 L2 prod_{j: k_j != 0} 1/2)   so that the F_k are orthonormal on the box,
+//   Lambda_k = (1 + |k|^2)^(-(n+1)/2), n = 2   (Sobolev weight of the ergodic metric).
+// Coefficient k = (k1, k2), 0 <= k1, k2 < K, is stored at flat index k1 * K + k2.
+#include <Eigen/Core>
+
+namespace sage::maps {
+
+class SpectralBasis {
+ public:
+  /// width_m, height_m: workspace extent in metres (> 0); order: K, the number of
+  /// wave numbers per dimension (>= 1), giving K^2 coefficients.
+  SpectralBasis(double width_m, double height_m, int order);
+
+  int order() const { return order_; }
+  int size() const { return order_ * order_; }
+  double width_m() const { return width_m_; }
+  double height_m() const { return height_m_; }
+  static int Index(int k1, int k2, int order) { return k1 * order + k2; }
+
+  /// Normalisers h_k (metres) and metric weights Lambda_k, flat-indexed.
+  const Eigen::VectorXd& normalizers() const { return h_; }
+  const Eigen::VectorXd& weights() const { return lambda_; }
+  /// Wave numbers kappa_j = k_j pi / L_j (rad/m) for dimension 0 (x) and 1 (y).
+  const Eigen::VectorXd& kappa_x() const { return kappa_x_; }
+  const Eigen::VectorXd& kappa_y() const { return kappa_y_; }
+
+  /// F_k(x) for all k into f (resized to size()). x in metres, workspace frame.
+  void Evaluate(const Eigen::Vector2d& x, Eigen::VectorXd& f) const;
+
+  /// Gradient of sum_k a_k F_k at x (1/m times units of a). Used by the SMC law with
+  /// a_k = Lambda_k (c_k - phi_k); costs O(K^2) with no allocation.
+  Eigen::Vector2d GradientOfSum(const Eigen::Vector2d& x, const Eigen::VectorXd& a) const;
+
+  /// Ergodic metric sum_k Lambda_k (c_k - phi_k)^2 of a coverage error e = c - phi.
+  double Metric(const Eigen::VectorXd& coverage_error) const;
+
+ private:
+  double width_m_;
+  double height_m_;
+  int order_;
+  Eigen::VectorXd h_;
+  Eigen::VectorXd inv_h_;
+  Eigen::VectorXd lambda_;
+  Eigen::VectorXd kappa_x_;
+  Eigen::VectorXd kappa_y_;
+};
+
+}  // namespace sage::maps

@@ -1,0 +1,9 @@
+#pragma once
+/// Topic names of the SAGE Fleet DDS streams, ROS 2 style ("rt/" prefix) so ros2 topic list sees them.
+namespace sage::proto {
+inline constexpr const char* kVehicleStateTopic = "rt/sage/vehicle_state";
+inline constexpr const char* kVehicleCoverageTopic = "rt/sage/vehicle_coverage";
+inline constexpr const char* kErgodicTargetTopic = "rt/sage/ergodic_target";
+inline constexpr const char* kRiskUpdateTopic = "rt/sage/risk_update";
+inline constexpr const char* kMissionStatusTopic = "rt/sage/mission_status";
+}  // namespace sage::proto
