@@ -1,1 +1,244 @@
-// placeholder: being written
+#include "server/cli.h"
+
+#include <unistd.h>
+
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <iostream>
+#include <limits>
+#include <optional>
+#include <string>
+
+#include <CLI/CLI.hpp>
+#include <fmt/format.h>
+#include <spdlog/spdlog.h>
+
+#include "maps/scenario.h"
+#include "server/metrics.h"
+#include "server/mission.h"
+#include "server/report.h"
+
+namespace sage::server {
+namespace {
+
+namespace fs = std::filesystem;
+
+/// Options shared by `run` and `compare`: they override the scenario file.
+struct MissionOverrides {
+  std::string scenario_path;
+  std::string profile;
+  std::optional<double> duration_s;
+  std::optional<std::uint64_t> seed;
+  std::optional<std::string> guard;       // "on" | "off"
+  std::optional<double> forgetting_time_s;
+  std::optional<int> basis_order;
+  std::string out_dir;
+};
+
+void AddMissionOptions(CLI::App& cmd, MissionOverrides& o) {
+  cmd.add_option("scenario", o.scenario_path, "Scenario YAML (e.g. scenarios/two_xt.yaml)")->required();
+  cmd.add_option("--profile,-p", o.profile, "Risk profile named in the scenario (default: its default_profile)");
+  cmd.add_option("--duration", o.duration_s, "Mission length in seconds (default: the scenario's)");
+  cmd.add_option("--seed", o.seed, "Seed of the start-pose jitter; the same seed gives the same mission");
+  cmd.add_option("--guard", o.guard,
+                 "No-starving-valve guard (weight floor + revisit bound): on|off (default: the scenario's; "
+                 "off reproduces the paper)")
+      ->check(CLI::IsMember({"on", "off"}));
+  cmd.add_option("--forgetting", o.forgetting_time_s,
+                 "Coverage forgetting time constant in seconds (default: the scenario's; inf = the paper's)");
+  cmd.add_option("--basis-order,-K", o.basis_order, "Wave numbers per dimension K (default: the scenario's)");
+}
+
+maps::Scenario LoadWithOverrides(const MissionOverrides& o) {
+  maps::Scenario scenario = maps::LoadScenario(o.scenario_path);
+  if (o.duration_s) scenario.duration_s = *o.duration_s;
+  if (o.seed) scenario.seed = *o.seed;
+  if (o.guard) scenario.guard.enabled = (*o.guard == "on");
+  if (o.forgetting_time_s) scenario.ergodic.forgetting_time_s = *o.forgetting_time_s;
+  if (o.basis_order) scenario.ergodic.basis_order = *o.basis_order;
+  scenario.Validate();  // the overrides obey the same rules as the file
+  return scenario;
+}
+
+// Progress on stderr: a redrawn bar on a terminal, a line every 10 % otherwise (CI logs).
+class ProgressPrinter {
+ public:
+  ProgressPrinter(std::string label, double duration_s)
+      : label_(std::move(label)), duration_s_(duration_s), tty_(isatty(fileno(stderr)) != 0) {}
+  void operator()(double fraction) {
+    const int percent = static_cast<int>(std::floor(fraction * 100.0 + 1e-9));
+    if (tty_) {
+      const int filled = percent / 5;
+      std::fprintf(stderr, "\r%s [%s%s] %3d%%  t = %.0f / %.0f s", label_.c_str(), std::string(filled, '#').c_str(),
+                   std::string(20 - filled, ' ').c_str(), percent, fraction * duration_s_, duration_s_);
+      if (percent >= 100) std::fprintf(stderr, "\n");
+    } else if (percent >= next_line_percent_) {
+      std::fprintf(stderr, "%s %3d%%  t = %.0f / %.0f s\n", label_.c_str(), percent, fraction * duration_s_, duration_s_);
+      next_line_percent_ = percent - percent % 10 + 10;
+    }
+  }
+
+ private:
+  std::string label_;
+  double duration_s_;
+  bool tty_;
+  int next_line_percent_ = 0;
+};
+
+double Degrees(double rad) { return rad * 180.0 / M_PI; }
+
+std::string FormatSeconds(double s) { return std::isnan(s) ? std::string("---") : fmt::format("{:.1f} s", s); }
+
+void PrintEventResponses(const MissionResult& result) {
+  for (const EventResponse& e : result.metrics.events) {
+    std::cout << fmt::format(
+        "event at t = {:.1f} s: {} weight -> {:.2f}; first-cycle heading change {:.1f} deg; next {} visit after {}; "
+        "{} interval {} before, {} after\n",
+        e.time_s, e.valve, e.new_weight, Degrees(e.heading_change_rad), e.valve, FormatSeconds(e.time_to_next_visit_s),
+        e.valve, FormatSeconds(e.interval_before_s), FormatSeconds(e.interval_after_s));
+  }
+}
+
+void WriteRunDirectory(const fs::path& dir, const maps::Scenario& scenario, const MissionResult& result) {
+  fs::create_directories(dir);
+  WriteTrajectoryCsv((dir / "trajectory.csv").string(), result.trajectory);
+  WriteMetricsJson((dir / "metrics.json").string(), result.metrics);
+  const std::string title = fmt::format("{}: {} on '{}', {:.0f} s", scenario.name, result.metrics.controller,
+                                        result.metrics.profile, result.metrics.duration_s);
+  WritePlotSvg((dir / "plot.svg").string(), scenario, result.weights.back().weights, result.trajectory, title);
+}
+
+std::string DefaultOutDir(const maps::Scenario& scenario, const std::string& profile, const std::string& what) {
+  return (fs::path("runs") / fmt::format("{}_{}_{}", scenario.name, profile, what)).string();
+}
+
+MissionResult RunOne(const maps::Scenario& scenario, ControllerKind kind, const std::string& profile) {
+  Mission mission(scenario, kind, profile);
+  ProgressPrinter progress(fmt::format("{:>7}", ToString(kind)), scenario.duration_s);
+  return mission.Run(std::ref(progress));
+}
+
+int CmdRun(const MissionOverrides& o, const std::string& controller_text) {
+  const maps::Scenario scenario = LoadWithOverrides(o);
+  const ControllerKind kind = ParseControllerKind(controller_text);
+  const std::string profile = o.profile.empty() ? scenario.default_profile : o.profile;
+  MissionResult result = RunOne(scenario, kind, profile);
+  std::cout << FormatTable({result.metrics});
+  PrintEventResponses(result);
+  const fs::path dir = o.out_dir.empty() ? DefaultOutDir(scenario, profile, ToString(kind)) : o.out_dir;
+  WriteRunDirectory(dir, scenario, result);
+  spdlog::info("{:.0f} s mission simulated in {:.2f} s wall time; wrote {}/metrics.json, trajectory.csv, plot.svg",
+               scenario.duration_s, result.wall_time_s, dir.string());
+  return 0;
+}
+
+int CmdCompare(const MissionOverrides& o) {
+  const maps::Scenario scenario = LoadWithOverrides(o);
+  const std::string profile = o.profile.empty() ? scenario.default_profile : o.profile;
+  const MissionResult astar = RunOne(scenario, ControllerKind::kAstar, profile);
+  const MissionResult ergodic = RunOne(scenario, ControllerKind::kErgodic, profile);
+  std::cout << FormatTable({astar.metrics, ergodic.metrics});
+  std::cout << "A*:\n";
+  PrintEventResponses(astar);
+  std::cout << "ergodic:\n";
+  PrintEventResponses(ergodic);
+  const fs::path dir = o.out_dir.empty() ? DefaultOutDir(scenario, profile, "compare") : o.out_dir;
+  WriteRunDirectory(dir / "astar", scenario, astar);
+  WriteRunDirectory(dir / "ergodic", scenario, ergodic);
+  spdlog::info("wrote {}/astar and {}/ergodic", dir.string(), dir.string());
+  return 0;
+}
+
+int CmdEvaluate(const std::string& trajectory_path, const std::string& scenario_path, const std::string& profile_name,
+                std::optional<double> duration_s, const std::string& out_dir) {
+  const maps::Scenario scenario = maps::LoadScenario(scenario_path);
+  const std::string name = profile_name.empty() ? scenario.default_profile : profile_name;
+  const maps::RiskProfile* profile = scenario.FindProfile(name);
+  if (profile == nullptr) throw maps::ScenarioError(scenario_path + ": profile = " + name + ": no such profile");
+  const Trajectory trajectory = ReadTrajectoryCsv(trajectory_path);
+  if (trajectory.samples.empty()) throw maps::ScenarioError(trajectory_path + ": no samples");
+  // The weights over time follow the profile and its events, as they would have in a mission.
+  std::vector<WeightChange> schedule;
+  std::vector<maps::Valve> valves = scenario.AllValves();
+  Eigen::VectorXd raw(valves.size());
+  for (std::size_t i = 0; i < valves.size(); ++i) raw[i] = profile->weights.at(valves[i].name);
+  schedule.push_back({0.0, raw / raw.sum()});
+  for (const maps::RiskEvent& e : profile->events) {
+    raw[scenario.ValveIndex(e.valve)] = e.weight;
+    schedule.push_back({e.time_s, raw / raw.sum()});
+  }
+  const double duration = duration_s.value_or(trajectory.samples.back().time_s);
+  MetricsOptions options;
+  options.profile = name;
+  const MissionMetrics metrics = ComputeMetrics(trajectory, scenario, schedule, duration, options);
+  std::cout << FormatTable({metrics});
+  if (!out_dir.empty()) {
+    fs::create_directories(out_dir);
+    WriteMetricsJson((fs::path(out_dir) / "metrics.json").string(), metrics);
+    WritePlotSvg((fs::path(out_dir) / "plot.svg").string(), scenario, schedule.back().weights, trajectory,
+                 fmt::format("{}: recorded trajectory {}", scenario.name, trajectory_path));
+    spdlog::info("wrote {}/metrics.json and plot.svg", out_dir);
+  }
+  return 0;
+}
+
+}  // namespace
+
+int RunCli(int argc, char** argv) {
+  CLI::App app{
+      "sage: ergodic inspection of subsea Christmas-tree valves (SAGE Fleet).\n"
+      "Vehicles spend time at each valve in proportion to its live risk, using the spectral multiscale\n"
+      "coverage law; the A* inspection tour is the baseline.",
+      "sage"};
+  app.require_subcommand(1);
+  app.set_version_flag("--version", "sage 0.1.0");
+
+  MissionOverrides run_opts;
+  std::string controller = "ergodic";
+  CLI::App* run = app.add_subcommand("run", "Run one mission; print the per-valve table (the paper's Table 1 layout) "
+                                            "and write DIR/metrics.json, trajectory.csv, plot.svg");
+  AddMissionOptions(*run, run_opts);
+  run->add_option("--controller,-c", controller, "ergodic (SMC) or astar (fixed tour)")
+      ->check(CLI::IsMember({"ergodic", "astar"}))
+      ->capture_default_str();
+  run->add_option("--out,-o", run_opts.out_dir, "Run directory (default: runs/<scenario>_<profile>_<controller>)");
+
+  MissionOverrides compare_opts;
+  CLI::App* compare = app.add_subcommand("compare", "Run A* and ergodic control on the same mission, side by side; "
+                                                    "writes DIR/astar and DIR/ergodic");
+  AddMissionOptions(*compare, compare_opts);
+  compare->add_option("--out,-o", compare_opts.out_dir, "Output directory (default: runs/<scenario>_<profile>_compare)");
+
+  std::string trajectory_path, eval_scenario, eval_profile, eval_out;
+  std::optional<double> eval_duration;
+  CLI::App* evaluate = app.add_subcommand("evaluate", "Inspection metrics of a recorded trajectory (CSV with columns "
+                                                      "t, vehicle, x, y), e.g. a real vehicle's log");
+  evaluate->add_option("trajectory", trajectory_path, "Trajectory CSV")->required();
+  evaluate->add_option("--scenario,-s", eval_scenario, "Scenario YAML giving the valves and risk profiles")->required();
+  evaluate->add_option("--profile,-p", eval_profile, "Risk profile (default: the scenario's default_profile)");
+  evaluate->add_option("--duration", eval_duration, "Mission length in seconds (default: the last sample's time)");
+  evaluate->add_option("--out,-o", eval_out, "Also write metrics.json and plot.svg here");
+
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e);
+  }
+
+  spdlog::set_pattern("%^[%l]%$ %v");
+  try {
+    if (*run) return CmdRun(run_opts, controller);
+    if (*compare) return CmdCompare(compare_opts);
+    if (*evaluate) return CmdEvaluate(trajectory_path, eval_scenario, eval_profile, eval_duration, eval_out);
+  } catch (const maps::ScenarioError& e) {
+    std::cerr << "sage: error: " << e.what() << "\n";
+    return 2;
+  } catch (const std::exception& e) {
+    std::cerr << "sage: error: " << e.what() << "\n";
+    return 1;
+  }
+  return 0;
+}
+
+}  // namespace sage::server

@@ -50,6 +50,20 @@ struct MetricSample {
   double ergodic_metric = 0.0;
 };
 
+/// How a risk event (e.g. a leak found at P1) was answered: time to the valve's next visit
+/// and its revisit interval before and after (NaN where undefined).
+struct EventResponse {
+  double time_s = 0.0;
+  std::string valve;
+  double new_weight = 0.0;              ///< normalised weight after the event
+  double time_to_next_visit_s = 0.0;    ///< NaN if never visited after it
+  double interval_before_s = 0.0;       ///< mean revisit interval before the event
+  double interval_after_s = 0.0;        ///< mean revisit interval after the event
+  /// Angle (rad) between the velocity vehicle 0 commanded in the first control cycle at or
+  /// after the event and the one it would have commanded without it.
+  double heading_change_rad = 0.0;
+};
+
 struct MissionMetrics {
   std::string controller;            ///< "ergodic", "astar", or "recorded"
   std::string profile;
@@ -62,6 +76,7 @@ struct MissionMetrics {
   double time_outside_s = 0.0;       ///< vehicle-seconds outside the workspace box
   double time_pinned_s = 0.0;        ///< vehicle-seconds within boundary_margin of its edge (inside)
   double boundary_margin_m = 0.2;
+  std::vector<EventResponse> events;  ///< filled by a mission run; empty for a recorded log
 };
 
 struct MetricsOptions {

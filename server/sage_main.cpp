@@ -1,1 +1,3 @@
-int main(){}
+#include "server/cli.h"
+
+int main(int argc, char** argv) { return sage::server::RunCli(argc, argv); }
