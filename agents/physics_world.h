@@ -60,6 +60,9 @@ class PhysicsWorld {
   /// Applies drag and thrust to every BlueROV2, then advances Box2D by dt_s.
   void Step(double dt_s);
   VehicleState State(VehicleId id) const;
+  /// Thrust the BlueROV2 velocity controller applied in the last Step, body frame:
+  /// (surge N, sway N, yaw N m), within the thrust limits; zero for a single integrator.
+  Eigen::Vector3d Thrust(VehicleId id) const;
 
   const BlueRov2Params& rov_params() const { return rov_params_; }
 

@@ -1,1 +1,131 @@
-// placeholder: being written
+// The A* baseline's guidance: approach the tour, then lap after lap follow each leg at transit
+// speed and wait at each valve for wait_per_lap_s * w_i.
+#include "agents/tour_controller.h"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+#include <string>
+#include <utility>
+
+namespace sage::agents {
+namespace {
+
+// Distance (m) before a valve over which the speed ramps down, v = v_transit * d / 0.3, so the
+// vehicle does not overshoot the valve it is to hold at.
+constexpr double kSlowdownDistanceM = 0.3;
+// Floor of the ramp (m/s): without it v ~ d would only approach the valve asymptotically.
+constexpr double kMinApproachSpeedMps = 0.1;
+
+Eigen::VectorXd Normalised(const Eigen::VectorXd& weights, std::size_t valve_count) {
+  if (static_cast<std::size_t>(weights.size()) != valve_count) {
+    throw std::invalid_argument("TourController: " + std::to_string(weights.size()) + " weights for " +
+                                std::to_string(valve_count) + " valves");
+  }
+  if (!weights.allFinite() || (weights.array() < 0.0).any() || weights.sum() <= 0.0) {
+    throw std::invalid_argument("TourController: weights must be finite, >= 0 and not all zero");
+  }
+  // Dividing by the sum keeps the wait per lap at wait_per_lap_s even for raw weights.
+  return weights / weights.sum();
+}
+
+}  // namespace
+
+TourController::TourController(Tour tour, const maps::OccupancyGrid& grid, double speed_mps, double wait_per_lap_s,
+                               Eigen::VectorXd weights, double arrive_radius_m)
+    : tour_(std::move(tour)),
+      grid_(&grid),
+      speed_mps_(speed_mps),
+      wait_per_lap_s_(wait_per_lap_s),
+      arrive_radius_m_(arrive_radius_m) {
+  if (!tour_.ok || tour_.order.empty() || tour_.legs.size() != tour_.order.size()) {
+    throw std::invalid_argument("TourController: the tour is not valid (PlanTour returned ok = false?)");
+  }
+  for (const auto& leg : tour_.legs) {
+    if (leg.empty()) throw std::invalid_argument("TourController: a tour leg has no waypoints");
+  }
+  if (!(speed_mps > 0.0)) throw std::invalid_argument("TourController: speed_mps must be > 0");
+  if (!(wait_per_lap_s >= 0.0)) throw std::invalid_argument("TourController: wait_per_lap_s must be >= 0");
+  if (!(arrive_radius_m > 0.0)) throw std::invalid_argument("TourController: arrive_radius_m must be > 0");
+  weights_ = Normalised(weights, tour_.order.size());
+  pending_weights_ = weights_;
+}
+
+void TourController::SetWeights(const Eigen::VectorXd& weights) {
+  pending_weights_ = Normalised(weights, tour_.order.size());
+}
+
+bool TourController::Follow(const std::vector<Eigen::Vector2d>& path, std::size_t& index,
+                            const Eigen::Vector2d& position_m, Eigen::Vector2d& command_mps) const {
+  // path[0] is where the vehicle already is (its snapped start cell, or the valve it waited at):
+  // pursue path[1] directly rather than step back to a cell centre.
+  if (index == 0 && path.size() > 1) index = 1;
+  // A waypoint is reached within the arrive radius; an intermediate one also once the vehicle
+  // has crossed the line through it perpendicular to the incoming segment, so a step longer
+  // than twice the radius cannot make it oscillate about the waypoint.
+  while (index < path.size()) {
+    const bool within = (path[index] - position_m).norm() < arrive_radius_m_;
+    const bool passed =
+        index > 0 && index + 1 < path.size() && (position_m - path[index]).dot(path[index] - path[index - 1]) >= 0.0;
+    if (!within && !passed) break;
+    ++index;
+  }
+  if (index == path.size()) return true;
+  // Pure pursuit of the next waypoint at transit speed; within the last kSlowdownDistanceM of
+  // the path (the valve) v = max(v_min, v_transit min(1, d_remaining / kSlowdownDistanceM)).
+  const Eigen::Vector2d to_target = path[index] - position_m;
+  double remaining_m = to_target.norm();
+  for (std::size_t k = index + 1; k < path.size() && remaining_m < kSlowdownDistanceM; ++k) {
+    remaining_m += (path[k] - path[k - 1]).norm();
+  }
+  const double speed = std::max(std::min(speed_mps_, kMinApproachSpeedMps),
+                                speed_mps_ * std::min(1.0, remaining_m / kSlowdownDistanceM));
+  command_mps = speed * to_target / to_target.norm();
+  return false;
+}
+
+void TourController::ArriveAt(int position_in_order, double time_s) {
+  if (position_in_order == 0) {
+    // Back at the tour's first valve: a lap ends (except on the first arrival) and the weights
+    // set during it take effect for the next one.
+    if (on_tour_) ++laps_completed_;
+    on_tour_ = true;
+    weights_ = pending_weights_;
+  }
+  const int valve = tour_.order[position_in_order];
+  waiting_ = true;
+  wait_until_s_ = time_s + wait_per_lap_s_ * weights_[valve];
+  leg_ = position_in_order;  // the leg to follow once the wait is over
+  waypoint_ = 0;
+}
+
+Eigen::Vector2d TourController::Command(const VehicleState& state, double time_s) {
+  Eigen::Vector2d command = Eigen::Vector2d::Zero();
+  if (!on_tour_) {
+    if (!approach_planned_) {
+      const Eigen::Vector2d first_valve = tour_.legs[0].front();
+      approach_ = PlanGridPath(*grid_, state.position_m, first_valve);
+      // Start off the grid's free space (e.g. inside an inflated obstacle) with no path at all:
+      // head straight for the valve rather than stand still.
+      if (approach_.empty()) approach_ = {first_valve};
+      approach_index_ = 0;
+      approach_planned_ = true;
+    }
+    if (!Follow(approach_, approach_index_, state.position_m, command)) return command;
+    ArriveAt(0, time_s);
+  }
+  const int valve_count = static_cast<int>(tour_.order.size());
+  // Zero waits and zero-length legs can chain several arrivals in one cycle; one lap's worth
+  // bounds it (a single-valve tour with no wait would otherwise loop forever).
+  for (int arrivals = 0; arrivals <= valve_count; ++arrivals) {
+    if (waiting_) {
+      if (time_s < wait_until_s_) return Eigen::Vector2d::Zero();  // the velocity loop holds station
+      waiting_ = false;
+    }
+    if (!Follow(tour_.legs[leg_], waypoint_, state.position_m, command)) return command;
+    ArriveAt((leg_ + 1) % valve_count, time_s);
+  }
+  return Eigen::Vector2d::Zero();
+}
+
+}  // namespace sage::agents

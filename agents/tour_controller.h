@@ -25,6 +25,13 @@ class TourController final : public VehicleController {
   int laps_completed() const { return laps_completed_; }
 
  private:
+  // Pursues path[index] (from path[1] on), advancing index past reached waypoints; true (and no
+  // command) once the whole path is done.
+  bool Follow(const std::vector<Eigen::Vector2d>& path, std::size_t& index, const Eigen::Vector2d& position_m,
+              Eigen::Vector2d& command_mps) const;
+  // Arrival at tour_.order[position_in_order]: lap bookkeeping, then the weighted wait.
+  void ArriveAt(int position_in_order, double time_s);
+
   // implementation-defined state
   Tour tour_;
   const maps::OccupancyGrid* grid_;
@@ -35,6 +42,7 @@ class TourController final : public VehicleController {
   double arrive_radius_m_;
   std::vector<Eigen::Vector2d> approach_;  // path from the start to the first valve
   std::size_t approach_index_ = 0;
+  bool approach_planned_ = false;  // approach_ is planned at the first Command (needs the position)
   bool on_tour_ = false;
   int leg_ = 0;
   std::size_t waypoint_ = 0;

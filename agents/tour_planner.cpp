@@ -1,1 +1,304 @@
-// placeholder: being written
+// A* grid paths and the shortest closed inspection tour (the SAGE paper's baseline).
+#include "agents/tour_planner.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <numbers>
+#include <optional>
+#include <queue>
+
+namespace sage::agents {
+namespace {
+
+constexpr double kInf = std::numeric_limits<double>::infinity();
+// Held-Karp is O(2^M M^2) time and O(2^M M) memory: exact up to 12 valves (2^11 x 12 states).
+constexpr int kMaxExactTourSize = 12;
+
+using Cell = Eigen::Vector2i;
+
+bool Free(const maps::OccupancyGrid& grid, const Cell& c) { return !grid.Occupied(c.x(), c.y()); }
+
+// Nearest free cell to x_m: breadth-first rings (8-connected) out from its cell; among the free
+// cells of the first ring that has any, the one whose centre is closest to x_m.
+std::optional<Cell> SnapToFree(const maps::OccupancyGrid& grid, const Eigen::Vector2d& x_m) {
+  const Cell start = grid.CellOf(x_m);
+  if (Free(grid, start)) return start;
+  const int n = grid.cols() * grid.rows();
+  std::vector<char> seen(n, 0);
+  auto index = [&](const Cell& c) { return c.x() * grid.rows() + c.y(); };
+  std::vector<Cell> ring{start};
+  seen[index(start)] = 1;
+  while (!ring.empty()) {
+    std::vector<Cell> next;
+    std::optional<Cell> best;
+    double best_d2 = kInf;
+    for (const Cell& c : ring) {
+      for (int di = -1; di <= 1; ++di) {
+        for (int dj = -1; dj <= 1; ++dj) {
+          const Cell nb(c.x() + di, c.y() + dj);
+          if (!grid.InBounds(nb.x(), nb.y()) || seen[index(nb)]) continue;
+          seen[index(nb)] = 1;
+          next.push_back(nb);
+          const double d2 = (grid.CenterOf(nb) - x_m).squaredNorm();
+          if (Free(grid, nb) && d2 < best_d2) best = nb, best_d2 = d2;
+        }
+      }
+    }
+    if (best) return best;
+    ring = std::move(next);
+  }
+  return std::nullopt;  // no free cell at all
+}
+
+// True if the segment a-b (m) touches only free cells. Exact grid traversal (Amanatides & Woo)
+// rather than sampling: sampling at r/2 can clip an occupied cell's corner unseen. Where the
+// segment passes exactly through a cell vertex, both side cells must be free too (the same
+// no-corner-cutting rule as the A* moves).
+bool SegmentFree(const maps::OccupancyGrid& grid, const Eigen::Vector2d& a, const Eigen::Vector2d& b) {
+  const double r = grid.resolution_m();
+  const Eigen::Vector2d p = a / r, d = (b - a) / r;  // in cell units
+  Cell cell(static_cast<int>(std::floor(p.x())), static_cast<int>(std::floor(p.y())));
+  const Cell last(static_cast<int>(std::floor(b.x() / r)), static_cast<int>(std::floor(b.y() / r)));
+  const int step_x = d.x() > 0 ? 1 : -1, step_y = d.y() > 0 ? 1 : -1;
+  // t (fraction of the segment) at the next vertical / horizontal cell boundary.
+  auto first_crossing = [](double pos, double dir, int cell_index) {
+    if (dir == 0.0) return kInf;
+    const double boundary = dir > 0 ? cell_index + 1.0 : static_cast<double>(cell_index);
+    return (boundary - pos) / dir;
+  };
+  double t_x = first_crossing(p.x(), d.x(), cell.x()), t_y = first_crossing(p.y(), d.y(), cell.y());
+  const double dt_x = d.x() == 0.0 ? kInf : 1.0 / std::abs(d.x());
+  const double dt_y = d.y() == 0.0 ? kInf : 1.0 / std::abs(d.y());
+  constexpr double kTie = 1e-9;
+  const int max_cells = std::abs(last.x() - cell.x()) + std::abs(last.y() - cell.y()) + 2;
+  for (int visited = 0; visited <= max_cells; ++visited) {
+    if (!Free(grid, cell)) return false;
+    if (cell == last || std::min(t_x, t_y) > 1.0) return true;
+    if (std::abs(t_x - t_y) < kTie) {  // through a vertex: the two side cells as well
+      if (!Free(grid, Cell(cell.x() + step_x, cell.y())) || !Free(grid, Cell(cell.x(), cell.y() + step_y))) {
+        return false;
+      }
+      cell += Cell(step_x, step_y);
+      t_x += dt_x, t_y += dt_y;
+    } else if (t_x < t_y) {
+      cell.x() += step_x, t_x += dt_x;
+    } else {
+      cell.y() += step_y, t_y += dt_y;
+    }
+  }
+  return Free(grid, cell);
+}
+
+// A* over cells, 8-connected: orthogonal step r, diagonal sqrt(2) r, and a diagonal only if
+// both orthogonal cells it passes are free. Octile heuristic
+//   h = r (max(dx, dy) + (sqrt(2) - 1) min(dx, dy))
+// is the exact obstacle-free cost, hence admissible and consistent.
+std::vector<Cell> AStar(const maps::OccupancyGrid& grid, const Cell& start, const Cell& goal) {
+  const int rows = grid.rows();
+  const double r = grid.resolution_m();
+  auto index = [rows](const Cell& c) { return c.x() * rows + c.y(); };
+  auto heuristic = [&](const Cell& c) {
+    const int dx = std::abs(c.x() - goal.x()), dy = std::abs(c.y() - goal.y());
+    return r * (std::max(dx, dy) + (std::numbers::sqrt2 - 1.0) * std::min(dx, dy));
+  };
+  const int n = grid.cols() * rows;
+  std::vector<double> g(n, kInf);
+  std::vector<int> parent(n, -1);
+  std::vector<char> closed(n, 0);
+  using Entry = std::pair<double, int>;  // (f, cell index)
+  std::priority_queue<Entry, std::vector<Entry>, std::greater<>> open;
+  g[index(start)] = 0.0;
+  open.emplace(heuristic(start), index(start));
+  const int goal_index = index(goal);
+  while (!open.empty()) {
+    const int current = open.top().second;
+    open.pop();
+    if (closed[current]) continue;
+    closed[current] = 1;
+    if (current == goal_index) break;
+    const Cell c(current / rows, current % rows);
+    for (int di = -1; di <= 1; ++di) {
+      for (int dj = -1; dj <= 1; ++dj) {
+        if (di == 0 && dj == 0) continue;
+        const Cell nb(c.x() + di, c.y() + dj);
+        if (!Free(grid, nb)) continue;
+        const bool diagonal = di != 0 && dj != 0;
+        if (diagonal && (!Free(grid, Cell(c.x() + di, c.y())) || !Free(grid, Cell(c.x(), c.y() + dj)))) continue;
+        const int k = index(nb);
+        const double cost = g[current] + (diagonal ? std::numbers::sqrt2 * r : r);
+        if (cost < g[k]) {
+          g[k] = cost;
+          parent[k] = current;
+          open.emplace(cost + heuristic(nb), k);
+        }
+      }
+    }
+  }
+  if (g[goal_index] == kInf) return {};
+  std::vector<Cell> cells;
+  for (int k = goal_index; k != -1; k = parent[k]) cells.emplace_back(k / rows, k % rows);
+  std::reverse(cells.begin(), cells.end());
+  return cells;
+}
+
+// Line-of-sight shortcut ("string pulling"): from the last kept waypoint, skip every following
+// waypoint while the straight segment to the one after it is free. Run on the full cell path
+// (not only its corners) so a shortcut may also leave an edge part-way; never longer than the
+// input by the triangle inequality.
+std::vector<Eigen::Vector2d> Shortcut(const maps::OccupancyGrid& grid, const std::vector<Eigen::Vector2d>& path) {
+  if (path.size() <= 2) return path;
+  std::vector<Eigen::Vector2d> out{path.front()};
+  for (std::size_t k = 1; k + 1 < path.size(); ++k) {
+    if (!SegmentFree(grid, out.back(), path[k + 1])) out.push_back(path[k]);
+  }
+  out.push_back(path.back());
+  return out;
+}
+
+// Drops waypoints that lie on the segment between their neighbours (|cross| ~ 0, same direction).
+std::vector<Eigen::Vector2d> RemoveCollinear(const std::vector<Eigen::Vector2d>& path) {
+  if (path.size() <= 2) return path;
+  std::vector<Eigen::Vector2d> out{path.front()};
+  for (std::size_t k = 1; k + 1 < path.size(); ++k) {
+    const Eigen::Vector2d in = path[k] - out.back(), next = path[k + 1] - path[k];
+    const double cross = in.x() * next.y() - in.y() * next.x();
+    if (std::abs(cross) > 1e-9 * in.norm() * next.norm() || in.dot(next) < 0.0) out.push_back(path[k]);
+  }
+  out.push_back(path.back());
+  return out;
+}
+
+using DistanceMatrix = std::vector<std::vector<double>>;
+
+double TourLength(const DistanceMatrix& d, const std::vector<int>& order) {
+  double length = 0.0;
+  for (std::size_t i = 0; i < order.size(); ++i) length += d[order[i]][order[(i + 1) % order.size()]];
+  return length;
+}
+
+// Held-Karp: C(S, j) = shortest path from 0 through the set S ending at j (0 not in S),
+//   C({j}, j) = d(0, j),  C(S, j) = min_{i in S \ {j}} C(S \ {j}, i) + d(i, j),
+// tour = min_j C({1..M-1}, j) + d(j, 0). Node k >= 1 is bit k - 1 of S.
+std::vector<int> HeldKarpOrder(const DistanceMatrix& d) {
+  const int m = static_cast<int>(d.size());
+  const int n = m - 1;  // nodes other than 0
+  const std::size_t subsets = std::size_t{1} << n;
+  std::vector<double> cost(subsets * n, kInf);
+  std::vector<int> parent(subsets * n, -1);
+  for (int j = 0; j < n; ++j) cost[(std::size_t{1} << j) * n + j] = d[0][j + 1];
+  for (std::size_t set = 1; set < subsets; ++set) {
+    for (int j = 0; j < n; ++j) {
+      if (!(set >> j & 1) || cost[set * n + j] == kInf) continue;
+      for (int k = 0; k < n; ++k) {
+        if (set >> k & 1) continue;
+        const std::size_t grown = set | (std::size_t{1} << k);
+        const double c = cost[set * n + j] + d[j + 1][k + 1];
+        if (c < cost[grown * n + k]) cost[grown * n + k] = c, parent[grown * n + k] = j;
+      }
+    }
+  }
+  const std::size_t full = subsets - 1;
+  int last = 0;
+  double best = kInf;
+  for (int j = 0; j < n; ++j) {
+    const double c = cost[full * n + j] + d[j + 1][0];
+    if (c < best) best = c, last = j;
+  }
+  std::vector<int> order;
+  for (std::size_t set = full; last != -1;) {
+    order.push_back(last + 1);
+    const int previous = parent[set * n + last];
+    set &= ~(std::size_t{1} << last);
+    last = previous;
+  }
+  order.push_back(0);
+  std::reverse(order.begin(), order.end());
+  return order;
+}
+
+// Nearest neighbour from 0, then 2-opt: reverse order[i..j] while that shortens the tour,
+//   delta = d(a, c) + d(b, e) - d(a, b) - d(c, e),  a b ... c e  ->  a c ... b e.
+// order[0] never moves (i >= 1). Each accepted move shortens the tour, so it terminates.
+std::vector<int> HeuristicOrder(const DistanceMatrix& d) {
+  const int m = static_cast<int>(d.size());
+  std::vector<int> order{0};
+  std::vector<char> used(m, 0);
+  used[0] = 1;
+  while (static_cast<int>(order.size()) < m) {
+    int next = -1;
+    for (int k = 0; k < m; ++k) {
+      if (!used[k] && (next < 0 || d[order.back()][k] < d[order.back()][next])) next = k;
+    }
+    used[next] = 1;
+    order.push_back(next);
+  }
+  for (bool improved = true; improved;) {
+    improved = false;
+    for (int i = 1; i + 1 < m; ++i) {
+      for (int j = i + 1; j < m; ++j) {
+        const int a = order[i - 1], b = order[i], c = order[j], e = order[(j + 1) % m];
+        if (d[a][c] + d[b][e] - d[a][b] - d[c][e] < -1e-12) {
+          std::reverse(order.begin() + i, order.begin() + j + 1);
+          improved = true;
+        }
+      }
+    }
+  }
+  return order;
+}
+
+}  // namespace
+
+std::vector<Eigen::Vector2d> PlanGridPath(const maps::OccupancyGrid& grid, const Eigen::Vector2d& from,
+                                          const Eigen::Vector2d& to) {
+  const std::optional<Cell> start = SnapToFree(grid, from);
+  const std::optional<Cell> goal = SnapToFree(grid, to);
+  if (!start || !goal) return {};
+  const std::vector<Cell> cells = AStar(grid, *start, *goal);
+  if (cells.empty()) return {};
+  std::vector<Eigen::Vector2d> path;
+  path.reserve(cells.size());
+  for (const Cell& c : cells) path.push_back(grid.CenterOf(c));
+  return RemoveCollinear(Shortcut(grid, path));
+}
+
+double PathLength(const std::vector<Eigen::Vector2d>& path) {
+  double length = 0.0;
+  for (std::size_t k = 1; k < path.size(); ++k) length += (path[k] - path[k - 1]).norm();
+  return length;
+}
+
+
+Tour PlanTour(const maps::OccupancyGrid& grid, const std::vector<Eigen::Vector2d>& points) {
+  Tour tour;
+  const int m = static_cast<int>(points.size());
+  if (m == 0) return tour;
+  if (m == 1) {
+    tour.order = {0};
+    tour.legs = {PlanGridPath(grid, points[0], points[0])};
+    tour.ok = !tour.legs[0].empty();
+    return tour;
+  }
+  // Pairwise paths; j -> i is i -> j reversed, so the distance matrix is symmetric (the
+  // shortcut pass is greedy and could otherwise differ slightly by direction).
+  std::vector<std::vector<std::vector<Eigen::Vector2d>>> paths(m, std::vector<std::vector<Eigen::Vector2d>>(m));
+  DistanceMatrix d(m, std::vector<double>(m, 0.0));
+  for (int i = 0; i < m; ++i) {
+    for (int j = i + 1; j < m; ++j) {
+      paths[i][j] = PlanGridPath(grid, points[i], points[j]);
+      if (paths[i][j].empty()) return tour;  // a valve unreachable: ok = false
+      paths[j][i].assign(paths[i][j].rbegin(), paths[i][j].rend());
+      d[i][j] = d[j][i] = PathLength(paths[i][j]);
+    }
+  }
+  tour.order = m <= kMaxExactTourSize ? HeldKarpOrder(d) : HeuristicOrder(d);
+  for (int i = 0; i < m; ++i) {
+    tour.legs.push_back(paths[tour.order[i]][tour.order[(i + 1) % m]]);
+  }
+  tour.length_m = TourLength(d, tour.order);
+  tour.ok = true;
+  return tour;
+}
+
+}  // namespace sage::agents

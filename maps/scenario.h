@@ -110,9 +110,9 @@ struct Scenario {
   StarvationGuard guard;
   AstarSettings astar;
 
-  /// All valves in file order (P1..Pn), with the index of the XT each sits on.
+  /// All valves in file order (P1..Pn), structure after structure.
   std::vector<Valve> AllValves() const;
-  int ValveIndex(const std::string& name) const;  ///< -1 if none
+  int ValveIndex(const std::string& name) const;  ///< index into AllValves(); -1 if none
   const RiskProfile* FindProfile(const std::string& name) const;  ///< nullptr if none
   /// Throws ScenarioError for the first field that breaks a rule.
   void Validate() const;
@@ -126,7 +126,8 @@ Scenario ParseScenario(const std::string& yaml_text, const std::string& source);
 std::string EmitScenario(const Scenario& scenario);
 
 const char* ToString(MotionModel model);
-/// Throws ScenarioError if `text` is not "single_integrator" or "bluerov2".
+/// Throws ScenarioError if `text` is not "single_integrator" or "bluerov2"; `where` starts the
+/// message, e.g. "scenarios/x.yaml: vehicles[0].model" or "command line: --model".
 MotionModel ParseMotionModel(const std::string& text, const std::string& where);
 
 }  // namespace sage::maps

@@ -7,9 +7,11 @@
 #include <random>
 
 #include "agents/ergodic_controller.h"
+#include "agents/obstacle_filter.h"
 #include "agents/physics_world.h"
 #include "agents/tour_controller.h"
 #include "agents/tour_planner.h"
+#include "maps/distance_field.h"
 #include "maps/risk_field.h"
 #include "maps/seabed_map.h"
 #include "maps/spectral_basis.h"
@@ -64,6 +66,7 @@ struct Mission::Impl {
     std::unique_ptr<agents::VehicleController> guidance;
     agents::ErgodicController* ergodic = nullptr;  // non-owning view of guidance, if ergodic
     agents::TourController* tour = nullptr;        // non-owning view of guidance, if A*
+    std::unique_ptr<agents::ObstacleFilter> keep_clear;  // BlueROV2 under SMC: slide round structures
   };
 
   maps::Scenario scenario;
@@ -71,7 +74,9 @@ struct Mission::Impl {
   const maps::RiskProfile* profile = nullptr;
   maps::SpectralBasis basis;
   maps::RiskField risk;
-  maps::OccupancyGrid grid;
+  maps::OccupancyGrid obstacles;    // the seabed OctoMap projected over the operating depth band
+  maps::DistanceField clearance;    // distance to the nearest structure, for the obstacle filter
+  maps::OccupancyGrid grid;         // obstacles inflated by the A* clearance
   agents::PhysicsWorld world;
   VisitTracker visits;
   std::vector<Vehicle> vehicles;
@@ -94,9 +99,10 @@ struct Mission::Impl {
         controller(kind),
         basis(scenario.workspace.width_m, scenario.workspace.height_m, scenario.ergodic.basis_order),
         risk(basis, ValveComponents(scenario)),
-        grid(maps::SeabedMap(scenario, scenario.astar.grid_resolution_m)
-                 .Project(kDepthBandMin_m, kDepthBandMax_m, scenario.astar.grid_resolution_m)
-                 .Inflated(scenario.astar.clearance_m)),
+        obstacles(maps::SeabedMap(scenario, scenario.astar.grid_resolution_m)
+                      .Project(kDepthBandMin_m, kDepthBandMax_m, scenario.astar.grid_resolution_m)),
+        clearance(obstacles),
+        grid(obstacles.Inflated(scenario.astar.clearance_m)),
         world(scenario.workspace, scenario.structures),
         visits([&] {
           std::vector<Eigen::Vector2d> centres;
@@ -137,6 +143,7 @@ struct Mission::Impl {
       smc->SetTarget(risk.coefficients());
       vehicle.ergodic = smc.get();
       vehicle.guidance = std::move(smc);
+      if (spec.model == maps::MotionModel::kBlueRov2) vehicle.keep_clear = std::make_unique<agents::ObstacleFilter>(clearance, scenario.workspace);
     } else {
       std::vector<Eigen::Vector2d> points;
       for (const maps::Valve& v : scenario.AllValves()) points.push_back(v.position_m);
@@ -228,7 +235,8 @@ struct Mission::Impl {
         // Command() integrated coverage already; a second call at the same time adds nothing.
       }
       if (v.ergodic) v.ergodic->SetTarget(risk.coefficients());
-      const Eigen::Vector2d command = v.guidance->Command(state, t);
+      Eigen::Vector2d command = v.guidance->Command(state, t);
+      if (v.keep_clear) command = v.keep_clear->Apply(state.position_m, command);
       world.SetVelocityCommand(v.id, command);
       visits.Update(static_cast<int>(i), state.position_m, t);
       trajectory.samples.push_back({t, static_cast<int>(i), state.position_m, state.heading_rad, state.velocity_mps, command});

@@ -1,1 +1,196 @@
-// placeholder: being written
+// PhysicsWorld: the single integrator is exact; the BlueROV2 follows its drag law, thrust limits,
+// heading loop and collides with structures and other vehicles. Physics at 50 Hz.
+#include "agents/physics_world.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <numbers>
+#include <stdexcept>
+
+#include <gtest/gtest.h>
+
+namespace sage::agents {
+namespace {
+
+constexpr double kDt = 0.02;  // 50 Hz physics
+
+maps::VehicleSpec Spec(maps::MotionModel model, Eigen::Vector2d start, double heading_rad = 0.0) {
+  maps::VehicleSpec spec;
+  spec.name = "rov";
+  spec.model = model;
+  spec.start_m = start;
+  spec.start_heading_rad = heading_rad;
+  return spec;
+}
+
+maps::ChristmasTree Tree(Eigen::Vector2d center, Eigen::Vector2d size) {
+  maps::ChristmasTree tree;
+  tree.name = "XT";
+  tree.center_m = center;
+  tree.size_m = size;
+  return tree;
+}
+
+void RunFor(PhysicsWorld& world, double seconds) {
+  const int steps = static_cast<int>(std::lround(seconds / kDt));
+  for (int n = 0; n < steps; ++n) world.Step(kDt);
+}
+
+// Corners of a vehicle's hull footprint (world frame).
+std::array<Eigen::Vector2d, 4> Hull(const VehicleState& state, const BlueRov2Params& p) {
+  const Eigen::Vector2d ex(std::cos(state.heading_rad), std::sin(state.heading_rad));
+  const Eigen::Vector2d ey(-ex.y(), ex.x());
+  const Eigen::Vector2d a = 0.5 * p.length_m * ex, b = 0.5 * p.width_m * ey;
+  return {state.position_m + a + b, state.position_m - a + b, state.position_m - a - b, state.position_m + a - b};
+}
+
+// Penetration depth of two convex quadrilaterals by separating axes (<= 0 when apart).
+double Penetration(const std::array<Eigen::Vector2d, 4>& p, const std::array<Eigen::Vector2d, 4>& q) {
+  double depth = 1e9;
+  for (const auto* poly : {&p, &q}) {
+    for (int e = 0; e < 2; ++e) {
+      const Eigen::Vector2d edge = (*poly)[e + 1] - (*poly)[e];
+      const Eigen::Vector2d axis = Eigen::Vector2d(-edge.y(), edge.x()).normalized();
+      double p_min = 1e9, p_max = -1e9, q_min = 1e9, q_max = -1e9;
+      for (const auto& x : p) p_min = std::min(p_min, axis.dot(x)), p_max = std::max(p_max, axis.dot(x));
+      for (const auto& x : q) q_min = std::min(q_min, axis.dot(x)), q_max = std::max(q_max, axis.dot(x));
+      depth = std::min(depth, std::min(p_max, q_max) - std::max(p_min, q_min));
+    }
+  }
+  return depth;
+}
+
+// x' = u exactly (1e-9 m), passing through a structure, heading along the command.
+TEST(PhysicsWorld, SingleIntegratorMovesExactlyUTimesT) {
+  PhysicsWorld world({}, {Tree({2.0, 1.5}, {1.0, 1.0})});
+  const VehicleId id = world.AddVehicle(Spec(maps::MotionModel::kSingleIntegrator, {1.0, 2.0}));
+  const Eigen::Vector2d u(0.3, -0.2);
+  world.SetVelocityCommand(id, u);
+  RunFor(world, 10.0);  // 3 m along x: straight through the 1 m box at (2, 1.5)
+  const VehicleState state = world.State(id);
+  EXPECT_NEAR(state.position_m.x(), 1.0 + 0.3 * 10.0, 1e-9);
+  EXPECT_NEAR(state.position_m.y(), 2.0 - 0.2 * 10.0, 1e-9);
+  EXPECT_NEAR(state.heading_rad, std::atan2(-0.2, 0.3), 1e-12);
+  EXPECT_TRUE(state.velocity_mps.isApprox(u));
+  EXPECT_EQ(world.Thrust(id), Eigen::Vector3d::Zero());
+}
+
+// Ids increase and are never reused; unknown ids throw std::out_of_range.
+TEST(PhysicsWorld, IdsAreNeverReusedAndUnknownIdsThrow) {
+  PhysicsWorld world({}, {});
+  const VehicleId a = world.AddVehicle(Spec(maps::MotionModel::kBlueRov2, {1.0, 1.0}));
+  const VehicleId b = world.AddVehicle(Spec(maps::MotionModel::kSingleIntegrator, {3.0, 1.0}));
+  world.RemoveVehicle(a);
+  const VehicleId c = world.AddVehicle(Spec(maps::MotionModel::kBlueRov2, {5.0, 1.0}));
+  EXPECT_LT(a, b);
+  EXPECT_LT(b, c);
+  EXPECT_EQ(world.vehicle_count(), 2);
+  EXPECT_FALSE(world.Contains(a));
+  EXPECT_TRUE(world.Contains(b) && world.Contains(c));
+  EXPECT_THROW(world.State(a), std::out_of_range);
+  EXPECT_THROW(world.SetVelocityCommand(a, {1.0, 0.0}), std::out_of_range);
+  EXPECT_THROW(world.RemoveVehicle(42), std::out_of_range);
+  world.Step(kDt);  // the remaining bodies still step
+  EXPECT_NEAR(world.State(c).position_m.x(), 5.0, 1e-6);
+}
+
+// 0.5 m/s surge from rest: within 0.03 m/s by 3 s, steady thrust = X_u u + X_uu u^2 within 5 %.
+TEST(PhysicsWorld, BlueRov2TracksSurgeCommandWithDragBalancingThrust) {
+  PhysicsWorld world({}, {});
+  const VehicleId id = world.AddVehicle(Spec(maps::MotionModel::kBlueRov2, {1.0, 5.0}));
+  world.SetVelocityCommand(id, {0.5, 0.0});
+  RunFor(world, 3.0);
+  EXPECT_NEAR(world.State(id).velocity_mps.x(), 0.5, 0.03);
+  EXPECT_NEAR(world.State(id).velocity_mps.y(), 0.0, 0.03);
+  RunFor(world, 2.0);
+  const double drag_n = 13.7 * 0.5 + 141.0 * 0.25;  // 42.1 N
+  EXPECT_NEAR(world.Thrust(id).x(), drag_n, 0.05 * drag_n);
+}
+
+// Full thrust saturates at the drag-law top speed: X_u u + X_uu u^2 = 113 N -> 0.848 m/s (3 %).
+TEST(PhysicsWorld, BlueRov2TopSpeedMatchesDragLaw) {
+  const BlueRov2Params p;
+  const double a = p.drag_quadratic_surge, b = p.drag_linear_surge, f = p.max_force_surge_n;
+  const double top_speed = (-b + std::sqrt(b * b + 4.0 * a * f)) / (2.0 * a);
+  PhysicsWorld world({}, {});
+  const VehicleId id = world.AddVehicle(Spec(maps::MotionModel::kBlueRov2, {1.0, 5.0}));
+  world.SetVelocityCommand(id, {5.0, 0.0});  // far beyond reach: thrust stays at its limit
+  RunFor(world, 10.0);
+  EXPECT_NEAR(world.Thrust(id).x(), p.max_force_surge_n, 1e-9);
+  EXPECT_NEAR(world.State(id).velocity_mps.norm(), top_speed, 0.03 * top_speed);
+}
+
+// Driven into an XT for 10 s, the hull stays outside the box (0.05 m tolerance).
+TEST(PhysicsWorld, BlueRov2DoesNotPenetrateStructure) {
+  const BlueRov2Params p;
+  PhysicsWorld world({}, {Tree({6.0, 5.0}, {1.5, 1.5})});  // x in [5.25, 6.75]
+  const VehicleId id = world.AddVehicle(Spec(maps::MotionModel::kBlueRov2, {3.0, 5.0}));
+  world.SetVelocityCommand(id, {0.8, 0.0});
+  double max_x = 0.0;
+  for (int n = 0; n < 500; ++n) {
+    world.Step(kDt);
+    max_x = std::max(max_x, world.State(id).position_m.x());
+  }
+  const double touching_x = 5.25 - 0.5 * p.length_m;
+  EXPECT_LT(max_x, touching_x + 0.05);
+  EXPECT_GT(max_x, touching_x - 0.05);  // it did reach the structure
+}
+
+// Two BlueROV2s driven at each other (slightly offset) never overlap by more than 0.02 m.
+TEST(PhysicsWorld, BlueRov2sDoNotOverlap) {
+  PhysicsWorld world({}, {});
+  const VehicleId a = world.AddVehicle(Spec(maps::MotionModel::kBlueRov2, {3.0, 5.0}, 0.0));
+  const VehicleId b = world.AddVehicle(Spec(maps::MotionModel::kBlueRov2, {6.0, 5.2}, std::numbers::pi));
+  world.SetVelocityCommand(a, {0.8, 0.0});
+  world.SetVelocityCommand(b, {-0.8, 0.0});
+  double worst = -1e9;
+  for (int n = 0; n < 500; ++n) {
+    world.Step(kDt);
+    worst = std::max(worst, Penetration(Hull(world.State(a), world.rov_params()),
+                                        Hull(world.State(b), world.rov_params())));
+  }
+  EXPECT_LT(worst, 0.02);
+  EXPECT_GT(worst, -0.05);  // they did meet
+}
+
+// Commanded along +y from heading 0, the vehicle faces +y within 3 s (0.05 rad).
+TEST(PhysicsWorld, BlueRov2TurnsToFaceCommand) {
+  PhysicsWorld world({}, {});
+  const VehicleId id = world.AddVehicle(Spec(maps::MotionModel::kBlueRov2, {5.0, 5.0}, 0.0));
+  world.SetVelocityCommand(id, {0.0, 0.4});
+  RunFor(world, 3.0);
+  EXPECT_NEAR(world.State(id).heading_rad, std::numbers::pi / 2.0, 0.05);
+  EXPECT_NEAR(world.State(id).yaw_rate_radps, 0.0, 0.05);
+  EXPECT_NEAR(world.State(id).velocity_mps.y(), 0.4, 0.03);
+}
+
+// A sway command moves the vehicle sideways before it has turned (vectored thrusters strafe).
+TEST(PhysicsWorld, BlueRov2StrafesBeforeTurning) {
+  PhysicsWorld world({}, {});
+  const VehicleId id = world.AddVehicle(Spec(maps::MotionModel::kBlueRov2, {5.0, 5.0}, 0.0));
+  world.SetVelocityCommand(id, {0.0, 0.4});
+  RunFor(world, 0.2);
+  const VehicleState state = world.State(id);
+  const double sway_mps = -std::sin(state.heading_rad) * state.velocity_mps.x() +
+                          std::cos(state.heading_rad) * state.velocity_mps.y();
+  EXPECT_LT(state.heading_rad, std::numbers::pi / 4.0);  // still mostly facing +x
+  EXPECT_GT(world.Thrust(id).y(), 10.0);     // body-frame sway thrust (N)
+  EXPECT_GT(sway_mps, 0.2);                  // body-frame sway velocity (m/s)
+  EXPECT_GT(state.position_m.y() - 5.0, 0.03);
+}
+
+// With a zero command the vehicle brakes to rest and holds its heading.
+TEST(PhysicsWorld, BlueRov2HoldsPositionOnZeroCommand) {
+  PhysicsWorld world({}, {});
+  const VehicleId id = world.AddVehicle(Spec(maps::MotionModel::kBlueRov2, {5.0, 5.0}, 0.7));
+  world.SetVelocityCommand(id, {0.5 * std::cos(0.7), 0.5 * std::sin(0.7)});
+  RunFor(world, 3.0);
+  world.SetVelocityCommand(id, Eigen::Vector2d::Zero());
+  RunFor(world, 3.0);
+  EXPECT_LT(world.State(id).velocity_mps.norm(), 1e-3);
+  EXPECT_NEAR(world.State(id).heading_rad, 0.7, 0.02);
+}
+
+}  // namespace
+}  // namespace sage::agents

@@ -1,1 +1,207 @@
-// placeholder: being written
+// A* grid paths (optimal length, obstacle-free segments, snapping, unreachable goals) and the
+// closed tour (Held-Karp exact against brute force; 2-opt beyond 12 valves).
+#include "agents/tour_planner.h"
+
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+#include <random>
+
+#include <gtest/gtest.h>
+
+namespace sage::agents {
+namespace {
+
+using maps::OccupancyGrid;
+
+// Every point of every segment (sampled at r/50) lies in a free cell.
+void ExpectPathOnFreeCells(const OccupancyGrid& grid, const std::vector<Eigen::Vector2d>& path) {
+  const double r = grid.resolution_m();
+  for (std::size_t k = 1; k < path.size(); ++k) {
+    const int samples = static_cast<int>(std::ceil((path[k] - path[k - 1]).norm() / (r / 50.0))) + 1;
+    for (int s = 0; s <= samples; ++s) {
+      const Eigen::Vector2d x = path[k - 1] + (path[k] - path[k - 1]) * (static_cast<double>(s) / samples);
+      const Eigen::Vector2i cell(static_cast<int>(std::floor(x.x() / r)), static_cast<int>(std::floor(x.y() / r)));
+      ASSERT_FALSE(grid.Occupied(cell.x(), cell.y())) << "segment " << k << " at " << x.transpose();
+    }
+  }
+}
+
+// Free cell centres drawn uniformly.
+std::vector<Eigen::Vector2d> RandomFreePoints(const OccupancyGrid& grid, int count, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::uniform_int_distribution<int> col(0, grid.cols() - 1), row(0, grid.rows() - 1);
+  std::vector<Eigen::Vector2d> points;
+  while (static_cast<int>(points.size()) < count) {
+    const Eigen::Vector2i cell(col(rng), row(rng));
+    if (!grid.Occupied(cell.x(), cell.y())) points.push_back(grid.CenterOf(cell));
+  }
+  return points;
+}
+
+OccupancyGrid GridWithTwoBlocks() {
+  OccupancyGrid grid(12.0, 10.0, 0.2);
+  grid.FillBox({3.0, 2.0}, {4.5, 6.0});
+  grid.FillBox({7.0, 4.0}, {9.0, 8.5});
+  return grid;
+}
+
+// Symmetric distance matrix the way PlanTour defines it (path i -> j for i < j).
+std::vector<std::vector<double>> Distances(const OccupancyGrid& grid, const std::vector<Eigen::Vector2d>& points) {
+  const std::size_t m = points.size();
+  std::vector<std::vector<double>> d(m, std::vector<double>(m, 0.0));
+  for (std::size_t i = 0; i < m; ++i) {
+    for (std::size_t j = i + 1; j < m; ++j) d[i][j] = d[j][i] = PathLength(PlanGridPath(grid, points[i], points[j]));
+  }
+  return d;
+}
+
+double ClosedLength(const std::vector<std::vector<double>>& d, const std::vector<int>& order) {
+  double length = 0.0;
+  for (std::size_t i = 0; i < order.size(); ++i) length += d[order[i]][order[(i + 1) % order.size()]];
+  return length;
+}
+
+// order is a permutation of 0..M-1 starting at 0; legs chain valve to valve; length adds up.
+void ExpectValidTour(const Tour& tour, const std::vector<Eigen::Vector2d>& points) {
+  const int m = static_cast<int>(points.size());
+  ASSERT_TRUE(tour.ok);
+  ASSERT_EQ(static_cast<int>(tour.order.size()), m);
+  ASSERT_EQ(static_cast<int>(tour.legs.size()), m);
+  EXPECT_EQ(tour.order[0], 0);
+  std::vector<int> sorted = tour.order;
+  std::sort(sorted.begin(), sorted.end());
+  for (int i = 0; i < m; ++i) EXPECT_EQ(sorted[i], i);
+  double sum = 0.0;
+  for (int i = 0; i < m; ++i) {
+    EXPECT_TRUE(tour.legs[i].front().isApprox(points[tour.order[i]]));
+    EXPECT_TRUE(tour.legs[i].back().isApprox(points[tour.order[(i + 1) % m]]));
+    sum += PathLength(tour.legs[i]);
+  }
+  EXPECT_NEAR(tour.length_m, sum, 1e-9);
+}
+
+// On an empty grid the path is the straight segment between the two cell centres.
+TEST(GridPath, StraightLineOnEmptyGrid) {
+  const OccupancyGrid grid(10.0, 8.0, 0.1);
+  const Eigen::Vector2d from(1.05, 1.05), to(8.95, 4.35);
+  const auto path = PlanGridPath(grid, from, to);
+  ASSERT_GE(path.size(), 2u);
+  EXPECT_TRUE(path.front().isApprox(from));
+  EXPECT_TRUE(path.back().isApprox(to));
+  EXPECT_NEAR(PathLength(path), (to - from).norm(), grid.resolution_m());
+  EXPECT_EQ(path.size(), 2u);  // shortcut pass leaves no staircase
+}
+
+// A wall [4.9, 5.1] x [0, 6] forces a detour over its top; the length matches the taut string
+// around its two top corners within 2 cells.
+TEST(GridPath, WallForcesDetourOfAnalyticLength) {
+  OccupancyGrid grid(10.0, 10.0, 0.1);
+  grid.FillBox({4.9, 0.0}, {5.1, 6.0});
+  const Eigen::Vector2d from(2.05, 3.05), to(8.05, 3.05);
+  const auto path = PlanGridPath(grid, from, to);
+  ASSERT_FALSE(path.empty());
+  const Eigen::Vector2d corner_left(4.9, 6.0), corner_right(5.1, 6.0);
+  const double analytic = (corner_left - from).norm() + 0.2 + (to - corner_right).norm();
+  EXPECT_GE(PathLength(path), analytic - 1e-9);
+  EXPECT_NEAR(PathLength(path), analytic, 2.0 * grid.resolution_m());
+  ExpectPathOnFreeCells(grid, path);
+}
+
+// Random obstacle fields and endpoints (some inside obstacles, then snapped): no segment of a
+// returned path crosses or clips an occupied cell.
+TEST(GridPath, NoSegmentCrossesOccupiedCell) {
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> x(0.0, 12.0), y(0.0, 10.0), size(0.3, 2.0);
+  for (int field = 0; field < 5; ++field) {
+    OccupancyGrid grid(12.0, 10.0, 0.1);
+    for (int b = 0; b < 8; ++b) {
+      const Eigen::Vector2d corner(x(rng), y(rng));
+      grid.FillBox(corner, corner + Eigen::Vector2d(size(rng), size(rng)));
+    }
+    for (int trial = 0; trial < 10; ++trial) {
+      const auto path = PlanGridPath(grid, {x(rng), y(rng)}, {x(rng), y(rng)});
+      if (path.empty()) continue;  // walled off: allowed
+      ExpectPathOnFreeCells(grid, path);
+    }
+  }
+}
+
+// A start inside an obstacle snaps to the nearest free cell centre.
+TEST(GridPath, SnapsEndpointsToNearestFreeCell) {
+  OccupancyGrid grid(10.0, 10.0, 0.1);
+  grid.FillBox({4.0, 4.0}, {6.0, 6.0});  // cells with centres 4.05 .. 5.95
+  const auto path = PlanGridPath(grid, {4.32, 5.0}, {1.05, 5.05});
+  ASSERT_FALSE(path.empty());
+  EXPECT_NEAR(path.front().x(), 3.95, 1e-9);  // left face is nearest (0.37 m)
+  EXPECT_NEAR(path.front().y(), 4.95, 0.1 + 1e-9);
+}
+
+// A goal enclosed by a ring of occupied cells is unreachable: empty path.
+TEST(GridPath, UnreachableGoalGivesEmptyPath) {
+  OccupancyGrid grid(10.0, 10.0, 0.1);
+  grid.FillBox({6.0, 6.0}, {8.0, 6.2});
+  grid.FillBox({6.0, 7.8}, {8.0, 8.0});
+  grid.FillBox({6.0, 6.0}, {6.2, 8.0});
+  grid.FillBox({7.8, 6.0}, {8.0, 8.0});
+  EXPECT_TRUE(PlanGridPath(grid, {1.05, 1.05}, {7.05, 7.05}).empty());
+  const Tour tour = PlanTour(grid, {{1.05, 1.05}, {3.05, 1.05}, {7.05, 7.05}});
+  EXPECT_FALSE(tour.ok);
+}
+
+// Held-Karp equals the brute-force optimum over all (M-1)! orders (1e-9 m), M = 6 and 8.
+TEST(TourPlanner, ExactTourMatchesBruteForce) {
+  const OccupancyGrid grid = GridWithTwoBlocks();
+  for (int m : {6, 8}) {
+    for (unsigned seed = 1; seed <= 4; ++seed) {
+      const auto points = RandomFreePoints(grid, m, seed);
+      const Tour tour = PlanTour(grid, points);
+      ExpectValidTour(tour, points);
+      const auto d = Distances(grid, points);
+      std::vector<int> order(m);
+      std::iota(order.begin(), order.end(), 0);
+      double best = 1e300;
+      do best = std::min(best, ClosedLength(d, order));
+      while (std::next_permutation(order.begin() + 1, order.end()));
+      EXPECT_NEAR(tour.length_m, best, 1e-9) << "M = " << m << ", seed " << seed;
+    }
+  }
+}
+
+// Beyond 12 valves: a valid tour no longer than nearest neighbour (M = 14).
+TEST(TourPlanner, TwoOptTourIsValidAndNoLongerThanNearestNeighbour) {
+  const OccupancyGrid grid = GridWithTwoBlocks();
+  for (unsigned seed = 1; seed <= 3; ++seed) {
+    const auto points = RandomFreePoints(grid, 14, seed);
+    const Tour tour = PlanTour(grid, points);
+    ExpectValidTour(tour, points);
+    const auto d = Distances(grid, points);
+    std::vector<int> nearest{0};
+    std::vector<bool> used(points.size(), false);
+    used[0] = true;
+    while (nearest.size() < points.size()) {
+      int next = -1;
+      for (int k = 0; k < static_cast<int>(points.size()); ++k) {
+        if (!used[k] && (next < 0 || d[nearest.back()][k] < d[nearest.back()][next])) next = k;
+      }
+      used[next] = true;
+      nearest.push_back(next);
+    }
+    EXPECT_LE(tour.length_m, ClosedLength(d, nearest) + 1e-9);
+  }
+}
+
+// Degenerate sizes: one valve is a zero-length tour; two valves go there and back.
+TEST(TourPlanner, OneAndTwoValves) {
+  const OccupancyGrid grid(10.0, 10.0, 0.1);
+  const Tour one = PlanTour(grid, {{2.05, 2.05}});
+  ExpectValidTour(one, {{2.05, 2.05}});
+  EXPECT_DOUBLE_EQ(one.length_m, 0.0);
+  const Tour two = PlanTour(grid, {{2.05, 2.05}, {5.05, 6.05}});
+  ExpectValidTour(two, {{2.05, 2.05}, {5.05, 6.05}});
+  EXPECT_NEAR(two.length_m, 10.0, 1e-9);
+  EXPECT_FALSE(PlanTour(grid, {}).ok);
+}
+
+}  // namespace
+}  // namespace sage::agents

@@ -1,1 +1,248 @@
-// placeholder: being written
+#include "server/metrics.h"
+
+#include <cmath>
+#include <random>
+#include <stdexcept>
+
+#include <Eigen/Cholesky>
+#include <gtest/gtest.h>
+
+#include "maps/risk_field.h"
+#include "maps/spectral_basis.h"
+
+namespace sage::server {
+namespace {
+
+// A 12 m x 10 m box with one XT carrying the given valves (covariance 0.25 m^2 I); visit radius
+// 0.5 m, re-arm radius 1.0 m. Built in code so these tests do not depend on the YAML loader.
+maps::Scenario MakeScenario(const std::vector<Eigen::Vector2d>& valve_positions) {
+  maps::Scenario scenario;
+  scenario.workspace = {12.0, 10.0};
+  maps::ChristmasTree xt;
+  xt.name = "XT-A";
+  xt.center_m = {6.0, 9.0};
+  for (std::size_t i = 0; i < valve_positions.size(); ++i) {
+    maps::Valve valve;
+    valve.name = "P" + std::to_string(i + 1);
+    valve.position_m = valve_positions[i];
+    xt.valves.push_back(valve);
+  }
+  scenario.structures = {xt};
+  scenario.visit_radius_m = 0.5;
+  scenario.rearm_radius_m = 1.0;
+  scenario.control_rate_hz = 10.0;
+  scenario.ergodic.basis_order = 10;
+  return scenario;
+}
+
+std::vector<WeightChange> Constant(const Eigen::VectorXd& weights) { return {{0.0, weights}}; }
+
+// One vehicle's path sampled every dt_s from t = 0: position_at(t).
+template <typename F>
+Trajectory SampledPath(int vehicle, double duration_s, double dt_s, F position_at) {
+  Trajectory trajectory;
+  for (int k = 0; k * dt_s <= duration_s + 1e-9; ++k) {
+    TrajectorySample s;
+    s.time_s = k * dt_s;
+    s.vehicle = vehicle;
+    s.position_m = position_at(s.time_s);
+    trajectory.samples.push_back(s);
+  }
+  return trajectory;
+}
+
+// WeightsAt: the last entry at or before t; the first before all; empty throws.
+TEST(WeightsAt, PiecewiseConstant) {
+  const std::vector<WeightChange> schedule = {{10.0, Eigen::Vector2d(1, 0)}, {20.0, Eigen::Vector2d(0, 1)}};
+  EXPECT_EQ(WeightsAt(schedule, 0.0)[0], 1.0);
+  EXPECT_EQ(WeightsAt(schedule, 19.999)[0], 1.0);
+  EXPECT_EQ(WeightsAt(schedule, 20.0)[1], 1.0);
+  EXPECT_EQ(WeightsAt(schedule, 1e9)[1], 1.0);
+  EXPECT_THROW(WeightsAt({}, 0.0), std::invalid_argument);
+}
+
+// A vehicle entering the valve disc at 2, 7 and 15 s of a 20 s mission: 3 visits at those
+// times, mean interval (15 - 2) / 2 = 6.5 s, longest gap 15 - 7 = 8 s; an unvisited valve has
+// no interval and a gap of the whole mission. Tolerance 1e-9 s (sample times are k * 0.1).
+TEST(ComputeMetrics, ExactVisitsIntervalsAndGaps) {
+  const maps::Scenario scenario = MakeScenario({{6, 5}, {2, 8}});
+  const Trajectory path = SampledPath(0, 20.0, 0.1, [](double t) {
+    const bool at_valve = (t >= 2 - 1e-9 && t < 2.5) || (t >= 7 - 1e-9 && t < 7.5) || (t >= 15 - 1e-9 && t < 15.5);
+    return at_valve ? Eigen::Vector2d(6.1, 5.0) : Eigen::Vector2d(10.0, 2.0);
+  });
+  const MissionMetrics m = ComputeMetrics(path, scenario, Constant(Eigen::Vector2d(0.5, 0.5)), 20.0);
+  ASSERT_EQ(m.valves.size(), 2u);
+  const ValveMetrics& p1 = m.valves[0];
+  EXPECT_EQ(p1.name, "P1");
+  ASSERT_EQ(p1.visits, 3);
+  EXPECT_NEAR(p1.visit_times_s[0], 2.0, 1e-9);
+  EXPECT_NEAR(p1.visit_times_s[1], 7.0, 1e-9);
+  EXPECT_NEAR(p1.visit_times_s[2], 15.0, 1e-9);
+  EXPECT_NEAR(p1.mean_interval_s, 6.5, 1e-9);
+  EXPECT_NEAR(p1.max_gap_s, 8.0, 1e-9);
+  EXPECT_NEAR(p1.time_near_s, 1.5, 1e-9);  // 3 x 5 samples x 0.1 s
+  EXPECT_EQ(m.valves[1].visits, 0);
+  EXPECT_TRUE(std::isnan(m.valves[1].mean_interval_s));
+  EXPECT_EQ(m.valves[1].max_gap_s, 20.0);
+  EXPECT_EQ(m.vehicle_count, 1);
+  EXPECT_EQ(m.controller, "recorded");
+}
+
+// Jitter across the visit radius that stays inside the re-arm radius is one visit; leaving the
+// re-arm radius and coming back is a second.
+TEST(VisitTracker, JitterInsideRearmRadiusCountsOnce) {
+  VisitTracker tracker({Eigen::Vector2d(0, 0)}, 0.5, 1.0);
+  const double distances[] = {2.0, 0.45, 0.55, 0.45, 0.9, 0.3, 0.99, 0.49, 1.5, 0.4};
+  int visits = 0;
+  for (int k = 0; k < 10; ++k) {
+    visits += static_cast<int>(tracker.Update(0, {distances[k], 0.0}, k).size());
+  }
+  EXPECT_EQ(visits, 2);
+  ASSERT_EQ(tracker.visit_times()[0].size(), 2u);
+  EXPECT_EQ(tracker.visit_times()[0][0], 1.0);
+  EXPECT_EQ(tracker.LastVisit(0), 9.0);
+}
+
+// Two vehicles (ids 5 and 2, arriving in that order) in the disc at once each count a visit;
+// Forget re-arms one vehicle only.
+TEST(VisitTracker, VehiclesCountSeparately) {
+  VisitTracker tracker({Eigen::Vector2d(0, 0)}, 0.5, 1.0);
+  EXPECT_EQ(tracker.LastVisit(0), -std::numeric_limits<double>::infinity());
+  EXPECT_EQ(tracker.Update(5, {0.1, 0.0}, 1.0).size(), 1u);
+  EXPECT_EQ(tracker.Update(2, {0.0, 0.2}, 3.0).size(), 1u);
+  EXPECT_EQ(tracker.Update(5, {0.1, 0.0}, 4.0).size(), 0u);  // still disarmed
+  tracker.Forget(5);
+  EXPECT_EQ(tracker.Update(5, {0.1, 0.0}, 5.0).size(), 1u);
+  EXPECT_EQ(tracker.Update(2, {0.0, 0.2}, 6.0).size(), 0u);
+  EXPECT_EQ(tracker.visit_times()[0].size(), 3u);
+}
+
+// Through ComputeMetrics too: two vehicles, one entry each, are two visits and vehicle_count 2.
+TEST(ComputeMetrics, TwoVehiclesEachVisit) {
+  const maps::Scenario scenario = MakeScenario({{6, 5}});
+  Trajectory a = SampledPath(0, 10.0, 0.1, [](double t) { return Eigen::Vector2d(1.0 + t, 5.0); });
+  const Trajectory b = SampledPath(1, 10.0, 0.1, [](double t) { return Eigen::Vector2d(6.0, 9.5 - 0.8 * t); });
+  a.samples.insert(a.samples.end(), b.samples.begin(), b.samples.end());
+  const MissionMetrics m = ComputeMetrics(a, scenario, Constant(Eigen::VectorXd::Ones(1)), 10.0);
+  EXPECT_EQ(m.valves[0].visits, 2);
+  EXPECT_EQ(m.vehicle_count, 2);
+}
+
+// A straight pass 0.3 m from the valve at 0.5 m/s crosses the 0.5 m disc along a chord of
+// 2 sqrt(0.5^2 - 0.3^2) = 0.8 m, so 1.6 s near it; within one sample period (0.1 s).
+TEST(ComputeMetrics, TimeNearIsChordOverSpeed) {
+  const maps::Scenario scenario = MakeScenario({{6, 5}});
+  const Trajectory pass = SampledPath(0, 20.0, 0.1, [](double t) { return Eigen::Vector2d(1.0 + 0.5 * t, 5.3); });
+  const MissionMetrics m = ComputeMetrics(pass, scenario, Constant(Eigen::VectorXd::Ones(1)), 20.0);
+  EXPECT_NEAR(m.valves[0].time_near_s, 1.6, 0.1);
+  EXPECT_EQ(m.valves[0].visits, 1);
+}
+
+// Pearson against hand computations (tolerance 1e-12); NaN whenever a side is constant.
+TEST(PearsonCorrelation, MatchesHandComputation) {
+  EXPECT_NEAR(PearsonCorrelation({1, 2, 3}, {2, 4, 6}), 1.0, 1e-12);
+  EXPECT_NEAR(PearsonCorrelation({1, 2, 3}, {3, 2, 1}), -1.0, 1e-12);
+  // a = {1,2,3,4}, b = {1,3,2,5}: sum da db = 5.5, sum da^2 = 5, sum db^2 = 8.75.
+  EXPECT_NEAR(PearsonCorrelation({1, 2, 3, 4}, {1, 3, 2, 5}), 5.5 / std::sqrt(5.0 * 8.75), 1e-12);
+  EXPECT_TRUE(std::isnan(PearsonCorrelation({1, 2, 3}, {0.2, 0.2, 0.2})));
+  EXPECT_TRUE(std::isnan(PearsonCorrelation({37, 37, 37, 37, 37}, {0.55, 0.2, 0.1, 0.08, 0.07})));
+  EXPECT_TRUE(std::isnan(PearsonCorrelation({1}, {2})));
+  // Equal weights off by rounding (as time averages produce) are still constant.
+  EXPECT_TRUE(std::isnan(PearsonCorrelation({1, 2, 3}, {0.2, 0.2 + 1e-17, 0.19999999999999998})));
+  EXPECT_THROW(PearsonCorrelation({1, 2}, {1, 2, 3}), std::invalid_argument);
+}
+
+// Samples drawn from the target mixture itself give a far smaller ergodic metric than uniform
+// coverage (100x) and than a vehicle parked in a corner (1000x; measured: 9e-8, 3e-3, 4e-2), and
+// the metric is reported every second to the end.
+TEST(ComputeMetrics, ErgodicMetricRewardsMatchingTheTarget) {
+  const maps::Scenario scenario = MakeScenario({{3, 3}, {9, 3}, {6, 7}});
+  const Eigen::Vector3d weights(0.6, 0.3, 0.1);
+  const double duration = 200.0, dt = 0.01;
+  std::mt19937 rng(7);
+  std::discrete_distribution<int> pick({0.6, 0.3, 0.1});
+  std::normal_distribution<double> normal;
+  const std::vector<maps::Valve> valves = scenario.AllValves();
+  const Trajectory matched = SampledPath(0, duration, dt, [&](double) {
+    const maps::Valve& valve = valves[pick(rng)];
+    const Eigen::Matrix2d root = valve.covariance_m2.llt().matrixL();
+    return Eigen::Vector2d(valve.position_m + root * Eigen::Vector2d(normal(rng), normal(rng)));
+  });
+  std::uniform_real_distribution<double> uniform;
+  const Trajectory spread = SampledPath(0, duration, dt, [&](double) {
+    return Eigen::Vector2d(12.0 * uniform(rng), 10.0 * uniform(rng));
+  });
+  const Trajectory parked = SampledPath(0, duration, dt, [](double) { return Eigen::Vector2d(0.1, 0.1); });
+  const MissionMetrics good = ComputeMetrics(matched, scenario, Constant(weights), duration);
+  const MissionMetrics flat = ComputeMetrics(spread, scenario, Constant(weights), duration);
+  const MissionMetrics bad = ComputeMetrics(parked, scenario, Constant(weights), duration);
+  EXPECT_LT(good.ergodic_metric, flat.ergodic_metric / 100.0) << good.ergodic_metric << " vs " << flat.ergodic_metric;
+  EXPECT_LT(good.ergodic_metric, bad.ergodic_metric / 1000.0) << good.ergodic_metric << " vs " << bad.ergodic_metric;
+  ASSERT_EQ(good.metric_over_time.size(), 200u);
+  EXPECT_EQ(good.metric_over_time.front().time_s, 1.0);
+  EXPECT_EQ(good.metric_over_time.back().time_s, duration);
+  EXPECT_EQ(good.metric_over_time.back().ergodic_metric, good.ergodic_metric);
+}
+
+// c_k is weighted by time, not by sample count, and a sample running past a checkpoint counts
+// only up to it: at A until 1.5 s and B until 150 s (samples every 0.3 s), then at A again
+// (samples every 0.05 s). At t = 2 s the coverage is (1.5 F(A) + 0.5 F(B)) / 2; at the end
+// (151.5 F(A) + 148.5 F(B)) / 300, although A has six times B's samples per second.
+// Relative tolerance 1e-9.
+TEST(ComputeMetrics, CoverageIsTheTimeAverageUpToEachCheckpoint) {
+  const maps::Scenario scenario = MakeScenario({{3, 5}, {9, 5}});
+  const Eigen::Vector2d a(2, 2), b(10, 8);
+  Trajectory path;
+  for (int k = 0; k * 0.3 < 1.5 - 1e-9; ++k) path.samples.push_back({k * 0.3, 0, a});
+  for (int k = 5; k * 0.3 < 150 - 1e-9; ++k) path.samples.push_back({k * 0.3, 0, b});
+  for (int k = 0; 150 + k * 0.05 < 300; ++k) path.samples.push_back({150 + k * 0.05, 0, a});
+  const maps::SpectralBasis basis(12, 10, scenario.ergodic.basis_order);
+  maps::RiskField field(basis, {{Eigen::Vector2d(3, 5), 0.25 * Eigen::Matrix2d::Identity()},
+                                {Eigen::Vector2d(9, 5), 0.25 * Eigen::Matrix2d::Identity()}});
+  const Eigen::VectorXd& phi = field.coefficients();  // equal weights
+  Eigen::VectorXd fa, fb;
+  basis.Evaluate(a, fa);
+  basis.Evaluate(b, fb);
+  const MissionMetrics m = ComputeMetrics(path, scenario, Constant(Eigen::Vector2d(1, 1)), 300.0);
+  const double at_2 = basis.Metric((1.5 * fa + 0.5 * fb) / 2.0 - phi);
+  const double at_end = basis.Metric((151.5 * fa + 148.5 * fb) / 300.0 - phi);
+  ASSERT_EQ(m.metric_over_time[1].time_s, 2.0);
+  EXPECT_NEAR(m.metric_over_time[1].ergodic_metric, at_2, 1e-9 * at_2);
+  EXPECT_NEAR(m.ergodic_metric, at_end, 1e-9 * at_end);
+}
+
+// 1 s in the middle, 2 s beyond the left edge, 3 s 0.1 m from the right edge, 0.5 s above the
+// top: 2.5 s outside and 3 s pinned (margin 0.2 m); a sample after the end does not count.
+// Tolerance 1e-9 s.
+TEST(ComputeMetrics, TimeOutsideAndPinned) {
+  const maps::Scenario scenario = MakeScenario({{6, 5}});
+  Trajectory path = SampledPath(0, 6.4, 0.1, [](double t) {
+    if (t < 1 - 1e-9) return Eigen::Vector2d(6, 5);
+    if (t < 3 - 1e-9) return Eigen::Vector2d(-0.5, 5);
+    if (t < 6 - 1e-9) return Eigen::Vector2d(11.9, 5);
+    return Eigen::Vector2d(6, 10.1);
+  });
+  path.samples.push_back({7.0, 0, Eigen::Vector2d(-5, -5)});
+  const MissionMetrics m = ComputeMetrics(path, scenario, Constant(Eigen::VectorXd::Ones(1)), 6.5);
+  EXPECT_NEAR(m.time_outside_s, 2.5, 1e-9);
+  EXPECT_NEAR(m.time_pinned_s, 3.0, 1e-9);
+}
+
+// Equal raw weights for 150 s, then 0.1 / 0.9: the 300 s averages are 0.3 / 0.7 (within 1e-12);
+// the ergodic metric switches to the new target at the change (a vehicle at P2 matches the
+// second target better than the first).
+TEST(ComputeMetrics, WeightsTimeAverageAcrossScheduleChange) {
+  const maps::Scenario scenario = MakeScenario({{3, 5}, {9, 5}});
+  const std::vector<WeightChange> schedule = {{0.0, Eigen::Vector2d(1, 1)}, {150.0, Eigen::Vector2d(0.1, 0.9)}};
+  const Trajectory at_p2 = SampledPath(0, 300.0, 0.1, [](double) { return Eigen::Vector2d(9, 5); });
+  const MissionMetrics m = ComputeMetrics(at_p2, scenario, schedule, 300.0);
+  EXPECT_NEAR(m.valves[0].weight, 0.3, 1e-12);
+  EXPECT_NEAR(m.valves[1].weight, 0.7, 1e-12);
+  const double before = m.metric_over_time[148].ergodic_metric;  // t = 149 s
+  const double after = m.metric_over_time[150].ergodic_metric;   // t = 151 s
+  EXPECT_LT(after, before);
+  EXPECT_THROW(ComputeMetrics(at_p2, scenario, {{0.0, Eigen::Vector3d(1, 1, 1)}}, 300.0), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace sage::server

@@ -1,0 +1,44 @@
+#pragma once
+// Keeps a vehicle's commanded velocity from driving it into a structure or out of the
+// workspace. The SMC law is closed form over the whole box and knows nothing of obstacles; and
+// outside the box the cosine basis mirrors the field, so a vehicle that leaves it covers a
+// phantom copy of the valves (the SAGE paper's corner excursions). Near a structure or an edge
+// the inward part of the command is turned into a slide along it and, inside the clearance,
+// the vehicle is pushed back. The speed is kept: SMC moves at constant speed.
+#include <Eigen/Core>
+
+#include "maps/distance_field.h"
+#include "maps/scenario.h"
+
+namespace sage::agents {
+
+struct ObstacleFilterSettings {
+  double influence_m = 0.7;           ///< beyond this distance (m) from any structure the command is untouched
+  double clearance_m = 0.4;           ///< inside this distance (m) of a structure the vehicle is pushed out
+  double boundary_influence_m = 0.5;  ///< the same for the workspace edges (m)
+  double boundary_clearance_m = 0.2;
+};
+
+class ObstacleFilter {
+ public:
+  /// field must outlive the filter; the workspace box is [0, width] x [0, height].
+  ObstacleFilter(const maps::DistanceField& field, const maps::Workspace& workspace,
+                 ObstacleFilterSettings settings = {});
+
+  /// The command to send instead of `velocity_mps` at position x (m). Same norm as the input.
+  Eigen::Vector2d Apply(const Eigen::Vector2d& x_m, const Eigen::Vector2d& velocity_mps);
+
+ private:
+  // Turns the part of u heading against `away` into a slide, by the share s in [0, 1] that
+  // grows from the influence distance to the clearance, and pushes out inside the clearance.
+  Eigen::Vector2d Slide(const Eigen::Vector2d& u, double speed, const Eigen::Vector2d& away, double distance,
+                        double influence, double clearance, double& tangent_sign) const;
+
+  const maps::DistanceField& field_;
+  maps::Workspace workspace_;
+  ObstacleFilterSettings settings_;
+  double tangent_sign_ = 1.0;           // keeps sliding the same way round a structure when head-on
+  double boundary_tangent_sign_ = 1.0;  // the same along the workspace edge
+};
+
+}  // namespace sage::agents

@@ -1,0 +1,39 @@
+#pragma once
+// Euclidean distance (m) from every point of the workspace to the nearest occupied cell of an
+// occupancy grid (the OctoMap's projection at operating depth), with its gradient. Vehicles use
+// it to keep the SMC direction from driving them into a structure: closed-form SMC knows
+// nothing of obstacles.
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "maps/occupancy_grid.h"
+
+namespace sage::maps {
+
+class DistanceField {
+ public:
+  /// Exact Euclidean distance transform of the grid's occupied cells (Felzenszwalb &
+  /// Huttenlocher 2012, two 1-D passes), measured between cell centres. With no occupied cell
+  /// every distance is +infinity.
+  explicit DistanceField(const OccupancyGrid& grid);
+
+  /// Distance (m) at x, bilinear between cell centres; 0 inside occupied cells. Points outside
+  /// the grid use the nearest cell.
+  double Distance(const Eigen::Vector2d& x_m) const;
+  /// Unit vector pointing away from the nearest obstacle (central differences of Distance);
+  /// zero where the field is flat or infinite.
+  Eigen::Vector2d AwayFromObstacle(const Eigen::Vector2d& x_m) const;
+
+  double resolution_m() const { return resolution_m_; }
+
+ private:
+  double At(int i, int j) const;  // clamped cell lookup
+
+  int cols_;
+  int rows_;
+  double resolution_m_;
+  std::vector<double> distance_m_;  // i * rows_ + j
+};
+
+}  // namespace sage::maps
