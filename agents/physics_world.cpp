@@ -56,10 +56,6 @@ PhysicsWorld::PhysicsWorld(const maps::Workspace& /*workspace*/,
   // The workspace box has no walls: vehicles may leave it and the metrics count that.
   // Forces are re-applied every step, so nothing may fall asleep between commands.
   world_->SetAllowSleeping(false);
-  // No continuous collision: at <= 1 m/s and 50 Hz a hull moves 2 cm a step, far less than its
-  // 0.46 m length, so nothing can tunnel; and Box2D's time-of-impact solver was seen to freeze a
-  // BlueROV2 for good when it grazed an XT corner (sample two_xt run, seed 4, t = 120 s).
-  world_->SetContinuousPhysics(false);
   for (const maps::ChristmasTree& tree : structures) {
     b2BodyDef def;
     def.type = b2_staticBody;
