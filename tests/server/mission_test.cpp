@@ -1,1 +1,116 @@
-// placeholder: being written
+#include "server/mission.h"
+
+#include <cmath>
+#include <numbers>
+
+#include <gtest/gtest.h>
+
+namespace sage::server {
+namespace {
+
+const std::string kTwoXt = std::string(SAGE_SOURCE_DIR) + "/scenarios/two_xt.yaml";
+
+maps::Scenario TwoXt(double duration_s) {
+  maps::Scenario s = maps::LoadScenario(kTwoXt);
+  s.duration_s = duration_s;
+  return s;
+}
+
+// A fixed seed gives the same mission, sample for sample; another seed a different one.
+TEST(Mission, SameSeedSameMission) {
+  auto run = [](std::uint64_t seed) {
+    maps::Scenario s = TwoXt(30.0);
+    s.seed = seed;
+    return Mission(s, ControllerKind::kErgodic).Run().trajectory;
+  };
+  const Trajectory a = run(7), b = run(7), c = run(8);
+  ASSERT_EQ(a.samples.size(), b.samples.size());
+  ASSERT_EQ(a.samples.size(), 301u);  // 30 s at 10 Hz, both ends included
+  for (std::size_t i = 0; i < a.samples.size(); ++i) {
+    EXPECT_EQ(a.samples[i].position_m, b.samples[i].position_m) << i;
+    EXPECT_EQ(a.samples[i].command_mps, b.samples[i].command_mps) << i;
+  }
+  EXPECT_NE(a.samples.back().position_m, c.samples.back().position_m);
+}
+
+// The BlueROV2 under SMC keeps close to its transit speed (mean over the run >= 90 % of it;
+// it slows only to turn and to slide round structures) and never enters an XT footprint or
+// leaves the workspace.
+TEST(Mission, ErgodicBlueRov2StaysClearAndUnderWay) {
+  const maps::Scenario s = TwoXt(120.0);
+  const MissionResult r = Mission(s, ControllerKind::kErgodic, "graded").Run();
+  double speed_sum = 0.0;
+  for (const TrajectorySample& sample : r.trajectory.samples) {
+    speed_sum += sample.velocity_mps.norm();
+    for (const maps::ChristmasTree& xt : s.structures) {
+      const Eigen::Vector2d d = (sample.position_m - xt.center_m).cwiseAbs() - 0.5 * xt.size_m;
+      EXPECT_GT(d.maxCoeff(), 0.0) << "inside " << xt.name << " at t = " << sample.time_s;
+    }
+  }
+  EXPECT_GT(speed_sum / r.trajectory.samples.size(), 0.9 * s.vehicles[0].transit_speed_mps);
+  EXPECT_EQ(r.metrics.time_outside_s, 0.0);
+}
+
+// A leak raises P1's weight mid-mission: the commanded velocity changes in the very first
+// control cycle after the event (no re-planning), by more than a degree.
+TEST(Mission, LeakChangesTheCommandOnTheNextCycle) {
+  maps::Scenario s = TwoXt(60.0);
+  maps::RiskProfile& leak = const_cast<maps::RiskProfile&>(*s.FindProfile("leak_injection"));
+  leak.events[0].time_s = 30.0;
+  const MissionResult r = Mission(s, ControllerKind::kErgodic, "leak_injection").Run();
+  ASSERT_EQ(r.metrics.events.size(), 1u);
+  EXPECT_EQ(r.metrics.events[0].time_s, 30.0);
+  EXPECT_GT(r.metrics.events[0].heading_change_rad, std::numbers::pi / 180.0);
+  EXPECT_NEAR(r.metrics.events[0].new_weight, 1.0 / 1.8, 1e-12);
+  ASSERT_EQ(r.weights.size(), 2u);
+  EXPECT_NEAR(r.weights[1].weights[0], 1.0 / 1.8, 1e-12);
+}
+
+// The A* tour visits every valve once per lap: visit counts differ by at most one, whatever
+// the weights.
+TEST(Mission, AstarVisitsEveryValveEachLap) {
+  const MissionResult r = Mission(TwoXt(120.0), ControllerKind::kAstar, "one_extreme").Run();
+  int lowest = 1 << 30, highest = 0;
+  for (const ValveMetrics& v : r.metrics.valves) {
+    lowest = std::min(lowest, v.visits);
+    highest = std::max(highest, v.visits);
+  }
+  EXPECT_GE(lowest, 5);
+  EXPECT_LE(highest - lowest, 1);
+}
+
+// The guard: a valve not visited within the revisit bound weighs, for the controllers, as much
+// as the heaviest one; with the guard off the weights are the profile's.
+TEST(Mission, GuardBoostsAnOverdueValve) {
+  maps::Scenario s = TwoXt(20.0);
+  s.guard.revisit_bound_s = 5.0;
+  s.guard.weight_floor = 0.05;
+  Mission on(s, ControllerKind::kErgodic, "one_extreme");
+  while (on.Step()) {
+  }
+  const Eigen::VectorXd& w = on.effective_weights();
+  EXPECT_NEAR(w.sum(), 1.0, 1e-12);
+  int at_max = 0;
+  for (int i = 0; i < w.size(); ++i) at_max += (w[i] > w.maxCoeff() - 1e-12);
+  EXPECT_GE(at_max, 2);  // at least one overdue valve raised to the heaviest weight
+  s.guard.enabled = false;
+  Mission off(s, ControllerKind::kErgodic, "one_extreme");
+  off.Step();
+  EXPECT_NEAR(off.effective_weights()[0], 0.55, 1e-12);
+  EXPECT_NEAR(off.effective_weights()[2], 0.10, 1e-12);
+}
+
+TEST(Mission, UnknownProfileIsAOneLineError) {
+  try {
+    Mission m(TwoXt(10.0), ControllerKind::kErgodic, "nope");
+    FAIL() << "expected ScenarioError";
+  } catch (const maps::ScenarioError& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("profile = nope"), std::string::npos) << what;
+    EXPECT_NE(what.find("one_extreme"), std::string::npos) << what;
+    EXPECT_EQ(what.find('\n'), std::string::npos);
+  }
+}
+
+}  // namespace
+}  // namespace sage::server

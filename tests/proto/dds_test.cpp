@@ -1,0 +1,324 @@
+// DDS transport layer: round trips, durability, liveliness, dispose, domain isolation, errors.
+// Each test reserves its own domain (DomainReservation) and runs on loopback only, so tests
+// never see each other or a running mission.
+#include <dirent.h>
+#include <gtest/gtest.h>
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <cstdio>
+#include <map>
+#include <string>
+#include <type_traits>
+#include <vector>
+
+#include "proto/dds_config.h"
+#include "proto/dds_endpoints.h"
+#include "proto/messages.h"
+#include "proto/qos.h"
+
+namespace sage::proto {
+namespace {
+
+using namespace std::chrono_literals;
+using Clock = std::chrono::steady_clock;
+
+// A fresh domain per test: distinct preferred ids per process and per test, and the lock makes
+// concurrent test processes (ctest -j) skip ids already in use.
+DomainReservation ReserveTestDomain() {
+  static int test_counter = 0;
+  const int preferred = 1 + (static_cast<int>(getpid()) * 31 + test_counter++ * 17) % kMaxDomainId;
+  return DomainReservation::Acquire(preferred);
+}
+
+const std::string& TestConfig() {
+  static const std::string xml = LocalhostConfigXml(8);
+  return xml;
+}
+
+// Takes samples until `done(samples)` holds or `timeout` passes; returns everything taken.
+template <class T, class Done>
+std::vector<Sample<T>> TakeUntil(Reader<T>& reader, Done done, std::chrono::milliseconds timeout) {
+  std::vector<Sample<T>> all;
+  const auto deadline = Clock::now() + timeout;
+  while (!done(all) && Clock::now() < deadline) {
+    reader.WaitForData(20ms);
+    for (auto& sample : reader.Take()) all.push_back(std::move(sample));
+  }
+  return all;
+}
+
+int CountThreads() {
+  int entries = 0;
+  DIR* dir = opendir("/proc/self/task");
+  while (dir != nullptr && readdir(dir) != nullptr) ++entries;
+  if (dir != nullptr) closedir(dir);
+  return entries - 2;  // "." and ".."
+}
+
+// Owners of DDS handles move but never copy (a copy would dds_delete twice).
+static_assert(!std::is_copy_constructible_v<Participant>);
+static_assert(!std::is_copy_constructible_v<Writer<VehicleState>>);
+static_assert(!std::is_copy_constructible_v<Reader<VehicleState>>);
+static_assert(std::is_move_constructible_v<Reader<VehicleState>>);
+static_assert(std::is_move_assignable_v<Writer<VehicleState>>);
+
+// Every one of 50 vehicle ids (the @key) arrives once with its own field values.
+TEST(DdsEntities, KeyedVehicleStateRoundTripsFiftyInstances) {
+  const DomainReservation domain = ReserveTestDomain();
+  Participant participant(domain.domain_id(), TestConfig());
+  const Topic<VehicleState> topic(participant);  // coexists with the endpoints' own topics
+  EXPECT_EQ(topic.name(), kVehicleStateTopic);
+  Reader<VehicleState> reader(participant, VehicleStateReaderQos());
+  Writer<VehicleState> writer(participant, VehicleStateWriterQos());
+  ASSERT_TRUE(writer.WaitForReaders(1, 2s));
+  for (uint32_t id = 0; id < 50; ++id) {
+    writer.Write(VehicleState{id, 1000 + id, 1.5 * id, -2.0 * id, 0.01 * id, 0.5, -0.25});
+  }
+  std::map<uint32_t, VehicleState> latest;
+  TakeUntil(
+      reader,
+      [&](const std::vector<Sample<VehicleState>>& samples) {
+        for (const auto& sample : samples) {
+          if (sample.valid_data()) latest[sample.data().vehicle_id] = sample.data();
+        }
+        return latest.size() == 50;
+      },
+      2000ms);
+  ASSERT_EQ(latest.size(), 50u);
+  for (const auto& [id, state] : latest) {
+    EXPECT_EQ(state.stamp_ns, 1000 + id);
+    EXPECT_DOUBLE_EQ(state.x_m, 1.5 * id);  // exact: doubles travel bit for bit
+    EXPECT_DOUBLE_EQ(state.y_m, -2.0 * id);
+    EXPECT_DOUBLE_EQ(state.heading_rad, 0.01 * id);
+    EXPECT_DOUBLE_EQ(state.vx_mps, 0.5);
+    EXPECT_DOUBLE_EQ(state.vy_mps, -0.25);
+  }
+}
+
+// A 400-element sequence<double> reaches readers created after the write (transient-local),
+// through both the owning Take() and the loaned TakeEach().
+TEST(DdsEntities, ErgodicTargetReachesLateJoiner) {
+  const DomainReservation domain = ReserveTestDomain();
+  Participant server(domain.domain_id(), TestConfig());
+  Writer<ErgodicTarget> writer(server, ErgodicTargetQos());
+  std::vector<double> error(400);
+  for (std::size_t k = 0; k < error.size(); ++k) error[k] = 0.25 * k - 3.0;
+  writer.Write(ErgodicTarget{7, 123, 9, 20, BorrowSequence(error)});
+
+  Participant vehicle(domain.domain_id(), TestConfig());
+  Reader<ErgodicTarget> late_reader(vehicle, ErgodicTargetQos());
+  auto samples = TakeUntil(
+      late_reader, [](const auto& s) { return !s.empty(); }, 2000ms);
+  ASSERT_EQ(samples.size(), 1u);
+  const ErgodicTarget& target = samples[0].data();
+  EXPECT_EQ(target.vehicle_id, 7u);
+  EXPECT_EQ(target.cycle, 9u);
+  EXPECT_EQ(target.basis_order, 20u);
+  const auto received = AsSpan(target.coverage_error);
+  ASSERT_EQ(received.size(), error.size());
+  EXPECT_TRUE(std::equal(received.begin(), received.end(), error.begin()));
+
+  Reader<ErgodicTarget> loaned_reader(vehicle, ErgodicTargetQos());
+  ASSERT_TRUE(loaned_reader.WaitForData(2s));
+  std::vector<double> copied;
+  const std::size_t visited =
+      loaned_reader.TakeEach([&](const ErgodicTarget& t, const dds_sample_info_t&) {
+        copied.assign(AsSpan(t.coverage_error).begin(), AsSpan(t.coverage_error).end());
+      });
+  EXPECT_EQ(visited, 1u);
+  EXPECT_EQ(copied, error);
+}
+
+// A vehicle process killed with SIGKILL (no goodbye) reads NOT_ALIVE_NO_WRITERS within 1.5 s
+// with a 500 ms lease. The bound is for correctness only; the latency is printed.
+TEST(DdsEntities, KilledVehicleReadsNotAliveNoWriters) {
+  // Fork before any DDS entity exists in this process: Cyclone's threads do not survive fork.
+  ASSERT_EQ(CountThreads(), 1) << "fork needs a single-threaded parent";
+  const DomainReservation domain = ReserveTestDomain();
+  constexpr uint32_t kVehicleId = 42;
+  const pid_t child = fork();
+  ASSERT_GE(child, 0);
+  if (child == 0) {
+    int status = 0;
+    try {
+      Participant vehicle(domain.domain_id(), TestConfig());
+      Writer<VehicleState> writer(vehicle, VehicleStateWriterQos(500ms));
+      for (int tick = 0; tick < 200; ++tick) {  // 10 s at most, should the parent die
+        writer.Write(VehicleState{kVehicleId, tick, 1.0, 2.0, 0.0, 0.0, 0.0});
+        dds_sleepfor(DDS_MSECS(50));
+      }
+    } catch (const std::exception& e) {
+      std::fprintf(stderr, "child: %s\n", e.what());
+      status = 1;
+    }
+    _exit(status);  // never return into the test runner
+  }
+
+  Participant server(domain.domain_id(), TestConfig());
+  Reader<VehicleState> reader(server, VehicleStateReaderQos());
+  auto alive = TakeUntil(
+      reader, [](const auto& s) { return !s.empty() && s.back().valid_data(); }, 3000ms);
+  ASSERT_FALSE(alive.empty()) << "no sample from the child vehicle";
+  EXPECT_EQ(alive.back().data().vehicle_id, kVehicleId);
+
+  ASSERT_EQ(kill(child, SIGKILL), 0);
+  const auto killed_at = Clock::now();
+  waitpid(child, nullptr, 0);
+  auto after = TakeUntil(
+      reader,
+      [&](const std::vector<Sample<VehicleState>>& s) {
+        return !s.empty() && s.back().instance_state() == DDS_NOT_ALIVE_NO_WRITERS_INSTANCE_STATE;
+      },
+      3000ms);
+  const double latency_s = std::chrono::duration<double>(Clock::now() - killed_at).count();
+  ASSERT_FALSE(after.empty());
+  ASSERT_EQ(after.back().instance_state(), DDS_NOT_ALIVE_NO_WRITERS_INSTANCE_STATE);
+  EXPECT_FALSE(after.back().valid_data());
+  EXPECT_EQ(after.back().data().vehicle_id, kVehicleId);  // key fields fill invalid samples
+  std::printf("kill -9 -> NOT_ALIVE_NO_WRITERS after %.3f s (lease 0.5 s)\n", latency_s);
+  RecordProperty("detection_latency_ms", static_cast<int>(latency_s * 1000));
+  EXPECT_LT(latency_s, 1.5);
+}
+
+// Dispose reads NOT_ALIVE_DISPOSED (clean leave); with autodispose off, unregistering or
+// deleting the writer reads NOT_ALIVE_NO_WRITERS instead.
+TEST(DdsEntities, DisposeAndWriterLossAreDistinguished) {
+  const DomainReservation domain = ReserveTestDomain();
+  Participant participant(domain.domain_id(), TestConfig());
+  Reader<VehicleState> reader(participant, VehicleStateReaderQos());
+  std::map<uint32_t, dds_instance_state_t> state_of;
+  auto collect = [&](std::size_t count) {
+    TakeUntil(
+        reader,
+        [&](const std::vector<Sample<VehicleState>>& samples) {
+          for (const auto& sample : samples)
+            state_of[sample.data().vehicle_id] = sample.instance_state();
+          return state_of.size() >= count;
+        },
+        2000ms);
+  };
+  {
+    Writer<VehicleState> writer(participant, VehicleStateWriterQos());
+    ASSERT_TRUE(writer.WaitForReaders(1, 2s));
+    for (uint32_t id : {5u, 6u, 7u}) writer.Write(VehicleState{id, 1, 0, 0, 0, 0, 0});
+    collect(3);
+    ASSERT_EQ(state_of.size(), 3u);
+    state_of.clear();
+    writer.Dispose(VehicleState{5, 2, 0, 0, 0, 0, 0});
+    writer.Unregister(VehicleState{6, 2, 0, 0, 0, 0, 0});
+    collect(2);
+  }  // writer deleted: vehicle 7 loses its only writer
+  collect(3);
+  EXPECT_EQ(state_of[5], DDS_NOT_ALIVE_DISPOSED_INSTANCE_STATE);
+  EXPECT_EQ(state_of[6], DDS_NOT_ALIVE_NO_WRITERS_INSTANCE_STATE);
+  EXPECT_EQ(state_of[7], DDS_NOT_ALIVE_NO_WRITERS_INSTANCE_STATE);
+}
+
+// Strings survive the trip (owned samples free them), a late reader replays the last 16 risk
+// changes in order (transient-local keep-last 16), and every operator command arrives.
+TEST(DdsEntities, RiskHistoryAndCommandsCarryStrings) {
+  const DomainReservation domain = ReserveTestDomain();
+  Participant operator_tool(domain.domain_id(), TestConfig());
+  Writer<RiskUpdate> risk_writer(operator_tool, RiskUpdateQos());
+  for (int i = 0; i < 20; ++i) {
+    const std::string valve = "valve_" + std::to_string(i);
+    const std::string source = "operator";
+    risk_writer.Write(RiskUpdate{i, BorrowString(valve), 0.05 * i, BorrowString(source)});
+  }
+  Participant server(domain.domain_id(), TestConfig());
+  Reader<RiskUpdate> risk_reader(server, RiskUpdateQos());
+  Reader<FleetCommand> command_reader(server, FleetCommandQos());
+  const auto history = TakeUntil(
+      risk_reader, [](const auto& s) { return s.size() >= 16; }, 2000ms);
+  ASSERT_EQ(history.size(), 16u);
+  for (std::size_t k = 0; k < history.size(); ++k) {
+    EXPECT_EQ(AsStringView(history[k].data().valve), "valve_" + std::to_string(k + 4));
+    EXPECT_EQ(AsStringView(history[k].data().source), "operator");
+  }
+
+  Writer<FleetCommand> command_writer(operator_tool, FleetCommandQos());
+  ASSERT_TRUE(command_writer.WaitForReaders(1, 2s));
+  std::string add = "add", remove = "remove", stop = "stop";
+  command_writer.Write(FleetCommand{1, BorrowString(add), 5, 0});
+  command_writer.Write(FleetCommand{2, BorrowString(remove), 0, 3});
+  command_writer.Write(FleetCommand{3, BorrowString(stop), 0, 0});
+  const auto commands = TakeUntil(
+      command_reader, [](const auto& s) { return s.size() >= 3; }, 2000ms);
+  ASSERT_EQ(commands.size(), 3u);
+  EXPECT_EQ(AsStringView(commands[0].data().verb), "add");
+  EXPECT_EQ(commands[0].data().count, 5u);
+  EXPECT_EQ(AsStringView(commands[1].data().verb), "remove");
+  EXPECT_EQ(commands[1].data().vehicle_id, 3u);
+  EXPECT_EQ(AsStringView(commands[2].data().verb), "stop");
+}
+
+// Two domains on one machine do not exchange samples (a positive control reader on the
+// writer's domain does receive it).
+TEST(DdsEntities, DifferentDomainsDoNotMeet) {
+  const DomainReservation domain_a = ReserveTestDomain();
+  const DomainReservation domain_b = ReserveTestDomain();
+  ASSERT_NE(domain_a.domain_id(), domain_b.domain_id());
+  Participant mission_a(domain_a.domain_id(), TestConfig());
+  Participant mission_b(domain_b.domain_id(), TestConfig());
+  Reader<MissionStatus> reader_a(mission_a, MissionStatusQos());
+  Reader<MissionStatus> reader_b(mission_b, MissionStatusQos());
+  Writer<MissionStatus> writer_a(mission_a, MissionStatusQos());
+  writer_a.Write(MissionStatus{1, 77, 1.0, 300.0, 3, 0.5, false});
+  const auto seen_a = TakeUntil(
+      reader_a, [](const auto& s) { return !s.empty(); }, 2000ms);
+  ASSERT_EQ(seen_a.size(), 1u);
+  EXPECT_EQ(seen_a[0].data().cycle, 77u);
+  EXPECT_FALSE(reader_b.WaitForData(300ms));
+  EXPECT_EQ(reader_b.MatchedWriters(), 0u);
+  EXPECT_TRUE(reader_b.Take().empty());
+}
+
+// A failing DDS call throws DdsError naming the call, the topic and the retcode text.
+TEST(DdsEntities, ErrorsNameOperationAndRetcode) {
+  try {
+    Writer<ErgodicTarget> writer(dds_entity_t{123456}, ErgodicTargetQos());
+    FAIL() << "an invalid participant handle was accepted";
+  } catch (const DdsError& e) {
+    EXPECT_LT(e.retcode(), 0);
+    EXPECT_EQ(std::string(e.what()), std::string("dds_create_topic(rt/sage/ergodic_target): ") +
+                                         dds_strretcode(e.retcode()));
+  }
+  const DomainReservation domain = ReserveTestDomain();
+  Participant participant(domain.domain_id(), TestConfig());
+  Qos inconsistent = ErgodicTargetQos();  // keep-last 4 > max 2 samples per instance
+  dds_qset_history(inconsistent.get(), DDS_HISTORY_KEEP_LAST, 4);
+  dds_qset_resource_limits(inconsistent.get(), DDS_LENGTH_UNLIMITED, DDS_LENGTH_UNLIMITED, 2);
+  try {
+    Writer<ErgodicTarget> writer(participant, inconsistent);
+    FAIL() << "an inconsistent QoS was accepted";
+  } catch (const DdsError& e) {
+    EXPECT_EQ(e.retcode(), DDS_RETCODE_INCONSISTENT_POLICY);
+    EXPECT_EQ(std::string(e.what()), std::string("dds_create_writer(rt/sage/ergodic_target): ") +
+                                         dds_strretcode(DDS_RETCODE_INCONSISTENT_POLICY));
+  }
+  EXPECT_THROW(Participant(kMaxDomainId + 1, TestConfig()), DdsError);  // ports > 65535
+}
+
+// Domain ids: explicit ids are range-checked, hashed ids are stable and never 0, and two
+// reservations never hand out the same id.
+TEST(DdsConfig, DomainIdsAreValidStableAndExclusive) {
+  EXPECT_EQ(MissionDomainId(17, "ignored"), 17);
+  EXPECT_THROW(MissionDomainId(kMaxDomainId + 1, ""), std::invalid_argument);
+  EXPECT_THROW(MissionDomainId(-1, ""), std::invalid_argument);
+  const int hashed = MissionDomainId(std::nullopt, "/runs/2025-01-01_mission_a");
+  EXPECT_EQ(hashed, MissionDomainId(std::nullopt, "/runs/2025-01-01_mission_a"));
+  EXPECT_GE(hashed, 1);
+  EXPECT_LE(hashed, kMaxDomainId);
+  const DomainReservation first = DomainReservation::Acquire(100);
+  const DomainReservation second = DomainReservation::Acquire(first.domain_id());
+  EXPECT_NE(first.domain_id(), second.domain_id());
+  EXPECT_THROW(LocalhostConfigXml(0), std::invalid_argument);
+  EXPECT_THROW(LocalhostConfigXml(kMaxLocalParticipants + 1), std::invalid_argument);
+  EXPECT_NE(LocalhostConfigXml(20).find("<MaxAutoParticipantIndex>20<"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace sage::proto
