@@ -33,6 +33,7 @@ struct MissionOverrides {
   std::optional<std::string> guard;       // "on" | "off"
   std::optional<double> forgetting_time_s;
   std::optional<int> basis_order;
+  std::optional<std::string> model;       // overrides every vehicle's motion model
   std::string out_dir;
 };
 
@@ -48,6 +49,10 @@ void AddMissionOptions(CLI::App& cmd, MissionOverrides& o) {
   cmd.add_option("--forgetting", o.forgetting_time_s,
                  "Coverage forgetting time constant in seconds (default: the scenario's; inf = the paper's)");
   cmd.add_option("--basis-order,-K", o.basis_order, "Wave numbers per dimension K (default: the scenario's)");
+  cmd.add_option("--model", o.model,
+                 "Motion model of every vehicle: bluerov2 (Box2D dynamics) or single_integrator (the paper's "
+                 "constant-speed point); default: as in the scenario")
+      ->check(CLI::IsMember({"bluerov2", "single_integrator"}));
 }
 
 maps::Scenario LoadWithOverrides(const MissionOverrides& o) {
@@ -57,6 +62,9 @@ maps::Scenario LoadWithOverrides(const MissionOverrides& o) {
   if (o.guard) scenario.guard.enabled = (*o.guard == "on");
   if (o.forgetting_time_s) scenario.ergodic.forgetting_time_s = *o.forgetting_time_s;
   if (o.basis_order) scenario.ergodic.basis_order = *o.basis_order;
+  if (o.model) {
+    for (maps::VehicleSpec& v : scenario.vehicles) v.model = maps::ParseMotionModel(*o.model, "--model");
+  }
   scenario.Validate();  // the overrides obey the same rules as the file
   return scenario;
 }
@@ -133,39 +141,12 @@ int CmdRun(const MissionOverrides& o, const std::string& controller_text) {
   return 0;
 }
 
-// The paper's protocol: A*'s wait per lap is set so that A* spends as long near the dominant
-// valve as ergodic control does; only then does the revisit interval compare like with like.
-// Time near the valve grows monotonically with the wait, so a few secant steps find it.
-double CalibrateAstarWait(maps::Scenario scenario, const std::string& profile, const MissionMetrics& ergodic) {
-  std::size_t dominant = 0;
-  for (std::size_t i = 1; i < ergodic.valves.size(); ++i)
-    if (ergodic.valves[i].weight > ergodic.valves[dominant].weight) dominant = i;
-  const double target = ergodic.valves[dominant].time_near_s;
-  auto near_time = [&](double wait) {
-    scenario.astar.wait_per_lap_s = wait;
-    Mission mission(scenario, ControllerKind::kAstar, profile);
-    return mission.Run().metrics.valves[dominant].time_near_s - target;
-  };
-  if (near_time(0.0) >= 0.0) return 0.0;  // A* already lingers as long without waiting
-  // Bracket by doubling, then bisect to 0.05 s: robust where the lap count jumps with the wait.
-  double low = 0.0, high = 1.0;
-  while (near_time(high) < 0.0 && high < scenario.duration_s) {
-    low = high;
-    high *= 2.0;
-  }
-  while (high - low > 0.05) {
-    const double mid = 0.5 * (low + high);
-    (near_time(mid) < 0.0 ? low : high) = mid;
-  }
-  return 0.5 * (low + high);
-}
-
 int CmdCompare(const MissionOverrides& o, bool calibrate_wait) {
   maps::Scenario scenario = LoadWithOverrides(o);
   const std::string profile = o.profile.empty() ? scenario.default_profile : o.profile;
   const MissionResult ergodic = RunOne(scenario, ControllerKind::kErgodic, profile);
   if (calibrate_wait) {
-    scenario.astar.wait_per_lap_s = CalibrateAstarWait(scenario, profile, ergodic.metrics);
+    scenario.astar.wait_per_lap_s = CalibratedAstarWait(scenario, profile, ergodic.metrics);
     spdlog::info("A* wait per lap set to {:.2f} s so that A* spends as long near the dominant valve as ergodic "
                  "control (the paper's protocol; --calibrate-wait off keeps the scenario's)",
                  scenario.astar.wait_per_lap_s);

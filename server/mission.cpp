@@ -293,3 +293,32 @@ MissionResult Mission::Run(const std::function<void(double)>& progress) {
 }
 
 }  // namespace sage::server
+
+namespace sage::server {
+
+double CalibratedAstarWait(maps::Scenario scenario, const std::string& profile, const MissionMetrics& ergodic) {
+  std::size_t dominant = 0;
+  for (std::size_t i = 1; i < ergodic.valves.size(); ++i)
+    if (ergodic.valves[i].weight > ergodic.valves[dominant].weight) dominant = i;
+  const double target = ergodic.valves[dominant].time_near_s;
+  // Time near the valve grows with the wait (longer stops, fewer laps, but the stop dominates).
+  auto shortfall = [&](double wait) {
+    scenario.astar.wait_per_lap_s = wait;
+    Mission mission(scenario, ControllerKind::kAstar, profile);
+    return mission.Run().metrics.valves[dominant].time_near_s - target;
+  };
+  if (shortfall(0.0) >= 0.0) return 0.0;
+  // Bracket by doubling, then bisect: robust where the lap count jumps with the wait.
+  double low = 0.0, high = 1.0;
+  while (shortfall(high) < 0.0 && high < scenario.duration_s) {
+    low = high;
+    high *= 2.0;
+  }
+  while (high - low > 0.05) {
+    const double mid = 0.5 * (low + high);
+    (shortfall(mid) < 0.0 ? low : high) = mid;
+  }
+  return 0.5 * (low + high);
+}
+
+}  // namespace sage::server

@@ -55,4 +55,9 @@ class Mission {
   std::unique_ptr<Impl> impl_;
 };
 
+/// The SAGE paper's protocol for a fair baseline: the A* wait per lap (s) that makes A* spend as
+/// long near the dominant valve (highest time-averaged weight) as the given ergodic run did, to
+/// 0.05 s. Zero if A* already lingers longer without waiting.
+double CalibratedAstarWait(maps::Scenario scenario, const std::string& profile, const MissionMetrics& ergodic);
+
 }  // namespace sage::server

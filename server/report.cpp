@@ -321,6 +321,16 @@ void WriteMetricsJson(const std::string& path, const MissionMetrics& metrics) {
                       {"time_near_s", number(v.time_near_s)},
                       {"visit_times_s", times}});
   }
+  Json events = Json::array();
+  for (const EventResponse& e : metrics.events) {
+    events.push_back({{"time_s", number(e.time_s)},
+                      {"valve", e.valve},
+                      {"new_weight", number(e.new_weight)},
+                      {"heading_change_rad", number(e.heading_change_rad)},
+                      {"time_to_next_visit_s", number(e.time_to_next_visit_s)},
+                      {"interval_before_s", number(e.interval_before_s)},
+                      {"interval_after_s", number(e.interval_after_s)}});
+  }
   const Json json = {{"controller", metrics.controller},
                      {"profile", metrics.profile},
                      {"duration_s", number(metrics.duration_s)},
@@ -330,7 +340,8 @@ void WriteMetricsJson(const std::string& path, const MissionMetrics& metrics) {
                      {"time_outside_s", number(metrics.time_outside_s)},
                      {"time_pinned_s", number(metrics.time_pinned_s)},
                      {"metric_over_time", over_time},
-                     {"valves", valves}};
+                     {"valves", valves},
+                     {"events", events}};
   WriteAtomically(path, json.dump(2) + "\n");
 }
 

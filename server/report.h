@@ -17,7 +17,8 @@ std::string FormatTable(const std::vector<MissionMetrics>& runs);
 /// Writes metrics as JSON (keys: controller, profile, duration_s, vehicle_count,
 /// visit_weight_correlation (null if undefined), ergodic_metric, time_outside_s, time_pinned_s,
 /// metric_over_time [{t, ergodic_metric}], valves [{name, weight, visits, mean_interval_s
-/// (null if undefined), max_gap_s, time_near_s, visit_times_s}]). Throws std::runtime_error naming the path.
+/// (null if undefined), max_gap_s, time_near_s, visit_times_s}], events [{time_s, valve, new_weight,
+/// heading_change_rad, time_to_next_visit_s, interval_before_s, interval_after_s}]). Throws std::runtime_error naming the path.
 void WriteMetricsJson(const std::string& path, const MissionMetrics& metrics);
 
 /// CSV header: t,vehicle,x,y,heading,vx,vy,cmd_x,cmd_y

@@ -158,6 +158,15 @@ MissionMetrics SampleMetrics() {
   ValveMetrics p1{"P1", 0.55, 3, 6.5, 8.0, 1.5, {2.0, 7.0, 15.0}};
   ValveMetrics p3{"P3", 0.10, 0, std::numeric_limits<double>::quiet_NaN(), 300.0, 0.0, {}};
   m.valves = {p1, p3};
+  EventResponse leak;
+  leak.time_s = 150.0;
+  leak.valve = "P1";
+  leak.new_weight = 0.56;
+  leak.heading_change_rad = 0.7;
+  leak.time_to_next_visit_s = 3.2;
+  leak.interval_before_s = 12.0;
+  leak.interval_after_s = std::numeric_limits<double>::quiet_NaN();
+  m.events = {leak};
   return m;  // visit_weight_correlation stays NaN
 }
 
@@ -166,7 +175,7 @@ TEST_F(ReportTest, MetricsJsonHasEveryKey) {
   WriteMetricsJson(Path("metrics.json"), SampleMetrics());
   EXPECT_FALSE(fs::exists(Path("metrics.json.tmp")));
   const nlohmann::json j = nlohmann::json::parse(ReadText(Path("metrics.json")));
-  EXPECT_EQ(j.size(), 10u);
+  EXPECT_EQ(j.size(), 11u);
   EXPECT_EQ(j.at("controller"), "ergodic");
   EXPECT_EQ(j.at("profile"), "one_extreme");
   EXPECT_EQ(j.at("duration_s"), 300.0);
@@ -190,6 +199,14 @@ TEST_F(ReportTest, MetricsJsonHasEveryKey) {
   EXPECT_EQ(p1.at("visit_times_s"), nlohmann::json({2.0, 7.0, 15.0}));
   EXPECT_TRUE(j.at("valves")[1].at("mean_interval_s").is_null());
   EXPECT_TRUE(j.at("valves")[1].at("visit_times_s").empty());
+  ASSERT_EQ(j.at("events").size(), 1u);
+  const nlohmann::json& leak = j.at("events")[0];
+  EXPECT_EQ(leak.size(), 7u);
+  EXPECT_EQ(leak.at("valve"), "P1");
+  EXPECT_EQ(leak.at("time_s"), 150.0);
+  EXPECT_EQ(leak.at("heading_change_rad"), 0.7);
+  EXPECT_EQ(leak.at("time_to_next_visit_s"), 3.2);
+  EXPECT_TRUE(leak.at("interval_after_s").is_null());
 }
 
 // A path that cannot be written throws std::runtime_error naming it, and leaves no file behind.
