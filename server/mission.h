@@ -55,6 +55,10 @@ class Mission {
   std::unique_ptr<Impl> impl_;
 };
 
+/// Fills each risk event's time to the valve's next visit and its revisit interval before and
+/// after, from the visit times in `metrics`.
+void FillEventResponses(const maps::Scenario& scenario, MissionMetrics& metrics);
+
 /// The SAGE paper's protocol for a fair baseline: the A* wait per lap (s) that makes A* spend as
 /// long near the dominant valve (highest time-averaged weight) as the given ergodic run did, to
 /// 0.05 s. Zero if A* already lingers longer without waiting.

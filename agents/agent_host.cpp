@@ -1,0 +1,180 @@
+#include "agents/agent_host.h"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+#include "agents/obstacle_filter.h"
+#include "agents/physics_world.h"
+#include "agents/tour_controller.h"
+#include "agents/tour_planner.h"
+#include "maps/distance_field.h"
+#include "maps/seabed_map.h"
+
+namespace sage::agents {
+namespace {
+
+// Operating depth band of the vehicles above the seabed (m): the slice of the OctoMap that
+// becomes the 2-D obstacle grid.
+constexpr double kDepthBandMin_m = 0.5;
+constexpr double kDepthBandMax_m = 1.5;
+
+std::vector<Eigen::Vector2d> ValvePositions(const maps::Scenario& scenario) {
+  std::vector<Eigen::Vector2d> points;
+  for (const maps::Valve& v : scenario.AllValves()) points.push_back(v.position_m);
+  return points;
+}
+
+}  // namespace
+
+struct AgentHost::Impl {
+  struct Vehicle {
+    VehicleId id = 0;
+    VehicleId body = 0;  // PhysicsWorld's id
+    std::unique_ptr<ErgodicController> ergodic;
+    std::unique_ptr<TourController> tour;
+    std::unique_ptr<ObstacleFilter> keep_clear;  // BlueROV2s under SMC
+    Eigen::Vector2d command = Eigen::Vector2d::Zero();
+  };
+
+  maps::Scenario scenario;
+  Guidance guidance;
+  maps::SpectralBasis basis;
+  maps::OccupancyGrid obstacles;  // the seabed OctoMap projected over the operating depth band
+  maps::DistanceField clearance;  // distance to the nearest structure, for the obstacle filter
+  maps::OccupancyGrid grid;       // obstacles inflated by the A* clearance
+  PhysicsWorld world;
+  Tour tour;                      // shared by every A* vehicle (same valves, same grid)
+  std::vector<Vehicle> vehicles;
+  int physics_substeps = 1;
+  double control_dt = 0.1;
+
+  Impl(const maps::Scenario& s, Guidance g)
+      : scenario(s),
+        guidance(g),
+        basis(s.workspace.width_m, s.workspace.height_m, s.ergodic.basis_order),
+        obstacles(maps::SeabedMap(s, s.astar.grid_resolution_m)
+                      .Project(kDepthBandMin_m, kDepthBandMax_m, s.astar.grid_resolution_m)),
+        clearance(obstacles),
+        grid(obstacles.Inflated(s.astar.clearance_m)),
+        world(s.workspace, s.structures) {
+    control_dt = 1.0 / s.control_rate_hz;
+    physics_substeps = std::max(1, static_cast<int>(std::lround(s.physics_rate_hz / s.control_rate_hz)));
+    if (guidance == Guidance::kAstar) {
+      tour = PlanTour(grid, ValvePositions(s));
+      if (!tour.ok) {
+        throw maps::ScenarioError(s.source_path + ": structures: some valve cannot be reached on the A* grid (clearance " +
+                                  std::to_string(s.astar.clearance_m) + " m)");
+      }
+    }
+  }
+
+  Vehicle& Find(VehicleId id) {
+    return const_cast<Vehicle&>(static_cast<const Impl*>(this)->Find(id));
+  }
+  const Vehicle& Find(VehicleId id) const {
+    for (const Vehicle& v : vehicles)
+      if (v.id == id) return v;
+    throw std::out_of_range("AgentHost: no vehicle with id " + std::to_string(id));
+  }
+};
+
+AgentHost::AgentHost(const maps::Scenario& scenario, Guidance guidance)
+    : impl_(std::make_unique<Impl>(scenario, guidance)) {}
+AgentHost::~AgentHost() = default;
+
+void AgentHost::AddVehicle(VehicleId id, const maps::VehicleSpec& spec, const Eigen::VectorXd& tour_weights) {
+  if (Contains(id)) throw std::invalid_argument("AgentHost: vehicle id " + std::to_string(id) + " already in use");
+  Impl::Vehicle v;
+  v.id = id;
+  v.body = impl_->world.AddVehicle(spec);
+  if (impl_->guidance == Guidance::kErgodic) {
+    v.ergodic = std::make_unique<ErgodicController>(impl_->basis, spec.transit_speed_mps,
+                                                    impl_->scenario.ergodic.forgetting_time_s);
+    if (spec.model == maps::MotionModel::kBlueRov2) {
+      v.keep_clear = std::make_unique<ObstacleFilter>(impl_->clearance, impl_->scenario.workspace);
+    }
+  } else {
+    const Eigen::VectorXd weights =
+        tour_weights.size() > 0 ? tour_weights
+                                : Eigen::VectorXd::Constant(impl_->tour.order.size(), 1.0 / impl_->tour.order.size());
+    v.tour = std::make_unique<TourController>(impl_->tour, impl_->grid, spec.transit_speed_mps,
+                                              impl_->scenario.astar.wait_per_lap_s, weights);
+  }
+  impl_->vehicles.push_back(std::move(v));
+}
+
+void AgentHost::RemoveVehicle(VehicleId id) {
+  const Impl::Vehicle& v = impl_->Find(id);
+  impl_->world.RemoveVehicle(v.body);
+  impl_->vehicles.erase(impl_->vehicles.begin() + (&v - impl_->vehicles.data()));
+}
+
+bool AgentHost::Contains(VehicleId id) const {
+  return std::any_of(impl_->vehicles.begin(), impl_->vehicles.end(), [&](const Impl::Vehicle& v) { return v.id == id; });
+}
+
+std::vector<VehicleId> AgentHost::ids() const {
+  std::vector<VehicleId> out;
+  for (const Impl::Vehicle& v : impl_->vehicles) out.push_back(v.id);
+  return out;
+}
+
+int AgentHost::vehicle_count() const { return static_cast<int>(impl_->vehicles.size()); }
+
+void AgentHost::SetTarget(VehicleId id, const VehicleTarget& target) {
+  Impl::Vehicle& v = impl_->Find(id);
+  if (!v.ergodic) return;  // an A* vehicle follows its tour
+  v.ergodic->SetTarget(target.phi);
+  if (target.fleet_sums.size() == impl_->basis.size()) {
+    v.ergodic->SetFleetCoverage(target.fleet_sums, target.fleet_time_s);
+  } else {
+    v.ergodic->SetFleetCoverage(Eigen::VectorXd::Zero(impl_->basis.size()), 0.0);
+  }
+}
+
+void AgentHost::SetTourWeights(const Eigen::VectorXd& weights) {
+  for (Impl::Vehicle& v : impl_->vehicles)
+    if (v.tour) v.tour->SetWeights(weights);
+}
+
+void AgentHost::Step(double time_s) {
+  for (Impl::Vehicle& v : impl_->vehicles) {
+    const VehicleState state = impl_->world.State(v.body);
+    Eigen::Vector2d command = v.ergodic ? v.ergodic->Command(state, time_s) : v.tour->Command(state, time_s);
+    if (v.keep_clear) command = v.keep_clear->Apply(state.position_m, command);
+    v.command = command;
+    impl_->world.SetVelocityCommand(v.body, command);
+  }
+  const double dt = impl_->control_dt / impl_->physics_substeps;
+  for (int s = 0; s < impl_->physics_substeps; ++s) impl_->world.Step(dt);
+}
+
+VehicleState AgentHost::State(VehicleId id) const { return impl_->world.State(impl_->Find(id).body); }
+
+Eigen::Vector2d AgentHost::LastCommand(VehicleId id) const { return impl_->Find(id).command; }
+
+const CoverageAccumulator* AgentHost::Coverage(VehicleId id) const {
+  const Impl::Vehicle& v = impl_->Find(id);
+  return v.ergodic ? &v.ergodic->coverage() : nullptr;
+}
+
+Eigen::Vector2d AgentHost::PreviewCommand(VehicleId id, const Eigen::VectorXd& phi, double time_s) const {
+  const Impl::Vehicle& v = impl_->Find(id);
+  if (!v.ergodic) return v.command;
+  ErgodicController copy = *v.ergodic;
+  copy.SetTarget(phi);
+  const VehicleState state = impl_->world.State(v.body);
+  Eigen::Vector2d command = copy.Command(state, time_s);
+  if (v.keep_clear) {
+    ObstacleFilter filter = *v.keep_clear;
+    command = filter.Apply(state.position_m, command);
+  }
+  return command;
+}
+
+const maps::SpectralBasis& AgentHost::basis() const { return impl_->basis; }
+double AgentHost::control_period_s() const { return impl_->control_dt; }
+
+}  // namespace sage::agents
