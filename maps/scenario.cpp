@@ -12,6 +12,8 @@
 #include <cstring>
 #include <filesystem>
 #include <memory>
+#include <optional>
+#include <set>
 #include <string_view>
 
 #include <yaml-cpp/yaml.h>
@@ -215,6 +217,28 @@ VehicleSpec ReadVehicle(const Reader& r, const YAML::Node& node, const std::stri
   return vehicle;
 }
 
+// One change of the fleet: {time_s: T, join: {a vehicle}} or {time_s: T, lose: NAME} or
+// {time_s: T, leave: NAME}.
+FleetEvent ReadFleetEvent(const Reader& r, const YAML::Node& node, const std::string& path) {
+  r.ExpectMap(node, path, {"time_s", "join", "lose", "leave"});
+  FleetEvent event;
+  event.time_s = r.Number(r.Require(node, "time_s", path), path + ".time_s");
+  const int kinds = static_cast<int>(node["join"].IsDefined()) + static_cast<int>(node["lose"].IsDefined()) +
+                    static_cast<int>(node["leave"].IsDefined());
+  if (kinds != 1) r.Fail(path, node, "must give exactly one of join, lose, leave");
+  if (node["join"].IsDefined()) {
+    event.kind = FleetEvent::Kind::kJoin;
+    event.vehicle = ReadVehicle(r, node["join"], path + ".join");
+  } else if (node["lose"].IsDefined()) {
+    event.kind = FleetEvent::Kind::kLose;
+    event.vehicle.name = r.Text(node["lose"], path + ".lose");
+  } else {
+    event.kind = FleetEvent::Kind::kLeave;
+    event.vehicle.name = r.Text(node["leave"], path + ".leave");
+  }
+  return event;
+}
+
 RiskProfile ReadProfile(const Reader& r, const std::string& name, const YAML::Node& node, const std::string& path) {
   r.ExpectMap(node, path, {"weights", "events"});
   RiskProfile profile;
@@ -244,7 +268,7 @@ Scenario ReadScenario(const Reader& r, const YAML::Node& root, const std::string
   if (!root.IsMap()) r.Fail("scenario", root, "must be a YAML map of sections (workspace, structures, ...)");
   r.ExpectMap(root, "", {"name", "workspace", "duration_s", "control_rate_hz", "physics_rate_hz",
                          "visit_radius_m", "rearm_radius_m", "seed", "ergodic", "guard", "astar",
-                         "structures", "vehicles", "default_profile", "profiles"});
+                         "structures", "vehicles", "default_profile", "profiles", "fleet", "fleet_events"});
   Scenario s;
   s.source_path = source;
   s.name = source.empty() ? "scenario" : std::filesystem::path(source).stem().string();
@@ -301,6 +325,20 @@ Scenario ReadScenario(const Reader& r, const YAML::Node& root, const std::string
     s.default_profile = r.Text(n, p);
   });
   if (s.default_profile.empty() && !s.profiles.empty()) s.default_profile = s.profiles.front().name;
+  r.Optional(root, "fleet", "", [&](const YAML::Node& n, const std::string& p) {
+    r.ExpectMap(n, p, {"assignment", "coverage_period_s", "liveliness_lease_s"});
+    r.Optional(n, "assignment", p, [&](const YAML::Node& v, const std::string& q) {
+      s.fleet.assignment = ParseFleetAssignment(r.Text(v, q), r.file() + ": " + q);
+    });
+    r.OptionalNumber(n, "coverage_period_s", p, s.fleet.coverage_period_s);
+    r.OptionalNumber(n, "liveliness_lease_s", p, s.fleet.liveliness_lease_s);
+  });
+  r.Optional(root, "fleet_events", "", [&](const YAML::Node& list, const std::string& p) {
+    r.ExpectList(list, p);
+    for (std::size_t i = 0; i < list.size(); ++i) {
+      s.fleet_events.push_back(ReadFleetEvent(r, list[i], p + "[" + std::to_string(i) + "]"));
+    }
+  });
   return s;
 }
 
@@ -352,6 +390,68 @@ class Checker {
 
 bool InsideBox(const Eigen::Vector2d& p, const Eigen::Vector2d& min, const Eigen::Vector2d& max) {
   return (p.array() >= min.array()).all() && (p.array() <= max.array()).all();
+}
+
+const char* EventKey(FleetEvent::Kind kind) {
+  switch (kind) {
+    case FleetEvent::Kind::kJoin: return "join";
+    case FleetEvent::Kind::kLose: return "lose";
+    case FleetEvent::Kind::kLeave: return "leave";
+  }
+  return "unknown";
+}
+
+std::string ShowName(const std::string& name) { return name.empty() ? "\"\"" : name; }
+
+// Fleet events: times and joined vehicles in file order, then who is present, walking the events
+// in time order (stable, as they are sorted on load) but naming each by its index in the file.
+template <typename CheckVehicle>
+void CheckFleetEvents(const Checker& c, const std::vector<FleetEvent>& events, const std::vector<VehicleSpec>& vehicles,
+                      double duration_s, const CheckVehicle& check_vehicle) {
+  const auto path_of = [](std::size_t i) { return "fleet_events[" + std::to_string(i) + "]"; };
+  std::map<std::string, double> join_time;
+  for (std::size_t i = 0; i < events.size(); ++i) {
+    const FleetEvent& event = events[i];
+    if (!(event.time_s >= 0 && event.time_s <= duration_s)) {
+      c.Fail(path_of(i) + ".time_s", FormatNumber(event.time_s),
+             "must be in [0, duration_s = " + FormatNumber(duration_s) + "]");
+    }
+    if (event.kind == FleetEvent::Kind::kJoin) {
+      check_vehicle(path_of(i) + ".join", event.vehicle);
+      join_time[event.vehicle.name] = event.time_s;
+    } else if (event.kind != FleetEvent::Kind::kLose && event.kind != FleetEvent::Kind::kLeave) {
+      c.Fail(path_of(i), std::to_string(static_cast<int>(event.kind)), "must be a join, lose or leave");
+    }
+  }
+  std::vector<std::size_t> order(events.size());
+  for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
+  std::stable_sort(order.begin(), order.end(),
+                   [&](std::size_t a, std::size_t b) { return events[a].time_s < events[b].time_s; });
+  std::vector<std::string> present;
+  for (const VehicleSpec& vehicle : vehicles) present.push_back(vehicle.name);
+  std::map<std::string, std::string> gone;  // name -> "was lost at t = 400"
+  for (std::size_t i : order) {
+    const FleetEvent& event = events[i];
+    const std::string& name = event.vehicle.name;
+    if (event.kind == FleetEvent::Kind::kJoin) {
+      present.push_back(name);
+      continue;
+    }
+    const std::string field = path_of(i) + "." + EventKey(event.kind);
+    const std::string time_text = "t = " + FormatNumber(event.time_s);
+    const auto it = std::find(present.begin(), present.end(), name);
+    if (it == present.end()) {
+      std::string list;
+      for (const std::string& other : present) list += (list.empty() ? "" : ", ") + other;
+      std::string why;
+      if (gone.count(name) != 0) why = "; " + name + " " + gone[name];
+      else if (join_time.count(name) != 0) why = "; " + name + " joins only at t = " + FormatNumber(join_time[name]);
+      c.Fail(field, ShowName(name), "must name a vehicle present at " + time_text + " (present: " + list + ")" + why);
+    }
+    if (present.size() == 1) c.Fail(field, name, "would leave no vehicle");
+    present.erase(it);
+    gone[name] = std::string(event.kind == FleetEvent::Kind::kLose ? "was lost" : "left") + " at " + time_text;
+  }
 }
 
 }  // namespace
@@ -440,10 +540,8 @@ void Scenario::Validate() const {
     return "(valves: " + list + ")";
   };
 
-  if (vehicles.empty()) c.Fail("vehicles", "must list at least one vehicle");
-  for (std::size_t i = 0; i < vehicles.size(); ++i) {
-    const VehicleSpec& vehicle = vehicles[i];
-    const std::string path = "vehicles[" + std::to_string(i) + "]";
+  // A vehicle of `vehicles:` or one joining later; names are unique across both.
+  const auto check_vehicle = [&](const std::string& path, const VehicleSpec& vehicle) {
     c.UniqueName(vehicle_names, path + ".name", vehicle.name);
     c.Finite(path + ".start_m", vehicle.start_m);
     if (!InsideBox(vehicle.start_m, Eigen::Vector2d::Zero(), workspace_max)) {
@@ -457,7 +555,16 @@ void Scenario::Validate() const {
       c.Fail(path + ".model", std::to_string(static_cast<int>(vehicle.model)), "must be single_integrator or bluerov2");
     }
     c.Positive(path + ".transit_speed_mps", vehicle.transit_speed_mps);
+  };
+  if (vehicles.empty()) c.Fail("vehicles", "must list at least one vehicle");
+  for (std::size_t i = 0; i < vehicles.size(); ++i) check_vehicle("vehicles[" + std::to_string(i) + "]", vehicles[i]);
+
+  if (fleet.assignment != FleetAssignment::kShared && fleet.assignment != FleetAssignment::kPartition) {
+    c.Fail("fleet.assignment", std::to_string(static_cast<int>(fleet.assignment)), "must be shared or partition");
   }
+  c.Positive("fleet.coverage_period_s", fleet.coverage_period_s);
+  c.Positive("fleet.liveliness_lease_s", fleet.liveliness_lease_s);
+  CheckFleetEvents(c, fleet_events, vehicles, duration_s, check_vehicle);
 
   const std::size_t valve_count = valve_names.size();
   c.Positive("guard.revisit_bound_s", guard.revisit_bound_s, /*infinity_ok=*/true);
@@ -539,6 +646,21 @@ MotionModel ParseMotionModel(const std::string& text, const std::string& where) 
                               ": must be single_integrator or bluerov2"));
 }
 
+const char* ToString(FleetAssignment assignment) {
+  switch (assignment) {
+    case FleetAssignment::kShared: return "shared";
+    case FleetAssignment::kPartition: return "partition";
+  }
+  return "unknown";
+}
+
+FleetAssignment ParseFleetAssignment(const std::string& text, const std::string& where) {
+  if (text == "shared") return FleetAssignment::kShared;
+  if (text == "partition") return FleetAssignment::kPartition;
+  throw ScenarioError(OneLine((where.empty() ? "assignment" : where) + " = " + (text.empty() ? "\"\"" : text) +
+                              ": must be shared or partition"));
+}
+
 Scenario ParseScenario(const std::string& yaml_text, const std::string& source) {
   const Reader reader(source);
   Scenario scenario;
@@ -555,6 +677,8 @@ Scenario ParseScenario(const std::string& yaml_text, const std::string& source) 
     std::stable_sort(profile.events.begin(), profile.events.end(),
                      [](const RiskEvent& a, const RiskEvent& b) { return a.time_s < b.time_s; });
   }
+  std::stable_sort(scenario.fleet_events.begin(), scenario.fleet_events.end(),
+                   [](const FleetEvent& a, const FleetEvent& b) { return a.time_s < b.time_s; });
   return scenario;
 }
 
@@ -577,6 +701,15 @@ std::string EmitScenario(const Scenario& s) {
   const auto number = [&](const std::string& name, double v) { key(name) << FormatNumber(v); };
   const auto vector = [&](const Eigen::Vector2d& v) {
     out << YAML::Flow << YAML::BeginSeq << FormatNumber(v.x()) << FormatNumber(v.y()) << YAML::EndSeq;
+  };
+  const auto vehicle_map = [&](const VehicleSpec& vehicle) {
+    out << YAML::Flow << YAML::BeginMap;
+    key("name") << vehicle.name;
+    key("start_m"); vector(vehicle.start_m);
+    number("start_heading_rad", vehicle.start_heading_rad);
+    key("model") << ToString(vehicle.model);
+    number("transit_speed_mps", vehicle.transit_speed_mps);
+    out << YAML::EndMap;
   };
   out << YAML::Comment("SAGE Fleet scenario (written by EmitScenario); units are in the field names");
   out << YAML::BeginMap;
@@ -628,13 +761,22 @@ std::string EmitScenario(const Scenario& s) {
   }
   out << YAML::EndSeq;
   key("vehicles") << YAML::BeginSeq;
-  for (const VehicleSpec& vehicle : s.vehicles) {
+  for (const VehicleSpec& vehicle : s.vehicles) vehicle_map(vehicle);
+  out << YAML::EndSeq;
+  key("fleet") << YAML::Flow << YAML::BeginMap;
+  key("assignment") << ToString(s.fleet.assignment);
+  number("coverage_period_s", s.fleet.coverage_period_s);
+  number("liveliness_lease_s", s.fleet.liveliness_lease_s);
+  out << YAML::EndMap;
+  key("fleet_events");
+  if (s.fleet_events.empty()) out << YAML::Flow;  // "fleet_events: []" on one line
+  out << YAML::BeginSeq;
+  for (const FleetEvent& event : s.fleet_events) {
     out << YAML::Flow << YAML::BeginMap;
-    key("name") << vehicle.name;
-    key("start_m"); vector(vehicle.start_m);
-    number("start_heading_rad", vehicle.start_heading_rad);
-    key("model") << ToString(vehicle.model);
-    number("transit_speed_mps", vehicle.transit_speed_mps);
+    number("time_s", event.time_s);
+    key(EventKey(event.kind));
+    if (event.kind == FleetEvent::Kind::kJoin) vehicle_map(event.vehicle);
+    else out << event.vehicle.name;
     out << YAML::EndMap;
   }
   out << YAML::EndSeq;
@@ -657,6 +799,129 @@ std::string EmitScenario(const Scenario& s) {
   }
   out << YAML::EndMap << YAML::EndMap;
   return std::string(out.c_str()) + "\n";
+}
+
+namespace {
+
+// Starts added by WithVehicleCount keep clear of footprints and of each other: a BlueROV2 hull is
+// 0.46 x 0.58 m (0.74 m across), so 1 m between starts leaves two hulls apart whatever headings.
+constexpr double kStartEdgeMargin_m = 0.5;       // from the workspace edges
+constexpr double kStartFootprintMargin_m = 0.5;  // added to each side of every footprint
+constexpr double kStartSeparation_m = 1.0;       // from every other start, joiners' included
+constexpr double kStartSearchStep_m = 0.05;      // grid step of the search for a free start
+
+bool IsFreeStart(const Scenario& s, const std::vector<Eigen::Vector2d>& taken, const Eigen::Vector2d& p) {
+  for (const ChristmasTree& tree : s.structures) {
+    const Eigen::Vector2d half = tree.size_m / 2 + Eigen::Vector2d::Constant(kStartFootprintMargin_m);
+    if (((p - tree.center_m).array().abs() < half.array()).all()) return false;
+  }
+  for (const Eigen::Vector2d& other : taken) {
+    if ((p - other).norm() < kStartSeparation_m) return false;
+  }
+  return true;
+}
+
+// Of the points wanted + kStartSearchStep_m * (i, j), to the mm, inside the workspace less its edge
+// margin, the free one nearest to `wanted` (ties: the first found). Rings of growing Chebyshev
+// radius are searched until no point of a further ring can be nearer than the best so far.
+std::optional<Eigen::Vector2d> NearestFreeStart(const Scenario& s, const std::vector<Eigen::Vector2d>& taken,
+                                                const Eigen::Vector2d& wanted) {
+  const Eigen::Vector2d size(s.workspace.width_m, s.workspace.height_m);
+  const Eigen::Vector2d margin = (size / 2).cwiseMin(Eigen::Vector2d::Constant(kStartEdgeMargin_m));
+  // A hair of tolerance so that the wanted point on the margin line itself counts as inside.
+  const Eigen::Vector2d low = margin.array() - 1e-9, high = (size - margin).array() + 1e-9;
+  const int last_ring = static_cast<int>(std::ceil(size.maxCoeff() / kStartSearchStep_m)) + 1;
+  std::optional<Eigen::Vector2d> best;
+  double best_distance = std::numeric_limits<double>::infinity();
+  const auto consider = [&](int i, int j) {
+    // Whole millimetres, so a written scenario reads cleanly; the rules are checked on this value.
+    const Eigen::Vector2d p =
+        ((wanted + kStartSearchStep_m * Eigen::Vector2d(i, j)) * 1000.0).array().round().matrix() / 1000.0;
+    const double distance = (p - wanted).norm();
+    if (distance >= best_distance || !InsideBox(p, low, high)) return;
+    if (!IsFreeStart(s, taken, p)) return;
+    best = p;
+    best_distance = distance;
+  };
+  for (int ring = 0; ring <= last_ring && ring * kStartSearchStep_m <= best_distance; ++ring) {
+    if (ring == 0) {
+      consider(0, 0);
+      continue;
+    }
+    for (int i = -ring; i <= ring; ++i) {
+      consider(i, -ring);
+      consider(i, ring);
+    }
+    for (int j = -ring + 1; j < ring; ++j) {
+      consider(-ring, j);
+      consider(ring, j);
+    }
+  }
+  return best;
+}
+
+}  // namespace
+
+Scenario WithVehicleCount(const Scenario& scenario, int count) {
+  const std::string option = "--vehicles = " + std::to_string(count);
+  if (count < 1) throw ScenarioError(option + ": must be >= 1");
+  Scenario s = scenario;
+  const std::size_t wanted = static_cast<std::size_t>(count);
+  if (wanted <= s.vehicles.size()) {
+    std::set<std::string> dropped;
+    for (std::size_t i = wanted; i < s.vehicles.size(); ++i) dropped.insert(s.vehicles[i].name);
+    s.vehicles.resize(wanted);
+    std::erase_if(s.fleet_events, [&](const FleetEvent& event) {
+      return event.kind != FleetEvent::Kind::kJoin && dropped.count(event.vehicle.name) != 0;
+    });
+  } else {
+    const VehicleSpec first = s.vehicles.empty() ? VehicleSpec() : s.vehicles.front();
+    std::set<std::string> used;
+    std::vector<Eigen::Vector2d> taken;
+    for (const VehicleSpec& vehicle : s.vehicles) {
+      used.insert(vehicle.name);
+      taken.push_back(vehicle.start_m);
+    }
+    for (const FleetEvent& event : s.fleet_events) {
+      if (event.kind != FleetEvent::Kind::kJoin) continue;
+      used.insert(event.vehicle.name);
+      taken.push_back(event.vehicle.start_m);
+    }
+    const std::size_t added = wanted - s.vehicles.size();
+    const double width = s.workspace.width_m;
+    const double y = std::min(kStartEdgeMargin_m, s.workspace.height_m / 2);
+    std::size_t number = s.vehicles.size() + 1;
+    for (std::size_t k = 0; k < added; ++k) {
+      // Evenly from x = 0.5 to width - 0.5 along y = 0.5, each then moved to the nearest free point.
+      const double x = (added == 1 || width <= 2 * kStartEdgeMargin_m)
+                           ? width / 2
+                           : kStartEdgeMargin_m + (width - 2 * kStartEdgeMargin_m) * static_cast<double>(k) /
+                                                      static_cast<double>(added - 1);
+      VehicleSpec vehicle;
+      while (used.count("rov" + std::to_string(number)) != 0) ++number;
+      vehicle.name = "rov" + std::to_string(number);
+      used.insert(vehicle.name);
+      vehicle.model = first.model;
+      vehicle.transit_speed_mps = first.transit_speed_mps;
+      vehicle.start_heading_rad = 0.0;
+      const std::optional<Eigen::Vector2d> start = NearestFreeStart(s, taken, Eigen::Vector2d(x, y));
+      if (!start) {
+        throw ScenarioError(option + ": no free start for " + vehicle.name + " in the workspace (" +
+                            FormatNumber(kStartSeparation_m) + " m from other vehicles, " +
+                            FormatNumber(kStartFootprintMargin_m) + " m from structures)");
+      }
+      vehicle.start_m = *start;
+      taken.push_back(vehicle.start_m);
+      s.vehicles.push_back(vehicle);
+    }
+  }
+  // Dropping vehicles can make a kept vehicle's loss leave the fleet empty; say which option did it.
+  try {
+    s.Validate();
+  } catch (const ScenarioError& e) {
+    throw ScenarioError(std::string(e.what()) + " (with " + option + ")");
+  }
+  return s;
 }
 
 }  // namespace sage::maps

@@ -92,6 +92,28 @@ struct AstarSettings {
   double wait_per_lap_s = 2.0;     ///< total wait per lap (s), split over valves by weight, >= 0
 };
 
+/// How the server divides the risk among the vehicles of a fleet.
+enum class FleetAssignment {
+  kShared,     ///< Mathew & Mezic: every vehicle steers on the whole fleet's coverage of the whole field
+  kPartition,  ///< the valves are partitioned among the vehicles; each covers its own share alone
+};
+
+/// Fleet settings (a single-vehicle mission ignores them).
+struct FleetSettings {
+  FleetAssignment assignment = FleetAssignment::kShared;
+  double coverage_period_s = 0.5;  ///< how often a vehicle publishes its coverage sums (s), > 0
+  double liveliness_lease_s = 0.5; ///< a vehicle silent this long is lost (s), > 0
+};
+
+/// A change of the fleet during a mission: a vehicle joins, is lost (dies without a word), or
+/// leaves cleanly.
+struct FleetEvent {
+  enum class Kind { kJoin, kLose, kLeave };
+  double time_s = 0.0;  ///< mission time (s), in [0, duration]
+  Kind kind = Kind::kJoin;
+  VehicleSpec vehicle;  ///< join: the whole spec (a new unique name); lose/leave: only the name matters
+};
+
 struct Scenario {
   std::string name;                         ///< from the file name or `name:` field
   std::string source_path;                  ///< file it was loaded from (for messages)
@@ -109,6 +131,8 @@ struct Scenario {
   ErgodicSettings ergodic;
   StarvationGuard guard;
   AstarSettings astar;
+  FleetSettings fleet;
+  std::vector<FleetEvent> fleet_events;     ///< sorted by time on load
 
   /// All valves in file order (P1..Pn), structure after structure.
   std::vector<Valve> AllValves() const;
@@ -125,7 +149,16 @@ Scenario ParseScenario(const std::string& yaml_text, const std::string& source);
 /// Writes YAML that LoadScenario reads back to an equal Scenario.
 std::string EmitScenario(const Scenario& scenario);
 
+/// A copy with exactly `count` vehicles (>= 1): the first `count` of the file's, or all of them
+/// plus new ones named rov<N> with the first vehicle's model and speed, their starts spread
+/// evenly along the bottom edge of the workspace (0.5 m in), so a fleet size can be chosen on
+/// the command line. Fleet events naming a dropped vehicle are dropped too.
+Scenario WithVehicleCount(const Scenario& scenario, int count);
+
 const char* ToString(MotionModel model);
+const char* ToString(FleetAssignment assignment);
+/// Throws ScenarioError unless text is "shared" or "partition"; `where` starts the message.
+FleetAssignment ParseFleetAssignment(const std::string& text, const std::string& where);
 /// Throws ScenarioError if `text` is not "single_integrator" or "bluerov2"; `where` starts the
 /// message, e.g. "scenarios/x.yaml: vehicles[0].model" or "command line: --model".
 MotionModel ParseMotionModel(const std::string& text, const std::string& where);

@@ -15,8 +15,10 @@ namespace sage::proto {
 using VehicleState = sage_msgs_msg_dds__VehicleState_;
 /// A vehicle's running basis sums (key vehicle_id).
 using VehicleCoverage = sage_msgs_msg_dds__VehicleCoverage_;
-/// The server's coverage error for one vehicle (key vehicle_id).
+/// The server's assignment for one vehicle (key vehicle_id).
 using ErgodicTarget = sage_msgs_msg_dds__ErgodicTarget_;
+/// The field's phi_k and the fleet's coverage, once per server cycle (unkeyed).
+using FleetCoverage = sage_msgs_msg_dds__FleetCoverage_;
 /// One valve's new risk weight (unkeyed).
 using RiskUpdate = sage_msgs_msg_dds__RiskUpdate_;
 /// The server's mission status (unkeyed).
@@ -35,6 +37,7 @@ SAGE_PROTO_MESSAGE_TRAITS(VehicleState, sage_msgs_msg_dds__VehicleState_, kVehic
 SAGE_PROTO_MESSAGE_TRAITS(VehicleCoverage, sage_msgs_msg_dds__VehicleCoverage_,
                           kVehicleCoverageTopic);
 SAGE_PROTO_MESSAGE_TRAITS(ErgodicTarget, sage_msgs_msg_dds__ErgodicTarget_, kErgodicTargetTopic);
+SAGE_PROTO_MESSAGE_TRAITS(FleetCoverage, sage_msgs_msg_dds__FleetCoverage_, kFleetCoverageTopic);
 SAGE_PROTO_MESSAGE_TRAITS(RiskUpdate, sage_msgs_msg_dds__RiskUpdate_, kRiskUpdateTopic);
 SAGE_PROTO_MESSAGE_TRAITS(MissionStatus, sage_msgs_msg_dds__MissionStatus_, kMissionStatusTopic);
 SAGE_PROTO_MESSAGE_TRAITS(FleetCommand, sage_msgs_msg_dds__FleetCommand_, kFleetCommandTopic);
@@ -52,6 +55,24 @@ inline dds_sequence_double BorrowSequence(std::span<const double> values) {
   sequence._release = false;
   return sequence;
 }
+
+/// The same for sequence<uint32> and sequence<uint64>.
+inline dds_sequence_uint32 BorrowSequence(std::span<const uint32_t> values) {
+  dds_sequence_uint32 sequence{};
+  sequence._maximum = sequence._length = static_cast<uint32_t>(values.size());
+  sequence._buffer = const_cast<uint32_t*>(values.data());
+  sequence._release = false;
+  return sequence;
+}
+inline dds_sequence_uint64 BorrowSequence(std::span<const uint64_t> values) {
+  dds_sequence_uint64 sequence{};
+  sequence._maximum = sequence._length = static_cast<uint32_t>(values.size());
+  sequence._buffer = const_cast<uint64_t*>(values.data());
+  sequence._release = false;
+  return sequence;
+}
+inline std::span<const uint32_t> AsSpan(const dds_sequence_uint32& sequence) { return {sequence._buffer, sequence._length}; }
+inline std::span<const uint64_t> AsSpan(const dds_sequence_uint64& sequence) { return {sequence._buffer, sequence._length}; }
 
 /// The elements of a received sequence<double>, valid as long as the sample holding it.
 inline std::span<const double> AsSpan(const dds_sequence_double& sequence) {

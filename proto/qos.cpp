@@ -94,6 +94,13 @@ Qos ErgodicTargetQos() {
   return qos;
 }
 
+Qos FleetCoverageQos() {
+  Qos qos;
+  SetReliable(qos);
+  SetKeepLast(qos, 1);
+  return qos;
+}
+
 Qos RiskUpdateQos() {
   Qos qos;
   SetReliable(qos);

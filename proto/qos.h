@@ -47,6 +47,10 @@ Qos VehicleCoverageQos();
 /// ErgodicTarget (server -> vehicles): reliable, transient-local, keep-last 1 per vehicle.
 Qos ErgodicTargetQos();
 
+/// FleetCoverage (server -> vehicles, once a cycle): reliable, volatile, keep-last 1 — only the
+/// newest accounting matters, and the next cycle brings one to a late joiner within 0.1 s.
+Qos FleetCoverageQos();
+
 /// RiskUpdate (operators/sensors -> server, viewers): reliable, transient-local, keep-last 16.
 Qos RiskUpdateQos();
 

@@ -15,6 +15,7 @@
 #include <spdlog/spdlog.h>
 
 #include "maps/scenario.h"
+#include "server/cli_fleet.h"
 #include "server/metrics.h"
 #include "server/mission.h"
 #include "server/report.h"
@@ -34,6 +35,8 @@ struct MissionOverrides {
   std::optional<double> forgetting_time_s;
   std::optional<int> basis_order;
   std::optional<std::string> model;       // overrides every vehicle's motion model
+  std::optional<int> vehicles;            // fleet size
+  std::optional<std::string> assignment;  // shared | partition
   std::string out_dir;
 };
 
@@ -53,11 +56,29 @@ void AddMissionOptions(CLI::App& cmd, MissionOverrides& o) {
                  "Motion model of every vehicle: bluerov2 (Box2D dynamics) or single_integrator (the paper's "
                  "constant-speed point); default: as in the scenario")
       ->check(CLI::IsMember({"bluerov2", "single_integrator"}));
+  cmd.add_option("--vehicles,-n", o.vehicles, "Fleet size: the scenario's first N vehicles, or more spread along the "
+                                              "bottom edge (default: the scenario's)");
+  cmd.add_option("--assignment", o.assignment,
+                 "Fleet coverage: shared (Mathew-Mezic) or partition (valves split among vehicles)")
+      ->check(CLI::IsMember({"shared", "partition"}));
 }
+
+}  // namespace
+
+// A shorter mission simply never reaches the events after its end.
+void SetDuration(maps::Scenario& scenario, double duration_s) {
+  scenario.duration_s = duration_s;
+  for (maps::RiskProfile& p : scenario.profiles) std::erase_if(p.events, [&](const auto& e) { return e.time_s > duration_s; });
+  std::erase_if(scenario.fleet_events, [&](const auto& e) { return e.time_s > duration_s; });
+}
+
+namespace {
 
 maps::Scenario LoadWithOverrides(const MissionOverrides& o) {
   maps::Scenario scenario = maps::LoadScenario(o.scenario_path);
-  if (o.duration_s) scenario.duration_s = *o.duration_s;
+  if (o.vehicles) scenario = maps::WithVehicleCount(scenario, *o.vehicles);
+  if (o.assignment) scenario.fleet.assignment = maps::ParseFleetAssignment(*o.assignment, "--assignment");
+  if (o.duration_s) SetDuration(scenario, *o.duration_s);
   if (o.seed) scenario.seed = *o.seed;
   if (o.guard) scenario.guard.enabled = (*o.guard == "on");
   if (o.forgetting_time_s) scenario.ergodic.forgetting_time_s = *o.forgetting_time_s;
@@ -242,6 +263,8 @@ int RunCli(int argc, char** argv) {
   evaluate->add_option("--duration", eval_duration, "Mission length in seconds (default: the last sample's time)");
   evaluate->add_option("--out,-o", eval_out, "Also write metrics.json and plot.svg here");
 
+  const std::shared_ptr<FleetCli> fleet = AddFleetSubcommands(app);
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -253,6 +276,7 @@ int RunCli(int argc, char** argv) {
     if (*run) return CmdRun(run_opts, controller);
     if (*compare) return CmdCompare(compare_opts, calibrate == "on");
     if (*evaluate) return CmdEvaluate(trajectory_path, eval_scenario, eval_profile, eval_duration, eval_out);
+    return RunFleetSubcommand(*fleet);
   } catch (const maps::ScenarioError& e) {
     std::cerr << "sage: error: " << e.what() << "\n";
     return 2;

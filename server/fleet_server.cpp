@@ -50,7 +50,10 @@ void FleetServer::AddVehicle(int id, const std::string& name) {
   if (!inserted && it->second.alive) return;
   it->second.name = name;
   it->second.alive = true;
-  if (inserted) it->second.sums = Eigen::VectorXd::Zero(basis_.size());
+  if (inserted) {
+    it->second.sums = Eigen::VectorXd::Zero(basis_.size());
+    it->second.dense = static_cast<int>(vehicles_.size()) - 1;
+  }
   partition_dirty_ = true;
 }
 
@@ -58,7 +61,7 @@ void FleetServer::RemoveVehicle(int id, bool /*lost*/, double /*time_s*/) {
   auto it = vehicles_.find(id);
   if (it == vehicles_.end() || !it->second.alive) return;
   it->second.alive = false;
-  visits_.Forget(id);
+  visits_.Forget(it->second.dense);
   partition_dirty_ = true;
 }
 
@@ -80,7 +83,7 @@ void FleetServer::OnState(int id, double time_s, const Eigen::Vector2d& position
   auto it = vehicles_.find(id);
   if (it == vehicles_.end() || !it->second.alive) return;
   it->second.position_m = position_m;
-  visits_.Update(id, position_m, time_s);
+  visits_.Update(it->second.dense, position_m, time_s);
 }
 
 bool FleetServer::OnCoverage(int id, std::uint64_t seq, double stamp_s, double kernel_time_s,

@@ -93,6 +93,7 @@ class FleetServer {
     Eigen::VectorXd sums;
     Eigen::Vector2d position_m = Eigen::Vector2d::Zero();
     std::vector<int> valves;  // partition: the valves this vehicle covers
+    int dense = 0;            // 0, 1, 2... in order of joining: the VisitTracker's index (ids may be huge)
   };
 
   void UpdateEffectiveWeights(double time_s);

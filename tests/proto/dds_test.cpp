@@ -75,7 +75,7 @@ TEST(DdsEntities, KeyedVehicleStateRoundTripsFiftyInstances) {
   Writer<VehicleState> writer(participant, VehicleStateWriterQos());
   ASSERT_TRUE(writer.WaitForReaders(1, 2s));
   for (uint32_t id = 0; id < 50; ++id) {
-    writer.Write(VehicleState{id, 1000 + id, 1.5 * id, -2.0 * id, 0.01 * id, 0.5, -0.25});
+    writer.Write(VehicleState{id, 1000 + id, const_cast<char*>("rov"), 1.5 * id, -2.0 * id, 0.01 * id, 0.5, -0.25});
   }
   std::map<uint32_t, VehicleState> latest;
   TakeUntil(
@@ -106,7 +106,7 @@ TEST(DdsEntities, ErgodicTargetReachesLateJoiner) {
   Writer<ErgodicTarget> writer(server, ErgodicTargetQos());
   std::vector<double> error(400);
   for (std::size_t k = 0; k < error.size(); ++k) error[k] = 0.25 * k - 3.0;
-  writer.Write(ErgodicTarget{7, 123, 9, 20, BorrowSequence(error)});
+  writer.Write(ErgodicTarget{7, 123, 9, 20, false, BorrowSequence(error)});
 
   Participant vehicle(domain.domain_id(), TestConfig());
   Reader<ErgodicTarget> late_reader(vehicle, ErgodicTargetQos());
@@ -117,7 +117,7 @@ TEST(DdsEntities, ErgodicTargetReachesLateJoiner) {
   EXPECT_EQ(target.vehicle_id, 7u);
   EXPECT_EQ(target.cycle, 9u);
   EXPECT_EQ(target.basis_order, 20u);
-  const auto received = AsSpan(target.coverage_error);
+  const auto received = AsSpan(target.phi);
   ASSERT_EQ(received.size(), error.size());
   EXPECT_TRUE(std::equal(received.begin(), received.end(), error.begin()));
 
@@ -126,7 +126,7 @@ TEST(DdsEntities, ErgodicTargetReachesLateJoiner) {
   std::vector<double> copied;
   const std::size_t visited =
       loaned_reader.TakeEach([&](const ErgodicTarget& t, const dds_sample_info_t&) {
-        copied.assign(AsSpan(t.coverage_error).begin(), AsSpan(t.coverage_error).end());
+        copied.assign(AsSpan(t.phi).begin(), AsSpan(t.phi).end());
       });
   EXPECT_EQ(visited, 1u);
   EXPECT_EQ(copied, error);
@@ -147,7 +147,7 @@ TEST(DdsEntities, KilledVehicleReadsNotAliveNoWriters) {
       Participant vehicle(domain.domain_id(), TestConfig());
       Writer<VehicleState> writer(vehicle, VehicleStateWriterQos(500ms));
       for (int tick = 0; tick < 200; ++tick) {  // 10 s at most, should the parent die
-        writer.Write(VehicleState{kVehicleId, tick, 1.0, 2.0, 0.0, 0.0, 0.0});
+        writer.Write(VehicleState{kVehicleId, tick, const_cast<char*>("rov"), 1.0, 2.0, 0.0, 0.0, 0.0});
         dds_sleepfor(DDS_MSECS(50));
       }
     } catch (const std::exception& e) {
@@ -203,12 +203,12 @@ TEST(DdsEntities, DisposeAndWriterLossAreDistinguished) {
   {
     Writer<VehicleState> writer(participant, VehicleStateWriterQos());
     ASSERT_TRUE(writer.WaitForReaders(1, 2s));
-    for (uint32_t id : {5u, 6u, 7u}) writer.Write(VehicleState{id, 1, 0, 0, 0, 0, 0});
+    for (uint32_t id : {5u, 6u, 7u}) writer.Write(VehicleState{id, 1, const_cast<char*>("rov"), 0, 0, 0, 0, 0});
     collect(3);
     ASSERT_EQ(state_of.size(), 3u);
     state_of.clear();
-    writer.Dispose(VehicleState{5, 2, 0, 0, 0, 0, 0});
-    writer.Unregister(VehicleState{6, 2, 0, 0, 0, 0, 0});
+    writer.Dispose(VehicleState{5, 2, const_cast<char*>("rov"), 0, 0, 0, 0, 0});
+    writer.Unregister(VehicleState{6, 2, const_cast<char*>("rov"), 0, 0, 0, 0, 0});
     collect(2);
   }  // writer deleted: vehicle 7 loses its only writer
   collect(3);
@@ -266,7 +266,7 @@ TEST(DdsEntities, DifferentDomainsDoNotMeet) {
   Reader<MissionStatus> reader_a(mission_a, MissionStatusQos());
   Reader<MissionStatus> reader_b(mission_b, MissionStatusQos());
   Writer<MissionStatus> writer_a(mission_a, MissionStatusQos());
-  writer_a.Write(MissionStatus{1, 77, 1.0, 300.0, 3, 0.5, false});
+  writer_a.Write(MissionStatus{1, 0, 1.0, 77, 1.0, 300.0, 3, 0, 0.0, 0.5, false});
   const auto seen_a = TakeUntil(
       reader_a, [](const auto& s) { return !s.empty(); }, 2000ms);
   ASSERT_EQ(seen_a.size(), 1u);

@@ -1,0 +1,286 @@
+#include "server/launch.h"
+
+#include <fcntl.h>
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <thread>
+#include <vector>
+
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+#include <spdlog/spdlog.h>
+
+#include "proto/dds_config.h"
+#include "proto/dds_endpoints.h"
+#include "proto/messages.h"
+#include "proto/qos.h"
+
+namespace sage::server {
+namespace {
+
+namespace fs = std::filesystem;
+constexpr int kVehiclesPerHost = 250;
+
+std::string SelfExe() { return fs::read_symlink("/proc/self/exe").string(); }
+
+// fork + exec of this same `sage` binary; stdout/stderr go to `log_path` unless it is empty.
+pid_t Spawn(const std::vector<std::string>& args, const std::string& log_path, bool detach = false) {
+  const pid_t pid = fork();
+  if (pid < 0) throw std::runtime_error("fork failed");
+  if (pid == 0) {
+    if (detach) setsid();
+    if (!log_path.empty()) {
+      const int fd = open(log_path.c_str(), O_WRONLY | O_CREAT | O_APPEND, 0644);
+      if (fd >= 0) {
+        dup2(fd, STDOUT_FILENO);
+        dup2(fd, STDERR_FILENO);
+        close(fd);
+      }
+    }
+    std::vector<char*> argv;
+    const std::string exe = SelfExe();
+    argv.push_back(const_cast<char*>(exe.c_str()));
+    for (const std::string& a : args) argv.push_back(const_cast<char*>(a.c_str()));
+    argv.push_back(nullptr);
+    execv(exe.c_str(), argv.data());
+    _exit(127);
+  }
+  return pid;
+}
+
+std::string Number(double v) { return fmt::format("{}", v); }
+
+struct Host {
+  pid_t pid = -1;
+  std::vector<std::string> vehicle_names;
+  bool running = true;
+};
+
+}  // namespace
+
+int Launch(const maps::Scenario& scenario, const LaunchOptions& options) {
+  const std::string out_dir =
+      options.out_dir.empty() ? (fs::path("runs") / (scenario.name + "_launch")).string() : options.out_dir;
+  fs::create_directories(out_dir);
+  const proto::DomainReservation reservation = proto::DomainReservation::Acquire(
+      proto::MissionDomainId(options.domain, fs::absolute(out_dir).string()));
+  const int domain = reservation.domain_id();
+
+  // The effective scenario (with the command line's overrides) is written next to the run, and
+  // every process of the mission reads that one file.
+  const std::string scenario_file = (fs::absolute(out_dir) / "scenario.yaml").string();
+  {
+    std::ofstream f(scenario_file);
+    f << maps::EmitScenario(scenario);
+  }
+  {
+    nlohmann::json handle = {{"domain_id", domain}, {"scenario", scenario_file}, {"run_dir", fs::absolute(out_dir).string()},
+                             {"time_scale", options.time_scale}, {"launcher_pid", getpid()}};
+    std::ofstream(fs::path(out_dir) / "mission.json") << handle.dump(2) << "\n";
+    std::error_code ignored;
+    fs::create_directories("runs", ignored);
+    fs::remove("runs/latest", ignored);
+    fs::create_directory_symlink(fs::absolute(out_dir), "runs/latest", ignored);
+  }
+
+  const std::vector<std::string> common = {"--domain", std::to_string(domain)};
+  std::vector<std::string> server_args = {"server", scenario_file, "--out", out_dir, "--time-scale",
+                                          Number(options.time_scale), "--quiet"};
+  if (!options.profile.empty()) server_args.insert(server_args.end(), {"--profile", options.profile});
+  server_args.insert(server_args.end(), common.begin(), common.end());
+  const pid_t server = Spawn(server_args, "");
+
+  // Vehicles named in a lose/leave event get a host process of their own, so that losing one is
+  // a real SIGKILL and leaving a real clean exit; the rest share hosts of up to 250 vehicles.
+  std::map<std::string, bool> solo;
+  for (const maps::FleetEvent& e : scenario.fleet_events)
+    if (e.kind != maps::FleetEvent::Kind::kJoin) solo[e.vehicle.name] = true;
+  const int n = static_cast<int>(scenario.vehicles.size());
+  std::vector<Host> hosts;
+  auto start_host = [&](std::vector<std::string> args, std::vector<std::string> names) {
+    args.insert(args.end(), common.begin(), common.end());
+    const std::string log = (fs::path(out_dir) / fmt::format("agents-{}.log", hosts.size())).string();
+    hosts.push_back({Spawn(args, log), std::move(names), true});
+  };
+  std::vector<int> shared;
+  for (int i = 0; i < n; ++i) {
+    if (solo.count(scenario.vehicles[i].name)) {
+      start_host({"agents", scenario_file, "--offset", std::to_string(i), "--count", "1"}, {scenario.vehicles[i].name});
+    } else {
+      shared.push_back(i);
+    }
+  }
+  const int host_count = std::max(1, options.hosts > 0 ? options.hosts
+                                                       : (static_cast<int>(shared.size()) + kVehiclesPerHost - 1) / kVehiclesPerHost);
+  // Shared vehicles are contiguous runs of indices between solo ones; split them into runs.
+  const int per_host = shared.empty() ? 0 : (static_cast<int>(shared.size()) + host_count - 1) / host_count;
+  for (std::size_t begin = 0; begin < shared.size();) {
+    std::size_t end = begin + 1;
+    while (end < shared.size() && static_cast<int>(end - begin) < per_host && shared[end] == shared[end - 1] + 1) ++end;
+    std::vector<std::string> names;
+    for (std::size_t j = begin; j < end; ++j) names.push_back(scenario.vehicles[shared[j]].name);
+    start_host({"agents", scenario_file, "--offset", std::to_string(shared[begin]), "--count", std::to_string(end - begin)},
+               names);
+    begin = end;
+  }
+  spdlog::info("launch: mission '{}' on DDS domain {}: server pid {}, {} agent host(s) for {} vehicles; run dir {}",
+               scenario.name, domain, server, hosts.size(), n, out_dir);
+  spdlog::info("launch: in another shell: sage risk set P1 0.9 | sage vehicle add --count 2 | sage vehicle remove ID "
+               "(they find this mission through runs/latest)");
+
+  proto::Participant participant(domain, proto::LocalhostConfigXml(proto::kMaxLocalParticipants));
+  proto::Reader<proto::MissionStatus> status(participant, proto::MissionStatusQos());
+  proto::Writer<proto::FleetCommand> commands(participant, proto::FleetCommandQos());
+  const bool tty = isatty(fileno(stderr)) != 0;
+  std::size_t next_event = 0;
+  int next_join_id = n;
+  bool stop_sent = false;
+  int server_status = -1;
+  double last_print = -1e9;
+  while (true) {
+    int wstatus = 0;
+    if (waitpid(server, &wstatus, WNOHANG) == server) {
+      server_status = WIFEXITED(wstatus) ? WEXITSTATUS(wstatus) : 1;
+      break;
+    }
+    if (options.stop && options.stop->load() && !stop_sent) {
+      proto::FleetCommand stop{};
+      std::string verb = "stop";
+      stop.verb = proto::BorrowString(verb);
+      commands.Write(stop);
+      stop_sent = true;
+      spdlog::info("launch: stopping; the server writes the run directory");
+    }
+    status.WaitForData(std::chrono::milliseconds(200));
+    status.TakeEach([&](const proto::MissionStatus& s, const dds_sample_info_t& info) {
+      if (!info.valid_data) return;
+      const double t = s.mission_time_s;
+      while (next_event < scenario.fleet_events.size() && scenario.fleet_events[next_event].time_s <= t) {
+        const maps::FleetEvent& e = scenario.fleet_events[next_event++];
+        if (e.kind == maps::FleetEvent::Kind::kJoin) {
+          start_host({"agents", scenario_file, "--join", e.vehicle.name, "--first-id", std::to_string(next_join_id++)},
+                     {e.vehicle.name});
+          spdlog::info("launch: t = {:.1f} s: {} joins", t, e.vehicle.name);
+          continue;
+        }
+        for (Host& h : hosts) {
+          if (!h.running || h.vehicle_names.size() != 1 || h.vehicle_names[0] != e.vehicle.name) continue;
+          const bool lose = e.kind == maps::FleetEvent::Kind::kLose;
+          kill(h.pid, lose ? SIGKILL : SIGTERM);
+          spdlog::info("launch: t = {:.1f} s: {} {} (pid {})", t, e.vehicle.name, lose ? "killed (SIGKILL)" : "leaves",
+                       h.pid);
+        }
+      }
+      if (tty || t - last_print >= s.duration_s / 10.0 || s.finished) {
+        last_print = t;
+        std::fprintf(stderr, "%st = %5.0f / %.0f s  vehicles %u (lost %u)  ergodic metric %.2e  server cycle %.2f ms%s",
+                     tty ? "\r" : "", t, s.duration_s, s.vehicles_alive, s.vehicles_lost, s.ergodic_metric,
+                     s.cycle_time_ms, tty ? "   " : "\n");
+      }
+    });
+    for (Host& h : hosts) {
+      int ws = 0;
+      if (h.running && waitpid(h.pid, &ws, WNOHANG) == h.pid) h.running = false;
+    }
+  }
+  if (tty) std::fprintf(stderr, "\n");
+  // The server has written the run directory and announced the end; hosts leave on that. Any
+  // that lingers gets SIGTERM (a clean leave), then SIGKILL.
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(5);
+  for (Host& h : hosts) {
+    while (h.running && std::chrono::steady_clock::now() < deadline) {
+      int ws = 0;
+      if (waitpid(h.pid, &ws, WNOHANG) == h.pid) h.running = false;
+      else std::this_thread::sleep_for(std::chrono::milliseconds(50));
+    }
+    if (h.running) {
+      kill(h.pid, SIGTERM);
+      std::this_thread::sleep_for(std::chrono::milliseconds(300));
+      kill(h.pid, SIGKILL);
+      waitpid(h.pid, nullptr, 0);
+      h.running = false;
+    }
+  }
+  return server_status;
+}
+
+MissionHandle FindMission(const std::string& dir) {
+  std::string where = dir;
+  if (where.empty()) {
+    const char* env = std::getenv("SAGE_MISSION");
+    where = env ? env : "runs/latest";
+  }
+  const fs::path file = fs::path(where) / "mission.json";
+  std::ifstream in(file);
+  if (!in) {
+    throw maps::ScenarioError(file.string() + ": cannot read: no running mission there (start one with sage launch, "
+                              "or give --mission RUN_DIR)");
+  }
+  try {
+    const nlohmann::json j = nlohmann::json::parse(in);
+    return {j.at("domain_id").get<int>(), j.at("scenario").get<std::string>(), j.at("run_dir").get<std::string>()};
+  } catch (const nlohmann::json::exception& e) {
+    throw maps::ScenarioError(file.string() + ": not a mission file: " + e.what());
+  }
+}
+
+int AddVehicles(const MissionHandle& mission, int count) {
+  if (count < 1) throw maps::ScenarioError("--count = " + std::to_string(count) + ": must be >= 1");
+  // Ids of added vehicles come from this process id, so concurrent adds never collide with each
+  // other or with the launch's vehicles (0..N-1).
+  const unsigned first_id = 1'000'000u + static_cast<unsigned>(getpid() % 4000) * 1000u;
+  const std::string log = (fs::path(mission.run_dir) / fmt::format("agents-add-{}.log", first_id)).string();
+  const pid_t pid = Spawn({"agents", mission.scenario_path, "--add", std::to_string(count), "--first-id",
+                           std::to_string(first_id), "--domain", std::to_string(mission.domain_id)},
+                          log, /*detach=*/true);
+  std::printf("started agent host pid %d with %d vehicle(s), ids %u..%u (log: %s)\n", pid, count, first_id,
+              first_id + count - 1, log.c_str());
+  return 0;
+}
+
+namespace {
+template <class T>
+int PublishOnce(const MissionHandle& mission, const proto::Qos& qos, const T& message, const char* what) {
+  proto::Participant participant(mission.domain_id, proto::LocalhostConfigXml(proto::kMaxLocalParticipants));
+  proto::Writer<T> writer(participant, qos);
+  if (!writer.WaitForReaders(1, std::chrono::seconds(3))) {
+    std::fprintf(stderr, "sage: error: no mission is listening on DDS domain %d (is it still running?)\n", mission.domain_id);
+    return 1;
+  }
+  writer.Write(message);
+  std::this_thread::sleep_for(std::chrono::milliseconds(300));  // reliable: let it be acknowledged
+  std::printf("%s\n", what);
+  return 0;
+}
+}  // namespace
+
+int RemoveVehicle(const MissionHandle& mission, unsigned id) {
+  proto::FleetCommand c{};
+  std::string verb = "remove";
+  c.stamp_ns = 0;
+  c.verb = proto::BorrowString(verb);
+  c.vehicle_id = id;
+  return PublishOnce(mission, proto::FleetCommandQos(), c, "asked the fleet to take the vehicle out");
+}
+
+int SetRisk(const MissionHandle& mission, const std::string& valve, double weight, const std::string& source) {
+  if (!(weight >= 0.0) || !std::isfinite(weight)) {
+    throw maps::ScenarioError("WEIGHT = " + std::to_string(weight) + ": must be a number >= 0");
+  }
+  proto::RiskUpdate r{};
+  r.valve = proto::BorrowString(valve);
+  r.weight = weight;
+  r.source = proto::BorrowString(source);
+  return PublishOnce(mission, proto::RiskUpdateQos(), r, "risk update sent");
+}
+
+}  // namespace sage::server
