@@ -15,11 +15,6 @@
 namespace sage::agents {
 namespace {
 
-// Operating depth band of the vehicles above the seabed (m): the slice of the OctoMap that
-// becomes the 2-D obstacle grid.
-constexpr double kDepthBandMin_m = 0.5;
-constexpr double kDepthBandMax_m = 1.5;
-
 std::vector<Eigen::Vector2d> ValvePositions(const maps::Scenario& scenario) {
   std::vector<Eigen::Vector2d> points;
   for (const maps::Valve& v : scenario.AllValves()) points.push_back(v.position_m);
@@ -54,8 +49,7 @@ struct AgentHost::Impl {
       : scenario(s),
         guidance(g),
         basis(s.workspace.width_m, s.workspace.height_m, s.ergodic.basis_order),
-        obstacles(maps::SeabedMap(s, s.astar.grid_resolution_m)
-                      .Project(kDepthBandMin_m, kDepthBandMax_m, s.astar.grid_resolution_m)),
+        obstacles(maps::SeabedMap::OperatingSlice(s)),
         clearance(obstacles),
         grid(obstacles.Inflated(s.astar.clearance_m)),
         world(s.workspace, s.structures) {

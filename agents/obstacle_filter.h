@@ -9,12 +9,13 @@
 
 #include "maps/distance_field.h"
 #include "maps/scenario.h"
+#include "maps/seabed_map.h"
 
 namespace sage::agents {
 
 struct ObstacleFilterSettings {
   double influence_m = 0.7;           ///< beyond this distance (m) from any structure the command is untouched
-  double clearance_m = 0.4;           ///< inside this distance (m) of a structure the vehicle is pushed out
+  double clearance_m = maps::kVehicleClearance_m;  ///< inside this distance (m) of a structure it is pushed out
   double boundary_influence_m = 0.5;  ///< the same for the workspace edges (m)
   double boundary_clearance_m = 0.2;
 };

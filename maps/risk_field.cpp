@@ -1,9 +1,12 @@
 #include "maps/risk_field.h"
 
+#include "maps/seabed_map.h"
+
 #include <cmath>
 #include <numbers>
 #include <stdexcept>
 
+#include <Eigen/Eigenvalues>
 #include <Eigen/LU>
 
 namespace sage::maps {
@@ -14,6 +17,47 @@ RiskField::RiskField(const SpectralBasis& basis, std::vector<GaussianComponent> 
   per_component_.resize(basis.size(), component_count());
   for (int i = 0; i < component_count(); ++i) per_component_.col(i) = GaussianCoefficients(basis, components_[i]);
   raw_weights_ = Eigen::VectorXd::Ones(component_count());
+  blocked_mass_ = Eigen::VectorXd::Zero(component_count());
+  Recompute();
+}
+
+RiskField RiskField::ForScenario(const Scenario& scenario, const SpectralBasis& basis) {
+  std::vector<GaussianComponent> components;
+  for (const Valve& valve : scenario.AllValves()) components.push_back({valve.position_m, valve.covariance_m2});
+  RiskField field(basis, std::move(components));
+  field.ExcludeBlocked(basis, SeabedMap::OperatingSlice(scenario).Inflated(kVehicleClearance_m));
+  return field;
+}
+
+void RiskField::ExcludeBlocked(const SpectralBasis& basis, const OccupancyGrid& blocked) {
+  const double r = blocked.resolution_m();
+  const double area = r * r;
+  Eigen::VectorXd f;
+  for (int i = 0; i < component_count(); ++i) {
+    const GaussianComponent& g = components_[i];
+    const Eigen::Matrix2d inverse = g.covariance_m2.inverse();
+    const double norm = 1.0 / (2.0 * std::numbers::pi * std::sqrt(g.covariance_m2.determinant()));
+    const double reach = 5.0 * std::sqrt(g.covariance_m2.eigenvalues().real().maxCoeff());
+    const Eigen::Vector2i lo = blocked.CellOf(g.mean_m - Eigen::Vector2d::Constant(reach));
+    const Eigen::Vector2i hi = blocked.CellOf(g.mean_m + Eigen::Vector2d::Constant(reach));
+    double mass = 0.0;
+    Eigen::VectorXd removed = Eigen::VectorXd::Zero(basis.size());
+    for (int a = lo.x(); a <= hi.x(); ++a) {
+      for (int b = lo.y(); b <= hi.y(); ++b) {
+        if (!blocked.Occupied(a, b)) continue;
+        const Eigen::Vector2d x = blocked.CenterOf({a, b});
+        const Eigen::Vector2d d = x - g.mean_m;
+        const double p = norm * std::exp(-0.5 * d.dot(inverse * d)) * area;
+        if (p == 0.0) continue;
+        basis.Evaluate(x, f);
+        removed += p * f;
+        mass += p;
+      }
+    }
+    mass = std::min(mass, 0.99);  // a valve inside a structure is rejected on load; stay finite anyway
+    per_component_.col(i) = (per_component_.col(i) - removed) / (1.0 - mass);
+    blocked_mass_[i] = mass;
+  }
   Recompute();
 }
 

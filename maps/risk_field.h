@@ -10,6 +10,8 @@
 
 #include <Eigen/Core>
 
+#include "maps/occupancy_grid.h"
+#include "maps/scenario.h"
 #include "maps/spectral_basis.h"
 
 namespace sage::maps {
@@ -43,6 +45,19 @@ class RiskField {
   /// Mixture density at x (1/m^2), untruncated Gaussians, normalised weights. For plots and tests.
   double Density(const Eigen::Vector2d& x) const;
 
+  /// The scenario's risk field: one component per valve (file order), with the water no
+  /// vehicle can reach (structures grown by kVehicleClearance_m, from the seabed map) excluded.
+  static RiskField ForScenario(const Scenario& scenario, const SpectralBasis& basis);
+
+  /// Takes out of each component the part of its mass in the blocked cells (no hull can be
+  /// there) and renormalises it:  phi_k^i <- (phi_k^i - sum_c N_i(x_c) F_k(x_c) A) / (1 - sum_c N_i(x_c) A),
+  /// by quadrature over the blocked cells within 5 sigma of the valve. Without it SMC keeps
+  /// pushing into the structure for the mass behind the valve, and vehicles orbit the XT
+  /// instead of looping over the valve. Weights are kept.
+  void ExcludeBlocked(const SpectralBasis& basis, const OccupancyGrid& blocked);
+  /// Fraction of each component's mass that ExcludeBlocked removed.
+  const Eigen::VectorXd& blocked_mass() const { return blocked_mass_; }
+
   /// Closed-form phi_k of one Gaussian (mirrored into the box) on `basis`.
   static Eigen::VectorXd GaussianCoefficients(const SpectralBasis& basis, const GaussianComponent& g);
 
@@ -54,6 +69,7 @@ class RiskField {
   Eigen::VectorXd raw_weights_;
   Eigen::VectorXd weights_;
   Eigen::VectorXd coefficients_;
+  Eigen::VectorXd blocked_mass_;
 };
 
 }  // namespace sage::maps

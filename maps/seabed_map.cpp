@@ -100,4 +100,9 @@ void SeabedMap::WriteBinary(const std::string& path) const {
   }
 }
 
+OccupancyGrid SeabedMap::OperatingSlice(const Scenario& scenario) {
+  const double resolution = scenario.astar.grid_resolution_m;
+  return SeabedMap(scenario, resolution).Project(kOperatingDepthMin_m, kOperatingDepthMax_m, resolution);
+}
+
 }  // namespace sage::maps

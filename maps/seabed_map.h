@@ -15,6 +15,16 @@ class OcTree;
 
 namespace sage::maps {
 
+/// The vehicles' operating depth band above the seabed (m): the slice of the OctoMap that
+/// becomes the 2-D obstacle grid.
+inline constexpr double kOperatingDepthMin_m = 0.5;
+inline constexpr double kOperatingDepthMax_m = 1.5;
+
+/// How close (m) a vehicle's centre comes to a structure: a BlueROV2 Heavy's half diagonal
+/// (0.37 m) and a little water. The obstacle filter keeps vehicles this far out, and the risk
+/// field puts no coverage inside it.
+inline constexpr double kVehicleClearance_m = 0.4;
+
 class SeabedMap {
  public:
   /// Voxelises the scenario's structures at resolution_m (m).
@@ -29,6 +39,9 @@ class SeabedMap {
   /// Occupied cells of the band z in [z_min_m, z_max_m] (m above seabed) projected onto a grid
   /// of grid_resolution_m over the workspace (pruned leaves cover several cells).
   OccupancyGrid Project(double z_min_m, double z_max_m, double grid_resolution_m) const;
+
+  /// Project() over the operating depth band at the scenario's A* grid resolution.
+  static OccupancyGrid OperatingSlice(const Scenario& scenario);
 
   /// Writes the tree as OctoMap binary (.bt). Throws std::runtime_error naming the path on failure.
   void WriteBinary(const std::string& path) const;

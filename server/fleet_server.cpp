@@ -8,12 +8,6 @@
 namespace sage::server {
 namespace {
 
-std::vector<maps::GaussianComponent> ValveComponents(const maps::Scenario& scenario) {
-  std::vector<maps::GaussianComponent> components;
-  for (const maps::Valve& valve : scenario.AllValves()) components.push_back({valve.position_m, valve.covariance_m2});
-  return components;
-}
-
 std::vector<Eigen::Vector2d> ValvePositions(const maps::Scenario& scenario) {
   std::vector<Eigen::Vector2d> points;
   for (const maps::Valve& valve : scenario.AllValves()) points.push_back(valve.position_m);
@@ -33,7 +27,7 @@ const maps::RiskProfile& FindProfileOrThrow(const maps::Scenario& scenario, cons
 FleetServer::FleetServer(const maps::Scenario& scenario, const std::string& profile)
     : scenario_(scenario),
       basis_(scenario.workspace.width_m, scenario.workspace.height_m, scenario.ergodic.basis_order),
-      risk_(basis_, ValveComponents(scenario)),
+      risk_(maps::RiskField::ForScenario(scenario, basis_)),
       valve_positions_(ValvePositions(scenario)),
       visits_(valve_positions_, scenario.visit_radius_m, scenario.rearm_radius_m) {
   profile_ = &FindProfileOrThrow(scenario_, profile);

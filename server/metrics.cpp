@@ -117,11 +117,8 @@ void ErgodicMetrics(const std::vector<TrajectorySample>& samples, const std::vec
                     double period_s, MissionMetrics& out) {
   const maps::SpectralBasis basis(scenario.workspace.width_m, scenario.workspace.height_m,
                                   scenario.ergodic.basis_order);
-  std::vector<maps::GaussianComponent> components;
-  for (const maps::Valve& valve : scenario.AllValves()) {
-    components.push_back({valve.position_m, valve.covariance_m2});
-  }
-  maps::RiskField field(basis, std::move(components));
+  // The same target the server steers on: the valves' risk where a vehicle can be.
+  maps::RiskField field = maps::RiskField::ForScenario(scenario, basis);
   std::vector<Eigen::VectorXd> phi;
   for (const Eigen::VectorXd& w : normalised) {
     field.SetWeights(w);
