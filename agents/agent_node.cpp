@@ -138,14 +138,17 @@ int RunAgentNode(const maps::Scenario& scenario, const AgentNodeOptions& options
       }
     });
     if (vehicles.empty()) return 0;
-    targets.TakeEach([&](const proto::ErgodicTarget& m, const dds_sample_info_t& info) {
+    // Every host sees every vehicle's assignment (one topic); take them all, 1,024 at a time.
+    auto take_target = [&](const proto::ErgodicTarget& m, const dds_sample_info_t& info) {
       auto it = vehicles.find(m.vehicle_id);
       if (!info.valid_data || it == vehicles.end()) return;
       const auto phi = AsSpan(m.phi);
       it->second.has_assignment = true;
       it->second.shared = m.shared;
       it->second.own_phi = Eigen::Map<const Eigen::VectorXd>(phi.data(), static_cast<Eigen::Index>(phi.size()));
-    });
+    };
+    while (targets.TakeEach(take_target, 1024) == 1024) {
+    }
     fleet.TakeEach([&](const proto::FleetCoverage& m, const dds_sample_info_t& info) {
       if (!info.valid_data || m.mission_time_s < snapshot.time_s) return;
       last_heard = std::chrono::steady_clock::now();

@@ -5,6 +5,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <string>
+#include <type_traits>
 #include <utility>
 #include <vector>
 
@@ -156,7 +157,7 @@ class Reader {
   template <class Visit>
   std::size_t TakeEach(Visit&& visit, std::size_t max_samples = 256) {
     auto trampoline = [](void* context, const void* sample, const dds_sample_info_t& info) {
-      (*static_cast<Visit*>(context))(*static_cast<const T*>(sample), info);
+      (*static_cast<std::remove_reference_t<Visit>*>(context))(*static_cast<const T*>(sample), info);
     };
     return core_.TakeLoaned(max_samples, trampoline, &visit);
   }

@@ -42,6 +42,9 @@ struct FleetLogEntry {
   std::string name;
 };
 
+// Fleets larger than this get one log line per cycle for their joins instead of one per vehicle.
+constexpr std::size_t kJoinsLoggedOneByOne = 20;
+
 struct KnownVehicle {
   int index = 0;  // dense index: trajectory.vehicle_names[index]
   bool alive = false;
@@ -123,7 +126,13 @@ int RunServerNode(const maps::Scenario& scenario, const ServerNodeOptions& optio
     const auto compute_start = std::chrono::steady_clock::now();
 
     // Vehicles: joins (first state), deaths (liveliness lapsed) and clean leaves (disposed).
-    states.TakeEach([&](const proto::VehicleState& s, const dds_sample_info_t& info) {
+    int joined_this_cycle = 0;
+    // Take until empty: one take returns at most 256 samples, and a 1,000-vehicle fleet sends 1,000 a cycle.
+    auto take_all = [](auto& reader, auto&& visit) {
+      while (reader.TakeEach(visit, 1024) == 1024) {
+      }
+    };
+    take_all(states, [&](const proto::VehicleState& s, const dds_sample_info_t& info) {
       ++messages_in;
       KnownVehicle& v = vehicles[s.vehicle_id];
       if (info.valid_data) {
@@ -135,7 +144,10 @@ int RunServerNode(const maps::Scenario& scenario, const ServerNodeOptions& optio
           v.alive = true;
           server.AddVehicle(static_cast<int>(s.vehicle_id), std::string(AsStringView(s.name)));
           fleet_log.push_back({t, "joined", s.vehicle_id, std::string(AsStringView(s.name))});
-          spdlog::info("server: {} (id {}) joined at t = {:.1f} s", AsStringView(s.name), s.vehicle_id, t);
+          if (vehicles.size() <= kJoinsLoggedOneByOne) {
+            spdlog::info("server: {} (id {}) joined at t = {:.1f} s", AsStringView(s.name), s.vehicle_id, t);
+          }
+          ++joined_this_cycle;
         }
         v.last = s;
         v.last.name = nullptr;  // the name lives in trajectory.vehicle_names; the sample's memory is a loan
@@ -152,7 +164,10 @@ int RunServerNode(const maps::Scenario& scenario, const ServerNodeOptions& optio
       spdlog::info("server: {} (id {}) {} at t = {:.1f} s (last heard at t = {:.1f} s)", name, s.vehicle_id,
                    lost ? "lost" : "left", t, mission_time(v.last.stamp_ns));
     });
-    coverage.TakeEach([&](const proto::VehicleCoverage& c, const dds_sample_info_t& info) {
+    if (vehicles.size() > kJoinsLoggedOneByOne && joined_this_cycle > 0) {
+      spdlog::info("server: {} vehicles joined at t = {:.1f} s ({} alive)", joined_this_cycle, t, server.alive().size());
+    }
+    take_all(coverage, [&](const proto::VehicleCoverage& c, const dds_sample_info_t& info) {
       ++messages_in;
       if (!info.valid_data) return;
       const auto sums = AsSpan(c.sums);
