@@ -42,6 +42,7 @@ struct AgentHost::Impl {
   PhysicsWorld world;
   Tour tour;                      // shared by every A* vehicle (same valves, same grid)
   std::vector<Vehicle> vehicles;
+  std::vector<Eigen::Vector2d> others;  // vehicles of other hosts
   int physics_substeps = 1;
   double control_dt = 0.1;
 
@@ -128,16 +129,31 @@ void AgentHost::SetTarget(VehicleId id, const VehicleTarget& target) {
   }
 }
 
+void AgentHost::SetOtherVehicles(std::vector<Eigen::Vector2d> positions_m) { impl_->others = std::move(positions_m); }
+
 void AgentHost::SetTourWeights(const Eigen::VectorXd& weights) {
   for (Impl::Vehicle& v : impl_->vehicles)
     if (v.tour) v.tour->SetWeights(weights);
 }
 
 void AgentHost::Step(double time_s) {
-  for (Impl::Vehicle& v : impl_->vehicles) {
+  // Everyone's position at the start of the cycle, so the order of vehicles does not matter.
+  std::vector<Eigen::Vector2d> positions;
+  for (const Impl::Vehicle& v : impl_->vehicles) positions.push_back(impl_->world.State(v.body).position_m);
+  std::vector<Eigen::Vector2d> neighbours;
+  const double reach2 = std::pow(ObstacleFilterSettings{}.neighbour_influence_m, 2);
+  for (std::size_t i = 0; i < impl_->vehicles.size(); ++i) {
+    Impl::Vehicle& v = impl_->vehicles[i];
     const VehicleState state = impl_->world.State(v.body);
     Eigen::Vector2d command = v.ergodic ? v.ergodic->Command(state, time_s) : v.tour->Command(state, time_s);
-    if (v.keep_clear) command = v.keep_clear->Apply(state.position_m, command);
+    if (v.keep_clear) {
+      neighbours.clear();
+      for (std::size_t j = 0; j < positions.size(); ++j)
+        if (j != i && (positions[j] - positions[i]).squaredNorm() < reach2) neighbours.push_back(positions[j]);
+      for (const Eigen::Vector2d& p : impl_->others)
+        if ((p - positions[i]).squaredNorm() < reach2) neighbours.push_back(p);
+      command = v.keep_clear->Apply(state.position_m, command, neighbours);
+    }
     v.command = command;
     impl_->world.SetVelocityCommand(v.body, command);
   }

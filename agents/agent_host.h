@@ -49,6 +49,9 @@ class AgentHost {
 
   /// The server's latest target for a vehicle; held until the next one.
   void SetTarget(VehicleId id, const VehicleTarget& target);
+  /// Positions (m) of the fleet's vehicles simulated elsewhere (other hosts), as last heard;
+  /// this host's vehicles keep apart from them and from each other.
+  void SetOtherVehicles(std::vector<Eigen::Vector2d> positions_m);
   /// New valve weights for every A* tour, taken at the start of its next lap.
   void SetTourWeights(const Eigen::VectorXd& weights);
 

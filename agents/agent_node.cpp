@@ -68,6 +68,9 @@ int RunAgentNode(const maps::Scenario& scenario, const AgentNodeOptions& options
   proto::Reader<proto::FleetCoverage> fleet(participant, proto::FleetCoverageQos());
   proto::Reader<proto::MissionStatus> status(participant, proto::MissionStatusQos());
   proto::Reader<proto::FleetCommand> commands(participant, proto::FleetCommandQos());
+  // The other hosts' vehicles, so this host's keep apart from them too.
+  proto::Reader<proto::VehicleState> neighbours(participant, proto::VehicleStateReaderQos());
+  std::map<std::uint32_t, Eigen::Vector2d> others;
 
   std::map<std::uint32_t, Vehicle> vehicles;
   for (std::size_t i = 0; i < options.vehicles.size(); ++i) {
@@ -168,6 +171,21 @@ int RunAgentNode(const maps::Scenario& scenario, const AgentNodeOptions& options
       spdlog::warn("agents: no word from the server for {:.0f} s; stopping", silent_s);
       break;
     }
+
+    auto take_neighbour = [&](const proto::VehicleState& m, const dds_sample_info_t& info) {
+      if (vehicles.count(m.vehicle_id)) return;
+      if (info.valid_data) {
+        others[m.vehicle_id] = Eigen::Vector2d(m.x_m, m.y_m);
+      } else {
+        others.erase(m.vehicle_id);  // lost or left
+      }
+    };
+    while (neighbours.TakeEach(take_neighbour, 1024) == 1024) {
+    }
+    std::vector<Eigen::Vector2d> other_positions;
+    other_positions.reserve(others.size());
+    for (const auto& [id, p] : others) other_positions.push_back(p);
+    host.SetOtherVehicles(std::move(other_positions));
 
     if (snapshot.valid && snapshot.phi.size() == host.basis().size()) {
       for (auto& [id, v] : vehicles) {

@@ -27,10 +27,21 @@ Eigen::Vector2d ObstacleFilter::Slide(const Eigen::Vector2d& u, double speed, co
   return out;
 }
 
-Eigen::Vector2d ObstacleFilter::Apply(const Eigen::Vector2d& x_m, const Eigen::Vector2d& velocity_mps) {
+Eigen::Vector2d ObstacleFilter::Apply(const Eigen::Vector2d& x_m, const Eigen::Vector2d& velocity_mps,
+                                      const std::vector<Eigen::Vector2d>& neighbours) {
   const double speed = velocity_mps.norm();
   if (speed < 1e-12) return velocity_mps;
   Eigen::Vector2d u = velocity_mps;
+
+  const double reach = settings_.neighbour_influence_m, near = settings_.neighbour_clearance_m;
+  for (const Eigen::Vector2d& other : neighbours) {
+    const Eigen::Vector2d offset = x_m - other;
+    const double distance = offset.norm();
+    if (distance >= reach || distance < 1e-9) continue;
+    const Eigen::Vector2d away = offset / distance;
+    u = Slide(u, speed, away, distance, reach, near, neighbour_tangent_sign_);
+    u += speed * std::clamp((reach - distance) / (reach - near), 0.0, 1.0) * away;
+  }
 
   const double distance = field_.Distance(x_m);
   if (distance < settings_.influence_m) {

@@ -5,6 +5,8 @@
 // phantom copy of the valves (the SAGE paper's corner excursions). Near a structure or an edge
 // the inward part of the command is turned into a slide along it and, inside the clearance,
 // the vehicle is pushed back. The speed is kept: SMC moves at constant speed.
+#include <vector>
+
 #include <Eigen/Core>
 
 #include "maps/distance_field.h"
@@ -18,6 +20,8 @@ struct ObstacleFilterSettings {
   double clearance_m = maps::kVehicleClearance_m;  ///< inside this distance (m) of a structure it is pushed out
   double boundary_influence_m = 0.5;  ///< the same for the workspace edges (m)
   double boundary_clearance_m = 0.2;
+  double neighbour_influence_m = 2.0;  ///< other vehicles closer than this (m) push this one away
+  double neighbour_clearance_m = 0.8;  ///< closer than this (m), the push is at full strength
 };
 
 class ObstacleFilter {
@@ -27,7 +31,12 @@ class ObstacleFilter {
                  ObstacleFilterSettings settings = {});
 
   /// The command to send instead of `velocity_mps` at position x (m). Same norm as the input.
-  Eigen::Vector2d Apply(const Eigen::Vector2d& x_m, const Eigen::Vector2d& velocity_mps);
+  /// `neighbours`: positions (m) of the other vehicles around. Vehicles sharing one coverage
+  /// field see nearly the same SMC gradient when close, so without a push apart they travel
+  /// together; each neighbour within the influence distance adds a push away from it, growing
+  /// to the full speed at the clearance, and a command heading into it slides past it.
+  Eigen::Vector2d Apply(const Eigen::Vector2d& x_m, const Eigen::Vector2d& velocity_mps,
+                        const std::vector<Eigen::Vector2d>& neighbours = {});
 
  private:
   // Turns the part of u heading against `away` into a slide, by the share s in [0, 1] that
@@ -40,6 +49,7 @@ class ObstacleFilter {
   ObstacleFilterSettings settings_;
   double tangent_sign_ = 1.0;           // keeps sliding the same way round a structure when head-on
   double boundary_tangent_sign_ = 1.0;  // the same along the workspace edge
+  double neighbour_tangent_sign_ = 1.0;  // the same round another vehicle
 };
 
 }  // namespace sage::agents
