@@ -65,6 +65,17 @@ struct AgentHost::Impl {
     }
   }
 
+  // Vehicles (this host's and the others') within the filter's reach of vehicle i.
+  std::vector<Eigen::Vector2d> Neighbours(std::size_t i, const std::vector<Eigen::Vector2d>& positions) const {
+    const double reach2 = std::pow(ObstacleFilterSettings{}.neighbour_influence_m, 2);
+    std::vector<Eigen::Vector2d> near;
+    for (std::size_t j = 0; j < positions.size(); ++j)
+      if (j != i && (positions[j] - positions[i]).squaredNorm() < reach2) near.push_back(positions[j]);
+    for (const Eigen::Vector2d& p : others)
+      if ((p - positions[i]).squaredNorm() < reach2) near.push_back(p);
+    return near;
+  }
+
   Vehicle& Find(VehicleId id) {
     return const_cast<Vehicle&>(static_cast<const Impl*>(this)->Find(id));
   }
@@ -140,20 +151,11 @@ void AgentHost::Step(double time_s) {
   // Everyone's position at the start of the cycle, so the order of vehicles does not matter.
   std::vector<Eigen::Vector2d> positions;
   for (const Impl::Vehicle& v : impl_->vehicles) positions.push_back(impl_->world.State(v.body).position_m);
-  std::vector<Eigen::Vector2d> neighbours;
-  const double reach2 = std::pow(ObstacleFilterSettings{}.neighbour_influence_m, 2);
   for (std::size_t i = 0; i < impl_->vehicles.size(); ++i) {
     Impl::Vehicle& v = impl_->vehicles[i];
     const VehicleState state = impl_->world.State(v.body);
     Eigen::Vector2d command = v.ergodic ? v.ergodic->Command(state, time_s) : v.tour->Command(state, time_s);
-    if (v.keep_clear) {
-      neighbours.clear();
-      for (std::size_t j = 0; j < positions.size(); ++j)
-        if (j != i && (positions[j] - positions[i]).squaredNorm() < reach2) neighbours.push_back(positions[j]);
-      for (const Eigen::Vector2d& p : impl_->others)
-        if ((p - positions[i]).squaredNorm() < reach2) neighbours.push_back(p);
-      command = v.keep_clear->Apply(state.position_m, command, neighbours);
-    }
+    if (v.keep_clear) command = v.keep_clear->Apply(state.position_m, command, impl_->Neighbours(i, positions));
     v.command = command;
     impl_->world.SetVelocityCommand(v.body, command);
   }
@@ -178,8 +180,10 @@ Eigen::Vector2d AgentHost::PreviewCommand(VehicleId id, const Eigen::VectorXd& p
   const VehicleState state = impl_->world.State(v.body);
   Eigen::Vector2d command = copy.Command(state, time_s);
   if (v.keep_clear) {
+    std::vector<Eigen::Vector2d> positions;
+    for (const Impl::Vehicle& other : impl_->vehicles) positions.push_back(impl_->world.State(other.body).position_m);
     ObstacleFilter filter = *v.keep_clear;
-    command = filter.Apply(state.position_m, command);
+    command = filter.Apply(state.position_m, command, impl_->Neighbours(&v - impl_->vehicles.data(), positions));
   }
   return command;
 }

@@ -85,7 +85,9 @@ bool FleetServer::OnCoverage(int id, std::uint64_t seq, double stamp_s, double k
   auto it = vehicles_.find(id);
   if (it == vehicles_.end() || sums.size() != basis_.size()) return false;
   VehicleRecord& v = it->second;
-  if (v.reported && seq <= v.seq) return false;  // late or duplicated: the newer totals are already in
+  // Late or duplicated: the newer totals are already in. A restarted vehicle counts from 1 again
+  // but stamps later: its new running sums replace the old ones.
+  if (v.reported && seq <= v.seq && !(seq < v.seq && stamp_s > v.stamp_s)) return false;
   v.reported = true;
   v.seq = seq;
   v.stamp_s = stamp_s;
@@ -128,12 +130,27 @@ void FleetServer::UpdateEffectiveWeights(double time_s) {
   Eigen::VectorXd w = raw_weights_ / raw_weights_.sum();
   const maps::StarvationGuard& guard = scenario_.guard;
   if (guard.enabled) {
-    w = w.cwiseMax(guard.weight_floor);
     const double heaviest = w.maxCoeff();
     for (int i = 0; i < w.size(); ++i) {
       if (time_s - std::max(0.0, visits_.LastVisit(i)) > guard.revisit_bound_s) w[i] = heaviest;
     }
     w /= w.sum();
+    // The floor holds after normalising: valves under it are pinned to it and the rest share
+    // what is left in proportion; pinning can push others under, so repeat (at most M times).
+    std::vector<bool> pinned(w.size(), false);
+    for (int round = 0; round < w.size(); ++round) {
+      double free_sum = 0.0;
+      int pinned_count = 0;
+      bool changed = false;
+      for (int i = 0; i < w.size(); ++i) {
+        if (!pinned[i] && w[i] < guard.weight_floor) pinned[i] = changed = true;
+        if (pinned[i]) ++pinned_count;
+        else free_sum += w[i];
+      }
+      if (!changed) break;
+      const double scale = free_sum > 0.0 ? (1.0 - pinned_count * guard.weight_floor) / free_sum : 0.0;
+      for (int i = 0; i < w.size(); ++i) w[i] = pinned[i] ? guard.weight_floor : w[i] * scale;
+    }
   }
   if (effective_.size() == w.size() && (effective_ - w).cwiseAbs().maxCoeff() < 1e-15) return;
   effective_ = w;
@@ -224,7 +241,11 @@ agents::VehicleTarget FleetServer::TargetFor(int id) const {
     target.phi = Eigen::VectorXd::Zero(basis_.size());
     double total = 0.0;
     for (int i : v.valves) total += effective_[i];
-    for (int i : v.valves) target.phi += (effective_[i] / total) * risk_.ComponentCoefficients(i);
+    // A share whose valves all weigh zero is still watched, evenly.
+    const double count = static_cast<double>(v.valves.size());
+    for (int i : v.valves) {
+      target.phi += (total > 0.0 ? effective_[i] / total : 1.0 / count) * risk_.ComponentCoefficients(i);
+    }
     return target;
   }
   target.phi = risk_.coefficients();

@@ -34,6 +34,8 @@ class FleetServer {
  public:
   /// profile: a profile name (empty: the scenario's default). Throws maps::ScenarioError.
   FleetServer(const maps::Scenario& scenario, const std::string& profile);
+  FleetServer(const FleetServer&) = delete;  // profile_ points into scenario_
+  FleetServer& operator=(const FleetServer&) = delete;
 
   const maps::Scenario& scenario() const { return scenario_; }
   const maps::RiskProfile& profile() const { return *profile_; }
@@ -51,8 +53,9 @@ class FleetServer {
   /// A vehicle's position at `time_s` (visit accounting).
   void OnState(int id, double time_s, const Eigen::Vector2d& position_m);
   /// A vehicle's running coverage (sums of F_k dt with its forgetting, and its kernel time) as of
-  /// mission time stamp_s. Reports with seq <= the last one seen are stale (late or duplicated)
-  /// and ignored: returns false. A lost report costs nothing, the next one carries the totals.
+  /// mission time stamp_s. Reports with seq <= the last one seen and no newer stamp are stale
+  /// (late or duplicated) and ignored: returns false. A lost report costs nothing, the next one
+  /// carries the totals. A lower seq with a newer stamp is a restarted vehicle: taken.
   bool OnCoverage(int id, std::uint64_t seq, double stamp_s, double kernel_time_s, const Eigen::VectorXd& sums);
   /// An operator's or sensor's risk update: the valve's raw weight from now on. Throws
   /// maps::ScenarioError for an unknown valve or a negative weight.

@@ -1,0 +1,203 @@
+#include "agents/agent_host.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <numbers>
+#include <stdexcept>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "maps/risk_field.h"
+
+namespace sage::agents {
+namespace {
+
+const std::string kTwoXt = std::string(SAGE_SOURCE_DIR) + "/scenarios/two_xt.yaml";
+
+maps::VehicleSpec Rov(const std::string& name, Eigen::Vector2d start, double heading_rad = 0.0) {
+  maps::VehicleSpec spec;
+  spec.name = name;
+  spec.start_m = start;
+  spec.start_heading_rad = heading_rad;
+  spec.model = maps::MotionModel::kBlueRov2;
+  spec.transit_speed_mps = 0.7;
+  return spec;
+}
+
+/// phi_k of one Gaussian bump (sigma 0.15 m) at `at`: a target that pulls a vehicle there.
+Eigen::VectorXd BumpAt(const maps::SpectralBasis& basis, const Eigen::Vector2d& at) {
+  maps::GaussianComponent g;
+  g.mean_m = at;
+  g.covariance_m2 = 0.15 * 0.15 * Eigen::Matrix2d::Identity();
+  return maps::RiskField::GaussianCoefficients(basis, g);
+}
+
+double AngleBetween(const Eigen::Vector2d& a, const Eigen::Vector2d& b) {
+  return std::abs(std::atan2(a.x() * b.y() - a.y() * b.x(), a.dot(b)));
+}
+
+// Caller-chosen sparse ids: kept in the order added, a duplicate id is refused, removal takes
+// out only that vehicle (the others keep their own bodies).
+TEST(AgentHost, SparseIdsDuplicatesAndRemoval) {
+  const maps::Scenario s = maps::LoadScenario(kTwoXt);
+  AgentHost host(s, Guidance::kErgodic);
+  host.AddVehicle(7, Rov("a", {0.6, 0.6}));
+  host.AddVehicle(1000003, Rov("b", {4.9, 3.7}));
+  host.AddVehicle(42, Rov("c", {0.6, 3.7}));
+  EXPECT_EQ(host.ids(), (std::vector<VehicleId>{7, 1000003, 42}));
+  EXPECT_THROW(host.AddVehicle(7, Rov("dup", {3.0, 0.6})), std::invalid_argument);
+  EXPECT_EQ(host.vehicle_count(), 3);
+
+  host.RemoveVehicle(1000003);
+  EXPECT_EQ(host.ids(), (std::vector<VehicleId>{7, 42}));
+  EXPECT_FALSE(host.Contains(1000003));
+  EXPECT_TRUE(host.Contains(42));
+  EXPECT_THROW(host.State(1000003), std::out_of_range);
+  EXPECT_LT((host.State(7).position_m - Eigen::Vector2d(0.6, 0.6)).norm(), 1e-6);
+  EXPECT_LT((host.State(42).position_m - Eigen::Vector2d(0.6, 3.7)).norm(), 1e-6);
+  host.AddVehicle(1000003, Rov("b again", {4.9, 3.2}));  // the id is free again
+  EXPECT_EQ(host.ids(), (std::vector<VehicleId>{7, 42, 1000003}));
+  EXPECT_LT((host.State(1000003).position_m - Eigen::Vector2d(4.9, 3.2)).norm(), 1e-6);
+  EXPECT_LT((host.State(42).position_m - Eigen::Vector2d(0.6, 3.7)).norm(), 1e-6);
+}
+
+// With one target and then silence from the server, a vehicle keeps covering: over 200 control
+// cycles it moves, runs near its transit speed (mean over the last 150 cycles within 10 %), and
+// its kernel time grows by 200 control periods (1e-9 relative, no forgetting).
+TEST(AgentHost, KeepsCoveringWithItsLastTarget) {
+  const maps::Scenario s = maps::LoadScenario(kTwoXt);
+  ASSERT_TRUE(std::isinf(s.ergodic.forgetting_time_s));
+  AgentHost host(s, Guidance::kErgodic);
+  const VehicleId id = 5;
+  host.AddVehicle(id, s.vehicles[0]);
+  host.SetTarget(id, {maps::RiskField::ForScenario(s, host.basis()).coefficients(), {}, 0.0});
+  const double dt = host.control_period_s();
+  host.Step(0.0);
+  const double kernel_time_0 = host.Coverage(id)->time_s();
+  std::vector<Eigen::Vector2d> positions;
+  double late_speed_sum = 0.0;
+  for (int i = 1; i <= 200; ++i) {
+    host.Step(i * dt);
+    const VehicleState state = host.State(id);
+    positions.push_back(state.position_m);
+    if (i > 50) late_speed_sum += state.velocity_mps.norm();
+  }
+  EXPECT_GT((positions.back() - s.vehicles[0].start_m).norm(), 0.5);
+  EXPECT_NE(positions[100], positions[150]);
+  EXPECT_NEAR(late_speed_sum / 150.0, s.vehicles[0].transit_speed_mps, 0.1 * s.vehicles[0].transit_speed_mps);
+  const double grown = host.Coverage(id)->time_s() - kernel_time_0;
+  EXPECT_NEAR(grown, 200 * dt, 1e-9 * 200 * dt);
+}
+
+// Two BlueROV2s in one host, 0.5 m apart, whose guidance pulls each towards the other (one
+// tight bump between them; checked with a standalone ErgodicController in the same state) never
+// overlap: centres stay > 0.4 m apart over 15 s (hull 0.457 m x 0.575 m). Whether contact in the
+// shared Box2D world or the keep-clear filter's push from neighbours does it is not this test's
+// concern; hull contact itself is PhysicsWorld.BlueRov2sDoNotOverlap.
+TEST(AgentHost, VehiclesInOneHostDoNotOverlap) {
+  const maps::Scenario s = maps::LoadScenario(kTwoXt);
+  AgentHost host(s, Guidance::kErgodic);
+  const Eigen::Vector2d a(2.3, 0.9), b(2.8, 0.9);  // open water south of XT-A / XT-B
+  host.AddVehicle(1, Rov("a", a, 0.0));
+  host.AddVehicle(2, Rov("b", b, 0.0));
+  const Eigen::VectorXd phi = BumpAt(host.basis(), 0.5 * (a + b));
+  host.SetTarget(1, {phi, {}, 0.0});
+  host.SetTarget(2, {phi, {}, 0.0});
+  for (const auto& [self, other] : {std::pair{a, b}, std::pair{b, a}}) {
+    ErgodicController alone(host.basis(), 0.7);
+    alone.SetTarget(phi);
+    VehicleState state;
+    state.position_m = self;
+    EXPECT_GT(alone.Command(state, 0.0).dot((other - self).normalized()), 0.5) << "not pulled together";
+  }
+  for (int i = 0; i < 150; ++i) {
+    host.Step(i * host.control_period_s());
+    const double d = (host.State(1).position_m - host.State(2).position_m).norm();
+    ASSERT_GT(d, 0.4) << "overlap at step " << i;
+  }
+}
+
+// PreviewCommand is side-effect free: a host that previews gives, on its next Step, exactly the
+// state and command of a twin that did not; the preview with the vehicle's own target is the
+// command that Step then issues; a different phi previews a different command (> 1 degree).
+TEST(AgentHost, PreviewCommandChangesNothing) {
+  const maps::Scenario s = maps::LoadScenario(kTwoXt);
+  AgentHost previewing(s, Guidance::kErgodic), twin(s, Guidance::kErgodic);
+  const Eigen::VectorXd phi = maps::RiskField::ForScenario(s, previewing.basis()).coefficients();
+  const Eigen::VectorXd other = BumpAt(previewing.basis(), {4.75, 3.6});
+  for (AgentHost* host : {&previewing, &twin}) {
+    host->AddVehicle(3, s.vehicles[0]);
+    host->SetTarget(3, {phi, {}, 0.0});
+  }
+  const double dt = previewing.control_period_s();
+  for (int i = 0; i < 30; ++i) {
+    const double t = i * dt;
+    const Eigen::Vector2d with_own = previewing.PreviewCommand(3, phi, t);
+    const Eigen::Vector2d with_other = previewing.PreviewCommand(3, other, t);
+    if (i == 20) {
+      EXPECT_GT(AngleBetween(with_own, with_other), std::numbers::pi / 180.0);
+    }
+    previewing.Step(t);
+    twin.Step(t);
+    EXPECT_EQ(previewing.LastCommand(3), with_own) << "step " << i;
+    EXPECT_EQ(previewing.LastCommand(3), twin.LastCommand(3)) << "step " << i;
+    EXPECT_EQ(previewing.State(3).position_m, twin.State(3).position_m) << "step " << i;
+    EXPECT_EQ(previewing.Coverage(3)->sums(), twin.Coverage(3)->sums()) << "step " << i;
+  }
+}
+
+// Shared coverage enters the SMC law: the same vehicle, in the same state, with the same phi,
+// commands a different velocity (> 1 degree) when its target carries another vehicle's sums
+// than when the fleet sums are empty.
+TEST(AgentHost, FleetSumsChangeTheCommand) {
+  const maps::Scenario s = maps::LoadScenario(kTwoXt);
+  const maps::SpectralBasis basis(s.workspace.width_m, s.workspace.height_m, s.ergodic.basis_order);
+  const Eigen::VectorXd phi = maps::RiskField::ForScenario(s, basis).coefficients();
+
+  // Another vehicle's coverage: 20 s of SMC from the opposite corner.
+  AgentHost other(s, Guidance::kErgodic);
+  other.AddVehicle(9, Rov("other", {4.9, 3.7}, std::numbers::pi));
+  other.SetTarget(9, {phi, {}, 0.0});
+  for (int i = 0; i <= 200; ++i) other.Step(i * other.control_period_s());
+  const CoverageAccumulator& other_coverage = *other.Coverage(9);
+  ASSERT_GT(other_coverage.time_s(), 19.0);
+
+  AgentHost shared(s, Guidance::kErgodic), alone(s, Guidance::kErgodic);
+  const double dt = shared.control_period_s();
+  for (AgentHost* host : {&shared, &alone}) {
+    host->AddVehicle(1, s.vehicles[0]);
+    host->SetTarget(1, {phi, {}, 0.0});
+    for (int i = 0; i < 10; ++i) host->Step(i * dt);
+  }
+  ASSERT_EQ(shared.State(1).position_m, alone.State(1).position_m);
+  shared.SetTarget(1, {phi, other_coverage.sums(), other_coverage.time_s()});
+  alone.SetTarget(1, {phi, {}, 0.0});
+  shared.Step(10 * dt);
+  alone.Step(10 * dt);
+  EXPECT_GT(AngleBetween(shared.LastCommand(1), alone.LastCommand(1)), std::numbers::pi / 180.0);
+}
+
+// With a neighbour near, the preview with the vehicle's own target is still the command Step
+// then issues (PreviewCommand's contract: "the command vehicle id would give now").
+TEST(AgentHost, PreviewMatchesStepWithNeighbours) {
+  const maps::Scenario s = maps::LoadScenario(kTwoXt);
+  AgentHost host(s, Guidance::kErgodic);
+  host.AddVehicle(1, Rov("a", {0.8, 0.9}));
+  host.AddVehicle(2, Rov("b", {1.8, 0.9}));
+  const Eigen::VectorXd phi = maps::RiskField::ForScenario(s, host.basis()).coefficients();
+  host.SetTarget(1, {phi, {}, 0.0});
+  host.SetTarget(2, {phi, {}, 0.0});
+  for (int i = 0; i < 10; ++i) {
+    const double t = i * host.control_period_s();
+    const Eigen::Vector2d preview = host.PreviewCommand(1, phi, t);
+    host.Step(t);
+    EXPECT_LT((host.LastCommand(1) - preview).norm(), 1e-12) << "step " << i;
+  }
+}
+
+}  // namespace
+}  // namespace sage::agents
