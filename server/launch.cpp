@@ -33,25 +33,29 @@ constexpr int kVehiclesPerHost = 250;
 std::string SelfExe() { return fs::read_symlink("/proc/self/exe").string(); }
 
 // fork + exec of this same `sage` binary; stdout/stderr go to `log_path` unless it is empty.
+// Everything is prepared before fork(): the launcher runs DDS threads, and a forked child of a
+// multi-threaded process may only call async-signal-safe functions until exec (a malloc could
+// deadlock on a lock another thread held at the fork; seen as a join host that never started).
 pid_t Spawn(const std::vector<std::string>& args, const std::string& log_path, bool detach = false) {
+  const std::string exe = SelfExe();
+  std::vector<char*> argv;
+  argv.push_back(const_cast<char*>(exe.c_str()));
+  for (const std::string& a : args) argv.push_back(const_cast<char*>(a.c_str()));
+  argv.push_back(nullptr);
+  const char* log = log_path.empty() ? nullptr : log_path.c_str();
   const pid_t pid = fork();
   if (pid < 0) throw std::runtime_error("fork failed");
   if (pid == 0) {
     if (detach) setsid();
-    if (!log_path.empty()) {
-      const int fd = open(log_path.c_str(), O_WRONLY | O_CREAT | O_APPEND, 0644);
+    if (log != nullptr) {
+      const int fd = open(log, O_WRONLY | O_CREAT | O_APPEND, 0644);
       if (fd >= 0) {
         dup2(fd, STDOUT_FILENO);
         dup2(fd, STDERR_FILENO);
         close(fd);
       }
     }
-    std::vector<char*> argv;
-    const std::string exe = SelfExe();
-    argv.push_back(const_cast<char*>(exe.c_str()));
-    for (const std::string& a : args) argv.push_back(const_cast<char*>(a.c_str()));
-    argv.push_back(nullptr);
-    execv(exe.c_str(), argv.data());
+    execv(argv[0], argv.data());
     _exit(127);
   }
   return pid;
