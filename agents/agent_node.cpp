@@ -140,7 +140,10 @@ int RunAgentNode(const maps::Scenario& scenario, const AgentNodeOptions& options
         vehicles.erase(c.vehicle_id);
       }
     });
-    if (vehicles.empty()) return 0;
+    if (vehicles.empty()) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(100));  // let the disposes go out
+      return 0;
+    }
     // Every host sees every vehicle's assignment (one topic); take them all, 1,024 at a time.
     auto take_target = [&](const proto::ErgodicTarget& m, const dds_sample_info_t& info) {
       auto it = vehicles.find(m.vehicle_id);

@@ -268,12 +268,44 @@ int PublishOnce(const MissionHandle& mission, const proto::Qos& qos, const T& me
 }  // namespace
 
 int RemoveVehicle(const MissionHandle& mission, unsigned id) {
+  // The command is volatile, so a host whose reader matched a moment late would miss it: repeat
+  // it until the vehicle's state is disposed (the host's clean leave), or give up after 5 s.
+  proto::Participant participant(mission.domain_id, proto::LocalhostConfigXml(proto::kMaxLocalParticipants));
+  proto::Reader<proto::VehicleState> states(participant, proto::VehicleStateReaderQos());
+  proto::Writer<proto::FleetCommand> writer(participant, proto::FleetCommandQos());
+  if (!writer.WaitForReaders(1, std::chrono::seconds(3))) {
+    std::fprintf(stderr, "sage: error: no mission is listening on DDS domain %d (is it still running?)\n",
+                 mission.domain_id);
+    return 1;
+  }
   proto::FleetCommand c{};
   std::string verb = "remove";
-  c.stamp_ns = 0;
   c.verb = proto::BorrowString(verb);
   c.vehicle_id = id;
-  return PublishOnce(mission, proto::FleetCommandQos(), c, "asked the fleet to take the vehicle out");
+  bool seen = false, gone = false;
+  const auto start = std::chrono::steady_clock::now();
+  auto next_write = start;
+  while (!gone && std::chrono::steady_clock::now() - start < std::chrono::seconds(5)) {
+    if (std::chrono::steady_clock::now() >= next_write) {
+      writer.Write(c);
+      next_write += std::chrono::milliseconds(500);
+    }
+    states.WaitForData(std::chrono::milliseconds(100));
+    while (states.TakeEach([&](const proto::VehicleState& s, const dds_sample_info_t& info) {
+      if (s.vehicle_id != id) return;
+      seen = true;
+      gone = gone || info.instance_state == DDS_NOT_ALIVE_DISPOSED_INSTANCE_STATE;
+    }, 1024) == 1024) {
+    }
+    if (!seen && std::chrono::steady_clock::now() - start > std::chrono::seconds(2)) break;
+  }
+  if (!gone) {
+    std::fprintf(stderr, "sage: error: vehicle %u %s\n", id,
+                 seen ? "did not leave within 5 s" : "is not in this mission (ids are in the server's log and fleet_events.csv)");
+    return 1;
+  }
+  std::printf("vehicle %u left the mission\n", id);
+  return 0;
 }
 
 int SetRisk(const MissionHandle& mission, const std::string& valve, double weight, const std::string& source) {

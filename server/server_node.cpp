@@ -153,7 +153,10 @@ int RunServerNode(const maps::Scenario& scenario, const ServerNodeOptions& optio
         v.last = s;
         v.last.name = nullptr;  // the name lives in trajectory.vehicle_names; the sample's memory is a loan
         v.has_state = true;
-        return;
+        // A dispose or a lapsed lease that arrives while the vehicle's last state is still
+        // unread comes as that (valid) sample with a not-alive instance state, not as a sample
+        // of its own: take the state, then the leave.
+        if (info.instance_state == DDS_ALIVE_INSTANCE_STATE) return;
       }
       if (!v.alive) return;
       const bool lost = info.instance_state == DDS_NOT_ALIVE_NO_WRITERS_INSTANCE_STATE;

@@ -4,6 +4,7 @@
 # launch_scale.md: the real-time factor the server kept, its cycle time, and the DDS message
 # rate it saw. Usage: tests/bench/launch_scale.sh [BUILD_DIR] [N ...]   (default: build 100 1000)
 set -euo pipefail
+cd "$(dirname "$0")/../.."   # the repository root: scenarios/ and build/ are relative to it
 build=${1:-build}
 shift || true
 counts=("${@:-100 1000}")
@@ -13,7 +14,10 @@ echo "|---|---|---|---|---|---|---|" | tee -a "$out"
 for n in ${counts[@]}; do
   dir=$(mktemp -d)
   log="$dir/launch.log"
-  "$build/bin/sage" launch scenarios/fleet_large.yaml --vehicles "$n" --duration 30 --out "$dir" >"$log" 2>&1
+  if ! "$build/bin/sage" launch scenarios/fleet_large.yaml --vehicles "$n" --duration 30 --out "$dir" >"$log" 2>&1; then
+    echo "launch_scale: the $n-vehicle mission failed; its log: $log" >&2
+    exit 1
+  fi
   summary=$(grep "server: .* of mission in" "$log" | tail -1)
   hosts=$(grep -o "[0-9]* agent host(s)" "$log" | head -1 | cut -d' ' -f1)
   # "... 30 s of mission in 30.0 s wall (1.00x real time); 310149 messages in, 1364 out (10380/s); server cycle 9.79 ms mean, ..."
