@@ -13,15 +13,6 @@
 #include "maps/seabed_map.h"
 
 namespace sage::agents {
-namespace {
-
-std::vector<Eigen::Vector2d> ValvePositions(const maps::Scenario& scenario) {
-  std::vector<Eigen::Vector2d> points;
-  for (const maps::Valve& v : scenario.AllValves()) points.push_back(v.position_m);
-  return points;
-}
-
-}  // namespace
 
 struct AgentHost::Impl {
   struct Vehicle {
@@ -57,7 +48,7 @@ struct AgentHost::Impl {
     control_dt = 1.0 / s.control_rate_hz;
     physics_substeps = std::max(1, static_cast<int>(std::lround(s.physics_rate_hz / s.control_rate_hz)));
     if (guidance == Guidance::kAstar) {
-      tour = PlanTour(grid, ValvePositions(s));
+      tour = PlanTour(grid, s.ValvePositions());
       if (!tour.ok) {
         throw maps::ScenarioError(s.source_path + ": structures: some valve cannot be reached on the A* grid (clearance " +
                                   std::to_string(s.astar.clearance_m) + " m)");

@@ -12,6 +12,7 @@
 #include "proto/dds_config.h"
 #include "proto/dds_endpoints.h"
 #include "proto/messages.h"
+#include "proto/mission_clock.h"
 #include "proto/qos.h"
 
 namespace sage::agents {
@@ -21,10 +22,6 @@ using Clock = std::chrono::system_clock;  // CLOCK_REALTIME: shared by every pro
 using proto::AsSpan;
 using proto::BorrowSequence;
 using proto::BorrowString;
-
-long long NowNs() {
-  return std::chrono::duration_cast<std::chrono::nanoseconds>(Clock::now().time_since_epoch()).count();
-}
 
 // One coverage report as published: kept so the vehicle can take exactly that part out of the
 // fleet's sums the server sends back.
@@ -75,7 +72,9 @@ int RunAgentNode(const maps::Scenario& scenario, const AgentNodeOptions& options
   std::map<std::uint32_t, Vehicle> vehicles;
   for (std::size_t i = 0; i < options.vehicles.size(); ++i) {
     host.AddVehicle(static_cast<VehicleId>(options.ids[i]), options.vehicles[i]);
-    vehicles[options.ids[i]] = Vehicle{options.ids[i], options.vehicles[i].name};
+    Vehicle& v = vehicles[options.ids[i]];
+    v.id = options.ids[i];
+    v.name = options.vehicles[i].name;
   }
 
   // The mission clock: the server's start time and time scale, from its (transient-local) status.
@@ -116,7 +115,7 @@ int RunAgentNode(const maps::Scenario& scenario, const AgentNodeOptions& options
 
   FleetSnapshot snapshot;
   auto last_heard = std::chrono::steady_clock::now();
-  long k = static_cast<long>(std::ceil(mission_time(NowNs()) / dt));
+  long k = static_cast<long>(std::ceil(mission_time(proto::NowRealtimeNs()) / dt));
   double next_coverage_t = k * dt;
   spdlog::info("agents: {} vehicle(s) joining the mission on DDS domain {} at t = {:.1f} s", vehicles.size(),
                options.domain_id, k * dt);
@@ -219,7 +218,7 @@ int RunAgentNode(const maps::Scenario& scenario, const AgentNodeOptions& options
       host.Step(t);  // vehicles hold still until the server's first word
     }
 
-    const long long stamp = NowNs();
+    const long long stamp = proto::NowRealtimeNs();
     for (const auto& [id, v] : vehicles) {
       const VehicleState s = host.State(static_cast<VehicleId>(id));
       proto::VehicleState msg{};

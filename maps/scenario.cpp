@@ -613,6 +613,12 @@ std::vector<Valve> Scenario::AllValves() const {
   return valves;
 }
 
+std::vector<Eigen::Vector2d> Scenario::ValvePositions() const {
+  std::vector<Eigen::Vector2d> points;
+  for (const Valve& valve : AllValves()) points.push_back(valve.position_m);
+  return points;
+}
+
 int Scenario::ValveIndex(const std::string& valve_name) const {
   int index = 0;
   for (const ChristmasTree& tree : structures) {

@@ -137,6 +137,7 @@ struct Scenario {
   /// All valves in file order (P1..Pn), structure after structure.
   std::vector<Valve> AllValves() const;
   int ValveIndex(const std::string& name) const;  ///< index into AllValves(); -1 if none
+  std::vector<Eigen::Vector2d> ValvePositions() const;  ///< AllValves()' positions, same order
   const RiskProfile* FindProfile(const std::string& name) const;  ///< nullptr if none
   /// Throws ScenarioError for the first field that breaks a rule.
   void Validate() const;

@@ -8,12 +8,6 @@
 namespace sage::server {
 namespace {
 
-std::vector<Eigen::Vector2d> ValvePositions(const maps::Scenario& scenario) {
-  std::vector<Eigen::Vector2d> points;
-  for (const maps::Valve& valve : scenario.AllValves()) points.push_back(valve.position_m);
-  return points;
-}
-
 const maps::RiskProfile& FindProfileOrThrow(const maps::Scenario& scenario, const std::string& requested) {
   const std::string name = requested.empty() ? scenario.default_profile : requested;
   if (const maps::RiskProfile* p = scenario.FindProfile(name)) return *p;
@@ -28,7 +22,7 @@ FleetServer::FleetServer(const maps::Scenario& scenario, const std::string& prof
     : scenario_(scenario),
       basis_(scenario.workspace.width_m, scenario.workspace.height_m, scenario.ergodic.basis_order),
       risk_(maps::RiskField::ForScenario(scenario, basis_)),
-      valve_positions_(ValvePositions(scenario)),
+      valve_positions_(scenario.ValvePositions()),
       visits_(valve_positions_, scenario.visit_radius_m, scenario.rearm_radius_m) {
   profile_ = &FindProfileOrThrow(scenario_, profile);
   const std::vector<maps::Valve> valves = scenario_.AllValves();

@@ -15,6 +15,7 @@
 #include "proto/dds_config.h"
 #include "proto/dds_endpoints.h"
 #include "proto/messages.h"
+#include "proto/mission_clock.h"
 #include "proto/qos.h"
 #include "server/fleet_server.h"
 #include "server/mission.h"
@@ -22,14 +23,10 @@
 
 namespace sage::server {
 
-long long NowRealtimeNs() {
-  return std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::system_clock::now().time_since_epoch())
-      .count();
-}
-
 namespace {
 
 namespace fs = std::filesystem;
+using proto::NowRealtimeNs;
 using proto::AsSpan;
 using proto::AsStringView;
 using proto::BorrowSequence;

@@ -24,7 +24,4 @@ struct ServerNodeOptions {
 /// fleet_events.csv (joins, losses, leaves with their detection times). Returns 0 on success.
 int RunServerNode(const maps::Scenario& scenario, const ServerNodeOptions& options);
 
-/// Nanoseconds of CLOCK_REALTIME: the clock every process of a mission shares.
-long long NowRealtimeNs();
-
 }  // namespace sage::server
