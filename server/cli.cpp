@@ -15,6 +15,7 @@
 #include <spdlog/spdlog.h>
 
 #include "maps/scenario.h"
+#include "maps/seabed_map.h"
 #include "server/cli_fleet.h"
 #include "server/metrics.h"
 #include "server/mission.h"
@@ -136,6 +137,8 @@ void WriteRunDirectory(const fs::path& dir, const maps::Scenario& scenario, cons
   const std::string title = fmt::format("{}: {} on '{}', {:.0f} s", scenario.name, result.metrics.controller,
                                         result.metrics.profile, result.metrics.duration_s);
   WritePlotSvg((dir / "plot.svg").string(), scenario, result.weights.back().weights, result.trajectory, title);
+  // The seabed the mission ran on, as OctoMap binary: octovis shows it.
+  maps::SeabedMap(scenario, scenario.astar.grid_resolution_m).WriteBinary((dir / "seabed.bt").string());
 }
 
 std::string DefaultOutDir(const maps::Scenario& scenario, const std::string& profile, const std::string& what) {

@@ -12,6 +12,7 @@
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
 
+#include "maps/seabed_map.h"
 #include "proto/dds_config.h"
 #include "proto/dds_endpoints.h"
 #include "proto/messages.h"
@@ -254,6 +255,7 @@ int RunServerNode(const maps::Scenario& scenario, const ServerNodeOptions& optio
   WriteMetricsJson((dir / "metrics.json").string(), metrics);
   WritePlotSvg((dir / "plot.svg").string(), scenario, server.schedule().back().weights, trajectory,
                fmt::format("{}: fleet of {} over DDS, {:.0f} s", scenario.name, trajectory.vehicle_names.size(), end_time));
+  maps::SeabedMap(scenario, scenario.astar.grid_resolution_m).WriteBinary((dir / "seabed.bt").string());
   std::ofstream log(dir / "fleet_events.csv");
   log << "t,event,vehicle_id,name\n";
   for (const FleetLogEntry& e : fleet_log) log << e.time_s << "," << e.what << "," << e.vehicle_id << "," << e.name << "\n";
