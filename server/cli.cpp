@@ -75,7 +75,19 @@ void SetDuration(maps::Scenario& scenario, double duration_s) {
 
 namespace {
 
+// Command-line values are checked here, so an error names the option rather than the file.
+void CheckOverrides(const MissionOverrides& o) {
+  if (o.duration_s && !(*o.duration_s > 0.0)) throw maps::ScenarioError(fmt::format("--duration = {}: must be > 0", *o.duration_s));
+  if (o.basis_order && (*o.basis_order < 1 || *o.basis_order > 64)) {
+    throw maps::ScenarioError(fmt::format("--basis-order = {}: must be in 1..64", *o.basis_order));
+  }
+  if (o.forgetting_time_s && !(*o.forgetting_time_s > 0.0)) {
+    throw maps::ScenarioError(fmt::format("--forgetting = {}: must be > 0 (inf = never forget)", *o.forgetting_time_s));
+  }
+}
+
 maps::Scenario LoadWithOverrides(const MissionOverrides& o) {
+  CheckOverrides(o);
   maps::Scenario scenario = maps::LoadScenario(o.scenario_path);
   if (o.vehicles) scenario = maps::WithVehicleCount(scenario, *o.vehicles);
   if (o.assignment) scenario.fleet.assignment = maps::ParseFleetAssignment(*o.assignment, "--assignment");
@@ -270,8 +282,16 @@ int RunCli(int argc, char** argv) {
 
   try {
     app.parse(argc, argv);
-  } catch (const CLI::ParseError& e) {
+  } catch (const CLI::CallForHelp& e) {
     return app.exit(e);
+  } catch (const CLI::CallForAllHelp& e) {
+    return app.exit(e);
+  } catch (const CLI::CallForVersion& e) {
+    return app.exit(e);
+  } catch (const CLI::ParseError& e) {
+    // Bad arguments: one line, like every other input error.
+    std::cerr << "sage: error: " << e.what() << " (see sage --help)\n";
+    return 2;
   }
 
   spdlog::set_pattern("%^[%l]%$ %v");
@@ -281,6 +301,9 @@ int RunCli(int argc, char** argv) {
     if (*evaluate) return CmdEvaluate(trajectory_path, eval_scenario, eval_profile, eval_duration, eval_out);
     return RunFleetSubcommand(*fleet);
   } catch (const maps::ScenarioError& e) {
+    std::cerr << "sage: error: " << e.what() << "\n";
+    return 2;
+  } catch (const std::invalid_argument& e) {  // e.g. a DDS domain out of range
     std::cerr << "sage: error: " << e.what() << "\n";
     return 2;
   } catch (const std::exception& e) {

@@ -63,15 +63,24 @@ struct FleetCli {
 
 namespace {
 
+// CLI11's PositiveNumber prints the whole range of a double; users need "must be > 0".
+std::string MustBePositive(const std::string& text) {
+  try {
+    return std::stod(text) > 0.0 ? std::string() : std::string("must be > 0");
+  } catch (const std::exception&) {
+    return "must be a number > 0";
+  }
+}
+
 void AddScenarioOptions(CLI::App& cmd, FleetCli& c, bool with_out) {
   cmd.add_option("scenario", c.scenario_path, "Scenario YAML (e.g. scenarios/fleet_field.yaml)")->required();
   cmd.add_option("--vehicles,-n", c.vehicles, "Fleet size (default: the scenario's vehicles)");
-  cmd.add_option("--duration", c.duration_s, "Mission length in seconds (default: the scenario's)");
+  cmd.add_option("--duration", c.duration_s, "Mission length in seconds (default: the scenario's)")->check(MustBePositive);
   cmd.add_option("--profile,-p", c.profile, "Risk profile (default: the scenario's default_profile)");
   cmd.add_option("--assignment", c.assignment, "shared (Mathew-Mezic shared coverage) or partition (valves split among vehicles)")
       ->check(CLI::IsMember({"shared", "partition"}));
   cmd.add_option("--time-scale", c.time_scale, "Mission seconds per wall second (1 = real time)")
-      ->check(CLI::PositiveNumber)
+      ->check(MustBePositive)
       ->capture_default_str();
   if (with_out) cmd.add_option("--out,-o", c.out_dir, "Run directory (default: runs/<scenario>_launch)");
 }
@@ -116,7 +125,10 @@ std::shared_ptr<FleetCli> AddFleetSubcommands(CLI::App& app) {
   c->vehicle_add->add_option("--count,-c", c->add_count, "How many vehicles")->capture_default_str();
   c->vehicle_add->add_option("--mission", c->mission_dir, "Run directory of the mission (default: $SAGE_MISSION or runs/latest)");
   c->vehicle_remove = c->vehicle->add_subcommand("remove", "Take a vehicle out of the running mission cleanly");
-  c->vehicle_remove->add_option("id", c->remove_id, "Vehicle id (see the server's log or fleet_events.csv)")->required();
+  c->vehicle_remove->add_option("id", c->remove_id,
+                                "Vehicle id: the launch's vehicles are 0..N-1 in scenario order (rov1 is 0); added ones "
+                                "are printed by sage vehicle add; the launcher's log shows every join")
+      ->required();
   c->vehicle_remove->add_option("--mission", c->mission_dir, "Run directory of the mission (default: $SAGE_MISSION or runs/latest)");
 
   c->risk = app.add_subcommand("risk", "Change a valve's risk in the running mission");

@@ -214,7 +214,8 @@ int Launch(const maps::Scenario& scenario, const LaunchOptions& options) {
       h.running = false;
     }
   }
-  return server_status;
+  // An interrupted mission still wrote its run directory, but says so in its exit status.
+  return server_status == 0 && stop_sent ? 130 : server_status;
 }
 
 MissionHandle FindMission(const std::string& dir) {
@@ -241,6 +242,16 @@ int AddVehicles(const MissionHandle& mission, int count) {
   if (count < 1) throw maps::ScenarioError("--count = " + std::to_string(count) + ": must be >= 1");
   // Ids of added vehicles come from this process id, so concurrent adds never collide with each
   // other or with the launch's vehicles (0..N-1).
+  {
+    // Only join a mission that is running: its server reads fleet commands.
+    proto::Participant participant(mission.domain_id, proto::LocalhostConfigXml(proto::kMaxLocalParticipants));
+    proto::Writer<proto::FleetCommand> probe(participant, proto::FleetCommandQos());
+    if (!probe.WaitForReaders(1, std::chrono::seconds(3))) {
+      std::fprintf(stderr, "sage: error: no mission is listening on DDS domain %d (is it still running?)\n",
+                   mission.domain_id);
+      return 1;
+    }
+  }
   const unsigned first_id = 1'000'000u + static_cast<unsigned>(getpid() % 4000) * 1000u;
   const std::string log = (fs::path(mission.run_dir) / fmt::format("agents-add-{}.log", first_id)).string();
   const pid_t pid = Spawn({"agents", mission.scenario_path, "--add", std::to_string(count), "--first-id",
@@ -310,7 +321,13 @@ int RemoveVehicle(const MissionHandle& mission, unsigned id) {
 
 int SetRisk(const MissionHandle& mission, const std::string& valve, double weight, const std::string& source) {
   if (!(weight >= 0.0) || !std::isfinite(weight)) {
-    throw maps::ScenarioError("WEIGHT = " + std::to_string(weight) + ": must be a number >= 0");
+    throw maps::ScenarioError(fmt::format("weight = {}: must be a number >= 0", weight));
+  }
+  const maps::Scenario scenario = maps::LoadScenario(mission.scenario_path);
+  if (scenario.ValveIndex(valve) < 0) {
+    std::string names;
+    for (const maps::Valve& v : scenario.AllValves()) names += (names.empty() ? "" : ", ") + v.name;
+    throw maps::ScenarioError("valve = " + valve + ": not in this mission (valves: " + names + ")");
   }
   proto::RiskUpdate r{};
   r.valve = proto::BorrowString(valve);
