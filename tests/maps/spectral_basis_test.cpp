@@ -39,7 +39,7 @@ TEST(SpectralBasis, OrthonormalOnTheBox) {
 TEST(SpectralBasis, ZerothFunctionIsOneOverRootArea) {
   const SpectralBasis basis(12.0, 3.0, 4);
   Eigen::VectorXd f;
-  for (const Eigen::Vector2d x : {Eigen::Vector2d(0, 0), Eigen::Vector2d(5.5, 2.9), Eigen::Vector2d(12, 3)}) {
+  for (const Eigen::Vector2d& x : {Eigen::Vector2d(0, 0), Eigen::Vector2d(5.5, 2.9), Eigen::Vector2d(12, 3)}) {
     basis.Evaluate(x, f);
     EXPECT_NEAR(f[0], 1.0 / 6.0, 1e-15);
   }
@@ -70,7 +70,7 @@ TEST(SpectralBasis, GradientMatchesFiniteDifferences) {
     return a.dot(f);
   };
   const double step = 1e-6;
-  for (const Eigen::Vector2d x : {Eigen::Vector2d(1.2, 3.4), Eigen::Vector2d(6.9, 0.1), Eigen::Vector2d(3.5, 2.5)}) {
+  for (const Eigen::Vector2d& x : {Eigen::Vector2d(1.2, 3.4), Eigen::Vector2d(6.9, 0.1), Eigen::Vector2d(3.5, 2.5)}) {
     const Eigen::Vector2d g = basis.GradientOfSum(x, a);
     const double fd_x = (value(x + Eigen::Vector2d(step, 0)) - value(x - Eigen::Vector2d(step, 0))) / (2 * step);
     const double fd_y = (value(x + Eigen::Vector2d(0, step)) - value(x - Eigen::Vector2d(0, step))) / (2 * step);
