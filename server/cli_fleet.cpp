@@ -43,6 +43,10 @@ struct FleetCli {
   std::optional<int> vehicles;
   std::optional<double> duration_s;
   std::optional<std::string> assignment;
+  std::optional<std::uint64_t> seed;
+  std::optional<std::string> guard;
+  std::optional<double> forgetting_time_s;
+  std::optional<int> basis_order;
   double time_scale = 1.0;
   bool quiet = false;
   int hosts = 0;
@@ -82,6 +86,13 @@ void AddScenarioOptions(CLI::App& cmd, FleetCli& c, bool with_out) {
   cmd.add_option("--time-scale", c.time_scale, "Mission seconds per wall second (1 = real time)")
       ->check(MustBePositive)
       ->capture_default_str();
+  cmd.add_option("--seed", c.seed, "Seed of the start-pose jitter (default: the scenario's)");
+  cmd.add_option("--guard", c.guard, "No-starving-valve guard: on|off (default: the scenario's)")
+      ->check(CLI::IsMember({"on", "off"}));
+  cmd.add_option("--forgetting", c.forgetting_time_s, "Coverage forgetting time constant in seconds (inf = never)")
+      ->check(MustBePositive);
+  cmd.add_option("--basis-order,-K", c.basis_order, "Wave numbers per dimension K (default: the scenario's)")
+      ->check(CLI::Range(1, 64).description(""));
   if (with_out) cmd.add_option("--out,-o", c.out_dir, "Run directory (default: runs/<scenario>_launch)");
 }
 
@@ -90,6 +101,10 @@ maps::Scenario LoadFleetScenario(const FleetCli& c) {
   if (c.vehicles) s = maps::WithVehicleCount(s, *c.vehicles);
   if (c.duration_s) SetDuration(s, *c.duration_s);
   if (c.assignment) s.fleet.assignment = maps::ParseFleetAssignment(*c.assignment, "--assignment");
+  if (c.seed) s.seed = *c.seed;
+  if (c.guard) s.guard.enabled = *c.guard == "on";
+  if (c.forgetting_time_s) s.ergodic.forgetting_time_s = *c.forgetting_time_s;
+  if (c.basis_order) s.ergodic.basis_order = *c.basis_order;
   s.Validate();
   return s;
 }
