@@ -75,8 +75,20 @@ int Launch(const maps::Scenario& scenario, const LaunchOptions& options) {
   const std::string out_dir =
       options.out_dir.empty() ? (fs::path("runs") / (scenario.name + "_launch")).string() : options.out_dir;
   fs::create_directories(out_dir);
-  const proto::DomainReservation reservation = proto::DomainReservation::Acquire(
-      proto::MissionDomainId(options.domain, fs::absolute(out_dir).string()));
+  // An explicit --domain is that domain or an error; otherwise the first free one from a hash of
+  // the run directory.
+  const int preferred = proto::MissionDomainId(options.domain, fs::absolute(out_dir).string());
+  auto reserve = [&] {
+    if (!options.domain) return proto::DomainReservation::Acquire(preferred);
+    try {
+      return proto::DomainReservation::Acquire(preferred, preferred, preferred);
+    } catch (const std::runtime_error&) {
+      throw maps::ScenarioError(fmt::format("--domain = {}: another mission on this machine holds it; leave --domain "
+                                            "out to get a free one",
+                                            preferred));
+    }
+  };
+  const proto::DomainReservation reservation = reserve();
   const int domain = reservation.domain_id();
 
   // The effective scenario (with the command line's overrides) is written next to the run, and

@@ -1,5 +1,6 @@
 #include "server/server_node.h"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -242,6 +243,11 @@ int RunServerNode(const maps::Scenario& scenario, const ServerNodeOptions& optio
   publish_status(cycle, end_time, true);
   const double wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
 
+  // Samples of one cycle were taken in id order; the file lists them by (time, trajectory index),
+  // so names read back to the same indices.
+  std::stable_sort(trajectory.samples.begin(), trajectory.samples.end(), [](const auto& a, const auto& b) {
+    return a.time_s < b.time_s || (a.time_s == b.time_s && a.vehicle < b.vehicle);
+  });
   MetricsOptions metrics_options;
   metrics_options.controller = "ergodic";
   metrics_options.profile = server.profile().name;
