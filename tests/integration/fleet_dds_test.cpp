@@ -424,7 +424,7 @@ class FleetDds : public ::testing::Test {
 TEST_F(FleetDds, ServerAndAgentsRunAMission) {
   const proto::DomainReservation domain = ReserveDomain();
   const std::string d = std::to_string(domain.domain_id());
-  const double duration = 60;
+  const double duration = 90;  // two vehicles reach every valve: >= 2 visits each in-process, seeds 1-8
   const fs::path out = run_dir_ / "out";
   ChildProcess& server = Start("server", {"server", Scenario("two_xt.yaml"), "--vehicles", "2", "--duration", Num(duration),
                                           "--time-scale", Num(kTimeScale), "--out", out.string(), "--domain", d, "--quiet"});
