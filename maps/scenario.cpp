@@ -41,6 +41,21 @@ const RiskProfile* Scenario::FindProfile(const std::string& profile_name) const 
   return nullptr;
 }
 
+const RiskProfile& Scenario::ProfileOrThrow(const std::string& requested) const {
+  const std::string name = requested.empty() ? default_profile : requested;
+  if (const RiskProfile* p = FindProfile(name)) return *p;
+  std::string allowed;
+  for (const RiskProfile& p : profiles) allowed += (allowed.empty() ? "" : ", ") + p.name;
+  throw ScenarioError(source_path + ": profile = " + name + ": must be one of " + allowed);
+}
+
+Eigen::VectorXd Scenario::ProfileWeights(const RiskProfile& profile) const {
+  const std::vector<Valve> valves = AllValves();
+  Eigen::VectorXd w(valves.size());
+  for (std::size_t i = 0; i < valves.size(); ++i) w[i] = profile.weights.at(valves[i].name);
+  return w;
+}
+
 const char* ToString(MotionModel model) {
   switch (model) {
     case MotionModel::kSingleIntegrator: return "single_integrator";

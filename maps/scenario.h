@@ -139,6 +139,10 @@ struct Scenario {
   int ValveIndex(const std::string& name) const;  ///< index into AllValves(); -1 if none
   std::vector<Eigen::Vector2d> ValvePositions() const;  ///< AllValves()' positions, same order
   const RiskProfile* FindProfile(const std::string& name) const;  ///< nullptr if none
+  /// The named profile (empty: default_profile); throws ScenarioError listing the profiles.
+  const RiskProfile& ProfileOrThrow(const std::string& name) const;
+  /// A profile's raw weights in AllValves() order (before its events).
+  Eigen::VectorXd ProfileWeights(const RiskProfile& profile) const;
   /// Throws ScenarioError for the first field that breaks a rule.
   void Validate() const;
 };

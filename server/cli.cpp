@@ -205,16 +205,13 @@ int CmdCompare(const MissionOverrides& o, bool calibrate_wait) {
 int CmdEvaluate(const std::string& trajectory_path, const std::string& scenario_path, const std::string& profile_name,
                 std::optional<double> duration_s, const std::string& out_dir) {
   const maps::Scenario scenario = maps::LoadScenario(scenario_path);
-  const std::string name = profile_name.empty() ? scenario.default_profile : profile_name;
-  const maps::RiskProfile* profile = scenario.FindProfile(name);
-  if (profile == nullptr) throw maps::ScenarioError(scenario_path + ": profile = " + name + ": no such profile");
+  const maps::RiskProfile* profile = &scenario.ProfileOrThrow(profile_name);
+  const std::string& name = profile->name;
   const Trajectory trajectory = ReadTrajectoryCsv(trajectory_path);
   if (trajectory.samples.empty()) throw maps::ScenarioError(trajectory_path + ": no samples");
   // The weights over time follow the profile and its events, as they would have in a mission.
   std::vector<WeightChange> schedule;
-  std::vector<maps::Valve> valves = scenario.AllValves();
-  Eigen::VectorXd raw(valves.size());
-  for (std::size_t i = 0; i < valves.size(); ++i) raw[i] = profile->weights.at(valves[i].name);
+  Eigen::VectorXd raw = scenario.ProfileWeights(*profile);
   schedule.push_back({0.0, raw / raw.sum()});
   for (const maps::RiskEvent& e : profile->events) {
     raw[scenario.ValveIndex(e.valve)] = e.weight;

@@ -6,28 +6,14 @@
 #include <numeric>
 
 namespace sage::server {
-namespace {
-
-const maps::RiskProfile& FindProfileOrThrow(const maps::Scenario& scenario, const std::string& requested) {
-  const std::string name = requested.empty() ? scenario.default_profile : requested;
-  if (const maps::RiskProfile* p = scenario.FindProfile(name)) return *p;
-  std::string allowed;
-  for (const auto& p : scenario.profiles) allowed += (allowed.empty() ? "" : ", ") + p.name;
-  throw maps::ScenarioError(scenario.source_path + ": profile = " + name + ": must be one of " + allowed);
-}
-
-}  // namespace
-
 FleetServer::FleetServer(const maps::Scenario& scenario, const std::string& profile)
     : scenario_(scenario),
       basis_(scenario.workspace.width_m, scenario.workspace.height_m, scenario.ergodic.basis_order),
       risk_(maps::RiskField::ForScenario(scenario, basis_)),
       valve_positions_(scenario.ValvePositions()),
       visits_(valve_positions_, scenario.visit_radius_m, scenario.rearm_radius_m) {
-  profile_ = &FindProfileOrThrow(scenario_, profile);
-  const std::vector<maps::Valve> valves = scenario_.AllValves();
-  raw_weights_.resize(valves.size());
-  for (std::size_t i = 0; i < valves.size(); ++i) raw_weights_[i] = profile_->weights.at(valves[i].name);
+  profile_ = &scenario_.ProfileOrThrow(profile);
+  raw_weights_ = scenario_.ProfileWeights(*profile_);
   schedule_.push_back({0.0, raw_weights_ / raw_weights_.sum()});
   coverage_.sums = Eigen::VectorXd::Zero(basis_.size());
   UpdateEffectiveWeights(0.0);
