@@ -88,7 +88,8 @@ void AgentHost::AddVehicle(VehicleId id, const maps::VehicleSpec& spec, const Ei
   v.body = impl_->world.AddVehicle(spec);
   if (impl_->guidance == Guidance::kErgodic) {
     v.ergodic = std::make_unique<ErgodicController>(impl_->basis, spec.transit_speed_mps,
-                                                    impl_->scenario.ergodic.forgetting_time_s);
+                                                    impl_->scenario.ergodic.forgetting_time_s,
+                                                    impl_->scenario.ergodic.min_turn_radius_m);
     if (spec.model == maps::MotionModel::kBlueRov2) {
       v.keep_clear = std::make_unique<ObstacleFilter>(impl_->clearance, impl_->scenario.workspace);
     }

@@ -4,6 +4,10 @@
 //   g(s) = exp(-s / T) with forgetting time T (g = 1, T = infinity: the paper's plain average),
 //   B      = sum_k Lambda_k (c_k - phi_k) grad F_k(x),
 //   u      = -u_max B / |B|.
+// With a minimum turning radius r > 0 the direction of u turns toward -B/|B| at no more than
+// u_max / r rad/s. Without it a vehicle that reaches the deficit's stationary point at a hot
+// valve chatters there (the direction flips every cycle); a BlueROV2 brakes and hovers, so the
+// valve gets one long visit instead of many. With it the vehicle flies through and loops back.
 // In a fleet the coverage of the other vehicles (their sums and time) is added to this
 // vehicle's own before forming c_k, which is Mathew & Mezic's multi-agent law.
 #include <limits>
@@ -37,8 +41,11 @@ class CoverageAccumulator {
 class ErgodicController final : public VehicleController {
  public:
   /// basis must outlive the controller. speed_mps: constant transit speed (> 0).
+  /// min_turn_radius_m: 0 = turn at once (the paper's law), else the radius (m) of the
+  /// tightest turn, so the direction turns at most speed / radius rad/s.
   ErgodicController(const maps::SpectralBasis& basis, double speed_mps,
-                    double forgetting_time_s = std::numeric_limits<double>::infinity());
+                    double forgetting_time_s = std::numeric_limits<double>::infinity(),
+                    double min_turn_radius_m = 0.0);
 
   /// The target phi_k (flat-indexed as the basis). Takes effect on the next Command().
   void SetTarget(const Eigen::VectorXd& phi_k);
@@ -58,6 +65,7 @@ class ErgodicController final : public VehicleController {
  private:
   const maps::SpectralBasis& basis_;
   double speed_mps_;
+  double max_turn_rate_radps_;  // speed / min turning radius; infinity = the paper's law
   CoverageAccumulator coverage_;
   Eigen::VectorXd target_;
   Eigen::VectorXd fleet_sums_;
@@ -65,6 +73,7 @@ class ErgodicController final : public VehicleController {
   Eigen::VectorXd f_;           // scratch: F_k(x)
   Eigen::VectorXd weighted_;    // scratch: Lambda_k (c_k - phi_k)
   Eigen::Vector2d last_direction_ = Eigen::Vector2d::UnitX();
+  bool has_direction_ = false;  // false until the first command: a vehicle at rest may head anywhere
   double last_time_s_ = std::numeric_limits<double>::quiet_NaN();
 };
 

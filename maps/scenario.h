@@ -75,6 +75,10 @@ struct ErgodicSettings {
   /// Time constant (s) of exponential forgetting of the coverage c_k; infinity = the
   /// paper's behaviour (c_k averages over the whole mission).
   double forgetting_time_s = std::numeric_limits<double>::infinity();
+  /// Tightest turn (m) of the commanded direction: it turns at most speed / radius rad/s, so a
+  /// vehicle passes through a hot valve and loops back instead of hovering on it. 0 = turn at
+  /// once, the paper's law.
+  double min_turn_radius_m = 0.0;
 };
 
 /// The "no starving valve" guard (the paper's named limitation): a floor on each valve's

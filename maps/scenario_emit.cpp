@@ -47,6 +47,7 @@ std::string EmitScenario(const Scenario& s) {
   key("ergodic") << YAML::Flow << YAML::BeginMap;
   key("basis_order") << std::to_string(s.ergodic.basis_order);
   number("forgetting_time_s", s.ergodic.forgetting_time_s);
+  number("min_turn_radius_m", s.ergodic.min_turn_radius_m);
   out << YAML::EndMap;
   key("guard") << YAML::Flow << YAML::BeginMap;
   key("enabled") << s.guard.enabled;

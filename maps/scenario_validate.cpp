@@ -143,6 +143,7 @@ void Scenario::Validate() const {
     c.Fail("ergodic.basis_order", std::to_string(ergodic.basis_order), "must be in 1..64");
   }
   c.Positive("ergodic.forgetting_time_s", ergodic.forgetting_time_s, /*infinity_ok=*/true);
+  c.NonNegative("ergodic.min_turn_radius_m", ergodic.min_turn_radius_m);
   c.Positive("astar.grid_resolution_m", astar.grid_resolution_m);
   c.NonNegative("astar.clearance_m", astar.clearance_m);
   c.NonNegative("astar.wait_per_lap_s", astar.wait_per_lap_s);

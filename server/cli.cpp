@@ -35,6 +35,7 @@ struct MissionOverrides {
   std::optional<std::string> guard;       // "on" | "off"
   std::optional<double> forgetting_time_s;
   std::optional<int> basis_order;
+  std::optional<double> min_turn_radius_m;
   std::optional<std::string> model;       // overrides every vehicle's motion model
   std::optional<int> vehicles;            // fleet size
   std::optional<std::string> assignment;  // shared | partition
@@ -53,6 +54,9 @@ void AddMissionOptions(CLI::App& cmd, MissionOverrides& o) {
   cmd.add_option("--forgetting", o.forgetting_time_s,
                  "Coverage forgetting time constant in seconds (default: the scenario's; inf = the paper's)");
   cmd.add_option("--basis-order,-K", o.basis_order, "Wave numbers per dimension K (default: the scenario's)");
+  cmd.add_option("--turn-radius", o.min_turn_radius_m,
+                 "Tightest turn of the SMC direction in metres: the vehicle loops back through a hot valve "
+                 "instead of hovering on it (default: the scenario's; 0 = turn at once, the paper's law)");
   cmd.add_option("--model", o.model,
                  "Motion model of every vehicle: bluerov2 (Box2D dynamics) or single_integrator (the paper's "
                  "constant-speed point); default: as in the scenario")
@@ -84,6 +88,10 @@ void CheckOverrides(const MissionOverrides& o) {
   if (o.forgetting_time_s && !(*o.forgetting_time_s > 0.0)) {
     throw maps::ScenarioError(fmt::format("--forgetting = {}: must be > 0 (inf = never forget)", *o.forgetting_time_s));
   }
+  if (o.min_turn_radius_m && !(*o.min_turn_radius_m >= 0.0 && std::isfinite(*o.min_turn_radius_m))) {
+    throw maps::ScenarioError(fmt::format("--turn-radius = {}: must be a finite number >= 0 (0 = turn at once)",
+                                          *o.min_turn_radius_m));
+  }
 }
 
 maps::Scenario LoadWithOverrides(const MissionOverrides& o) {
@@ -96,6 +104,7 @@ maps::Scenario LoadWithOverrides(const MissionOverrides& o) {
   if (o.guard) scenario.guard.enabled = (*o.guard == "on");
   if (o.forgetting_time_s) scenario.ergodic.forgetting_time_s = *o.forgetting_time_s;
   if (o.basis_order) scenario.ergodic.basis_order = *o.basis_order;
+  if (o.min_turn_radius_m) scenario.ergodic.min_turn_radius_m = *o.min_turn_radius_m;
   if (o.model) {
     for (maps::VehicleSpec& v : scenario.vehicles) v.model = maps::ParseMotionModel(*o.model, "--model");
   }

@@ -47,6 +47,7 @@ struct FleetCli {
   std::optional<std::string> guard;
   std::optional<double> forgetting_time_s;
   std::optional<int> basis_order;
+  std::optional<double> min_turn_radius_m;
   double time_scale = 1.0;
   bool quiet = false;
   int hosts = 0;
@@ -93,6 +94,9 @@ void AddScenarioOptions(CLI::App& cmd, FleetCli& c, bool with_out) {
       ->check(MustBePositive);
   cmd.add_option("--basis-order,-K", c.basis_order, "Wave numbers per dimension K (default: the scenario's)")
       ->check(CLI::Range(1, 64).description(""));
+  cmd.add_option("--turn-radius", c.min_turn_radius_m,
+                 "Tightest turn of the SMC direction in metres (default: the scenario's; 0 = turn at once)")
+      ->check(CLI::Range(0.0, 100.0).description(""));
   if (with_out) cmd.add_option("--out,-o", c.out_dir, "Run directory (default: runs/<scenario>_launch)");
 }
 
@@ -105,6 +109,7 @@ maps::Scenario LoadFleetScenario(const FleetCli& c) {
   if (c.guard) s.guard.enabled = *c.guard == "on";
   if (c.forgetting_time_s) s.ergodic.forgetting_time_s = *c.forgetting_time_s;
   if (c.basis_order) s.ergodic.basis_order = *c.basis_order;
+  if (c.min_turn_radius_m) s.ergodic.min_turn_radius_m = *c.min_turn_radius_m;
   s.Validate();
   return s;
 }

@@ -80,6 +80,7 @@ void ExpectSameScenario(const Scenario& a, const Scenario& b) {
   EXPECT_EQ(a.seed, b.seed);
   EXPECT_EQ(a.ergodic.basis_order, b.ergodic.basis_order);
   EXPECT_EQ(a.ergodic.forgetting_time_s, b.ergodic.forgetting_time_s);
+  EXPECT_EQ(a.ergodic.min_turn_radius_m, b.ergodic.min_turn_radius_m);
   EXPECT_EQ(a.guard.enabled, b.guard.enabled);
   EXPECT_EQ(a.guard.weight_floor, b.guard.weight_floor);
   EXPECT_EQ(a.guard.revisit_bound_s, b.guard.revisit_bound_s);
@@ -185,6 +186,7 @@ profiles: {only: {weights: {V: 1}}}
   EXPECT_EQ(s.workspace.width_m, defaults.workspace.width_m);
   EXPECT_EQ(s.duration_s, defaults.duration_s);
   EXPECT_EQ(s.ergodic.basis_order, defaults.ergodic.basis_order);
+  EXPECT_EQ(s.ergodic.min_turn_radius_m, 0.0);  // the paper's law unless asked for
   EXPECT_EQ(s.astar.clearance_m, defaults.astar.clearance_m);
   EXPECT_EQ(s.structures[0].size_m, ChristmasTree().size_m);
   EXPECT_EQ(s.structures[0].valves[0].covariance_m2, Valve().covariance_m2);
@@ -274,6 +276,7 @@ TEST(Scenario, FleetFieldLoads) {
   EXPECT_EQ(leak.events[0].time_s, 300.0);
   EXPECT_EQ(leak.events[0].weight, 20.0);
   EXPECT_EQ(s.ergodic.basis_order, 20);
+  EXPECT_EQ(s.ergodic.min_turn_radius_m, 0.3);
   EXPECT_TRUE(s.guard.enabled);
 }
 
@@ -373,6 +376,8 @@ TEST(Scenario, BadInputsGiveOneLineNamingFieldAndValue) {
       {"basis_order: 10", "basis_order: 65", {"ergodic.basis_order = 65", "1..64"}},
       {"basis_order: 10", "basis_order: 10.5", {"ergodic.basis_order = 10.5", "whole number"}},
       {"forgetting_time_s: .inf", "forgetting_time_s: -5", {"ergodic.forgetting_time_s = -5", "> 0"}},
+      {"forgetting_time_s: .inf", "forgetting_time_s: .inf, min_turn_radius_m: -0.1",
+       {"ergodic.min_turn_radius_m = -0.1", ">= 0"}},
       {"weight_floor: 0.05", "weight_floor: 0.5", {"guard.weight_floor = 0.5", "1/M = 0.5"}},
       {"enabled: true", "enabled: maybe", {"guard.enabled = maybe", "true or false"}},
       {"duration_s: 300", "duration_s: 300\nseed: -3", {"seed = -3", "whole number >= 0"}},
