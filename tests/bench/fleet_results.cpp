@@ -1,7 +1,8 @@
 // Fleet figures of SAGE Fleet, measured in-process (the same FleetServer and AgentHost that run
 // behind DDS, in deterministic lockstep): how the dominant valve's revisit interval shrinks
 // from 1 to 4 vehicles, shared (Mathew & Mezic) against partitioned coverage, whether vehicles
-// bunch, how fast a lost vehicle's valves are taken over, and the cost of larger fleets.
+// bunch, what the SMC direction's turning radius does to visits, how fast a lost vehicle's valves are
+// taken over, and the cost of larger fleets.
 // Prints Markdown and writes it to the first argument (default fleet_results.md).
 // Run: build/bin/sage_bench_fleet [OUT.md]
 #include <algorithm>
@@ -43,7 +44,7 @@ double BunchedFraction(const sage::server::Trajectory& trajectory, double distan
 }
 
 struct Row {
-  double corr = 0, top_interval = 0, longest_gap = 0, min_visits = 0, bunched = 0, wall = 0;
+  double corr = 0, corr_time_near = 0, top_interval = 0, longest_gap = 0, min_visits = 0, bunched = 0, wall = 0;
 };
 
 Row Measure(const Scenario& s) {
@@ -51,6 +52,9 @@ Row Measure(const Scenario& s) {
   Row row;
   row.corr = r.metrics.visit_weight_correlation;
   const auto& v = r.metrics.valves;
+  std::vector<double> time_near, weights;
+  for (const auto& valve : v) time_near.push_back(valve.time_near_s), weights.push_back(valve.weight);
+  row.corr_time_near = sage::server::PearsonCorrelation(time_near, weights);
   const auto top = std::max_element(v.begin(), v.end(), [](const auto& a, const auto& b) { return a.weight < b.weight; });
   row.top_interval = top->mean_interval_s;
   row.longest_gap = std::max_element(v.begin(), v.end(), [](auto& a, auto& b) { return a.max_gap_s < b.max_gap_s; })->max_gap_s;
@@ -91,6 +95,31 @@ int main(int argc, char** argv) {
                         *std::max_element(corrs.begin(), corrs.end()), mean.top_interval, mean.longest_gap,
                         mean.min_visits, 100 * mean.bunched, mean.wall);
     }
+  }
+
+  // The SMC direction's turning radius: 0 is the paper's law (hovers on hot valves).
+  md << "\n## Turning radius of the SMC direction (fleet_field, 4 vehicles, shared, seeds 1-10)\n\n"
+     << "| min turn radius | corr(visits, weight) | seeds >= +0.90 | corr(time near, weight) | dominant valve interval "
+        "| longest gap |\n|---|---|---|---|---|---|\n";
+  for (double radius : {0.0, 0.25, 0.3, 0.35, 0.4, 0.5}) {
+    Row mean;
+    std::vector<double> corrs;
+    const int seeds = 10;
+    for (int seed = 1; seed <= seeds; ++seed) {
+      Scenario s = sage::maps::WithVehicleCount(field, 4);
+      s.ergodic.min_turn_radius_m = radius;
+      s.seed = seed;
+      const Row r = Measure(s);
+      corrs.push_back(r.corr);
+      mean.corr += r.corr / seeds, mean.corr_time_near += r.corr_time_near / seeds;
+      mean.top_interval += r.top_interval / seeds, mean.longest_gap += r.longest_gap / seeds;
+    }
+    std::cerr << "sage_bench_fleet: turning radius " << radius << " m\n";
+    const auto passing = std::count_if(corrs.begin(), corrs.end(), [](double c) { return c >= 0.9; });
+    md << fmt::format("| {:.2f} m{} | {:+.2f} ({:+.2f} to {:+.2f}) | {} of {} | {:+.2f} | {:.1f} s | {:.0f} s |\n", radius,
+                      radius == field.ergodic.min_turn_radius_m ? " (scenario)" : "", mean.corr,
+                      *std::min_element(corrs.begin(), corrs.end()), *std::max_element(corrs.begin(), corrs.end()),
+                      passing, seeds, mean.corr_time_near, mean.top_interval, mean.longest_gap);
   }
 
   // A vehicle lost mid-mission: how soon are the valves it was covering visited again?
