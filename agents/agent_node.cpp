@@ -114,6 +114,7 @@ int RunAgentNode(const maps::Scenario& scenario, const AgentNodeOptions& options
   };
 
   FleetSnapshot snapshot;
+  int exit_code = 0;
   auto last_heard = std::chrono::steady_clock::now();
   long k = static_cast<long>(std::ceil(mission_time(proto::NowRealtimeNs()) / dt));
   double next_coverage_t = k * dt;
@@ -171,6 +172,14 @@ int RunAgentNode(const maps::Scenario& scenario, const AgentNodeOptions& options
     const double silent_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - last_heard).count();
     if (silent_s > options.server_timeout_s) {
       spdlog::warn("agents: no word from the server for {:.0f} s; stopping", silent_s);
+      break;
+    }
+    if (snapshot.valid && snapshot.phi.size() != host.basis().size()) {
+      // A server started with another -K (or another scenario): its targets cannot be steered on.
+      spdlog::error("agents: the server's targets have {} coefficients but this host's basis has {} (K = {}); start "
+                    "sage agents with the server's scenario and -K",
+                    snapshot.phi.size(), host.basis().size(), scenario.ergodic.basis_order);
+      exit_code = 2;
       break;
     }
 
@@ -252,7 +261,7 @@ int RunAgentNode(const maps::Scenario& scenario, const AgentNodeOptions& options
   }
   for (const auto& [id, v] : vehicles) leave(v);
   std::this_thread::sleep_for(std::chrono::milliseconds(100));  // let the disposes go out
-  return 0;
+  return exit_code;
 }
 
 }  // namespace sage::agents

@@ -17,6 +17,7 @@
 #include "maps/scenario.h"
 #include "maps/seabed_map.h"
 #include "server/cli_fleet.h"
+#include "server/cli_scenario.h"
 #include "server/metrics.h"
 #include "server/mission.h"
 #include "server/report.h"
@@ -26,91 +27,10 @@ namespace {
 
 namespace fs = std::filesystem;
 
-/// Options shared by `run` and `compare`: they override the scenario file.
-struct MissionOverrides {
-  std::string scenario_path;
-  std::string profile;
-  std::optional<double> duration_s;
-  std::optional<std::uint64_t> seed;
-  std::optional<std::string> guard;       // "on" | "off"
-  std::optional<double> forgetting_time_s;
-  std::optional<int> basis_order;
-  std::optional<double> min_turn_radius_m;
-  std::optional<std::string> model;       // overrides every vehicle's motion model
-  std::optional<int> vehicles;            // fleet size
-  std::optional<std::string> assignment;  // shared | partition
+/// Options of `run` and `compare`: the scenario overrides and the run directory.
+struct MissionOverrides : ScenarioOverrides {
   std::string out_dir;
 };
-
-void AddMissionOptions(CLI::App& cmd, MissionOverrides& o) {
-  cmd.add_option("scenario", o.scenario_path, "Scenario YAML (e.g. scenarios/two_xt.yaml)")->required();
-  cmd.add_option("--profile,-p", o.profile, "Risk profile named in the scenario (default: its default_profile)");
-  cmd.add_option("--duration", o.duration_s, "Mission length in seconds (default: the scenario's)");
-  cmd.add_option("--seed", o.seed, "Seed of the start-pose jitter; the same seed gives the same mission");
-  cmd.add_option("--guard", o.guard,
-                 "No-starving-valve guard (weight floor + revisit bound): on|off (default: the scenario's; "
-                 "off reproduces the paper)")
-      ->check(CLI::IsMember({"on", "off"}));
-  cmd.add_option("--forgetting", o.forgetting_time_s,
-                 "Coverage forgetting time constant in seconds (default: the scenario's; inf = the paper's)");
-  cmd.add_option("--basis-order,-K", o.basis_order, "Wave numbers per dimension K (default: the scenario's)");
-  cmd.add_option("--turn-radius", o.min_turn_radius_m,
-                 "Tightest turn of the SMC direction in metres: the vehicle loops back through a hot valve "
-                 "instead of hovering on it (default: the scenario's; 0 = turn at once, the paper's law)");
-  cmd.add_option("--model", o.model,
-                 "Motion model of every vehicle: bluerov2 (Box2D dynamics) or single_integrator (the paper's "
-                 "constant-speed point); default: as in the scenario")
-      ->check(CLI::IsMember({"bluerov2", "single_integrator"}));
-  cmd.add_option("--vehicles,-n", o.vehicles, "Fleet size: the scenario's first N vehicles, or more spread along the "
-                                              "bottom edge (default: the scenario's)");
-  cmd.add_option("--assignment", o.assignment,
-                 "Fleet coverage: shared (Mathew-Mezic) or partition (valves split among vehicles)")
-      ->check(CLI::IsMember({"shared", "partition"}));
-}
-
-}  // namespace
-
-// A shorter mission simply never reaches the events after its end.
-void SetDuration(maps::Scenario& scenario, double duration_s) {
-  scenario.duration_s = duration_s;
-  for (maps::RiskProfile& p : scenario.profiles) std::erase_if(p.events, [&](const auto& e) { return e.time_s > duration_s; });
-  std::erase_if(scenario.fleet_events, [&](const auto& e) { return e.time_s > duration_s; });
-}
-
-namespace {
-
-// Command-line values are checked here, so an error names the option rather than the file.
-void CheckOverrides(const MissionOverrides& o) {
-  if (o.duration_s && !(*o.duration_s > 0.0)) throw maps::ScenarioError(fmt::format("--duration = {}: must be > 0", *o.duration_s));
-  if (o.basis_order && (*o.basis_order < 1 || *o.basis_order > 64)) {
-    throw maps::ScenarioError(fmt::format("--basis-order = {}: must be in 1..64", *o.basis_order));
-  }
-  if (o.forgetting_time_s && !(*o.forgetting_time_s > 0.0)) {
-    throw maps::ScenarioError(fmt::format("--forgetting = {}: must be > 0 (inf = never forget)", *o.forgetting_time_s));
-  }
-  if (o.min_turn_radius_m && !(*o.min_turn_radius_m >= 0.0 && std::isfinite(*o.min_turn_radius_m))) {
-    throw maps::ScenarioError(fmt::format("--turn-radius = {}: must be a finite number >= 0 (0 = turn at once)",
-                                          *o.min_turn_radius_m));
-  }
-}
-
-maps::Scenario LoadWithOverrides(const MissionOverrides& o) {
-  CheckOverrides(o);
-  maps::Scenario scenario = maps::LoadScenario(o.scenario_path);
-  if (o.vehicles) scenario = maps::WithVehicleCount(scenario, *o.vehicles);
-  if (o.assignment) scenario.fleet.assignment = maps::ParseFleetAssignment(*o.assignment, "--assignment");
-  if (o.duration_s) SetDuration(scenario, *o.duration_s);
-  if (o.seed) scenario.seed = *o.seed;
-  if (o.guard) scenario.guard.enabled = (*o.guard == "on");
-  if (o.forgetting_time_s) scenario.ergodic.forgetting_time_s = *o.forgetting_time_s;
-  if (o.basis_order) scenario.ergodic.basis_order = *o.basis_order;
-  if (o.min_turn_radius_m) scenario.ergodic.min_turn_radius_m = *o.min_turn_radius_m;
-  if (o.model) {
-    for (maps::VehicleSpec& v : scenario.vehicles) v.model = maps::ParseMotionModel(*o.model, "--model");
-  }
-  scenario.Validate();  // the overrides obey the same rules as the file
-  return scenario;
-}
 
 // Progress on stderr: a redrawn bar on a terminal, a line every 10 % otherwise (CI logs).
 class ProgressPrinter {
@@ -256,7 +176,7 @@ int RunCli(int argc, char** argv) {
   std::string controller = "ergodic";
   CLI::App* run = app.add_subcommand("run", "Run one mission; print the per-valve table (the paper's Table 1 layout) "
                                             "and write DIR/metrics.json, trajectory.csv, plot.svg");
-  AddMissionOptions(*run, run_opts);
+  AddScenarioOverrides(*run, run_opts, OverrideSet::kMission, "scenarios/two_xt.yaml");
   run->add_option("--controller,-c", controller, "ergodic (SMC) or astar (fixed tour)")
       ->check(CLI::IsMember({"ergodic", "astar"}))
       ->capture_default_str();
@@ -265,7 +185,7 @@ int RunCli(int argc, char** argv) {
   MissionOverrides compare_opts;
   CLI::App* compare = app.add_subcommand("compare", "Run A* and ergodic control on the same mission, side by side; "
                                                     "writes DIR/astar and DIR/ergodic");
-  AddMissionOptions(*compare, compare_opts);
+  AddScenarioOverrides(*compare, compare_opts, OverrideSet::kMission, "scenarios/two_xt.yaml");
   compare->add_option("--out,-o", compare_opts.out_dir, "Output directory (default: runs/<scenario>_<profile>_compare)");
   std::string calibrate = "on";
   compare->add_option("--calibrate-wait", calibrate,

@@ -7,6 +7,7 @@
 #include <CLI/CLI.hpp>
 
 #include "agents/agent_node.h"
+#include "server/cli_scenario.h"
 #include "server/launch.h"
 #include "server/server_node.h"
 
@@ -36,18 +37,9 @@ struct FleetCli {
   CLI::App* risk = nullptr;
   CLI::App* risk_set = nullptr;
 
-  std::string scenario_path;
-  std::string profile;
+  ScenarioOverrides scenario;
   std::string out_dir;
   std::optional<int> domain;
-  std::optional<int> vehicles;
-  std::optional<double> duration_s;
-  std::optional<std::string> assignment;
-  std::optional<std::uint64_t> seed;
-  std::optional<std::string> guard;
-  std::optional<double> forgetting_time_s;
-  std::optional<int> basis_order;
-  std::optional<double> min_turn_radius_m;
   double time_scale = 1.0;
   bool quiet = false;
   int hosts = 0;
@@ -77,41 +69,13 @@ std::string MustBePositive(const std::string& text) {
   }
 }
 
-void AddScenarioOptions(CLI::App& cmd, FleetCli& c, bool with_out) {
-  cmd.add_option("scenario", c.scenario_path, "Scenario YAML (e.g. scenarios/fleet_field.yaml)")->required();
-  cmd.add_option("--vehicles,-n", c.vehicles, "Fleet size (default: the scenario's vehicles)");
-  cmd.add_option("--duration", c.duration_s, "Mission length in seconds (default: the scenario's)")->check(MustBePositive);
-  cmd.add_option("--profile,-p", c.profile, "Risk profile (default: the scenario's default_profile)");
-  cmd.add_option("--assignment", c.assignment, "shared (Mathew-Mezic shared coverage) or partition (valves split among vehicles)")
-      ->check(CLI::IsMember({"shared", "partition"}));
+// The mission's scenario and overrides, the wall-clock pace and the run directory.
+void AddMissionOptions(CLI::App& cmd, FleetCli& c, const std::string& default_out) {
+  AddScenarioOverrides(cmd, c.scenario, OverrideSet::kMission, "scenarios/fleet_field.yaml");
   cmd.add_option("--time-scale", c.time_scale, "Mission seconds per wall second (1 = real time)")
       ->check(MustBePositive)
       ->capture_default_str();
-  cmd.add_option("--seed", c.seed, "Seed of the start-pose jitter (default: the scenario's)");
-  cmd.add_option("--guard", c.guard, "No-starving-valve guard: on|off (default: the scenario's)")
-      ->check(CLI::IsMember({"on", "off"}));
-  cmd.add_option("--forgetting", c.forgetting_time_s, "Coverage forgetting time constant in seconds (inf = never)")
-      ->check(MustBePositive);
-  cmd.add_option("--basis-order,-K", c.basis_order, "Wave numbers per dimension K (default: the scenario's)")
-      ->check(CLI::Range(1, 64).description(""));
-  cmd.add_option("--turn-radius", c.min_turn_radius_m,
-                 "Tightest turn of the SMC direction in metres (default: the scenario's; 0 = turn at once)")
-      ->check(CLI::Range(0.0, 100.0).description(""));
-  if (with_out) cmd.add_option("--out,-o", c.out_dir, "Run directory (default: runs/<scenario>_launch)");
-}
-
-maps::Scenario LoadFleetScenario(const FleetCli& c) {
-  maps::Scenario s = maps::LoadScenario(c.scenario_path);
-  if (c.vehicles) s = maps::WithVehicleCount(s, *c.vehicles);
-  if (c.duration_s) SetDuration(s, *c.duration_s);
-  if (c.assignment) s.fleet.assignment = maps::ParseFleetAssignment(*c.assignment, "--assignment");
-  if (c.seed) s.seed = *c.seed;
-  if (c.guard) s.guard.enabled = *c.guard == "on";
-  if (c.forgetting_time_s) s.ergodic.forgetting_time_s = *c.forgetting_time_s;
-  if (c.basis_order) s.ergodic.basis_order = *c.basis_order;
-  if (c.min_turn_radius_m) s.ergodic.min_turn_radius_m = *c.min_turn_radius_m;
-  s.Validate();
-  return s;
+  cmd.add_option("--out,-o", c.out_dir, "Run directory (default: " + default_out + ")");
 }
 
 }  // namespace
@@ -120,19 +84,18 @@ std::shared_ptr<FleetCli> AddFleetSubcommands(CLI::App& app) {
   auto c = std::make_shared<FleetCli>();
   c->launch = app.add_subcommand("launch", "Run a fleet mission over Cyclone DDS: the server and agent hosts as "
                                            "processes on a private loopback-only domain; Ctrl-C stops cleanly");
-  AddScenarioOptions(*c->launch, *c, true);
+  AddMissionOptions(*c->launch, *c, "runs/<scenario>_launch");
   c->launch->add_option("--hosts", c->hosts, "Agent host processes (default: one per 250 vehicles)");
   c->launch->add_option("--domain", c->domain, "DDS domain id 0..232 (default: a free one, reserved machine-wide)");
 
   c->server = app.add_subcommand("server", "The mission server alone (sage launch starts it for you)");
-  AddScenarioOptions(*c->server, *c, true);
+  AddMissionOptions(*c->server, *c, "runs/<scenario>_server");
   c->server->add_option("--domain", c->domain, "DDS domain id 0..232")->required();
   c->server->add_flag("--quiet", c->quiet, "No progress lines");
 
   c->agents = app.add_subcommand("agents", "An agent host: several BlueROV2s in one Box2D world (sage launch starts them)");
-  c->agents->add_option("scenario", c->scenario_path, "Scenario YAML")->required();
+  AddScenarioOverrides(*c->agents, c->scenario, OverrideSet::kVehicles, "scenarios/fleet_field.yaml");
   c->agents->add_option("--domain", c->domain, "DDS domain id 0..232")->required();
-  c->agents->add_option("--vehicles,-n", c->vehicles, "Fleet size the offsets refer to (default: the scenario's)");
   c->agents->add_option("--offset", c->offset, "First of the fleet's vehicles this host simulates")->capture_default_str();
   c->agents->add_option("--count", c->count, "How many of them (default: all from --offset on)");
   c->agents->add_option("--join", c->join, "Simulate the vehicle that joins in the scenario's fleet_events under this name");
@@ -164,10 +127,10 @@ std::shared_ptr<FleetCli> AddFleetSubcommands(CLI::App& app) {
 int RunFleetSubcommand(FleetCli& c) {
   if (*c.launch) {
     StopOnSignals();
-    const maps::Scenario scenario = LoadFleetScenario(c);
+    const maps::Scenario scenario = LoadWithOverrides(c.scenario);
     LaunchOptions options;
-    options.scenario_path = c.scenario_path;
-    options.profile = c.profile;
+    options.scenario_path = c.scenario.scenario_path;
+    options.profile = c.scenario.profile;
     options.out_dir = c.out_dir;
     options.domain = c.domain;
     options.hosts = c.hosts;
@@ -177,10 +140,10 @@ int RunFleetSubcommand(FleetCli& c) {
   }
   if (*c.server) {
     StopOnSignals();
-    const maps::Scenario scenario = LoadFleetScenario(c);
+    const maps::Scenario scenario = LoadWithOverrides(c.scenario);
     ServerNodeOptions options;
     options.domain_id = *c.domain;
-    options.profile = c.profile;
+    options.profile = c.scenario.profile;
     options.time_scale = c.time_scale;
     options.out_dir = c.out_dir.empty() ? "runs/" + scenario.name + "_server" : c.out_dir;
     options.show_progress = !c.quiet;
@@ -189,8 +152,7 @@ int RunFleetSubcommand(FleetCli& c) {
   }
   if (*c.agents) {
     StopOnSignals();
-    maps::Scenario scenario = maps::LoadScenario(c.scenario_path);
-    if (c.vehicles) scenario = maps::WithVehicleCount(scenario, *c.vehicles);
+    const maps::Scenario scenario = LoadWithOverrides(c.scenario);
     agents::AgentNodeOptions options;
     options.domain_id = *c.domain;
     options.stop = &g_stop;

@@ -13,9 +13,6 @@ namespace sage::server {
 
 struct FleetCli;
 
-/// Sets the mission length; events after the new end are dropped (they would never fire).
-void SetDuration(maps::Scenario& scenario, double duration_s);
-
 /// Declares the fleet subcommands on `app`; the returned state receives their options.
 std::shared_ptr<FleetCli> AddFleetSubcommands(CLI::App& app);
 /// Runs the fleet subcommand that was parsed, if any; returns its exit code, or -1 if none.
