@@ -788,5 +788,67 @@ TEST_F(FleetDds, TwoMissionsDoNotSeeEachOther) {
   }
 }
 
+// 6. The server dies mid-mission: the agent host does not stop or freeze its vehicles; they
+// cover on with the last target and fleet coverage they had, still inside the workspace and
+// still passing valves.
+TEST_F(FleetDds, VehiclesCoverOnWhenTheServerGoesSilent) {
+  const proto::DomainReservation domain = ReserveDomain();
+  const std::string d = std::to_string(domain.domain_id());
+  const maps::Scenario scenario = maps::LoadScenario(Scenario("two_xt.yaml"));
+  MissionWatcher watcher(domain.domain_id());
+  ChildProcess& server = Start("server", {"server", Scenario("two_xt.yaml"), "--vehicles", "2", "--duration", "120",
+                                          "--time-scale", Num(kTimeScale), "--out", (run_dir_ / "out").string(),
+                                          "--domain", d, "--quiet"});
+  ChildProcess& agents = Start("agents", {"agents", Scenario("two_xt.yaml"), "--domain", d, "--vehicles", "2"});
+  ASSERT_TRUE(watcher.PollUntil(
+      [&] { return watcher.status() && watcher.status()->vehicles_alive == 2 && watcher.MissionTimeNow() >= 8.0; },
+      kStartupTimeout))
+      << "the mission never had both vehicles";
+
+  server.Signal(SIGKILL);
+  const long long killed_ns = RealtimeNs();
+  const auto silence = 4s;  // 16 mission-s at 4x
+  const auto until = SteadyClock::now() + silence;
+  while (SteadyClock::now() < until) watcher.Poll();
+  EXPECT_TRUE(agents.Running()) << "the agent host gave up as soon as the server fell silent";
+
+  int visits_after = 0;
+  for (unsigned id : {0u, 1u}) {
+    std::vector<MissionWatcher::StateSample> after;
+    for (const auto& sample : watcher.States(id))
+      if (sample.stamp_ns > killed_ns) after.push_back(sample);
+    // States go out every control cycle (10 Hz of mission time, 40 per wall second here).
+    ASSERT_GE(after.size(), 40u) << "vehicle " << id << " stopped publishing after the server died";
+    double path_m = 0.0;
+    for (std::size_t i = 1; i < after.size(); ++i) {
+      path_m += std::hypot(after[i].x - after[i - 1].x, after[i].y - after[i - 1].y);
+      EXPECT_TRUE(after[i].x >= 0.0 && after[i].x <= scenario.workspace.width_m && after[i].y >= 0.0 &&
+                  after[i].y <= scenario.workspace.height_m)
+          << "vehicle " << id << " left the workspace at (" << after[i].x << ", " << after[i].y << ")";
+    }
+    // 16 mission-s at 0.8 m/s is up to 12.8 m; a vehicle holding still or jittering covers < 1 m.
+    EXPECT_GT(path_m, 5.0) << "vehicle " << id << " barely moved without the server";
+    for (const maps::Valve& valve : scenario.AllValves()) {
+      bool armed = true;
+      for (const auto& sample : after) {
+        const double dist = std::hypot(sample.x - valve.position_m.x(), sample.y - valve.position_m.y());
+        if (armed && dist <= scenario.visit_radius_m) {
+          ++visits_after;
+          armed = false;
+        } else if (!armed && dist > scenario.rearm_radius_m) {
+          armed = true;
+        }
+      }
+    }
+    Report(fmt::format("path_without_server_vehicle{}_m", id), path_m, "m in 16 mission-s");
+  }
+  // Two vehicles on five valves pass one every few seconds while they steer on the last target.
+  EXPECT_GE(visits_after, 2) << "the vehicles moved but inspected nothing without the server";
+  Report("valve_visits_without_server", visits_after, "visits in 16 mission-s");
+
+  agents.Stop();
+  EXPECT_FALSE(agents.Running());
+}
+
 }  // namespace
 }  // namespace sage
