@@ -8,10 +8,34 @@
 #include <cstring>
 #include <stdexcept>
 
+#include <fcntl.h>
+#include <unistd.h>
+
 #include <octomap/OcTree.h>
 
 namespace sage::maps {
 namespace {
+
+// Debian's liboctomap is built with its debug prints on: writing a tree prints " done." to
+// stderr, which lands in the middle of a progress line. Silences fd 2 for its lifetime.
+class QuietStderr {
+ public:
+  QuietStderr() : saved_(dup(STDERR_FILENO)) {
+    const int null = open("/dev/null", O_WRONLY | O_CLOEXEC);
+    if (saved_ >= 0 && null >= 0) dup2(null, STDERR_FILENO);
+    if (null >= 0) close(null);
+  }
+  ~QuietStderr() {
+    if (saved_ < 0) return;
+    dup2(saved_, STDERR_FILENO);
+    close(saved_);
+  }
+  QuietStderr(const QuietStderr&) = delete;
+  QuietStderr& operator=(const QuietStderr&) = delete;
+
+ private:
+  int saved_;
+};
 
 // Indices k of the voxels (or cells) of size r whose centres (k + 1/2) r lie in [lo, hi]; the
 // tolerance keeps a centre lying exactly on an edge inside despite rounding.
@@ -94,7 +118,12 @@ OccupancyGrid SeabedMap::Project(double z_min_m, double z_max_m, double grid_res
 
 void SeabedMap::WriteBinary(const std::string& path) const {
   errno = 0;
-  if (!tree_->writeBinaryConst(path)) {
+  bool written = false;
+  {
+    QuietStderr quiet;
+    written = tree_->writeBinaryConst(path);
+  }
+  if (!written) {
     throw std::runtime_error("SeabedMap: cannot write OctoMap binary to " + path +
                              (errno != 0 ? std::string(": ") + std::strerror(errno) : std::string()));
   }

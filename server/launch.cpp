@@ -5,6 +5,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <cerrno>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -12,6 +13,7 @@
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <string>
 #include <thread>
 #include <vector>
 
@@ -33,16 +35,21 @@ constexpr int kVehiclesPerHost = 250;
 std::string SelfExe() { return fs::read_symlink("/proc/self/exe").string(); }
 
 // fork + exec of this same `sage` binary; stdout/stderr go to `log_path` unless it is empty.
-// Everything is prepared before fork(): the launcher runs DDS threads, and a forked child of a
-// multi-threaded process may only call async-signal-safe functions until exec (a malloc could
-// deadlock on a lock another thread held at the fork; seen as a join host that never started).
-pid_t Spawn(const std::vector<std::string>& args, const std::string& log_path, bool detach = false) {
+// With `stdout_pipe` the child's stdout goes into a pipe whose non-blocking read end is
+// returned there. Everything is prepared before fork(): the launcher runs DDS threads, and a
+// forked child of a multi-threaded process may only call async-signal-safe functions until exec
+// (a malloc could deadlock on a lock another thread held at the fork; seen as a join host that
+// never started).
+pid_t Spawn(const std::vector<std::string>& args, const std::string& log_path, bool detach = false,
+            int* stdout_pipe = nullptr) {
   const std::string exe = SelfExe();
   std::vector<char*> argv;
   argv.push_back(const_cast<char*>(exe.c_str()));
   for (const std::string& a : args) argv.push_back(const_cast<char*>(a.c_str()));
   argv.push_back(nullptr);
   const char* log = log_path.empty() ? nullptr : log_path.c_str();
+  int pipe_fds[2] = {-1, -1};
+  if (stdout_pipe != nullptr && pipe2(pipe_fds, O_CLOEXEC) != 0) throw std::runtime_error("pipe2 failed");
   const pid_t pid = fork();
   if (pid < 0) throw std::runtime_error("fork failed");
   if (pid == 0) {
@@ -55,11 +62,95 @@ pid_t Spawn(const std::vector<std::string>& args, const std::string& log_path, b
         close(fd);
       }
     }
+    if (pipe_fds[1] >= 0) dup2(pipe_fds[1], STDOUT_FILENO);  // dup2 clears close-on-exec on the copy
     execv(argv[0], argv.data());
     _exit(127);
   }
+  if (stdout_pipe != nullptr) {
+    close(pipe_fds[1]);
+    fcntl(pipe_fds[0], F_SETFL, fcntl(pipe_fds[0], F_GETFL) | O_NONBLOCK);
+    *stdout_pipe = pipe_fds[0];
+  }
   return pid;
 }
+
+// The launcher owns the terminal: the server's output comes through a pipe and is printed here
+// line by line, so on a terminal the redrawn progress line is cleared first and drawn again
+// after, and never ends up with a log line glued to it.
+class TerminalRelay {
+ public:
+  TerminalRelay(int fd, bool tty) : fd_(fd), tty_(tty) {}
+  ~TerminalRelay() {
+    if (fd_ >= 0) close(fd_);
+  }
+  TerminalRelay(const TerminalRelay&) = delete;
+  TerminalRelay& operator=(const TerminalRelay&) = delete;
+
+  /// Prints the child's complete lines read so far (all of it, to the end, with `to_eof`).
+  void Relay(bool to_eof = false) {
+    char buffer[4096];
+    bool printed = false;
+    while (fd_ >= 0) {
+      const ssize_t n = read(fd_, buffer, sizeof buffer);
+      if (n > 0) {
+        pending_.append(buffer, static_cast<std::size_t>(n));
+      } else if (n == 0 || (errno != EAGAIN && errno != EINTR)) {
+        close(fd_);  // end of file: the child has exited
+        fd_ = -1;
+      } else if (!to_eof || errno == EAGAIN) {
+        if (!to_eof) break;
+        std::this_thread::sleep_for(std::chrono::milliseconds(10));
+      }
+      std::size_t end;
+      while ((end = pending_.find('\n')) != std::string::npos) {
+        Print(pending_.substr(0, end + 1));
+        pending_.erase(0, end + 1);
+        printed = true;
+      }
+    }
+    if (fd_ < 0 && !pending_.empty()) {
+      Print(pending_ + "\n");
+      pending_.clear();
+      printed = true;
+    }
+    if (printed && tty_ && !progress_.empty()) std::fputs(progress_.c_str(), stderr);
+  }
+
+  /// Shows the launcher's progress: a redrawn line on a terminal, a line of its own otherwise.
+  void Progress(const std::string& text) {
+    if (tty_) {
+      progress_ = "\r" + text + "\033[K";
+      std::fputs(progress_.c_str(), stderr);
+    } else {
+      std::fprintf(stderr, "%s\n", text.c_str());
+    }
+  }
+  /// The launcher's own log line, printed like the child's.
+  void Log(const std::string& message) {
+    if (tty_ && !progress_.empty()) std::fputs("\r\033[K", stderr);
+    std::fflush(stderr);
+    spdlog::info("{}", message);
+    if (tty_ && !progress_.empty()) std::fputs(progress_.c_str(), stderr);
+  }
+  /// Ends the progress line on a terminal (before the final output).
+  void EndProgress() {
+    if (tty_ && !progress_.empty()) std::fputs("\n", stderr);
+    progress_.clear();
+  }
+
+ private:
+  void Print(const std::string& line) {
+    if (tty_ && !progress_.empty()) std::fputs("\r\033[K", stderr);
+    std::fflush(stderr);
+    std::fputs(line.c_str(), stdout);
+    std::fflush(stdout);
+  }
+
+  int fd_;
+  bool tty_;
+  std::string pending_;
+  std::string progress_;
+};
 
 std::string Number(double v) { return fmt::format("{}", v); }
 
@@ -113,7 +204,8 @@ int Launch(const maps::Scenario& scenario, const LaunchOptions& options) {
                                           Number(options.time_scale), "--quiet"};
   if (!options.profile.empty()) server_args.insert(server_args.end(), {"--profile", options.profile});
   server_args.insert(server_args.end(), common.begin(), common.end());
-  const pid_t server = Spawn(server_args, "");
+  int server_stdout = -1;
+  const pid_t server = Spawn(server_args, "", false, &server_stdout);
 
   // Vehicles named in a lose/leave event get a host process of their own, so that losing one is
   // a real SIGKILL and leaving a real clean exit; the rest share hosts of up to 250 vehicles.
@@ -157,6 +249,7 @@ int Launch(const maps::Scenario& scenario, const LaunchOptions& options) {
   proto::Reader<proto::MissionStatus> status(participant, proto::MissionStatusQos());
   proto::Writer<proto::FleetCommand> commands(participant, proto::FleetCommandQos());
   const bool tty = isatty(fileno(stderr)) != 0;
+  TerminalRelay terminal(server_stdout, tty);
   std::size_t next_event = 0;
   int next_join_id = n;
   bool stop_sent = false;
@@ -174,9 +267,10 @@ int Launch(const maps::Scenario& scenario, const LaunchOptions& options) {
       stop.verb = proto::BorrowString(verb);
       commands.Write(stop);
       stop_sent = true;
-      spdlog::info("launch: stopping; the server writes the run directory");
+      terminal.Log("launch: stopping; the server writes the run directory");
     }
     status.WaitForData(std::chrono::milliseconds(200));
+    terminal.Relay();
     status.TakeEach([&](const proto::MissionStatus& s, const dds_sample_info_t& info) {
       if (!info.valid_data) return;
       const double t = s.mission_time_s;
@@ -185,22 +279,23 @@ int Launch(const maps::Scenario& scenario, const LaunchOptions& options) {
         if (e.kind == maps::FleetEvent::Kind::kJoin) {
           start_host({"agents", scenario_file, "--join", e.vehicle.name, "--first-id", std::to_string(next_join_id++)},
                      {e.vehicle.name});
-          spdlog::info("launch: t = {:.1f} s: {} joins", t, e.vehicle.name);
+          terminal.Log(fmt::format("launch: t = {:.1f} s: {} joins", t, e.vehicle.name));
           continue;
         }
         for (Host& h : hosts) {
           if (!h.running || h.vehicle_names.size() != 1 || h.vehicle_names[0] != e.vehicle.name) continue;
           const bool lose = e.kind == maps::FleetEvent::Kind::kLose;
           kill(h.pid, lose ? SIGKILL : SIGTERM);
-          spdlog::info("launch: t = {:.1f} s: {} {} (pid {})", t, e.vehicle.name, lose ? "killed (SIGKILL)" : "leaves",
-                       h.pid);
+          terminal.Log(fmt::format("launch: t = {:.1f} s: {} {} (pid {})", t, e.vehicle.name,
+                                   lose ? "killed (SIGKILL)" : "leaves", h.pid));
         }
       }
       if (tty || t - last_print >= s.duration_s / 10.0 || s.finished) {
         last_print = t;
-        std::fprintf(stderr, "%st = %5.0f / %.0f s  vehicles %u (lost %u)  ergodic metric %.2e  server cycle %.2f ms%s",
-                     tty ? "\r" : "", t, s.duration_s, s.vehicles_alive, s.vehicles_lost, s.ergodic_metric,
-                     s.cycle_time_ms, tty ? "   " : "\n");
+        terminal.Progress(fmt::format("t = {:5.0f} / {:.0f} s  vehicles {} (lost {})  ergodic metric {:.2e}  server cycle "
+                                      "{:.2f} ms",
+                                      t, s.duration_s, s.vehicles_alive, s.vehicles_lost, s.ergodic_metric,
+                                      s.cycle_time_ms));
       }
     });
     for (Host& h : hosts) {
@@ -208,7 +303,8 @@ int Launch(const maps::Scenario& scenario, const LaunchOptions& options) {
       if (h.running && waitpid(h.pid, &ws, WNOHANG) == h.pid) h.running = false;
     }
   }
-  if (tty) std::fprintf(stderr, "\n");
+  terminal.EndProgress();
+  terminal.Relay(/*to_eof=*/true);  // the server's table and last lines
   // The server has written the run directory and announced the end; hosts leave on that. Any
   // that lingers gets SIGTERM (a clean leave), then SIGKILL.
   const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(5);
