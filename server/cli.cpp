@@ -96,10 +96,11 @@ int CmdRun(const MissionOverrides& o, const std::string& controller_text) {
   const maps::Scenario scenario = LoadWithOverrides(o);
   const ControllerKind kind = ParseControllerKind(controller_text);
   const std::string profile = o.profile.empty() ? scenario.default_profile : o.profile;
+  const fs::path dir = o.out_dir.empty() ? DefaultOutDir(scenario, profile, ToString(kind)) : o.out_dir;
+  PrepareRunDirectory(dir.string());
   MissionResult result = RunOne(scenario, kind, profile);
   std::cout << FormatTable({result.metrics});
   PrintEventResponses(result);
-  const fs::path dir = o.out_dir.empty() ? DefaultOutDir(scenario, profile, ToString(kind)) : o.out_dir;
   WriteRunDirectory(dir, scenario, result);
   spdlog::info("{:.0f} s mission simulated in {:.2f} s wall time; wrote {}/metrics.json, trajectory.csv, plot.svg",
                scenario.duration_s, result.wall_time_s, dir.string());
@@ -109,6 +110,8 @@ int CmdRun(const MissionOverrides& o, const std::string& controller_text) {
 int CmdCompare(const MissionOverrides& o, bool calibrate_wait) {
   maps::Scenario scenario = LoadWithOverrides(o);
   const std::string profile = o.profile.empty() ? scenario.default_profile : o.profile;
+  const fs::path dir = o.out_dir.empty() ? DefaultOutDir(scenario, profile, "compare") : o.out_dir;
+  PrepareRunDirectory(dir.string());
   const MissionResult ergodic = RunOne(scenario, ControllerKind::kErgodic, profile);
   if (calibrate_wait) {
     scenario.astar.wait_per_lap_s = CalibratedAstarWait(scenario, profile, ergodic.metrics);
@@ -124,7 +127,6 @@ int CmdCompare(const MissionOverrides& o, bool calibrate_wait) {
     std::cout << "ergodic:\n";
     PrintEventResponses(ergodic);
   }
-  const fs::path dir = o.out_dir.empty() ? DefaultOutDir(scenario, profile, "compare") : o.out_dir;
   WriteRunDirectory(dir / "astar", scenario, astar);
   WriteRunDirectory(dir / "ergodic", scenario, ergodic);
   spdlog::info("wrote {}/astar and {}/ergodic", dir.string(), dir.string());
@@ -152,7 +154,7 @@ int CmdEvaluate(const std::string& trajectory_path, const std::string& scenario_
   const MissionMetrics metrics = ComputeMetrics(trajectory, scenario, schedule, duration, options);
   std::cout << FormatTable({metrics});
   if (!out_dir.empty()) {
-    fs::create_directories(out_dir);
+    PrepareRunDirectory(out_dir);
     WriteMetricsJson((fs::path(out_dir) / "metrics.json").string(), metrics);
     WritePlotSvg((fs::path(out_dir) / "plot.svg").string(), scenario, schedule.back().weights, trajectory,
                  fmt::format("{}: recorded trajectory {}", scenario.name, trajectory_path));

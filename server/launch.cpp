@@ -25,6 +25,7 @@
 #include "proto/dds_endpoints.h"
 #include "proto/messages.h"
 #include "proto/qos.h"
+#include "server/report.h"
 
 namespace sage::server {
 namespace {
@@ -165,7 +166,7 @@ struct Host {
 int Launch(const maps::Scenario& scenario, const LaunchOptions& options) {
   const std::string out_dir =
       options.out_dir.empty() ? (fs::path("runs") / (scenario.name + "_launch")).string() : options.out_dir;
-  fs::create_directories(out_dir);
+  PrepareRunDirectory(out_dir);
   // An explicit --domain is that domain or an error; otherwise the first free one from a hash of
   // the run directory.
   const int preferred = proto::MissionDomainId(options.domain, fs::absolute(out_dir).string());

@@ -3,6 +3,11 @@
 #include "server/report.h"
 
 #include <algorithm>
+#include <cerrno>
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <system_error>
 #include <cmath>
 #include <utility>
 
@@ -12,6 +17,21 @@
 #include "server/atomic_write.h"
 
 namespace sage::server {
+
+void PrepareRunDirectory(const std::string& dir) {
+  const auto fail = [&](const std::string& reason) {
+    throw maps::ScenarioError("--out = " + dir + ": cannot write there: " + reason);
+  };
+  std::error_code error;
+  std::filesystem::create_directories(dir, error);
+  if (error) fail(error.message());
+  if (!std::filesystem::is_directory(dir, error)) fail("not a directory");
+  const std::string probe = (std::filesystem::path(dir) / ".sage_write_probe").string();
+  std::FILE* file = std::fopen(probe.c_str(), "wb");
+  if (file == nullptr) fail(std::strerror(errno));
+  std::fclose(file);
+  std::filesystem::remove(probe, error);
+}
 namespace {
 
 using detail::WriteAtomically;

@@ -11,6 +11,11 @@
 
 namespace sage::server {
 
+/// Creates the run directory (and its parents) and checks that a file can be written in it,
+/// before a mission runs rather than after it. Throws maps::ScenarioError with one line:
+/// "--out = DIR: cannot write there: REASON".
+void PrepareRunDirectory(const std::string& dir);
+
 /// Table 1 layout: Valve | Weight | for each run: visits, interval; then corr and metric rows.
 std::string FormatTable(const std::vector<MissionMetrics>& runs);
 

@@ -55,6 +55,7 @@ struct KnownVehicle {
 }  // namespace
 
 int RunServerNode(const maps::Scenario& scenario, const ServerNodeOptions& options) {
+  PrepareRunDirectory(options.out_dir);  // a mission of minutes must not end in "cannot write"
   FleetServer server(scenario, options.profile);
   const bool partition = scenario.fleet.assignment == maps::FleetAssignment::kPartition;
   proto::Participant participant(options.domain_id, proto::LocalhostConfigXml(proto::kMaxLocalParticipants));

@@ -220,6 +220,22 @@ TEST_F(ReportTest, UnwritablePathThrowsNamingIt) {
   }
 }
 
+// A run directory is made (with its parents) and proven writable before a mission runs; a file
+// in the way is one error naming the option and the path, and nothing is left behind.
+TEST_F(ReportTest, RunDirectoryIsPreparedOrRefusedUpFront) {
+  const std::string nested = Path("runs/a/b");
+  PrepareRunDirectory(nested);
+  EXPECT_TRUE(fs::is_directory(nested));
+  EXPECT_TRUE(fs::is_empty(nested)) << "the write probe was left behind";
+  const std::string blocked = WriteText("a_file", "x") + "/run";
+  try {
+    PrepareRunDirectory(blocked);
+    FAIL() << "no error";
+  } catch (const maps::ScenarioError& e) {
+    EXPECT_EQ(std::string(e.what()).rfind("--out = " + blocked + ": cannot write there: ", 0), 0u) << e.what();
+  }
+}
+
 // The SVG is one document: <svg ...> to </svg>\n, one polyline per vehicle (a long path decimated
 // to at most ~5000 points), one label per valve with its weight.
 TEST_F(ReportTest, PlotSvgHasPathsAndLabels) {
