@@ -16,6 +16,7 @@
 
 #include "maps/scenario.h"
 #include "maps/seabed_map.h"
+#include "server/atomic_write.h"
 #include "server/cli_fleet.h"
 #include "server/cli_scenario.h"
 #include "server/metrics.h"
@@ -80,6 +81,9 @@ void WriteRunDirectory(const fs::path& dir, const maps::Scenario& scenario, cons
   WritePlotSvg((dir / "plot.svg").string(), scenario, result.weights.back().weights, result.trajectory, title);
   // The seabed the mission ran on, as OctoMap binary: octovis shows it.
   maps::SeabedMap(scenario, scenario.astar.grid_resolution_m).WriteBinary((dir / "seabed.bt").string());
+  // The effective scenario, command-line overrides included: `sage run DIR/scenario.yaml` runs
+  // the same mission again, and two runs can be told apart.
+  detail::WriteAtomically((dir / "scenario.yaml").string(), maps::EmitScenario(scenario));
 }
 
 std::string DefaultOutDir(const maps::Scenario& scenario, const std::string& profile, const std::string& what) {

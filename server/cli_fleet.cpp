@@ -5,8 +5,10 @@
 #include <string>
 
 #include <CLI/CLI.hpp>
+#include <fmt/format.h>
 
 #include "agents/agent_node.h"
+#include "proto/dds_config.h"
 #include "server/cli_scenario.h"
 #include "server/launch.h"
 #include "server/server_node.h"
@@ -15,14 +17,25 @@ namespace sage::server {
 namespace {
 
 std::atomic<bool> g_stop{false};
-extern "C" void OnStopSignal(int) { g_stop.store(true); }
+std::atomic<int> g_stop_signal{0};
+extern "C" void OnStopSignal(int signal) {
+  g_stop_signal.store(signal);
+  g_stop.store(true);
+}
 
+// Ctrl-C, kill, a closed terminal (SIGHUP) or a closed output pipe (SIGPIPE, `sage launch | head`)
+// all stop the mission cleanly: the server still writes the run directory.
 void StopOnSignals() {
   struct sigaction action {};
   action.sa_handler = OnStopSignal;
   sigemptyset(&action.sa_mask);
-  sigaction(SIGINT, &action, nullptr);
-  sigaction(SIGTERM, &action, nullptr);
+  for (int signal : {SIGINT, SIGTERM, SIGHUP, SIGPIPE}) sigaction(signal, &action, nullptr);
+}
+
+void CheckDomain(const std::optional<int>& domain) {
+  if (domain && (*domain < 0 || *domain > proto::kMaxDomainId)) {
+    throw maps::ScenarioError(fmt::format("--domain = {}: must be in 0..{}", *domain, proto::kMaxDomainId));
+  }
 }
 
 }  // namespace
@@ -42,7 +55,7 @@ struct FleetCli {
   std::optional<int> domain;
   double time_scale = 1.0;
   bool quiet = false;
-  int hosts = 0;
+  std::optional<int> hosts;
   // agents
   int offset = 0;
   std::optional<int> count;
@@ -85,7 +98,8 @@ std::shared_ptr<FleetCli> AddFleetSubcommands(CLI::App& app) {
   c->launch = app.add_subcommand("launch", "Run a fleet mission over Cyclone DDS: the server and agent hosts as "
                                            "processes on a private loopback-only domain; Ctrl-C stops cleanly");
   AddMissionOptions(*c->launch, *c, "runs/<scenario>_launch");
-  c->launch->add_option("--hosts", c->hosts, "Agent host processes (default: one per 250 vehicles)");
+  c->launch->add_option("--hosts", c->hosts, "Agent host processes (default: one per 250 vehicles)")
+      ->check(MustBePositive);
   c->launch->add_option("--domain", c->domain, "DDS domain id 0..232 (default: a free one, reserved machine-wide)");
 
   c->server = app.add_subcommand("server", "The mission server alone (sage launch starts it for you)");
@@ -125,6 +139,7 @@ std::shared_ptr<FleetCli> AddFleetSubcommands(CLI::App& app) {
 }
 
 int RunFleetSubcommand(FleetCli& c) {
+  CheckDomain(c.domain);
   if (*c.launch) {
     StopOnSignals();
     const maps::Scenario scenario = LoadWithOverrides(c.scenario);
@@ -133,10 +148,12 @@ int RunFleetSubcommand(FleetCli& c) {
     options.profile = c.scenario.profile;
     options.out_dir = c.out_dir;
     options.domain = c.domain;
-    options.hosts = c.hosts;
+    options.hosts = c.hosts.value_or(0);
     options.time_scale = c.time_scale;
     options.stop = &g_stop;
-    return Launch(scenario, options);
+    const int status = Launch(scenario, options);
+    // Stopped by a signal: the shell's convention, 128 + its number (130 for Ctrl-C).
+    return status == 130 && g_stop_signal.load() != 0 ? 128 + g_stop_signal.load() : status;
   }
   if (*c.server) {
     StopOnSignals();
@@ -173,9 +190,13 @@ int RunFleetSubcommand(FleetCli& c) {
     } else {
       const int total = static_cast<int>(scenario.vehicles.size());
       const int count = c.count.value_or(total - c.offset);
-      if (c.offset < 0 || count < 1 || c.offset + count > total) {
-        throw maps::ScenarioError("--offset/--count = " + std::to_string(c.offset) + "/" + std::to_string(count) +
-                                  ": must select vehicles within the fleet of " + std::to_string(total));
+      if (c.offset < 0 || c.offset >= total) {
+        throw maps::ScenarioError(
+            fmt::format("--offset = {}: must be in 0..{} (the fleet's vehicles)", c.offset, total - 1));
+      }
+      if (count < 1 || c.offset + count > total) {
+        throw maps::ScenarioError(fmt::format("--count = {}: must be in 1..{} (vehicles {}..{} of the fleet)", count,
+                                              total - c.offset, c.offset, total - 1));
       }
       for (int i = c.offset; i < c.offset + count; ++i) {
         options.vehicles.push_back(scenario.vehicles[i]);

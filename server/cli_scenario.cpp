@@ -1,9 +1,12 @@
 #include "server/cli_scenario.h"
 
+#include <algorithm>
 #include <cmath>
+#include <vector>
 
 #include <CLI/CLI.hpp>
 #include <fmt/format.h>
+#include <spdlog/spdlog.h>
 
 namespace sage::server {
 
@@ -24,7 +27,12 @@ void AddScenarioOverrides(CLI::App& cmd, ScenarioOverrides& o, OverrideSet set, 
                    "off reproduces the paper)")
         ->check(CLI::IsMember({"on", "off"}));
   }
-  cmd.add_option("--seed", o.seed, "Seed of the start-pose jitter; the same seed gives the same mission");
+  cmd.add_option("--seed", o.seed, "Seed of the start-pose jitter; the same seed gives the same mission")
+      ->check([](const std::string& text) {
+        return text.find_first_not_of("0123456789") == std::string::npos && !text.empty()
+                   ? std::string()
+                   : std::string("must be a whole number >= 0");
+      });
   cmd.add_option("--forgetting", o.forgetting_time_s,
                  "Coverage forgetting time constant in seconds (default: the scenario's; inf = the paper's)");
   cmd.add_option("--basis-order,-K", o.basis_order, "Wave numbers per dimension K (default: the scenario's)");
@@ -73,7 +81,21 @@ void SetDuration(maps::Scenario& scenario, double duration_s) {
 maps::Scenario LoadWithOverrides(const ScenarioOverrides& o) {
   CheckOverrides(o);
   maps::Scenario scenario = maps::LoadScenario(o.scenario_path);
-  if (o.vehicles) scenario = maps::WithVehicleCount(scenario, *o.vehicles);
+  if (!o.profile.empty()) scenario.ProfileOrThrow(o.profile);  // before anything starts, naming the user's file
+  if (o.vehicles) {
+    const std::vector<maps::FleetEvent> events = scenario.fleet_events;
+    scenario = maps::WithVehicleCount(scenario, *o.vehicles);
+    // Losing or removing a vehicle the smaller fleet does not have is dropped; say so.
+    for (const maps::FleetEvent& e : events) {
+      const bool kept = std::any_of(scenario.fleet_events.begin(), scenario.fleet_events.end(), [&](const auto& k) {
+        return k.kind == e.kind && k.vehicle.name == e.vehicle.name && k.time_s == e.time_s;
+      });
+      if (!kept) {
+        spdlog::warn("--vehicles = {}: fleet event at t = {} s dropped: {} is not in the fleet", *o.vehicles, e.time_s,
+                     e.vehicle.name);
+      }
+    }
+  }
   if (o.assignment) scenario.fleet.assignment = maps::ParseFleetAssignment(*o.assignment, "--assignment");
   if (o.duration_s) SetDuration(scenario, *o.duration_s);
   if (o.seed) scenario.seed = *o.seed;

@@ -1,6 +1,7 @@
 #include "server/launch.h"
 
 #include <fcntl.h>
+#include <sys/prctl.h>
 #include <signal.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -51,10 +52,18 @@ pid_t Spawn(const std::vector<std::string>& args, const std::string& log_path, b
   const char* log = log_path.empty() ? nullptr : log_path.c_str();
   int pipe_fds[2] = {-1, -1};
   if (stdout_pipe != nullptr && pipe2(pipe_fds, O_CLOEXEC) != 0) throw std::runtime_error("pipe2 failed");
+  const pid_t parent = getpid();
   const pid_t pid = fork();
   if (pid < 0) throw std::runtime_error("fork failed");
   if (pid == 0) {
-    if (detach) setsid();
+    if (detach) {
+      setsid();
+    } else {
+      // The mission's processes go when the launcher goes, however it dies (even SIGKILL):
+      // SIGTERM is a clean stop. If it died before this line, stop now.
+      prctl(PR_SET_PDEATHSIG, SIGTERM);
+      if (getppid() != parent) _exit(1);
+    }
     if (log != nullptr) {
       const int fd = open(log, O_WRONLY | O_CREAT | O_APPEND, 0644);
       if (fd >= 0) {
@@ -167,6 +176,11 @@ int Launch(const maps::Scenario& scenario, const LaunchOptions& options) {
   const std::string out_dir =
       options.out_dir.empty() ? (fs::path("runs") / (scenario.name + "_launch")).string() : options.out_dir;
   PrepareRunDirectory(out_dir);
+  // A run directory used before keeps no agent-host logs of the earlier mission to mislead.
+  for (const fs::directory_entry& entry : fs::directory_iterator(out_dir)) {
+    const std::string name = entry.path().filename().string();
+    if (name.starts_with("agents-") && name.ends_with(".log")) fs::remove(entry.path());
+  }
   // An explicit --domain is that domain or an error; otherwise the first free one from a hash of
   // the run directory.
   const int preferred = proto::MissionDomainId(options.domain, fs::absolute(out_dir).string());
@@ -421,7 +435,8 @@ int RemoveVehicle(const MissionHandle& mission, unsigned id) {
   }
   if (!gone) {
     std::fprintf(stderr, "sage: error: vehicle %u %s\n", id,
-                 seen ? "did not leave within 5 s" : "is not in this mission (ids are in the server's log and fleet_events.csv)");
+                 seen ? "did not leave within 5 s"
+                      : "is not in this mission (the launcher's log names every vehicle with its id as it joins)");
     return 1;
   }
   std::printf("vehicle %u left the mission\n", id);

@@ -170,7 +170,9 @@ TEST(ErgodicController, TurnRadiusBoundsEachTurnTowardThePapersDirection) {
       ++clipped;
       // Turned the full bound, toward the wanted side (a reversal turns counter-clockwise).
       ASSERT_NEAR(std::abs(turn), max_turn, 1e-9) << "at step " << i;
-      if (std::abs(wanted_turn) < M_PI - 1e-9) ASSERT_GT(turn * wanted_turn, 0.0) << "at step " << i;
+      if (std::abs(wanted_turn) < M_PI - 1e-9) {
+        ASSERT_GT(turn * wanted_turn, 0.0) << "at step " << i;
+      }
     }
     previous = direction;
   }

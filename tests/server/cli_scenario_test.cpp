@@ -62,6 +62,8 @@ TEST(ScenarioOverrides, BadValuesNameTheOption) {
       {[](ScenarioOverrides& o) { o.basis_order = 65; }, "--basis-order = 65: must be in 1..64"},
       {[](ScenarioOverrides& o) { o.forgetting_time_s = 0.0; }, "--forgetting = 0: must be > 0"},
       {[](ScenarioOverrides& o) { o.min_turn_radius_m = -0.1; }, "--turn-radius = -0.1: must be a finite number >= 0"},
+      // Checked on load, so `sage launch -p nope` fails before it starts any process.
+      {[](ScenarioOverrides& o) { o.profile = "nope"; }, "fleet_field.yaml: profile = nope: must be one of routine"},
   };
   for (const Case& c : cases) {
     ScenarioOverrides o = FleetField();
