@@ -38,12 +38,15 @@ struct Vehicle {
   bool has_assignment = false;
   bool shared = true;
   Eigen::VectorXd own_phi;  // partition: this vehicle's share
+  std::uint64_t own_phi_cycle = 0;  // the server cycle of own_phi's ErgodicTarget_
+  std::uint64_t steered_cycle = 0;  // the server cycle of the target its last command was steered on
   std::uint64_t seq = 0;
   std::deque<Report> reports;
 };
 
 struct FleetSnapshot {
   bool valid = false;
+  std::uint64_t cycle = 0;
   double time_s = 0.0;
   Eigen::VectorXd phi;
   Eigen::VectorXd sums;
@@ -82,6 +85,8 @@ int RunAgentNode(const maps::Scenario& scenario, const AgentNodeOptions& options
   double time_scale = 1.0;
   bool finished = false;
   const auto give_up = std::chrono::steady_clock::now() + std::chrono::duration<double>(options.wait_for_server_s);
+  spdlog::info("agents: waiting up to {:.0f} s for the mission's server on DDS domain {}", options.wait_for_server_s,
+               options.domain_id);
   while (start_ns == 0) {
     if (options.stop && options.stop->load()) return 0;
     if (std::chrono::steady_clock::now() > give_up) {
@@ -102,7 +107,8 @@ int RunAgentNode(const maps::Scenario& scenario, const AgentNodeOptions& options
     return Clock::time_point(std::chrono::duration_cast<Clock::duration>(
         std::chrono::nanoseconds(start_ns + static_cast<long long>(t / time_scale * 1e9))));
   };
-  const double dt = host.control_period_s();
+  // k / rate rather than k * period: cycle 3 is t = 0.3, not 0.30000000000000004.
+  auto cycle_time = [&](long k) { return static_cast<double>(k) / scenario.control_rate_hz; };
   const double forgetting = scenario.ergodic.forgetting_time_s;
   auto decay = [&](double age) { return std::isfinite(forgetting) ? std::exp(-std::max(0.0, age) / forgetting) : 1.0; };
 
@@ -116,12 +122,12 @@ int RunAgentNode(const maps::Scenario& scenario, const AgentNodeOptions& options
   FleetSnapshot snapshot;
   int exit_code = 0;
   auto last_heard = std::chrono::steady_clock::now();
-  long k = static_cast<long>(std::ceil(mission_time(proto::NowRealtimeNs()) / dt));
-  double next_coverage_t = k * dt;
-  spdlog::info("agents: {} vehicle(s) joining the mission on DDS domain {} at t = {:.1f} s", vehicles.size(),
-               options.domain_id, k * dt);
+  long k = static_cast<long>(std::ceil(mission_time(proto::NowRealtimeNs()) * scenario.control_rate_hz));
+  double next_coverage_t = cycle_time(k);
+  spdlog::info("agents: found the server on DDS domain {}; {} vehicle(s) joining the mission at t = {:.1f} s",
+               options.domain_id, vehicles.size(), cycle_time(k));
   for (;; ++k) {
-    const double t = k * dt;
+    const double t = cycle_time(k);
     std::this_thread::sleep_until(wall_of(t));
     if (options.stop && options.stop->load()) break;
 
@@ -151,6 +157,7 @@ int RunAgentNode(const maps::Scenario& scenario, const AgentNodeOptions& options
       const auto phi = AsSpan(m.phi);
       it->second.has_assignment = true;
       it->second.shared = m.shared;
+      it->second.own_phi_cycle = m.cycle;
       it->second.own_phi = Eigen::Map<const Eigen::VectorXd>(phi.data(), static_cast<Eigen::Index>(phi.size()));
     };
     while (targets.TakeEach(take_target, 1024) == 1024) {
@@ -159,6 +166,7 @@ int RunAgentNode(const maps::Scenario& scenario, const AgentNodeOptions& options
       if (!info.valid_data || m.mission_time_s < snapshot.time_s) return;
       last_heard = std::chrono::steady_clock::now();
       snapshot.valid = true;
+      snapshot.cycle = m.cycle;
       snapshot.time_s = m.mission_time_s;
       const auto phi = AsSpan(m.phi), sums = AsSpan(m.sums);
       snapshot.phi = Eigen::Map<const Eigen::VectorXd>(phi.data(), static_cast<Eigen::Index>(phi.size()));
@@ -203,6 +211,7 @@ int RunAgentNode(const maps::Scenario& scenario, const AgentNodeOptions& options
         VehicleTarget target;
         if (v.has_assignment && !v.shared && v.own_phi.size() == host.basis().size()) {
           target.phi = v.own_phi;  // partition: its share, alone
+          v.steered_cycle = v.own_phi_cycle;
         } else {
           // Shared coverage: the fleet's sums minus this vehicle's own report that the server
           // included (matched by seq), aged to now with the forgetting window.
@@ -221,6 +230,7 @@ int RunAgentNode(const maps::Scenario& scenario, const AgentNodeOptions& options
           const double age = decay(t - snapshot.time_s);
           target.fleet_sums *= age;
           target.fleet_time_s = std::max(0.0, target.fleet_time_s * age);
+          v.steered_cycle = snapshot.cycle;
         }
         host.SetTarget(static_cast<VehicleId>(id), target);
       }
@@ -239,6 +249,10 @@ int RunAgentNode(const maps::Scenario& scenario, const AgentNodeOptions& options
       msg.heading_rad = s.heading_rad;
       msg.vx_mps = s.velocity_mps.x();
       msg.vy_mps = s.velocity_mps.y();
+      const Eigen::Vector2d command = host.LastCommand(static_cast<VehicleId>(id));
+      msg.cmd_x_mps = command.x();
+      msg.cmd_y_mps = command.y();
+      msg.target_cycle = v.steered_cycle;
       states.Write(msg);
     }
     if (t + 1e-9 >= next_coverage_t) {

@@ -11,7 +11,7 @@
 
 namespace sage::proto {
 
-/// Pose and velocity of one vehicle (key vehicle_id), workspace frame, SI units.
+/// Pose, velocity and last command of one vehicle (key vehicle_id), workspace frame, SI units.
 using VehicleState = sage_msgs_msg_dds__VehicleState_;
 /// A vehicle's running basis sums (key vehicle_id).
 using VehicleCoverage = sage_msgs_msg_dds__VehicleCoverage_;

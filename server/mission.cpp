@@ -16,17 +16,17 @@ namespace {
 // repeatable missions.
 constexpr double kStartJitter_m = 0.2;
 
-double AngleBetween(const Eigen::Vector2d& a, const Eigen::Vector2d& b) {
-  if (a.norm() < 1e-12 || b.norm() < 1e-12) return 0.0;
-  return std::acos(std::clamp(a.dot(b) / (a.norm() * b.norm()), -1.0, 1.0));
-}
-
 double MeanInterval(const std::vector<double>& times) {
   if (times.size() < 2) return std::numeric_limits<double>::quiet_NaN();
   return (times.back() - times.front()) / static_cast<double>(times.size() - 1);
 }
 
 }  // namespace
+
+double HeadingChange(const Eigen::Vector2d& before_mps, const Eigen::Vector2d& after_mps) {
+  if (before_mps.norm() < 1e-12 || after_mps.norm() < 1e-12) return 0.0;
+  return std::acos(std::clamp(before_mps.dot(after_mps) / (before_mps.norm() * after_mps.norm()), -1.0, 1.0));
+}
 
 void FillEventResponses(const maps::Scenario& scenario, MissionMetrics& metrics) {
   for (EventResponse& response : metrics.events) {
@@ -120,7 +120,7 @@ struct Mission::Impl {
       // How the first vehicle's command turns in this very cycle, against keeping the old target.
       const Eigen::Vector2d without = host.PreviewCommand(ids.front(), phi_before, t);
       const Eigen::Vector2d with = host.PreviewCommand(ids.front(), server.phi(), t);
-      server.responses().back().heading_change_rad = AngleBetween(without, with);
+      server.responses().back().heading_change_rad = HeadingChange(without, with);
     }
     std::vector<agents::VehicleState> states;
     for (int id : ids) {

@@ -55,6 +55,10 @@ class Mission {
   std::unique_ptr<Impl> impl_;
 };
 
+/// Angle (rad, 0..pi) between two commanded velocities; 0 if either is (near) zero. The
+/// heading change of a risk event (EventResponse::heading_change_rad).
+double HeadingChange(const Eigen::Vector2d& before_mps, const Eigen::Vector2d& after_mps);
+
 /// Fills each risk event's time to the valve's next visit and its revisit interval before and
 /// after, from the visit times in `metrics`.
 void FillEventResponses(const maps::Scenario& scenario, MissionMetrics& metrics);

@@ -7,6 +7,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <limits>
 #include <map>
 #include <thread>
 
@@ -52,6 +53,16 @@ struct KnownVehicle {
   bool target_sent = false;
 };
 
+// A risk event whose heading change waits for the first command vehicle_id steers on the
+// event's target (its state's target_cycle reaches `cycle`).
+struct PendingHeadingChange {
+  std::size_t response;  // index into FleetServer::responses()
+  std::uint64_t cycle;   // the server cycle whose FleetCoverage_ first carried the new field
+  unsigned vehicle_id;
+};
+
+Eigen::Vector2d CommandOf(const proto::VehicleState& s) { return {s.cmd_x_mps, s.cmd_y_mps}; }
+
 }  // namespace
 
 int RunServerNode(const maps::Scenario& scenario, const ServerNodeOptions& options) {
@@ -81,6 +92,19 @@ int RunServerNode(const maps::Scenario& scenario, const ServerNodeOptions& optio
   long cycles_run = 0;
   std::uint64_t messages_in = 0, messages_out = 0;
   bool stop_requested = false;
+  std::vector<PendingHeadingChange> pending_heading_changes;
+  // In-process the heading change compares one state's command with and without the event. Over
+  // DDS the nearest is the first command steered on the event's target against the command
+  // before it, one cycle earlier (more if a best-effort state was lost on the way).
+  auto answer_heading_changes = [&](unsigned id, const proto::VehicleState& before, const proto::VehicleState& now) {
+    std::erase_if(pending_heading_changes, [&](const PendingHeadingChange& p) {
+      if (p.vehicle_id != id || now.target_cycle < p.cycle) return false;
+      if (before.target_cycle < p.cycle) {
+        server.responses()[p.response].heading_change_rad = HeadingChange(CommandOf(before), CommandOf(now));
+      }
+      return true;
+    });
+  };
 
   auto publish_status = [&](long cycle, double t, bool finished) {
     proto::MissionStatus s{};
@@ -121,7 +145,8 @@ int RunServerNode(const maps::Scenario& scenario, const ServerNodeOptions& optio
   long cycle = 0;
   std::vector<std::vector<int>> last_assignment;
   for (; cycle <= cycles_total; ++cycle) {
-    const double t = cycle * dt;
+    // cycle / rate rather than cycle * dt: cycle 3 is t = 0.3, not 0.30000000000000004.
+    const double t = static_cast<double>(cycle) / scenario.control_rate_hz;
     std::this_thread::sleep_until(wall_start + std::chrono::duration<double>(t / options.time_scale));
     if ((options.stop && options.stop->load()) || stop_requested) break;
     const auto compute_start = std::chrono::steady_clock::now();
@@ -149,6 +174,8 @@ int RunServerNode(const maps::Scenario& scenario, const ServerNodeOptions& optio
             spdlog::info("server: {} (id {}) joined at t = {:.1f} s", AsStringView(s.name), s.vehicle_id, t);
           }
           ++joined_this_cycle;
+        } else {
+          answer_heading_changes(s.vehicle_id, v.last, s);
         }
         v.last = s;
         v.last.name = nullptr;  // the name lives in trajectory.vehicle_names; the sample's memory is a loan
@@ -161,6 +188,9 @@ int RunServerNode(const maps::Scenario& scenario, const ServerNodeOptions& optio
       if (!v.alive) return;
       const bool lost = info.instance_state == DDS_NOT_ALIVE_NO_WRITERS_INSTANCE_STATE;
       v.alive = false;
+      // Its answer to a pending event never comes: that heading change stays unknown (NaN).
+      std::erase_if(pending_heading_changes,
+                    [&](const PendingHeadingChange& p) { return p.vehicle_id == s.vehicle_id; });
       server.RemoveVehicle(static_cast<int>(s.vehicle_id), lost, t);
       lost_count += lost ? 1 : 0;
       const std::string& name = trajectory.vehicle_names.at(v.index);
@@ -178,6 +208,7 @@ int RunServerNode(const maps::Scenario& scenario, const ServerNodeOptions& optio
       server.OnCoverage(static_cast<int>(c.vehicle_id), c.seq, mission_time(c.stamp_ns), c.time_s,
                         Eigen::Map<const Eigen::VectorXd>(sums.data(), static_cast<Eigen::Index>(sums.size())));
     });
+    const std::size_t responses_before = server.responses().size();
     risk_updates.TakeEach([&](const proto::RiskUpdate& r, const dds_sample_info_t& info) {
       ++messages_in;
       if (!info.valid_data) return;
@@ -199,9 +230,18 @@ int RunServerNode(const maps::Scenario& scenario, const ServerNodeOptions& optio
       const Eigen::Vector2d position(v.last.x_m, v.last.y_m);
       server.OnState(static_cast<int>(id), t, position);
       trajectory.samples.push_back({t, v.index, position, v.last.heading_rad, Eigen::Vector2d(v.last.vx_mps, v.last.vy_mps),
-                                    Eigen::Vector2d::Zero()});
+                                    CommandOf(v.last)});
     }
     server.Cycle(t);
+    // This cycle's risk changes (operators' and the profile's): measured on the first vehicle, as
+    // in-process; unknown (NaN, null in metrics.json) until its answer arrives, or if none is alive.
+    const std::vector<int> alive = server.alive();
+    for (std::size_t i = responses_before; i < server.responses().size(); ++i) {
+      server.responses()[i].heading_change_rad = std::numeric_limits<double>::quiet_NaN();
+      if (!alive.empty()) {
+        pending_heading_changes.push_back({i, static_cast<std::uint64_t>(cycle), static_cast<unsigned>(alive.front())});
+      }
+    }
 
     const FleetCoverage& fc = server.coverage();
     std::vector<std::uint32_t> ids;
@@ -240,7 +280,7 @@ int RunServerNode(const maps::Scenario& scenario, const ServerNodeOptions& optio
                    scenario.duration_s, server.alive().size(), lost_count, server.FleetMetric(), last_cycle_ms);
     }
   }
-  const double end_time = std::min(scenario.duration_s, cycle * dt);
+  const double end_time = std::min(scenario.duration_s, static_cast<double>(cycle) / scenario.control_rate_hz);
   publish_status(cycle, end_time, true);
   const double wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
 

@@ -27,6 +27,7 @@
 #include <limits>
 #include <map>
 #include <memory>
+#include <numbers>
 #include <optional>
 #include <regex>
 #include <set>
@@ -715,10 +716,43 @@ TEST_F(FleetDds, OperatorRiskUpdateReachesServer) {
     found = true;
     EXPECT_GT(e.at("new_weight").get<double>(), 0.5);
     EXPECT_GE(e.at("time_s").get<double>(), risk_sent_at);
+    // Measured over DDS from the commands the moving vehicle reports: a number (not null while
+    // the vehicle was there to answer) and not the 0 placeholder (two consecutive commands of
+    // a moving vehicle differ by 0.0004 rad or more, measured).
+    ASSERT_TRUE(e.at("heading_change_rad").is_number()) << e.dump();
+    EXPECT_GT(e.at("heading_change_rad").get<double>(), 0.0);
+    EXPECT_LE(e.at("heading_change_rad").get<double>(), std::numbers::pi);
     std::cout << "P3 -> weight " << e.at("new_weight") << " applied at t = " << e.at("time_s") << " s (sent at t = "
-              << risk_sent_at << " s)\n";
+              << risk_sent_at << " s), heading change " << e.at("heading_change_rad") << " rad\n";
   }
   EXPECT_TRUE(found) << "metrics.json has no event for P3: " << metrics.at("events").dump();
+
+  // trajectory.csv (t,vehicle,x,y,heading,vx,vy,cmd_x,cmd_y): the server records the commands
+  // the vehicle reports, so a moving vehicle has non-zero ones; times are whole cycles (0.3, not
+  // 0.30000000000000004).
+  std::ifstream csv(out / "trajectory.csv");
+  std::string line;
+  std::getline(csv, line);
+  int moving = 0, commanded = 0, rows = 0;
+  std::vector<std::string> odd_times;
+  while (std::getline(csv, line)) {
+    std::vector<std::string> cells;
+    std::stringstream ss(line);
+    for (std::string cell; std::getline(ss, cell, ',');) cells.push_back(cell);
+    ASSERT_EQ(cells.size(), 9u) << line;
+    ++rows;
+    const std::size_t point = cells[0].find('.');
+    const bool whole_cycle = point == std::string::npos || cells[0].size() - point - 1 <= 1;
+    if (!whole_cycle && odd_times.size() < 5) odd_times.push_back(cells[0]);
+    if (std::hypot(std::stod(cells[5]), std::stod(cells[6])) < 0.1) continue;
+    ++moving;
+    if (std::hypot(std::stod(cells[7]), std::stod(cells[8])) > 0.1) ++commanded;
+  }
+  EXPECT_GT(rows, 0);
+  EXPECT_TRUE(odd_times.empty()) << "times that are not whole cycles at 10 Hz: "
+                                 << fmt::format("{}", fmt::join(odd_times, " "));
+  ASSERT_GT(moving, 0) << "the vehicle never moved";
+  EXPECT_GT(commanded, moving * 9 / 10) << commanded << " of " << moving << " moving samples have a command > 0.1 m/s";
   const auto events = ReadFleetEvents(out / "fleet_events.csv");
   const auto left = EventsOf(events, "left");
   // `sage vehicle remove` repeats its command until the vehicle's state is disposed, and the
