@@ -144,6 +144,7 @@ int RunServerNode(const maps::Scenario& scenario, const ServerNodeOptions& optio
 
   long cycle = 0;
   std::vector<std::vector<int>> last_assignment;
+  Eigen::VectorXd last_weights;
   for (; cycle <= cycles_total; ++cycle) {
     // cycle / rate rather than cycle * dt: cycle 3 is t = 0.3, not 0.30000000000000004.
     const double t = static_cast<double>(cycle) / scenario.control_rate_hz;
@@ -263,8 +264,17 @@ int RunServerNode(const maps::Scenario& scenario, const ServerNodeOptions& optio
     fleet_coverage.Write(msg);
     ++messages_out;
 
-    const bool reassigned = partition && server.assignment() != last_assignment;
-    if (reassigned) last_assignment = server.assignment();
+    // A partition target is the vehicle's share of the valves weighted by the current risk, so
+    // it is sent again when the shares change and when the risk does (an operator's update, a
+    // profile event, the guard); in-process every vehicle gets it every cycle.
+    const Eigen::VectorXd& weights = server.effective_weights();
+    const bool reweighted = weights.size() != last_weights.size() ||
+                            (weights.size() > 0 && (weights - last_weights).cwiseAbs().maxCoeff() > 0.0);
+    const bool reassigned = partition && (server.assignment() != last_assignment || reweighted);
+    if (reassigned) {
+      last_assignment = server.assignment();
+      last_weights = weights;
+    }
     for (auto& [id, v] : vehicles) {
       if (!v.alive || (v.target_sent && !reassigned)) continue;
       publish_target(id, cycle);

@@ -763,6 +763,49 @@ TEST_F(FleetDds, OperatorRiskUpdateReachesServer) {
   EXPECT_TRUE(EventsOf(events, "lost").empty()) << "a removed vehicle leaves cleanly, it is not lost";
 }
 
+// 4b. Under partitioned coverage an operator's risk update reaches the vehicles too: each one's
+// target (its share of the valves, weighted by the risk) is sent again, so the first vehicle
+// answers the event with a turn the server can measure (null if no new target reached it).
+TEST_F(FleetDds, PartitionTargetsFollowRiskUpdates) {
+  int domain_id = 0;
+  {
+    const proto::DomainReservation domain = ReserveDomain();
+    domain_id = domain.domain_id();
+  }
+  const double duration = 30;
+  const fs::path out = run_dir_ / "out";
+  ChildProcess& launch = Start("launch", {"launch", Scenario("fleet_field.yaml"), "--vehicles", "4", "--assignment",
+                                          "partition", "--duration", Num(duration), "--time-scale", Num(kTimeScale),
+                                          "--out", out.string(), "--domain", std::to_string(domain_id)});
+  const auto deadline = SteadyClock::now() + kStartupTimeout;
+  while (!fs::exists(out / "mission.json") && SteadyClock::now() < deadline) std::this_thread::sleep_for(20ms);
+  std::this_thread::sleep_for(100ms);
+  ASSERT_TRUE(fs::exists(out / "mission.json"));
+  MissionWatcher watcher(domain_id);
+  ASSERT_TRUE(watcher.PollUntil(
+      [&] { return watcher.status() && watcher.status()->vehicles_alive == 4 && watcher.MissionTimeNow() >= 6.0; },
+      kStartupTimeout))
+      << "the launched mission never had its four vehicles";
+  ChildProcess& risk = Start("risk", {"risk", "set", "P9", "1.05", "--mission", out.string()});
+  const std::optional<int> risk_exit = risk.WaitExit(15s);
+  ASSERT_TRUE(risk_exit.has_value()) << "sage risk set hung";
+  EXPECT_EQ(*risk_exit, 0) << risk.LogText();
+
+  const std::optional<int> launch_exit = WaitMissionEnd(launch, duration);
+  ASSERT_TRUE(launch_exit.has_value()) << "sage launch did not end";
+  EXPECT_EQ(*launch_exit, 0);
+  const Json metrics = ReadJson(out / "metrics.json");
+  bool found = false;
+  for (const Json& e : metrics.at("events")) {
+    if (e.at("valve") != "P9") continue;
+    found = true;
+    ASSERT_TRUE(e.at("heading_change_rad").is_number())
+        << "no vehicle steered on a target sent after the update: " << e.dump();
+    Report("partition_risk_update_heading_change_rad", e.at("heading_change_rad").get<double>(), "rad");
+  }
+  EXPECT_TRUE(found) << "metrics.json has no event for P9: " << metrics.at("events").dump();
+}
+
 // 5. Two missions launched at once on two domains do not see each other.
 TEST_F(FleetDds, TwoMissionsDoNotSeeEachOther) {
   int domain_ids[2] = {0, 0};
@@ -862,18 +905,9 @@ TEST_F(FleetDds, VehiclesCoverOnWhenTheServerGoesSilent) {
     }
     // 16 mission-s at 0.8 m/s is up to 12.8 m; a vehicle holding still or jittering covers < 1 m.
     EXPECT_GT(path_m, 5.0) << "vehicle " << id << " barely moved without the server";
-    for (const maps::Valve& valve : scenario.AllValves()) {
-      bool armed = true;
-      for (const auto& sample : after) {
-        const double dist = std::hypot(sample.x - valve.position_m.x(), sample.y - valve.position_m.y());
-        if (armed && dist <= scenario.visit_radius_m) {
-          ++visits_after;
-          armed = false;
-        } else if (!armed && dist > scenario.rearm_radius_m) {
-          armed = true;
-        }
-      }
-    }
+    Tracks track;
+    for (const auto& sample : after) track["v"].push_back({sample.stamp_ns * 1e-9, sample.x, sample.y});
+    visits_after += static_cast<int>(PerVehicleVisits(track, scenario).size());
     Report(fmt::format("path_without_server_vehicle{}_m", id), path_m, "m in 16 mission-s");
   }
   // Two vehicles on five valves pass one every few seconds while they steer on the last target.
