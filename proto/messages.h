@@ -21,6 +21,8 @@ using ErgodicTarget = sage_msgs_msg_dds__ErgodicTarget_;
 using FleetCoverage = sage_msgs_msg_dds__FleetCoverage_;
 /// One valve's new risk weight (unkeyed).
 using RiskUpdate = sage_msgs_msg_dds__RiskUpdate_;
+/// The server's answer to one RiskUpdate: applied or why not (unkeyed).
+using RiskUpdateResult = sage_msgs_msg_dds__RiskUpdateResult_;
 /// The server's mission status (unkeyed).
 using MissionStatus = sage_msgs_msg_dds__MissionStatus_;
 /// An operator's command: "add" count / "remove" vehicle_id / "stop" (unkeyed).
@@ -39,6 +41,7 @@ SAGE_PROTO_MESSAGE_TRAITS(VehicleCoverage, sage_msgs_msg_dds__VehicleCoverage_,
 SAGE_PROTO_MESSAGE_TRAITS(ErgodicTarget, sage_msgs_msg_dds__ErgodicTarget_, kErgodicTargetTopic);
 SAGE_PROTO_MESSAGE_TRAITS(FleetCoverage, sage_msgs_msg_dds__FleetCoverage_, kFleetCoverageTopic);
 SAGE_PROTO_MESSAGE_TRAITS(RiskUpdate, sage_msgs_msg_dds__RiskUpdate_, kRiskUpdateTopic);
+SAGE_PROTO_MESSAGE_TRAITS(RiskUpdateResult, sage_msgs_msg_dds__RiskUpdateResult_, kRiskUpdateResultTopic);
 SAGE_PROTO_MESSAGE_TRAITS(MissionStatus, sage_msgs_msg_dds__MissionStatus_, kMissionStatusTopic);
 SAGE_PROTO_MESSAGE_TRAITS(FleetCommand, sage_msgs_msg_dds__FleetCommand_, kFleetCommandTopic);
 

@@ -111,6 +111,15 @@ Qos RiskUpdateQos() {
   return qos;
 }
 
+Qos RiskUpdateResultQos() {
+  Qos qos;
+  // Volatile: the operator's command reads answers to its own update only (its reader exists
+  // before it writes); 16 deep so answers to several sensors' updates in one cycle all arrive.
+  SetReliable(qos);
+  SetKeepLast(qos, 16);
+  return qos;
+}
+
 Qos MissionStatusQos() {
   Qos qos;
   SetReliable(qos);

@@ -54,6 +54,9 @@ Qos FleetCoverageQos();
 /// RiskUpdate (operators/sensors -> server, viewers): reliable, transient-local, keep-last 16.
 Qos RiskUpdateQos();
 
+/// RiskUpdateResult (server -> the operator who sent the update): reliable, volatile, keep-last 16.
+Qos RiskUpdateResultQos();
+
 /// MissionStatus (server -> everyone): reliable, transient-local, keep-last 1.
 Qos MissionStatusQos();
 

@@ -6,6 +6,7 @@ inline constexpr const char* kVehicleCoverageTopic = "rt/sage/vehicle_coverage";
 inline constexpr const char* kErgodicTargetTopic = "rt/sage/ergodic_target";
 inline constexpr const char* kFleetCoverageTopic = "rt/sage/fleet_coverage";
 inline constexpr const char* kRiskUpdateTopic = "rt/sage/risk_update";
+inline constexpr const char* kRiskUpdateResultTopic = "rt/sage/risk_update_result";
 inline constexpr const char* kMissionStatusTopic = "rt/sage/mission_status";
 inline constexpr const char* kFleetCommandTopic = "rt/sage/fleet_command";
 }  // namespace sage::proto

@@ -14,6 +14,7 @@
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <optional>
 #include <string>
 #include <thread>
 #include <vector>
@@ -24,6 +25,7 @@
 
 #include "proto/dds_config.h"
 #include "proto/dds_endpoints.h"
+#include "proto/mission_clock.h"
 #include "proto/messages.h"
 #include "proto/qos.h"
 #include "server/report.h"
@@ -385,21 +387,6 @@ int AddVehicles(const MissionHandle& mission, int count) {
   return 0;
 }
 
-namespace {
-template <class T>
-int PublishOnce(const MissionHandle& mission, const proto::Qos& qos, const T& message, const char* what) {
-  proto::Participant participant(mission.domain_id, proto::LocalhostConfigXml(proto::kMaxLocalParticipants));
-  proto::Writer<T> writer(participant, qos);
-  if (!writer.WaitForReaders(1, std::chrono::seconds(3))) {
-    std::fprintf(stderr, "sage: error: no mission is listening on DDS domain %d (is it still running?)\n", mission.domain_id);
-    return 1;
-  }
-  writer.Write(message);
-  std::this_thread::sleep_for(std::chrono::milliseconds(300));  // reliable: let it be acknowledged
-  std::printf("%s\n", what);
-  return 0;
-}
-}  // namespace
 
 int RemoveVehicle(const MissionHandle& mission, unsigned id) {
   // The command is volatile, so a host whose reader matched a moment late would miss it: repeat
@@ -453,11 +440,47 @@ int SetRisk(const MissionHandle& mission, const std::string& valve, double weigh
     for (const maps::Valve& v : scenario.AllValves()) names += (names.empty() ? "" : ", ") + v.name;
     throw maps::ScenarioError("valve = " + valve + ": not in this mission (valves: " + names + ")");
   }
+  proto::Participant participant(mission.domain_id, proto::LocalhostConfigXml(proto::kMaxLocalParticipants));
+  // The answer's reader exists before the update is written, so the (volatile) answer reaches it.
+  proto::Reader<proto::RiskUpdateResult> results(participant, proto::RiskUpdateResultQos());
+  proto::Writer<proto::RiskUpdate> writer(participant, proto::RiskUpdateQos());
+  if (!writer.WaitForReaders(1, std::chrono::seconds(3)) || !results.WaitForWriters(1, std::chrono::seconds(3))) {
+    std::fprintf(stderr, "sage: error: no mission is listening on DDS domain %d (is it still running?)\n",
+                 mission.domain_id);
+    return 1;
+  }
   proto::RiskUpdate r{};
+  r.stamp_ns = proto::NowRealtimeNs();
   r.valve = proto::BorrowString(valve);
   r.weight = weight;
   r.source = proto::BorrowString(source);
-  return PublishOnce(mission, proto::RiskUpdateQos(), r, "risk update sent");
+  writer.Write(r);
+  // The server answers in the cycle it takes the update (every 0.1 mission-s).
+  struct Answer {
+    bool applied;
+    double mission_time_s, new_share;
+    std::string reason;
+  };
+  std::optional<Answer> answer;
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(5);
+  while (!answer && std::chrono::steady_clock::now() < deadline) {
+    results.WaitForData(std::chrono::milliseconds(100));
+    results.TakeEach([&](const proto::RiskUpdateResult& a, const dds_sample_info_t& info) {
+      if (!info.valid_data || a.update_stamp_ns != r.stamp_ns || proto::AsStringView(a.valve) != valve) return;
+      answer = Answer{a.applied, a.mission_time_s, a.new_share, std::string(proto::AsStringView(a.reason))};
+    });
+  }
+  if (!answer) {
+    std::fprintf(stderr, "sage: error: risk update sent, but the server did not answer within 5 s\n");
+    return 1;
+  }
+  if (!answer->applied) {
+    std::fprintf(stderr, "sage: error: the mission did not apply it: %s\n", answer->reason.c_str());
+    return 2;
+  }
+  std::printf("%s: risk %g applied at t = %.1f s; now %.1f %% of the field's risk\n", valve.c_str(), weight,
+              answer->mission_time_s, 100.0 * answer->new_share);
+  return 0;
 }
 
 }  // namespace sage::server

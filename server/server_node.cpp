@@ -73,6 +73,7 @@ int RunServerNode(const maps::Scenario& scenario, const ServerNodeOptions& optio
   proto::Reader<proto::VehicleState> states(participant, proto::VehicleStateReaderQos());
   proto::Reader<proto::VehicleCoverage> coverage(participant, proto::VehicleCoverageQos());
   proto::Reader<proto::RiskUpdate> risk_updates(participant, proto::RiskUpdateQos());
+  proto::Writer<proto::RiskUpdateResult> risk_results(participant, proto::RiskUpdateResultQos());
   proto::Reader<proto::FleetCommand> commands(participant, proto::FleetCommandQos());
   proto::Writer<proto::ErgodicTarget> targets(participant, proto::ErgodicTargetQos());
   proto::Writer<proto::FleetCoverage> fleet_coverage(participant, proto::FleetCoverageQos());
@@ -213,13 +214,24 @@ int RunServerNode(const maps::Scenario& scenario, const ServerNodeOptions& optio
     risk_updates.TakeEach([&](const proto::RiskUpdate& r, const dds_sample_info_t& info) {
       ++messages_in;
       if (!info.valid_data) return;
+      proto::RiskUpdateResult result{};
+      result.update_stamp_ns = r.stamp_ns;
+      result.valve = r.valve;
+      result.mission_time_s = t;
+      std::string reason;
       try {
         server.SetRiskWeight(std::string(AsStringView(r.valve)), r.weight, t, std::string(AsStringView(r.source)));
+        result.applied = true;
+        result.new_share = server.responses().back().new_weight;
         spdlog::info("server: risk of {} set to {} by {} at t = {:.1f} s", AsStringView(r.valve), r.weight,
                      AsStringView(r.source), t);
       } catch (const maps::ScenarioError& e) {
-        spdlog::warn("server: ignored {}", e.what());
+        reason = e.what();
+        spdlog::warn("server: ignored {}", reason);
       }
+      result.reason = proto::BorrowString(reason);
+      risk_results.Write(result);
+      ++messages_out;
     });
     commands.TakeEach([&](const proto::FleetCommand& c, const dds_sample_info_t& info) {
       ++messages_in;

@@ -689,7 +689,28 @@ TEST_F(FleetDds, OperatorRiskUpdateReachesServer) {
   const std::optional<int> risk_exit = risk.WaitExit(15s);
   ASSERT_TRUE(risk_exit.has_value()) << "sage risk set hung";
   EXPECT_EQ(*risk_exit, 0) << risk.LogText();
+  // The server's answer, not just "sent": the valve's new share of the risk, computed here from
+  // the scenario's default profile with P3's raw weight replaced by 5.
+  {
+    const maps::Scenario two_xt = maps::LoadScenario(Scenario("two_xt.yaml"));
+    Eigen::VectorXd raw = two_xt.ProfileWeights(two_xt.ProfileOrThrow(""));
+    raw[two_xt.ValveIndex("P3")] = 5.0;
+    const std::string share = fmt::format("now {:.1f} % of the field's risk", 100.0 * 5.0 / raw.sum());
+    EXPECT_TRUE(std::regex_search(risk.LogText(), std::regex(R"(P3: risk 5 applied at t = [0-9.]+ s)")))
+        << risk.LogText();
+    EXPECT_NE(risk.LogText().find(share), std::string::npos) << "expected '" << share << "' in: " << risk.LogText();
+  }
   Report("risk_set_command_wall_s", risk.WallSeconds(), "s wall (sage risk set start to exit)");
+
+  // An update the mission refuses is an error in the operator's shell, not a line in a log:
+  // with every other valve at zero, P3 at zero would leave no risk anywhere.
+  for (const char* valve : {"P1", "P2", "P4", "P5"}) {
+    ChildProcess& zero = Start(std::string("zero_") + valve, {"risk", "set", valve, "0", "--mission", out.string()});
+    ASSERT_EQ(zero.WaitExit(15s), std::optional<int>(0)) << zero.LogText();
+  }
+  ChildProcess& refused = Start("refused", {"risk", "set", "P3", "0", "--mission", out.string()});
+  EXPECT_EQ(refused.WaitExit(15s), std::optional<int>(2)) << refused.LogText();
+  EXPECT_NE(refused.LogText().find("would leave every valve at zero risk"), std::string::npos) << refused.LogText();
 
   ChildProcess& remove = Start("remove", {"vehicle", "remove", "0", "--mission", out.string()});
   const std::optional<int> remove_exit = remove.WaitExit(15s);
