@@ -26,6 +26,6 @@ for n in ${counts[@]}; do
   rtf=$(sed -E 's/.*\(([0-9.]+)x real time\).*/\1/' <<<"$summary")
   rate=$(sed -E 's/.*out \(([0-9]+)\/s\).*/\1/' <<<"$summary")
   cycle=$(sed -E 's/.*server cycle ([0-9.]+ ms mean, [0-9.]+ ms max).*/\1/' <<<"$summary")
-  echo "| $n | $hosts | $mission s | $wall s | ${rtf}x | $cycle ms | $rate |" | tee -a "$out"
+  echo "| $n | $hosts | $mission s | $wall s | ${rtf}x | $cycle | $rate |" | tee -a "$out"
   rm -rf "$dir"
 done
