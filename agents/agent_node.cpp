@@ -184,8 +184,8 @@ int RunAgentNode(const maps::Scenario& scenario, const AgentNodeOptions& options
     }
     if (snapshot.valid && snapshot.phi.size() != host.basis().size()) {
       // A server started with another -K (or another scenario): its targets cannot be steered on.
-      spdlog::error("agents: the server's targets have {} coefficients but this host's basis has {} (K = {}); start "
-                    "sage agents with the server's scenario and -K",
+      spdlog::error("agents: the server's targets have {} coefficients but this host's basis has {} (K = {}): the "
+                    "server runs another -K; start sage agents with the server's scenario and -K",
                     snapshot.phi.size(), host.basis().size(), scenario.ergodic.basis_order);
       exit_code = 2;
       break;

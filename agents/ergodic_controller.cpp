@@ -1,23 +1,20 @@
 #include "agents/ergodic_controller.h"
 
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 
 namespace sage::agents {
 
-namespace {
-
-// Rotates unit vector `from` toward unit vector `to` by at most max_angle_rad. A reversal
-// (exactly opposite) turns counter-clockwise, so the choice is deterministic.
 Eigen::Vector2d TurnToward(const Eigen::Vector2d& from, const Eigen::Vector2d& to, double max_angle_rad) {
   const double angle = std::atan2(from.x() * to.y() - from.y() * to.x(), from.dot(to));
   if (std::abs(angle) <= max_angle_rad) return to;
-  const double step = angle < 0.0 ? -max_angle_rad : max_angle_rad;
+  const bool reversal = std::abs(angle) > M_PI - 1e-9;
+  const double step = angle < 0.0 && !reversal ? -max_angle_rad : max_angle_rad;
   const double c = std::cos(step), s = std::sin(step);
   return {c * from.x() - s * from.y(), s * from.x() + c * from.y()};
 }
 
-}  // namespace
 
 CoverageAccumulator::CoverageAccumulator(int size, double forgetting_time_s)
     : forgetting_time_s_(forgetting_time_s), sums_(Eigen::VectorXd::Zero(size)) {
@@ -82,7 +79,7 @@ Eigen::Vector2d ErgodicController::Command(const VehicleState& state, double tim
   // Rectangle rule over the control period: the position at this cycle stands for the interval
   // since the last one. At 10 Hz and 0.7 m/s that is a 7 cm stride, far below the finest
   // wavelength resolved at K = 10 on a 7 m box (1.4 m).
-  const double dt = std::isnan(last_time_s_) ? 0.0 : time_s - last_time_s_;
+  const double dt = std::isnan(last_time_s_) ? 0.0 : std::max(0.0, time_s - last_time_s_);
   if (!std::isnan(last_time_s_)) {
     basis_.Evaluate(state.position_m, f_);
     coverage_.Add(f_, dt);
@@ -102,8 +99,8 @@ Eigen::Vector2d ErgodicController::Command(const VehicleState& state, double tim
     const Eigen::Vector2d wanted = -b / norm;
     const bool limited = has_direction_ && std::isfinite(max_turn_rate_radps_);
     last_direction_ = limited ? TurnToward(last_direction_, wanted, max_turn_rate_radps_ * dt) : wanted;
-    has_direction_ = true;
   }
+  has_direction_ = true;  // whatever was commanded (even the initial heading) is where turns start from
   return speed_mps_ * last_direction_;
 }
 

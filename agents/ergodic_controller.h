@@ -38,6 +38,11 @@ class CoverageAccumulator {
   double time_s_ = 0.0;
 };
 
+/// Rotates unit vector `from` toward unit vector `to` by at most max_angle_rad (>= 0). A
+/// reversal (opposite to within 1e-9 rad, where the sign of the cross product is rounding
+/// noise, even -0.0) turns counter-clockwise, so the choice is deterministic.
+Eigen::Vector2d TurnToward(const Eigen::Vector2d& from, const Eigen::Vector2d& to, double max_angle_rad);
+
 class ErgodicController final : public VehicleController {
  public:
   /// basis must outlive the controller. speed_mps: constant transit speed (> 0).

@@ -113,10 +113,13 @@ Qos RiskUpdateQos() {
 
 Qos RiskUpdateResultQos() {
   Qos qos;
-  // Volatile: the operator's command reads answers to its own update only (its reader exists
-  // before it writes); 16 deep so answers to several sensors' updates in one cycle all arrive.
+  // Transient-local: the operator's command may be matched by the server's writer a moment after
+  // the server took its update and answered; the answer then still reaches it. Answers are
+  // matched by the update's stamp, so older ones are ignored. 16 deep for several sensors'
+  // updates in one cycle.
   SetReliable(qos);
   SetKeepLast(qos, 16);
+  SetTransientLocal(qos, 16);
   return qos;
 }
 

@@ -54,7 +54,7 @@ Qos FleetCoverageQos();
 /// RiskUpdate (operators/sensors -> server, viewers): reliable, transient-local, keep-last 16.
 Qos RiskUpdateQos();
 
-/// RiskUpdateResult (server -> the operator who sent the update): reliable, volatile, keep-last 16.
+/// RiskUpdateResult (server -> the operator who sent the update): reliable, transient-local, keep-last 16.
 Qos RiskUpdateResultQos();
 
 /// MissionStatus (server -> everyone): reliable, transient-local, keep-last 1.

@@ -13,6 +13,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <map>
 #include <optional>
 #include <string>
@@ -56,7 +57,11 @@ pid_t Spawn(const std::vector<std::string>& args, const std::string& log_path, b
   if (stdout_pipe != nullptr && pipe2(pipe_fds, O_CLOEXEC) != 0) throw std::runtime_error("pipe2 failed");
   const pid_t parent = getpid();
   const pid_t pid = fork();
-  if (pid < 0) throw std::runtime_error("fork failed");
+  if (pid < 0) {
+    for (int fd : pipe_fds)
+      if (fd >= 0) close(fd);
+    throw std::runtime_error("fork failed");
+  }
   if (pid == 0) {
     if (detach) {
       setsid();
@@ -178,6 +183,21 @@ int Launch(const maps::Scenario& scenario, const LaunchOptions& options) {
   const std::string out_dir =
       options.out_dir.empty() ? (fs::path("runs") / (scenario.name + "_launch")).string() : options.out_dir;
   PrepareRunDirectory(out_dir);
+  // A mission still running in this directory would lose its logs, its mission.json and with
+  // them its operators (sage risk set, vehicle add): refuse.
+  if (std::ifstream in{fs::path(out_dir) / "mission.json"}) {
+    const nlohmann::json previous = nlohmann::json::parse(in, nullptr, /*allow_exceptions=*/false);
+    const pid_t pid = previous.is_object() && previous.contains("launcher_pid") && previous["launcher_pid"].is_number_integer()
+                          ? previous["launcher_pid"].get<pid_t>()
+                          : -1;
+    std::ifstream cmdline(fmt::format("/proc/{}/cmdline", pid));
+    const std::string command((std::istreambuf_iterator<char>(cmdline)), std::istreambuf_iterator<char>());
+    if (pid > 0 && pid != getpid() && command.find("launch") != std::string::npos) {
+      throw maps::ScenarioError(fmt::format("--out = {}: a mission is running there (launcher pid {}); stop it or "
+                                            "choose another --out",
+                                            out_dir, pid));
+    }
+  }
   // A run directory used before keeps no agent-host logs of the earlier mission to mislead.
   for (const fs::directory_entry& entry : fs::directory_iterator(out_dir)) {
     const std::string name = entry.path().filename().string();
@@ -340,7 +360,10 @@ int Launch(const maps::Scenario& scenario, const LaunchOptions& options) {
     }
   }
   // An interrupted mission still wrote its run directory, but says so in its exit status.
-  return server_status == 0 && stop_sent ? 130 : server_status;
+  // Interrupted (the server, in the same process group, may have seen Ctrl-C and finished first):
+  // the run directory is written, but the exit status says the mission was cut short.
+  const bool interrupted = stop_sent || (options.stop && options.stop->load());
+  return server_status == 0 && interrupted ? 130 : server_status;
 }
 
 MissionHandle FindMission(const std::string& dir) {

@@ -282,7 +282,10 @@ int RunServerNode(const maps::Scenario& scenario, const ServerNodeOptions& optio
     const Eigen::VectorXd& weights = server.effective_weights();
     const bool reweighted = weights.size() != last_weights.size() ||
                             (weights.size() > 0 && (weights - last_weights).cwiseAbs().maxCoeff() > 0.0);
-    const bool reassigned = partition && (server.assignment() != last_assignment || reweighted);
+    // Also after any risk event, even one that left the weights as they were: its heading change
+    // waits for a command steered on a target of this cycle or later.
+    const bool risk_event = server.responses().size() > responses_before;
+    const bool reassigned = partition && (server.assignment() != last_assignment || reweighted || risk_event);
     if (reassigned) {
       last_assignment = server.assignment();
       last_weights = weights;

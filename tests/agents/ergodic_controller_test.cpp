@@ -137,6 +137,23 @@ double AngleBetween(const Eigen::Vector2d& a, const Eigen::Vector2d& b) {
   return std::atan2(a.x() * b.y() - a.y() * b.x(), a.dot(b));
 }
 
+// TurnToward: within reach it is the target itself; beyond, exactly the bound toward it on the
+// shorter side; an exact reversal turns counter-clockwise whichever way it is written (the
+// cross product of (-1, 0) and (1, 0) is -0.0).
+TEST(TurnToward, BoundedShorterSideAndReversalsCounterClockwise) {
+  const Eigen::Vector2d x(1, 0), y(0, 1);
+  EXPECT_LT((TurnToward(x, y, 2.0) - y).norm(), 1e-15);
+  const Eigen::Vector2d toward_y = TurnToward(x, y, 0.1);
+  EXPECT_NEAR(std::atan2(toward_y.y(), toward_y.x()), 0.1, 1e-12);
+  const Eigen::Vector2d toward_minus_y = TurnToward(x, -y, 0.1);
+  EXPECT_NEAR(std::atan2(toward_minus_y.y(), toward_minus_y.x()), -0.1, 1e-12);
+  for (const Eigen::Vector2d& from : {x, Eigen::Vector2d(-x), y, Eigen::Vector2d(-y)}) {
+    const Eigen::Vector2d turned = TurnToward(from, -from, 0.1);
+    EXPECT_NEAR(AngleBetween(from, turned), 0.1, 1e-12) << from.transpose();
+    EXPECT_NEAR(turned.norm(), 1.0, 1e-12);
+  }
+}
+
 // With a minimum turning radius r the command turns by at most v / r * dt per cycle, and it is
 // exactly the paper's direction whenever that is within reach, else that bound toward it. The
 // paper's direction comes from a twin controller without the limit fed the same states (the
@@ -172,6 +189,8 @@ TEST(ErgodicController, TurnRadiusBoundsEachTurnTowardThePapersDirection) {
       ASSERT_NEAR(std::abs(turn), max_turn, 1e-9) << "at step " << i;
       if (std::abs(wanted_turn) < M_PI - 1e-9) {
         ASSERT_GT(turn * wanted_turn, 0.0) << "at step " << i;
+      } else {
+        ASSERT_GT(turn, 0.0) << "a reversal turns counter-clockwise, at step " << i;
       }
     }
     previous = direction;
