@@ -49,6 +49,11 @@ struct RiskEvent {
   double weight = 0.0;  ///< raw weight, >= 0
 };
 
+/// Largest raw risk weight a profile, an event or an operator may give a valve. Weights are
+/// relative, so 1e12 is far past any useful ratio, and sums over thousands of valves stay finite
+/// (two valves at 1e308 overflowed the normalisation and stopped a running mission).
+inline constexpr double kMaxRawWeight = 1e12;
+
 /// Named raw weights per valve (any positive scale; normalised on use) plus timed events.
 struct RiskProfile {
   std::string name;

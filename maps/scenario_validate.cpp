@@ -51,6 +51,10 @@ class Checker {
     Finite(field, v);
     if (!(v >= 0)) Fail(field, FormatNumber(v), "must be >= 0");
   }
+  void RawWeight(const std::string& field, double v) const {
+    NonNegative(field, v);
+    if (v > kMaxRawWeight) Fail(field, FormatNumber(v), "must be in [0, 1e12] (weights are relative)");
+  }
   // A non-empty name not used before by another entry of the same kind.
   void UniqueName(std::map<std::string, std::string>& seen, const std::string& field, const std::string& name) const {
     if (name.empty()) Fail(field, "\"\"", "must not be empty");
@@ -245,7 +249,7 @@ void Scenario::Validate() const {
     double total = 0;
     for (const auto& [valve, weight] : profile.weights) {
       if (valve_names.count(valve) == 0) c.Fail(path + ".weights." + valve, FormatNumber(weight), "unknown valve " + valve_list());
-      c.NonNegative(path + ".weights." + valve, weight);
+      c.RawWeight(path + ".weights." + valve, weight);
       total += weight;
     }
     for (const Valve& valve : AllValves()) {
@@ -259,7 +263,7 @@ void Scenario::Validate() const {
         c.Fail(event_path + ".time_s", FormatNumber(event.time_s), "must be in [0, duration_s = " + FormatNumber(duration_s) + "]");
       }
       if (valve_names.count(event.valve) == 0) c.Fail(event_path + ".valve", event.valve, "unknown valve " + valve_list());
-      c.NonNegative(event_path + ".weight", event.weight);
+      c.RawWeight(event_path + ".weight", event.weight);
     }
   }
   if (FindProfile(default_profile) == nullptr) {

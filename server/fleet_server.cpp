@@ -5,6 +5,8 @@
 #include <limits>
 #include <numeric>
 
+#include <fmt/format.h>
+
 namespace sage::server {
 FleetServer::FleetServer(const maps::Scenario& scenario, const std::string& profile)
     : scenario_(scenario),
@@ -79,8 +81,8 @@ bool FleetServer::OnCoverage(int id, std::uint64_t seq, double stamp_s, double k
 void FleetServer::SetRiskWeight(const std::string& valve, double weight, double time_s, const std::string& source) {
   const int index = scenario_.ValveIndex(valve);
   if (index < 0) throw maps::ScenarioError("risk update: valve = " + valve + ": no such valve in " + scenario_.name);
-  if (!(weight >= 0.0) || !std::isfinite(weight)) {
-    throw maps::ScenarioError("risk update: weight = " + std::to_string(weight) + ": must be >= 0");
+  if (!(weight >= 0.0 && weight <= maps::kMaxRawWeight)) {
+    throw maps::ScenarioError(fmt::format("risk update: weight = {}: must be in [0, 1e12]", weight));
   }
   Eigen::VectorXd w = raw_weights_;
   w[index] = weight;

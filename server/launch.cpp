@@ -454,8 +454,8 @@ int RemoveVehicle(const MissionHandle& mission, unsigned id) {
 }
 
 int SetRisk(const MissionHandle& mission, const std::string& valve, double weight, const std::string& source) {
-  if (!(weight >= 0.0) || !std::isfinite(weight)) {
-    throw maps::ScenarioError(fmt::format("weight = {}: must be a number >= 0", weight));
+  if (!(weight >= 0.0 && weight <= maps::kMaxRawWeight)) {
+    throw maps::ScenarioError(fmt::format("weight = {}: must be a number in [0, 1e12] (weights are relative)", weight));
   }
   const maps::Scenario scenario = maps::LoadScenario(mission.scenario_path);
   if (scenario.ValveIndex(valve) < 0) {

@@ -225,7 +225,7 @@ int RunServerNode(const maps::Scenario& scenario, const ServerNodeOptions& optio
         result.new_share = server.responses().back().new_weight;
         spdlog::info("server: risk of {} set to {} by {} at t = {:.1f} s", AsStringView(r.valve), r.weight,
                      AsStringView(r.source), t);
-      } catch (const maps::ScenarioError& e) {
+      } catch (const std::exception& e) {  // an operator's message must never end the mission
         reason = e.what();
         spdlog::warn("server: ignored {}", reason);
       }

@@ -384,6 +384,8 @@ TEST(Scenario, BadInputsGiveOneLineNamingFieldAndValue) {
       {"duration_s: 300", "duration_s: --5", {"duration_s = --5", "must be a number"}},
       {"equal: {weights: {P1: 1, P2: 1}}", "equal: {weights: {P1: 1}}", {"profiles.equal.weights: missing valve P2"}},
       {"equal: {weights: {P1: 1, P2: 1}}", "equal: {weights: {P1: -1, P2: 1}}", {"profiles.equal.weights.P1 = -1"}},
+      {"equal: {weights: {P1: 1, P2: 1}}", "equal: {weights: {P1: 1e308, P2: 1e308}}",
+       {"profiles.equal.weights.P1 = 1e+308", "[0, 1e12]"}},
       {"equal: {weights: {P1: 1, P2: 1}}", "equal: {weights: {P1: 0, P2: 0}}", {"profiles.equal.weights", "all be zero"}},
       {"equal: {weights: {P1: 1, P2: 1}}", "equal: {weights: {P1: 1, P2: 1, P7: 1}}",
        {"profiles.equal.weights.P7 = 1", "unknown valve"}},

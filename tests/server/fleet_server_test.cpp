@@ -211,10 +211,19 @@ TEST(FleetServer, BadRiskUpdateIsAOneLineError) {
   };
   expect_one_line("P9", 1.0, "P9");
   expect_one_line("P1", -1.0, "weight");
+  // Two huge weights would overflow the normalisation (the sum becomes inf) and stop the mission.
+  expect_one_line("P1", 1e308, "[0, 1e12]");
+  expect_one_line("P1", std::numeric_limits<double>::quiet_NaN(), "weight");
   server.Cycle(1.0);
   EXPECT_EQ(server.schedule().size(), schedule_before);
   EXPECT_EQ(server.responses().size(), 0u);
   EXPECT_EQ(server.phi(), phi_before);
+  // The largest allowed weight on two valves keeps every coefficient finite.
+  server.SetRiskWeight("P1", maps::kMaxRawWeight, 2.0, "test");
+  server.SetRiskWeight("P2", maps::kMaxRawWeight, 2.0, "test");
+  server.Cycle(2.0);
+  EXPECT_TRUE(server.phi().allFinite());
+  EXPECT_NEAR(server.schedule().back().weights[0], 0.5, 1e-9);
 }
 
 // A profile's timed event fires in the first Cycle at or after its time, once:
