@@ -81,6 +81,7 @@ int RunAgentNode(const maps::Scenario& scenario, const AgentNodeOptions& options
   }
 
   // The mission clock: the server's start time and time scale, from its (transient-local) status.
+  const std::uint64_t fingerprint = maps::VehicleFingerprint(scenario);
   long long start_ns = 0;
   double time_scale = 1.0;
   bool finished = false;
@@ -94,12 +95,20 @@ int RunAgentNode(const maps::Scenario& scenario, const AgentNodeOptions& options
       return 1;
     }
     status.WaitForData(std::chrono::milliseconds(100));
+    bool other_world = false;
     status.TakeEach([&](const proto::MissionStatus& s, const dds_sample_info_t& info) {
       if (!info.valid_data) return;
+      other_world = s.vehicle_fingerprint != fingerprint;
       start_ns = s.start_ns;
       time_scale = s.time_scale;
       finished = s.finished;
     });
+    if (other_world) {
+      spdlog::error("agents: the server on DDS domain {} runs another scenario or other options; start sage agents "
+                    "with the server's scenario and the same -n, --seed, -K, --forgetting, --turn-radius and --model",
+                    options.domain_id);
+      return 2;
+    }
   }
   if (finished) return 0;
   auto mission_time = [&](long long ns) { return (ns - start_ns) * 1e-9 * time_scale; };
@@ -120,7 +129,6 @@ int RunAgentNode(const maps::Scenario& scenario, const AgentNodeOptions& options
   };
 
   FleetSnapshot snapshot;
-  int exit_code = 0;
   auto last_heard = std::chrono::steady_clock::now();
   long k = static_cast<long>(std::ceil(mission_time(proto::NowRealtimeNs()) * scenario.control_rate_hz));
   double next_coverage_t = cycle_time(k);
@@ -180,14 +188,6 @@ int RunAgentNode(const maps::Scenario& scenario, const AgentNodeOptions& options
     const double silent_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - last_heard).count();
     if (silent_s > options.server_timeout_s) {
       spdlog::warn("agents: no word from the server for {:.0f} s; stopping", silent_s);
-      break;
-    }
-    if (snapshot.valid && snapshot.phi.size() != host.basis().size()) {
-      // A server started with another -K (or another scenario): its targets cannot be steered on.
-      spdlog::error("agents: the server's targets have {} coefficients but this host's basis has {} (K = {}): the "
-                    "server runs another -K; start sage agents with the server's scenario and -K",
-                    snapshot.phi.size(), host.basis().size(), scenario.ergodic.basis_order);
-      exit_code = 2;
       break;
     }
 
@@ -275,7 +275,7 @@ int RunAgentNode(const maps::Scenario& scenario, const AgentNodeOptions& options
   }
   for (const auto& [id, v] : vehicles) leave(v);
   std::this_thread::sleep_for(std::chrono::milliseconds(100));  // let the disposes go out
-  return exit_code;
+  return 0;
 }
 
 }  // namespace sage::agents

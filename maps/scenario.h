@@ -169,6 +169,13 @@ std::string EmitScenario(const Scenario& scenario);
 /// the command line. Fleet events naming a dropped vehicle are dropped too.
 Scenario WithVehicleCount(const Scenario& scenario, int count);
 
+/// A hash (FNV-1a) of what shapes the vehicles' own simulation and control: workspace,
+/// structures and valves, rates, seed, vehicles, SMC settings (K, forgetting, turning radius)
+/// and the fleet's reporting periods. Not the mission's length, risk profiles, guard, A*,
+/// coverage assignment or fleet events, which only the server uses. A server and an agent host
+/// that disagree on it would fly vehicles in a different world than the one accounted.
+std::uint64_t VehicleFingerprint(const Scenario& scenario);
+
 const char* ToString(MotionModel model);
 const char* ToString(FleetAssignment assignment);
 /// Throws ScenarioError unless text is "shared" or "partition"; `where` starts the message.

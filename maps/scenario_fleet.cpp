@@ -170,4 +170,23 @@ Scenario WithVehicleCount(const Scenario& scenario, int count) {
   return s;
 }
 
+std::uint64_t VehicleFingerprint(const Scenario& scenario) {
+  Scenario vehicles_only = scenario;
+  vehicles_only.name.clear();
+  vehicles_only.source_path.clear();
+  vehicles_only.duration_s = 1.0;
+  vehicles_only.profiles = {RiskProfile{"any", {}, {}}};
+  vehicles_only.default_profile = "any";
+  vehicles_only.guard = StarvationGuard{};
+  vehicles_only.astar = AstarSettings{};
+  vehicles_only.fleet.assignment = FleetAssignment::kShared;
+  vehicles_only.fleet_events.clear();
+  std::uint64_t hash = 14695981039346656037ull;
+  for (const char c : EmitScenario(vehicles_only)) {
+    hash ^= static_cast<unsigned char>(c);
+    hash *= 1099511628211ull;
+  }
+  return hash;
+}
+
 }  // namespace sage::maps

@@ -218,6 +218,16 @@ int Launch(const maps::Scenario& scenario, const LaunchOptions& options) {
   };
   const proto::DomainReservation reservation = reserve();
   const int domain = reservation.domain_id();
+  {
+    // The reservation keeps other launches off this domain, not a server started by hand.
+    proto::Participant probe(domain, proto::LocalhostConfigXml(proto::kMaxLocalParticipants));
+    proto::Reader<proto::MissionStatus> servers(probe, proto::MissionStatusQos());
+    if (servers.WaitForWriters(1, std::chrono::milliseconds(500))) {
+      throw maps::ScenarioError(fmt::format("--domain = {}: a mission's server is already running on this DDS domain; "
+                                            "leave --domain out to get a free one",
+                                            domain));
+    }
+  }
 
   // The effective scenario (with the command line's overrides) is written next to the run, and
   // every process of the mission reads that one file.

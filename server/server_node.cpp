@@ -22,6 +22,7 @@
 #include "proto/qos.h"
 #include "server/fleet_server.h"
 #include "server/mission.h"
+#include "server/atomic_write.h"
 #include "server/report.h"
 
 namespace sage::server {
@@ -67,9 +68,21 @@ Eigen::Vector2d CommandOf(const proto::VehicleState& s) { return {s.cmd_x_mps, s
 
 int RunServerNode(const maps::Scenario& scenario, const ServerNodeOptions& options) {
   PrepareRunDirectory(options.out_dir);  // a mission of minutes must not end in "cannot write"
+  // The effective scenario beside the results, as sage run and sage launch leave it.
+  detail::WriteAtomically((fs::path(options.out_dir) / "scenario.yaml").string(), maps::EmitScenario(scenario));
   FleetServer server(scenario, options.profile);
   const bool partition = scenario.fleet.assignment == maps::FleetAssignment::kPartition;
   proto::Participant participant(options.domain_id, proto::LocalhostConfigXml(proto::kMaxLocalParticipants));
+  {
+    // Two servers on one domain would both adopt the same vehicles and clocks: refuse to be the
+    // second. Asked before this server's own status writer exists; discovery on loopback takes
+    // a few ms, so 0.5 s finds any server already running.
+    proto::Reader<proto::MissionStatus> others(participant, proto::MissionStatusQos());
+    if (others.WaitForWriters(1, std::chrono::milliseconds(500))) {
+      throw maps::ScenarioError(fmt::format("--domain = {}: another mission's server is running on this DDS domain",
+                                            options.domain_id));
+    }
+  }
   proto::Reader<proto::VehicleState> states(participant, proto::VehicleStateReaderQos());
   proto::Reader<proto::VehicleCoverage> coverage(participant, proto::VehicleCoverageQos());
   proto::Reader<proto::RiskUpdate> risk_updates(participant, proto::RiskUpdateQos());
@@ -107,6 +120,7 @@ int RunServerNode(const maps::Scenario& scenario, const ServerNodeOptions& optio
     });
   };
 
+  const std::uint64_t vehicle_fingerprint = maps::VehicleFingerprint(scenario);
   auto publish_status = [&](long cycle, double t, bool finished) {
     proto::MissionStatus s{};
     s.stamp_ns = NowRealtimeNs();
@@ -120,6 +134,7 @@ int RunServerNode(const maps::Scenario& scenario, const ServerNodeOptions& optio
     s.cycle_time_ms = last_cycle_ms;
     s.ergodic_metric = server.FleetMetric();
     s.finished = finished;
+    s.vehicle_fingerprint = vehicle_fingerprint;
     status.Write(s);
     ++messages_out;
   };

@@ -611,5 +611,33 @@ TEST(Scenario, WithVehicleCountAddsVehiclesAlongTheSouthEdge) {
   EXPECT_EQ(five.vehicles.back().name, "rov6");
 }
 
+// A server and an agent host compare VehicleFingerprint before the host joins: it ignores what
+// only the server uses, and changes with anything that shapes the vehicles' world or control.
+TEST(Scenario, VehicleFingerprintSeesWhatShapesTheVehiclesOnly) {
+  const Scenario base = LoadScenario(kFleetFieldPath);
+  const std::uint64_t fingerprint = VehicleFingerprint(base);
+  EXPECT_EQ(VehicleFingerprint(LoadScenario(kFleetFieldPath)), fingerprint);
+
+  Scenario server_only = base;
+  server_only.duration_s = 60;
+  server_only.fleet_events.clear();
+  server_only.default_profile = "leak";
+  server_only.guard.enabled = false;
+  server_only.astar.clearance_m = 0.5;
+  server_only.fleet.assignment = FleetAssignment::kPartition;
+  EXPECT_EQ(VehicleFingerprint(server_only), fingerprint);
+
+  std::vector<Scenario> vehicle_side(6, base);
+  vehicle_side[0].ergodic.basis_order = 24;
+  vehicle_side[1].seed = 2;
+  vehicle_side[2].ergodic.min_turn_radius_m = 0.4;
+  vehicle_side[3] = WithVehicleCount(base, 3);
+  vehicle_side[4].structures[0].center_m.x() += 0.1;
+  vehicle_side[5].vehicles[0].model = MotionModel::kSingleIntegrator;
+  for (std::size_t i = 0; i < vehicle_side.size(); ++i) {
+    EXPECT_NE(VehicleFingerprint(vehicle_side[i]), fingerprint) << "change " << i;
+  }
+}
+
 }  // namespace
 }  // namespace sage::maps

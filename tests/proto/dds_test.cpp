@@ -270,7 +270,7 @@ TEST(DdsEntities, DifferentDomainsDoNotMeet) {
   Reader<MissionStatus> reader_a(mission_a, MissionStatusQos());
   Reader<MissionStatus> reader_b(mission_b, MissionStatusQos());
   Writer<MissionStatus> writer_a(mission_a, MissionStatusQos());
-  writer_a.Write(MissionStatus{1, 0, 1.0, 77, 1.0, 300.0, 3, 0, 0.0, 0.5, false});
+  writer_a.Write(MissionStatus{1, 0, 1.0, 77, 1.0, 300.0, 3, 0, 0.0, 0.5, false, 0});
   const auto seen_a = TakeUntil(
       reader_a, [](const auto& s) { return !s.empty(); }, 2000ms);
   ASSERT_EQ(seen_a.size(), 1u);
