@@ -388,6 +388,23 @@ class FleetDds : public ::testing::Test {
     return *children_.back();
   }
 
+  // A free domain id for `sage launch`, released again: the launch reserves it itself (it would
+  // move to the next free id while this test held it).
+  static int FreeDomainForLaunch() { return ReserveDomain().domain_id(); }
+
+  // Starts `sage launch ARGS --out OUT --domain D` and waits until it has written OUT/mission.json
+  // (check that it exists before reading it).
+  ChildProcess& StartLaunch(const std::string& label, std::vector<std::string> args, const fs::path& out, int domain_id,
+                            std::optional<fs::path> cwd = std::nullopt) {
+    args.insert(args.begin(), "launch");
+    args.insert(args.end(), {"--out", out.string(), "--domain", std::to_string(domain_id)});
+    ChildProcess& launch = Start(label, args, cwd);
+    const auto deadline = SteadyClock::now() + kStartupTimeout;
+    while (!fs::exists(out / "mission.json") && SteadyClock::now() < deadline) std::this_thread::sleep_for(20ms);
+    std::this_thread::sleep_for(100ms);  // written in one go, but let the writer close it
+    return launch;
+  }
+
   // Waits until `regex` matches the log of `child` (or it exits, or the timeout passes); the
   // match and its groups.
   static std::optional<std::vector<std::string>> WaitForLog(ChildProcess& child, const std::string& regex,
@@ -660,21 +677,12 @@ TEST_F(FleetDds, KilledVehicleIsNoticedAndOthersTakeOver) {
 // 4. Operator commands reach a mission started by `sage launch`: a risk update is applied by
 // the server, and a removed vehicle leaves cleanly.
 TEST_F(FleetDds, OperatorRiskUpdateReachesServer) {
-  int domain_id = 0;
-  {
-    // Reserved to pick a free id, released for `sage launch`, which reserves it itself (it would
-    // move to the next free id while this test held it).
-    const proto::DomainReservation domain = ReserveDomain();
-    domain_id = domain.domain_id();
-  }
+  const int domain_id = FreeDomainForLaunch();
   const double duration = 40;
   const fs::path out = run_dir_ / "out";
-  ChildProcess& launch = Start("launch", {"launch", Scenario("two_xt.yaml"), "--vehicles", "1", "--duration",
-                                          Num(duration), "--time-scale", Num(kTimeScale), "--out", out.string(),
-                                          "--domain", std::to_string(domain_id)});
-  const auto deadline = SteadyClock::now() + kStartupTimeout;
-  while (!fs::exists(out / "mission.json") && SteadyClock::now() < deadline) std::this_thread::sleep_for(20ms);
-  std::this_thread::sleep_for(100ms);  // written in one go, but let the writer close it
+  ChildProcess& launch = StartLaunch("launch", {Scenario("two_xt.yaml"), "--vehicles", "1", "--duration", Num(duration),
+                                                "--time-scale", Num(kTimeScale)},
+                                     out, domain_id);
   ASSERT_TRUE(fs::exists(out / "mission.json"));
   const Json mission = ReadJson(out / "mission.json");
   EXPECT_EQ(mission.at("domain_id").get<int>(), domain_id) << "launch did not use the free domain it was given";
@@ -788,19 +796,12 @@ TEST_F(FleetDds, OperatorRiskUpdateReachesServer) {
 // target (its share of the valves, weighted by the risk) is sent again, so the first vehicle
 // answers the event with a turn the server can measure (null if no new target reached it).
 TEST_F(FleetDds, PartitionTargetsFollowRiskUpdates) {
-  int domain_id = 0;
-  {
-    const proto::DomainReservation domain = ReserveDomain();
-    domain_id = domain.domain_id();
-  }
+  const int domain_id = FreeDomainForLaunch();
   const double duration = 30;
   const fs::path out = run_dir_ / "out";
-  ChildProcess& launch = Start("launch", {"launch", Scenario("fleet_field.yaml"), "--vehicles", "4", "--assignment",
-                                          "partition", "--duration", Num(duration), "--time-scale", Num(kTimeScale),
-                                          "--out", out.string(), "--domain", std::to_string(domain_id)});
-  const auto deadline = SteadyClock::now() + kStartupTimeout;
-  while (!fs::exists(out / "mission.json") && SteadyClock::now() < deadline) std::this_thread::sleep_for(20ms);
-  std::this_thread::sleep_for(100ms);
+  ChildProcess& launch = StartLaunch("launch", {Scenario("fleet_field.yaml"), "--vehicles", "4", "--assignment",
+                                                "partition", "--duration", Num(duration), "--time-scale", Num(kTimeScale)},
+                                     out, domain_id);
   ASSERT_TRUE(fs::exists(out / "mission.json"));
   MissionWatcher watcher(domain_id);
   ASSERT_TRUE(watcher.PollUntil(
