@@ -66,6 +66,11 @@ enum class MotionModel {
   kBlueRov2,          ///< Box2D dynamic body with BlueROV2 Heavy added mass, drag, thrust limits
 };
 
+/// The BlueROV2 Heavy's top speed in surge at full thrust (m/s): the drag law of its model
+/// (agents/physics_world) gives 0.848, and tests/agents/physics_world_test.cpp checks the two
+/// agree. A faster commanded transit speed could not be flown, only asked for.
+inline constexpr double kBlueRov2TopSpeed_mps = 0.85;
+
 struct VehicleSpec {
   std::string name;                                      ///< unique, e.g. "rov1"
   Eigen::Vector2d start_m = Eigen::Vector2d::Zero();     ///< start position (m)

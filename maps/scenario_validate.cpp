@@ -221,6 +221,10 @@ void Scenario::Validate() const {
       c.Fail(path + ".model", std::to_string(static_cast<int>(vehicle.model)), "must be single_integrator or bluerov2");
     }
     c.Positive(path + ".transit_speed_mps", vehicle.transit_speed_mps);
+    if (vehicle.model == MotionModel::kBlueRov2 && vehicle.transit_speed_mps > kBlueRov2TopSpeed_mps) {
+      c.Fail(path + ".transit_speed_mps", FormatNumber(vehicle.transit_speed_mps),
+             "must be <= 0.85 for model bluerov2 (its top speed in surge)");
+    }
   };
   if (vehicles.empty()) c.Fail("vehicles", "must list at least one vehicle");
   for (std::size_t i = 0; i < vehicles.size(); ++i) check_vehicle("vehicles[" + std::to_string(i) + "]", vehicles[i]);

@@ -221,7 +221,20 @@ int RunCli(int argc, char** argv) {
   } catch (const CLI::CallForVersion& e) {
     return app.exit(e);
   } catch (const CLI::ParseError& e) {
-    // Bad arguments: one line, like every other input error.
+    // Bad arguments: one line, like every other input error. A mistyped command word gets its
+    // own message (CLI11 would only say that a subcommand is required).
+    if (argc > 1 && argv[1][0] != '-') {
+      std::string commands;
+      bool known = false;
+      for (const CLI::App* sub : app.get_subcommands([](CLI::App*) { return true; })) {
+        known = known || sub->get_name() == argv[1];
+        commands += (commands.empty() ? "" : ", ") + sub->get_name();
+      }
+      if (!known) {
+        std::cerr << "sage: error: unknown command '" << argv[1] << "' (commands: " << commands << "; see sage --help)\n";
+        return 2;
+      }
+    }
     std::cerr << "sage: error: " << e.what() << " (see sage --help)\n";
     return 2;
   }

@@ -119,6 +119,8 @@ TEST(PhysicsWorld, BlueRov2TopSpeedMatchesDragLaw) {
   RunFor(world, 10.0);
   EXPECT_NEAR(world.Thrust(id).x(), p.max_force_surge_n, 1e-9);
   EXPECT_NEAR(world.State(id).velocity_mps.norm(), top_speed, 0.03 * top_speed);
+  // The limit scenarios are validated against (a bluerov2's transit_speed_mps) is this speed.
+  EXPECT_NEAR(maps::kBlueRov2TopSpeed_mps, top_speed, 0.005);
 }
 
 // Driven into an XT for 10 s, the hull stays outside the box (0.05 m tolerance).

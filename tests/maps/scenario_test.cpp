@@ -368,6 +368,9 @@ TEST(Scenario, BadInputsGiveOneLineNamingFieldAndValue) {
   const std::vector<BadInput> cases = {
       {"rov3, start_m: [6.5, 4.5], transit_speed_mps: 0.7", "rov3, start_m: [6.5, 4.5], transit_speed_mps: -1",
        {"base.yaml: vehicles[2].transit_speed_mps = -1: must be > 0"}},
+      {"rov1, start_m: [0.5, 0.5], model: bluerov2, transit_speed_mps: 0.7",
+       "rov1, start_m: [0.5, 0.5], model: bluerov2, transit_speed_mps: 50",
+       {"base.yaml: vehicles[0].transit_speed_mps = 50: must be <= 0.85 for model bluerov2"}},
       {"width_m: 7.0", "width_m: abc", {"workspace.width_m = abc", "must be a number"}},
       {"height_m: 5.0}", "heigth_m: 5.0}", {"workspace.heigth_m", "unknown key", "width_m, height_m"}},
       {"duration_s: 300", "duraton_s: 300", {"duraton_s", "unknown key", "duration_s"}},
