@@ -337,7 +337,7 @@ int Launch(const maps::Scenario& scenario, const LaunchOptions& options) {
                                    lose ? "killed (SIGKILL)" : "leaves", h.pid));
         }
       }
-      if (tty || t - last_print >= s.duration_s / 10.0 || s.finished) {
+      if (tty || t - last_print >= s.duration_s / 10.0 || (s.finished && t > last_print)) {
         last_print = t;
         terminal.Progress(fmt::format("t = {:5.0f} / {:.0f} s  vehicles {} (lost {})  ergodic metric {:.2e}  server cycle "
                                       "{:.2f} ms",
