@@ -177,18 +177,22 @@ void Scenario::Validate() const {
     }
     return nullptr;
   };
+  // A valve or a vehicle's start: finite, inside the workspace, outside every footprint.
+  const auto check_in_open_water = [&](const std::string& field, const Eigen::Vector2d& p) {
+    c.Finite(field, p);
+    if (!InsideBox(p, Eigen::Vector2d::Zero(), workspace_max)) {
+      c.Fail(field, FormatVector(p), "must be inside the workspace " + workspace_text);
+    }
+    if (const ChristmasTree* tree = inside_structure(p)) {
+      c.Fail(field, FormatVector(p), "must not be inside the footprint of " + tree->name);
+    }
+  };
   for (std::size_t i = 0; i < structures.size(); ++i) {
     for (std::size_t j = 0; j < structures[i].valves.size(); ++j) {
       const Valve& valve = structures[i].valves[j];
       const std::string path = "structures[" + std::to_string(i) + "].valves[" + std::to_string(j) + "]";
       c.UniqueName(valve_names, path + ".name", valve.name);
-      c.Finite(path + ".position_m", valve.position_m);
-      if (!InsideBox(valve.position_m, Eigen::Vector2d::Zero(), workspace_max)) {
-        c.Fail(path + ".position_m", FormatVector(valve.position_m), "must be inside the workspace " + workspace_text);
-      }
-      if (const ChristmasTree* tree = inside_structure(valve.position_m)) {
-        c.Fail(path + ".position_m", FormatVector(valve.position_m), "must not be inside the footprint of " + tree->name);
-      }
+      check_in_open_water(path + ".position_m", valve.position_m);
       const Eigen::Matrix2d& m = valve.covariance_m2;
       if (!m.allFinite() || std::abs(m(0, 1) - m(1, 0)) > 1e-12 * m.cwiseAbs().maxCoeff()) {
         c.Fail(path + ".covariance_m2", FormatMatrix(m), "must be symmetric and finite");
@@ -209,13 +213,7 @@ void Scenario::Validate() const {
   // A vehicle of `vehicles:` or one joining later; names are unique across both.
   const auto check_vehicle = [&](const std::string& path, const VehicleSpec& vehicle) {
     c.UniqueName(vehicle_names, path + ".name", vehicle.name);
-    c.Finite(path + ".start_m", vehicle.start_m);
-    if (!InsideBox(vehicle.start_m, Eigen::Vector2d::Zero(), workspace_max)) {
-      c.Fail(path + ".start_m", FormatVector(vehicle.start_m), "must be inside the workspace " + workspace_text);
-    }
-    if (const ChristmasTree* tree = inside_structure(vehicle.start_m)) {
-      c.Fail(path + ".start_m", FormatVector(vehicle.start_m), "must not be inside the footprint of " + tree->name);
-    }
+    check_in_open_water(path + ".start_m", vehicle.start_m);
     c.Finite(path + ".start_heading_rad", vehicle.start_heading_rad);
     if (vehicle.model != MotionModel::kSingleIntegrator && vehicle.model != MotionModel::kBlueRov2) {
       c.Fail(path + ".model", std::to_string(static_cast<int>(vehicle.model)), "must be single_integrator or bluerov2");
