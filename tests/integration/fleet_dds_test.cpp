@@ -338,6 +338,13 @@ Json ReadJson(const fs::path& path) {
   return Json::parse(in);
 }
 
+// The first risk event of `valve` in a run's metrics.json, if any.
+std::optional<Json> EventOf(const Json& metrics, const std::string& valve) {
+  for (const Json& e : metrics.at("events"))
+    if (e.at("valve") == valve) return e;
+  return std::nullopt;
+}
+
 // ---------------------------------------------------------------------------------------------
 class FleetDds : public ::testing::Test {
  protected:
@@ -739,10 +746,10 @@ TEST_F(FleetDds, OperatorRiskUpdateReachesServer) {
   EXPECT_EQ(*launch_exit, 0);
 
   const Json metrics = ReadJson(out / "metrics.json");
-  bool found = false;
-  for (const Json& e : metrics.at("events")) {
-    if (e.at("valve") != "P3") continue;
-    found = true;
+  const std::optional<Json> event = EventOf(metrics, "P3");
+  EXPECT_TRUE(event.has_value()) << "metrics.json has no event for P3: " << metrics.at("events").dump();
+  if (event) {
+    const Json& e = *event;
     EXPECT_GT(e.at("new_weight").get<double>(), 0.5);
     EXPECT_GE(e.at("time_s").get<double>(), risk_sent_at);
     // Measured over DDS from the commands the moving vehicle reports: a number (not null while
@@ -754,7 +761,6 @@ TEST_F(FleetDds, OperatorRiskUpdateReachesServer) {
     std::cout << "P3 -> weight " << e.at("new_weight") << " applied at t = " << e.at("time_s") << " s (sent at t = "
               << risk_sent_at << " s), heading change " << e.at("heading_change_rad") << " rad\n";
   }
-  EXPECT_TRUE(found) << "metrics.json has no event for P3: " << metrics.at("events").dump();
 
   // trajectory.csv (t,vehicle,x,y,heading,vx,vy,cmd_x,cmd_y): the server records the commands
   // the vehicle reports, so a moving vehicle has non-zero ones; times are whole cycles (0.3, not
@@ -817,15 +823,11 @@ TEST_F(FleetDds, PartitionTargetsFollowRiskUpdates) {
   ASSERT_TRUE(launch_exit.has_value()) << "sage launch did not end";
   EXPECT_EQ(*launch_exit, 0);
   const Json metrics = ReadJson(out / "metrics.json");
-  bool found = false;
-  for (const Json& e : metrics.at("events")) {
-    if (e.at("valve") != "P9") continue;
-    found = true;
-    ASSERT_TRUE(e.at("heading_change_rad").is_number())
-        << "no vehicle steered on a target sent after the update: " << e.dump();
-    Report("partition_risk_update_heading_change_rad", e.at("heading_change_rad").get<double>(), "rad");
-  }
-  EXPECT_TRUE(found) << "metrics.json has no event for P9: " << metrics.at("events").dump();
+  const std::optional<Json> event = EventOf(metrics, "P9");
+  ASSERT_TRUE(event.has_value()) << "metrics.json has no event for P9: " << metrics.at("events").dump();
+  ASSERT_TRUE(event->at("heading_change_rad").is_number())
+      << "no vehicle steered on a target sent after the update: " << event->dump();
+  Report("partition_risk_update_heading_change_rad", event->at("heading_change_rad").get<double>(), "rad");
 }
 
 // 5. Two missions launched at once on two domains do not see each other.
