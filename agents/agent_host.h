@@ -12,7 +12,7 @@
 
 #include "agents/ergodic_controller.h"
 #include "agents/vehicle_controller.h"
-#include "maps/scenario.h"
+#include "maps/scenario/scenario.h"
 #include "maps/spectral_basis.h"
 
 namespace sage::agents {

@@ -10,7 +10,7 @@
 #include <Eigen/Core>
 
 #include "maps/distance_field.h"
-#include "maps/scenario.h"
+#include "maps/scenario/scenario.h"
 #include "maps/seabed_map.h"
 
 namespace sage::agents {

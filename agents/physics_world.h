@@ -12,7 +12,7 @@
 #include <Eigen/Core>
 
 #include "agents/vehicle_controller.h"
-#include "maps/scenario.h"
+#include "maps/scenario/scenario.h"
 
 class b2World;
 class b2Body;

@@ -11,7 +11,7 @@
 #include <Eigen/Core>
 
 #include "maps/occupancy_grid.h"
-#include "maps/scenario.h"
+#include "maps/scenario/scenario.h"
 #include "maps/spectral_basis.h"
 
 namespace sage::maps {

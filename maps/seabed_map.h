@@ -7,7 +7,7 @@
 #include <string>
 
 #include "maps/occupancy_grid.h"
-#include "maps/scenario.h"
+#include "maps/scenario/scenario.h"
 
 namespace octomap {
 class OcTree;

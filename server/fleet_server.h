@@ -13,7 +13,7 @@
 
 #include "agents/agent_host.h"
 #include "maps/risk_field.h"
-#include "maps/scenario.h"
+#include "maps/scenario/scenario.h"
 #include "maps/spectral_basis.h"
 #include "server/metrics.h"
 #include "server/trajectory.h"

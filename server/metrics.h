@@ -9,7 +9,7 @@
 
 #include <Eigen/Core>
 
-#include "maps/scenario.h"
+#include "maps/scenario/scenario.h"
 #include "server/trajectory.h"
 
 namespace sage::server {

@@ -12,7 +12,7 @@
 
 #include <Eigen/Core>
 
-#include "maps/scenario.h"
+#include "maps/scenario/scenario.h"
 #include "server/metrics.h"
 #include "server/trajectory.h"
 

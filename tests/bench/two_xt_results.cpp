@@ -17,7 +17,7 @@
 #include <fmt/format.h>
 
 #include "server/mission.h"
-#include "server/report.h"
+#include "server/report/report.h"
 
 namespace {
 

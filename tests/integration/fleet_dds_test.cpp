@@ -40,7 +40,7 @@
 #include <fmt/ranges.h>
 #include <nlohmann/json.hpp>
 
-#include "maps/scenario.h"
+#include "maps/scenario/scenario.h"
 #include "proto/dds_config.h"
 #include "proto/dds_endpoints.h"
 #include "proto/messages.h"

@@ -1,0 +1,89 @@
+// The Scenario's lookups (valves, profiles) and the text names of its enums. Reading, checking
+// and writing a scenario live in scenario_parse.cpp, scenario_validate.cpp and scenario_emit.cpp.
+#include "maps/scenario/scenario.h"
+
+#include "maps/scenario/scenario_detail.h"
+
+namespace sage::maps {
+namespace {
+
+using detail::OneLine;
+
+}  // namespace
+
+std::vector<Valve> Scenario::AllValves() const {
+  std::vector<Valve> valves;
+  for (const ChristmasTree& tree : structures) valves.insert(valves.end(), tree.valves.begin(), tree.valves.end());
+  return valves;
+}
+
+std::vector<Eigen::Vector2d> Scenario::ValvePositions() const {
+  std::vector<Eigen::Vector2d> points;
+  for (const Valve& valve : AllValves()) points.push_back(valve.position_m);
+  return points;
+}
+
+int Scenario::ValveIndex(const std::string& valve_name) const {
+  int index = 0;
+  for (const ChristmasTree& tree : structures) {
+    for (const Valve& valve : tree.valves) {
+      if (valve.name == valve_name) return index;
+      ++index;
+    }
+  }
+  return -1;
+}
+
+const RiskProfile* Scenario::FindProfile(const std::string& profile_name) const {
+  for (const RiskProfile& profile : profiles) {
+    if (profile.name == profile_name) return &profile;
+  }
+  return nullptr;
+}
+
+const RiskProfile& Scenario::ProfileOrThrow(const std::string& requested) const {
+  const std::string name = requested.empty() ? default_profile : requested;
+  if (const RiskProfile* p = FindProfile(name)) return *p;
+  std::string allowed;
+  for (const RiskProfile& p : profiles) allowed += (allowed.empty() ? "" : ", ") + p.name;
+  throw ScenarioError(source_path + ": profile = " + name + ": must be one of " + allowed);
+}
+
+Eigen::VectorXd Scenario::ProfileWeights(const RiskProfile& profile) const {
+  const std::vector<Valve> valves = AllValves();
+  Eigen::VectorXd w(valves.size());
+  for (std::size_t i = 0; i < valves.size(); ++i) w[i] = profile.weights.at(valves[i].name);
+  return w;
+}
+
+const char* ToString(MotionModel model) {
+  switch (model) {
+    case MotionModel::kSingleIntegrator: return "single_integrator";
+    case MotionModel::kBlueRov2: return "bluerov2";
+  }
+  return "unknown";
+}
+
+MotionModel ParseMotionModel(const std::string& text, const std::string& where) {
+  if (text == "single_integrator") return MotionModel::kSingleIntegrator;
+  if (text == "bluerov2") return MotionModel::kBlueRov2;
+  throw ScenarioError(OneLine((where.empty() ? "model" : where) + " = " + text +
+                              ": must be single_integrator or bluerov2"));
+}
+
+const char* ToString(FleetAssignment assignment) {
+  switch (assignment) {
+    case FleetAssignment::kShared: return "shared";
+    case FleetAssignment::kPartition: return "partition";
+  }
+  return "unknown";
+}
+
+FleetAssignment ParseFleetAssignment(const std::string& text, const std::string& where) {
+  if (text == "shared") return FleetAssignment::kShared;
+  if (text == "partition") return FleetAssignment::kPartition;
+  throw ScenarioError(OneLine((where.empty() ? "assignment" : where) + " = " + (text.empty() ? "\"\"" : text) +
+                              ": must be shared or partition"));
+}
+
+}  // namespace sage::maps

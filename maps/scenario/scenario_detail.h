@@ -1,0 +1,46 @@
+#pragma once
+// Helpers shared by the scenario sources (maps/scenario*.cpp) and by nothing else: not part of
+// the sage_maps API, so include it only from those files.
+#include <algorithm>
+#include <charconv>
+#include <cmath>
+#include <string>
+
+#include <Eigen/Core>
+
+#include "maps/scenario/scenario.h"
+
+namespace sage::maps::detail {
+
+// Shortest text that reads back to the very same double (std::to_chars), so that emitting and
+// re-parsing is exact; YAML spellings for the non-finite values.
+inline std::string FormatNumber(double value) {
+  if (std::isnan(value)) return ".nan";
+  if (std::isinf(value)) return value > 0 ? ".inf" : "-.inf";
+  char buffer[40];
+  const auto result = std::to_chars(buffer, buffer + sizeof buffer, value);
+  return std::string(buffer, result.ptr);
+}
+
+// Messages reach the user as one line, whatever text was quoted into them.
+inline std::string OneLine(std::string text) {
+  std::replace_if(text.begin(), text.end(), [](char c) { return c == '\n' || c == '\r'; }, ' ');
+  return text;
+}
+
+// Closed box: a point on the edge is inside.
+inline bool InsideBox(const Eigen::Vector2d& p, const Eigen::Vector2d& min, const Eigen::Vector2d& max) {
+  return (p.array() >= min.array()).all() && (p.array() <= max.array()).all();
+}
+
+// The YAML key of a fleet event: join, lose or leave.
+inline const char* EventKey(FleetEvent::Kind kind) {
+  switch (kind) {
+    case FleetEvent::Kind::kJoin: return "join";
+    case FleetEvent::Kind::kLose: return "lose";
+    case FleetEvent::Kind::kLeave: return "leave";
+  }
+  return "unknown";
+}
+
+}  // namespace sage::maps::detail

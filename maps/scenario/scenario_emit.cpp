@@ -1,0 +1,125 @@
+// Scenario YAML writing: EmitScenario, the inverse of ParseScenario.
+#include "maps/scenario/scenario.h"
+
+#include <yaml-cpp/yaml.h>
+
+#include "maps/scenario/scenario_detail.h"
+
+namespace sage::maps {
+namespace {
+
+using detail::EventKey;
+using detail::FormatNumber;
+
+}  // namespace
+
+std::string EmitScenario(const Scenario& s) {
+  // Numbers go out as shortest round-trip text so ParseScenario(EmitScenario(s)) == s exactly;
+  // the covariance is always written in full.
+  YAML::Emitter out;
+  const auto key = [&](const std::string& name) -> YAML::Emitter& { return out << YAML::Key << name << YAML::Value; };
+  const auto number = [&](const std::string& name, double v) { key(name) << FormatNumber(v); };
+  const auto vector = [&](const Eigen::Vector2d& v) {
+    out << YAML::Flow << YAML::BeginSeq << FormatNumber(v.x()) << FormatNumber(v.y()) << YAML::EndSeq;
+  };
+  const auto vehicle_map = [&](const VehicleSpec& vehicle) {
+    out << YAML::Flow << YAML::BeginMap;
+    key("name") << vehicle.name;
+    key("start_m"); vector(vehicle.start_m);
+    number("start_heading_rad", vehicle.start_heading_rad);
+    key("model") << ToString(vehicle.model);
+    number("transit_speed_mps", vehicle.transit_speed_mps);
+    out << YAML::EndMap;
+  };
+  out << YAML::Comment("SAGE Fleet scenario (written by EmitScenario); units are in the field names");
+  out << YAML::BeginMap;
+  key("name") << s.name;
+  key("workspace") << YAML::Flow << YAML::BeginMap;
+  number("width_m", s.workspace.width_m);
+  number("height_m", s.workspace.height_m);
+  out << YAML::EndMap;
+  number("duration_s", s.duration_s);
+  number("control_rate_hz", s.control_rate_hz);
+  number("physics_rate_hz", s.physics_rate_hz);
+  number("visit_radius_m", s.visit_radius_m);
+  number("rearm_radius_m", s.rearm_radius_m);
+  key("seed") << std::to_string(s.seed);
+  key("ergodic") << YAML::Flow << YAML::BeginMap;
+  key("basis_order") << std::to_string(s.ergodic.basis_order);
+  number("forgetting_time_s", s.ergodic.forgetting_time_s);
+  number("min_turn_radius_m", s.ergodic.min_turn_radius_m);
+  out << YAML::EndMap;
+  key("guard") << YAML::Flow << YAML::BeginMap;
+  key("enabled") << s.guard.enabled;
+  number("weight_floor", s.guard.weight_floor);
+  number("revisit_bound_s", s.guard.revisit_bound_s);
+  out << YAML::EndMap;
+  key("astar") << YAML::Flow << YAML::BeginMap;
+  number("grid_resolution_m", s.astar.grid_resolution_m);
+  number("clearance_m", s.astar.clearance_m);
+  number("wait_per_lap_s", s.astar.wait_per_lap_s);
+  out << YAML::EndMap;
+  key("structures") << YAML::BeginSeq;
+  for (const ChristmasTree& tree : s.structures) {
+    out << YAML::BeginMap;
+    key("name") << tree.name;
+    key("center_m"); vector(tree.center_m);
+    key("size_m"); vector(tree.size_m);
+    number("height_m", tree.height_m);
+    key("valves");
+    if (tree.valves.empty()) out << YAML::Flow;  // "valves: []" on one line
+    out << YAML::BeginSeq;
+    for (const Valve& valve : tree.valves) {
+      out << YAML::Flow << YAML::BeginMap;
+      key("name") << valve.name;
+      key("position_m"); vector(valve.position_m);
+      key("covariance_m2") << YAML::BeginSeq;
+      vector(valve.covariance_m2.row(0).transpose());
+      vector(valve.covariance_m2.row(1).transpose());
+      out << YAML::EndSeq << YAML::EndMap;
+    }
+    out << YAML::EndSeq << YAML::EndMap;
+  }
+  out << YAML::EndSeq;
+  key("vehicles") << YAML::BeginSeq;
+  for (const VehicleSpec& vehicle : s.vehicles) vehicle_map(vehicle);
+  out << YAML::EndSeq;
+  key("fleet") << YAML::Flow << YAML::BeginMap;
+  key("assignment") << ToString(s.fleet.assignment);
+  number("coverage_period_s", s.fleet.coverage_period_s);
+  number("liveliness_lease_s", s.fleet.liveliness_lease_s);
+  out << YAML::EndMap;
+  key("fleet_events");
+  if (s.fleet_events.empty()) out << YAML::Flow;  // "fleet_events: []" on one line
+  out << YAML::BeginSeq;
+  for (const FleetEvent& event : s.fleet_events) {
+    out << YAML::Flow << YAML::BeginMap;
+    number("time_s", event.time_s);
+    key(EventKey(event.kind));
+    if (event.kind == FleetEvent::Kind::kJoin) vehicle_map(event.vehicle);
+    else out << event.vehicle.name;
+    out << YAML::EndMap;
+  }
+  out << YAML::EndSeq;
+  key("default_profile") << s.default_profile;
+  key("profiles") << YAML::BeginMap;
+  for (const RiskProfile& profile : s.profiles) {
+    key(profile.name) << YAML::BeginMap;
+    key("weights") << YAML::Flow << YAML::BeginMap;
+    for (const auto& [valve, weight] : profile.weights) number(valve, weight);
+    out << YAML::EndMap;
+    key("events") << YAML::Flow << YAML::BeginSeq;
+    for (const RiskEvent& event : profile.events) {
+      out << YAML::BeginMap;
+      number("time_s", event.time_s);
+      key("valve") << event.valve;
+      number("weight", event.weight);
+      out << YAML::EndMap;
+    }
+    out << YAML::EndSeq << YAML::EndMap;
+  }
+  out << YAML::EndMap << YAML::EndMap;
+  return std::string(out.c_str()) + "\n";
+}
+
+}  // namespace sage::maps

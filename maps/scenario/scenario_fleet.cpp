@@ -1,0 +1,192 @@
+// WithVehicleCount: a scenario resized to a chosen fleet, new vehicles placed at free starts.
+#include "maps/scenario/scenario.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <optional>
+#include <set>
+
+#include "maps/scenario/scenario_detail.h"
+
+namespace sage::maps {
+namespace {
+
+using detail::FormatNumber;
+using detail::InsideBox;
+
+// Starts added by WithVehicleCount keep clear of footprints and of each other: a BlueROV2 hull is
+// 0.46 x 0.58 m (0.74 m across), so 1 m between starts leaves two hulls apart whatever headings.
+constexpr double kStartEdgeMargin_m = 0.5;       // from the workspace edges
+constexpr double kStartFootprintMargin_m = 0.5;  // added to each side of every footprint
+constexpr double kStartSeparation_m = 1.0;       // from every other start, joiners' included
+constexpr double kDenseStartSeparation_m = 0.8;  // large fleets, when 1.0 m does not fit
+constexpr std::size_t kLineStartsMax = 50;       // more added vehicles than this fill a lattice
+constexpr double kStartSearchStep_m = 0.05;      // grid step of the search for a free start
+
+bool IsFreeStart(const Scenario& s, const std::vector<Eigen::Vector2d>& taken, const Eigen::Vector2d& p) {
+  for (const ChristmasTree& tree : s.structures) {
+    const Eigen::Vector2d half = tree.size_m / 2 + Eigen::Vector2d::Constant(kStartFootprintMargin_m);
+    if (((p - tree.center_m).array().abs() < half.array()).all()) return false;
+  }
+  for (const Eigen::Vector2d& other : taken) {
+    if ((p - other).norm() < kStartSeparation_m) return false;
+  }
+  return true;
+}
+
+// Of the points wanted + kStartSearchStep_m * (i, j), to the mm, inside the workspace less its edge
+// margin, the free one nearest to `wanted` (ties: the first found). Rings of growing Chebyshev
+// radius are searched until no point of a further ring can be nearer than the best so far.
+std::optional<Eigen::Vector2d> NearestFreeStart(const Scenario& s, const std::vector<Eigen::Vector2d>& taken,
+                                                const Eigen::Vector2d& wanted) {
+  const Eigen::Vector2d size(s.workspace.width_m, s.workspace.height_m);
+  const Eigen::Vector2d margin = (size / 2).cwiseMin(Eigen::Vector2d::Constant(kStartEdgeMargin_m));
+  // A hair of tolerance so that the wanted point on the margin line itself counts as inside.
+  const Eigen::Vector2d low = margin.array() - 1e-9, high = (size - margin).array() + 1e-9;
+  const int last_ring = static_cast<int>(std::ceil(size.maxCoeff() / kStartSearchStep_m)) + 1;
+  std::optional<Eigen::Vector2d> best;
+  double best_distance = std::numeric_limits<double>::infinity();
+  const auto consider = [&](int i, int j) {
+    // Whole millimetres, so a written scenario reads cleanly; the rules are checked on this value.
+    const Eigen::Vector2d p =
+        ((wanted + kStartSearchStep_m * Eigen::Vector2d(i, j)) * 1000.0).array().round().matrix() / 1000.0;
+    const double distance = (p - wanted).norm();
+    if (distance >= best_distance || !InsideBox(p, low, high)) return;
+    if (!IsFreeStart(s, taken, p)) return;
+    best = p;
+    best_distance = distance;
+  };
+  for (int ring = 0; ring <= last_ring && ring * kStartSearchStep_m <= best_distance; ++ring) {
+    if (ring == 0) {
+      consider(0, 0);
+      continue;
+    }
+    for (int i = -ring; i <= ring; ++i) {
+      consider(i, -ring);
+      consider(i, ring);
+    }
+    for (int j = -ring + 1; j < ring; ++j) {
+      consider(-ring, j);
+      consider(ring, j);
+    }
+  }
+  return best;
+}
+
+}  // namespace
+
+Scenario WithVehicleCount(const Scenario& scenario, int count) {
+  const std::string option = "--vehicles = " + std::to_string(count);
+  if (count < 1) throw ScenarioError(option + ": must be >= 1");
+  Scenario s = scenario;
+  const std::size_t wanted = static_cast<std::size_t>(count);
+  if (wanted <= s.vehicles.size()) {
+    std::set<std::string> dropped;
+    for (std::size_t i = wanted; i < s.vehicles.size(); ++i) dropped.insert(s.vehicles[i].name);
+    s.vehicles.resize(wanted);
+    std::erase_if(s.fleet_events, [&](const FleetEvent& event) {
+      return event.kind != FleetEvent::Kind::kJoin && dropped.count(event.vehicle.name) != 0;
+    });
+  } else {
+    const VehicleSpec first = s.vehicles.empty() ? VehicleSpec() : s.vehicles.front();
+    std::set<std::string> used;
+    std::vector<Eigen::Vector2d> taken;
+    for (const VehicleSpec& vehicle : s.vehicles) {
+      used.insert(vehicle.name);
+      taken.push_back(vehicle.start_m);
+    }
+    for (const FleetEvent& event : s.fleet_events) {
+      if (event.kind != FleetEvent::Kind::kJoin) continue;
+      used.insert(event.vehicle.name);
+      taken.push_back(event.vehicle.start_m);
+    }
+    const std::size_t added = wanted - s.vehicles.size();
+    const double width = s.workspace.width_m;
+    const double y = std::min(kStartEdgeMargin_m, s.workspace.height_m / 2);
+    std::size_t number = s.vehicles.size() + 1;
+    auto make_vehicle = [&](const Eigen::Vector2d& start) {
+      VehicleSpec vehicle;
+      while (used.count("rov" + std::to_string(number)) != 0) ++number;
+      vehicle.name = "rov" + std::to_string(number);
+      used.insert(vehicle.name);
+      vehicle.model = first.model;
+      vehicle.transit_speed_mps = first.transit_speed_mps;
+      vehicle.start_heading_rad = 0.0;
+      vehicle.start_m = start;
+      taken.push_back(start);
+      s.vehicles.push_back(vehicle);
+    };
+    if (added > kLineStartsMax) {
+      // A large fleet (scale runs): fill a lattice row by row from the bottom edge, 1.0 m apart,
+      // or 0.8 m (still clear of a 0.73 m hull diagonal) if that is the only way to fit them.
+      const std::size_t existing = taken.size();
+      for (double spacing : {kStartSeparation_m, kDenseStartSeparation_m}) {
+        std::vector<Eigen::Vector2d> lattice;
+        for (double y = kStartEdgeMargin_m; y <= s.workspace.height_m - kStartEdgeMargin_m && lattice.size() < added;
+             y += spacing) {
+          for (double x = kStartEdgeMargin_m; x <= width - kStartEdgeMargin_m && lattice.size() < added; x += spacing) {
+            const Eigen::Vector2d p(x, y);
+            bool free = true;
+            for (const ChristmasTree& tree : s.structures) {
+              const Eigen::Vector2d half = tree.size_m / 2 + Eigen::Vector2d::Constant(kStartFootprintMargin_m);
+              if (((p - tree.center_m).cwiseAbs() - half).maxCoeff() < 0.0) free = false;
+            }
+            for (std::size_t i = 0; i < existing && free; ++i) free = (p - taken[i]).norm() >= spacing;
+            if (free) lattice.push_back(p);
+          }
+        }
+        if (lattice.size() < added) continue;
+        for (const Eigen::Vector2d& p : lattice) make_vehicle(p);
+        break;
+      }
+      if (s.vehicles.size() < wanted) {
+        throw ScenarioError(option + ": the workspace has room for fewer vehicles (" +
+                            FormatNumber(kDenseStartSeparation_m) + " m apart, " +
+                            FormatNumber(kStartFootprintMargin_m) + " m from structures)");
+      }
+    }
+    for (std::size_t k = 0; s.vehicles.size() < wanted; ++k) {
+      // Evenly from x = 0.5 to width - 0.5 along y = 0.5, each then moved to the nearest free point.
+      const double x = (added == 1 || width <= 2 * kStartEdgeMargin_m)
+                           ? width / 2
+                           : kStartEdgeMargin_m + (width - 2 * kStartEdgeMargin_m) * static_cast<double>(k) /
+                                                      static_cast<double>(added - 1);
+      const std::optional<Eigen::Vector2d> start = NearestFreeStart(s, taken, Eigen::Vector2d(x, y));
+      if (!start) {
+        throw ScenarioError(option + ": no free start for rov" + std::to_string(number) + " in the workspace (" +
+                            FormatNumber(kStartSeparation_m) + " m from other vehicles, " +
+                            FormatNumber(kStartFootprintMargin_m) + " m from structures)");
+      }
+      make_vehicle(*start);
+    }
+  }
+  // Dropping vehicles can make a kept vehicle's loss leave the fleet empty; say which option did it.
+  try {
+    s.Validate();
+  } catch (const ScenarioError& e) {
+    throw ScenarioError(std::string(e.what()) + " (with " + option + ")");
+  }
+  return s;
+}
+
+std::uint64_t VehicleFingerprint(const Scenario& scenario) {
+  Scenario vehicles_only = scenario;
+  vehicles_only.name.clear();
+  vehicles_only.source_path.clear();
+  vehicles_only.duration_s = 1.0;
+  vehicles_only.profiles = {RiskProfile{"any", {}, {}}};
+  vehicles_only.default_profile = "any";
+  vehicles_only.guard = StarvationGuard{};
+  vehicles_only.astar = AstarSettings{};
+  vehicles_only.fleet.assignment = FleetAssignment::kShared;
+  vehicles_only.fleet_events.clear();
+  std::uint64_t hash = 14695981039346656037ull;
+  for (const char c : EmitScenario(vehicles_only)) {
+    hash ^= static_cast<unsigned char>(c);
+    hash *= 1099511628211ull;
+  }
+  return hash;
+}
+
+}  // namespace sage::maps

@@ -1,0 +1,365 @@
+// Scenario YAML reading, with typo and type checks. Every user-facing problem becomes one
+// ScenarioError line "FILE: FIELD = VALUE: RULE", so a bad file never shows a yaml-cpp message
+// alone or a trace.
+#include "maps/scenario/scenario.h"
+
+#include <algorithm>
+#include <cctype>
+#include <cerrno>
+#include <charconv>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <initializer_list>
+#include <limits>
+#include <memory>
+#include <string_view>
+
+#include <yaml-cpp/yaml.h>
+
+#include "maps/scenario/scenario_detail.h"
+
+namespace sage::maps {
+namespace {
+
+using detail::OneLine;
+
+using Keys = std::initializer_list<std::string_view>;
+
+// A node as the user wrote it, on one line and short enough to quote in a message.
+std::string Show(const YAML::Node& node) {
+  if (!node.IsDefined() || node.IsNull()) return "null";
+  if (node.IsScalar()) return node.Scalar().empty() ? "\"\"" : OneLine(node.Scalar());
+  YAML::Emitter out;
+  out.SetSeqFormat(YAML::Flow);
+  out.SetMapFormat(YAML::Flow);
+  out << node;
+  std::string text = OneLine(out.c_str());
+  return text.size() > 60 ? text.substr(0, 57) + "..." : text;
+}
+
+// Turns YAML nodes into typed values; every failure names file, field path and value.
+class Reader {
+ public:
+  explicit Reader(std::string file) : file_(std::move(file)) {}
+
+  [[noreturn]] void Fail(const std::string& path, const std::string& rule) const {
+    throw ScenarioError(OneLine(file_ + ": " + path + ": " + rule));
+  }
+  [[noreturn]] void Fail(const std::string& path, const YAML::Node& node, const std::string& rule) const {
+    throw ScenarioError(OneLine(file_ + ": " + path + " = " + Show(node) + ": " + rule));
+  }
+
+  // A map with unique plain keys, each in `allowed` (any key if `allowed` is empty).
+  void ExpectMap(const YAML::Node& node, const std::string& path, Keys allowed) const {
+    if (!node.IsMap()) Fail(path, node, "must be a map");
+    std::vector<std::string> seen;
+    for (const auto& entry : node) {
+      if (!entry.first.IsScalar()) Fail(path, entry.first, "keys must be plain names");
+      const std::string& key = entry.first.Scalar();
+      const std::string key_path = Join(path, key);
+      if (std::find(seen.begin(), seen.end(), key) != seen.end()) Fail(key_path, "duplicate key");
+      seen.push_back(key);
+      if (allowed.size() != 0 && std::find(allowed.begin(), allowed.end(), key) == allowed.end()) {
+        std::string list;
+        for (std::string_view name : allowed) list += (list.empty() ? "" : ", ") + std::string(name);
+        Fail(key_path, "unknown key (allowed: " + list + ")");
+      }
+    }
+  }
+  void ExpectList(const YAML::Node& node, const std::string& path) const {
+    if (!node.IsSequence()) Fail(path, node, "must be a list");
+  }
+  YAML::Node Require(const YAML::Node& map, const std::string& key, const std::string& path) const {
+    const YAML::Node node = map[key];
+    if (!node.IsDefined()) Fail(Join(path, key), "missing (required)");
+    return node;
+  }
+  static std::string Join(const std::string& path, const std::string& key) {
+    return path.empty() ? key : path + "." + key;
+  }
+
+  // Accepts YAML's .inf as well as inf and infinity (any case, optional sign) for infinity.
+  double Number(const YAML::Node& node, const std::string& path) const {
+    if (!node.IsScalar()) Fail(path, node, "must be a number");
+    std::string text = node.Scalar();
+    std::transform(text.begin(), text.end(), text.begin(), [](unsigned char c) { return std::tolower(c); });
+    bool negative = false;
+    std::string_view body = text;
+    if (!body.empty() && (body[0] == '+' || body[0] == '-')) {
+      negative = body[0] == '-';
+      body.remove_prefix(1);
+    }
+    if (body == ".inf" || body == "inf" || body == "infinity") {
+      return negative ? -std::numeric_limits<double>::infinity() : std::numeric_limits<double>::infinity();
+    }
+    if (body == ".nan" || body == "nan") return std::numeric_limits<double>::quiet_NaN();
+    double value = 0.0;
+    const auto result = std::from_chars(body.data(), body.data() + body.size(), value);
+    if (body.empty() || body[0] == '+' || body[0] == '-' || result.ec != std::errc() ||
+        result.ptr != body.data() + body.size()) {
+      Fail(path, node, "must be a number");
+    }
+    return negative ? -value : value;
+  }
+  template <typename Integer>
+  Integer WholeNumber(const YAML::Node& node, const std::string& path, const char* rule) const {
+    Integer value = 0;
+    const std::string text = node.IsScalar() ? node.Scalar() : std::string();
+    const auto result = std::from_chars(text.data(), text.data() + text.size(), value);
+    if (text.empty() || result.ec != std::errc() || result.ptr != text.data() + text.size()) {
+      Fail(path, node, rule);
+    }
+    return value;
+  }
+  bool Bool(const YAML::Node& node, const std::string& path) const {
+    bool value = false;
+    if (!node.IsScalar() || !YAML::convert<bool>::decode(node, value)) Fail(path, node, "must be true or false");
+    return value;
+  }
+  std::string Text(const YAML::Node& node, const std::string& path) const {
+    if (!node.IsScalar()) Fail(path, node, "must be a name (text)");
+    return node.Scalar();
+  }
+  Eigen::Vector2d Vector(const YAML::Node& node, const std::string& path) const {
+    if (!node.IsSequence() || node.size() != 2) Fail(path, node, "must be a list of 2 numbers [x, y]");
+    return {Number(node[0], path + "[0]"), Number(node[1], path + "[1]")};
+  }
+  Eigen::Matrix2d Matrix(const YAML::Node& node, const std::string& path) const {
+    if (!node.IsSequence() || node.size() != 2) Fail(path, node, "must be [[xx, xy], [yx, yy]]");
+    Eigen::Matrix2d m;
+    m.row(0) = Vector(node[0], path + "[0]").transpose();
+    m.row(1) = Vector(node[1], path + "[1]").transpose();
+    return m;
+  }
+
+  template <typename Read>
+  void Optional(const YAML::Node& map, const std::string& key, const std::string& path, Read read) const {
+    const YAML::Node node = map[key];
+    if (node.IsDefined()) read(node, Join(path, key));
+  }
+  void OptionalNumber(const YAML::Node& map, const std::string& key, const std::string& path, double& out) const {
+    Optional(map, key, path, [&](const YAML::Node& n, const std::string& p) { out = Number(n, p); });
+  }
+
+  const std::string& file() const { return file_; }
+
+ private:
+  std::string file_;
+};
+
+Valve ReadValve(const Reader& r, const YAML::Node& node, const std::string& path) {
+  r.ExpectMap(node, path, {"name", "position_m", "sigma_m", "covariance_m2"});
+  Valve valve;
+  valve.name = r.Text(r.Require(node, "name", path), path + ".name");
+  valve.position_m = r.Vector(r.Require(node, "position_m", path), path + ".position_m");
+  if (node["sigma_m"].IsDefined() && node["covariance_m2"].IsDefined()) {
+    r.Fail(path, "give sigma_m or covariance_m2, not both");
+  }
+  r.Optional(node, "sigma_m", path, [&](const YAML::Node& n, const std::string& p) {
+    const double sigma = r.Number(n, p);
+    // Checked here: squaring would hide a negative sigma from Validate().
+    if (!(std::isfinite(sigma) && sigma > 0)) r.Fail(p, n, "must be > 0");
+    valve.covariance_m2 = sigma * sigma * Eigen::Matrix2d::Identity();
+  });
+  r.Optional(node, "covariance_m2", path,
+             [&](const YAML::Node& n, const std::string& p) { valve.covariance_m2 = r.Matrix(n, p); });
+  return valve;
+}
+
+ChristmasTree ReadStructure(const Reader& r, const YAML::Node& node, const std::string& path) {
+  r.ExpectMap(node, path, {"name", "center_m", "size_m", "height_m", "valves"});
+  ChristmasTree tree;
+  tree.name = r.Text(r.Require(node, "name", path), path + ".name");
+  tree.center_m = r.Vector(r.Require(node, "center_m", path), path + ".center_m");
+  r.Optional(node, "size_m", path, [&](const YAML::Node& n, const std::string& p) { tree.size_m = r.Vector(n, p); });
+  r.OptionalNumber(node, "height_m", path, tree.height_m);
+  r.Optional(node, "valves", path, [&](const YAML::Node& list, const std::string& p) {
+    r.ExpectList(list, p);
+    for (std::size_t i = 0; i < list.size(); ++i) {
+      tree.valves.push_back(ReadValve(r, list[i], p + "[" + std::to_string(i) + "]"));
+    }
+  });
+  return tree;
+}
+
+VehicleSpec ReadVehicle(const Reader& r, const YAML::Node& node, const std::string& path) {
+  r.ExpectMap(node, path, {"name", "start_m", "start_heading_rad", "model", "transit_speed_mps"});
+  VehicleSpec vehicle;
+  vehicle.name = r.Text(r.Require(node, "name", path), path + ".name");
+  vehicle.start_m = r.Vector(r.Require(node, "start_m", path), path + ".start_m");
+  r.OptionalNumber(node, "start_heading_rad", path, vehicle.start_heading_rad);
+  r.Optional(node, "model", path, [&](const YAML::Node& n, const std::string& p) {
+    vehicle.model = ParseMotionModel(r.Text(n, p), r.file() + ": " + p);
+  });
+  r.OptionalNumber(node, "transit_speed_mps", path, vehicle.transit_speed_mps);
+  return vehicle;
+}
+
+// One change of the fleet: {time_s: T, join: {a vehicle}} or {time_s: T, lose: NAME} or
+// {time_s: T, leave: NAME}.
+FleetEvent ReadFleetEvent(const Reader& r, const YAML::Node& node, const std::string& path) {
+  r.ExpectMap(node, path, {"time_s", "join", "lose", "leave"});
+  FleetEvent event;
+  event.time_s = r.Number(r.Require(node, "time_s", path), path + ".time_s");
+  const int kinds = static_cast<int>(node["join"].IsDefined()) + static_cast<int>(node["lose"].IsDefined()) +
+                    static_cast<int>(node["leave"].IsDefined());
+  if (kinds != 1) r.Fail(path, node, "must give exactly one of join, lose, leave");
+  if (node["join"].IsDefined()) {
+    event.kind = FleetEvent::Kind::kJoin;
+    event.vehicle = ReadVehicle(r, node["join"], path + ".join");
+  } else if (node["lose"].IsDefined()) {
+    event.kind = FleetEvent::Kind::kLose;
+    event.vehicle.name = r.Text(node["lose"], path + ".lose");
+  } else {
+    event.kind = FleetEvent::Kind::kLeave;
+    event.vehicle.name = r.Text(node["leave"], path + ".leave");
+  }
+  return event;
+}
+
+RiskProfile ReadProfile(const Reader& r, const std::string& name, const YAML::Node& node, const std::string& path) {
+  r.ExpectMap(node, path, {"weights", "events"});
+  RiskProfile profile;
+  profile.name = name;
+  const YAML::Node weights = r.Require(node, "weights", path);
+  r.ExpectMap(weights, path + ".weights", {});
+  for (const auto& entry : weights) {
+    const std::string valve = entry.first.Scalar();
+    profile.weights[valve] = r.Number(entry.second, path + ".weights." + valve);
+  }
+  r.Optional(node, "events", path, [&](const YAML::Node& list, const std::string& p) {
+    r.ExpectList(list, p);
+    for (std::size_t i = 0; i < list.size(); ++i) {
+      const std::string event_path = p + "[" + std::to_string(i) + "]";
+      r.ExpectMap(list[i], event_path, {"time_s", "valve", "weight"});
+      RiskEvent event;
+      event.time_s = r.Number(r.Require(list[i], "time_s", event_path), event_path + ".time_s");
+      event.valve = r.Text(r.Require(list[i], "valve", event_path), event_path + ".valve");
+      event.weight = r.Number(r.Require(list[i], "weight", event_path), event_path + ".weight");
+      profile.events.push_back(event);
+    }
+  });
+  return profile;
+}
+
+Scenario ReadScenario(const Reader& r, const YAML::Node& root, const std::string& source) {
+  if (!root.IsMap()) r.Fail("scenario", root, "must be a YAML map of sections (workspace, structures, ...)");
+  r.ExpectMap(root, "", {"name", "workspace", "duration_s", "control_rate_hz", "physics_rate_hz",
+                         "visit_radius_m", "rearm_radius_m", "seed", "ergodic", "guard", "astar",
+                         "structures", "vehicles", "default_profile", "profiles", "fleet", "fleet_events"});
+  Scenario s;
+  s.source_path = source;
+  s.name = source.empty() ? "scenario" : std::filesystem::path(source).stem().string();
+  r.Optional(root, "name", "", [&](const YAML::Node& n, const std::string& p) { s.name = r.Text(n, p); });
+  r.Optional(root, "workspace", "", [&](const YAML::Node& n, const std::string& p) {
+    r.ExpectMap(n, p, {"width_m", "height_m"});
+    r.OptionalNumber(n, "width_m", p, s.workspace.width_m);
+    r.OptionalNumber(n, "height_m", p, s.workspace.height_m);
+  });
+  r.OptionalNumber(root, "duration_s", "", s.duration_s);
+  r.OptionalNumber(root, "control_rate_hz", "", s.control_rate_hz);
+  r.OptionalNumber(root, "physics_rate_hz", "", s.physics_rate_hz);
+  r.OptionalNumber(root, "visit_radius_m", "", s.visit_radius_m);
+  r.OptionalNumber(root, "rearm_radius_m", "", s.rearm_radius_m);
+  r.Optional(root, "seed", "", [&](const YAML::Node& n, const std::string& p) {
+    s.seed = r.WholeNumber<std::uint64_t>(n, p, "must be a whole number >= 0");
+  });
+  r.Optional(root, "ergodic", "", [&](const YAML::Node& n, const std::string& p) {
+    r.ExpectMap(n, p, {"basis_order", "forgetting_time_s", "min_turn_radius_m"});
+    r.Optional(n, "basis_order", p, [&](const YAML::Node& v, const std::string& q) {
+      s.ergodic.basis_order = r.WholeNumber<int>(v, q, "must be a whole number");
+    });
+    r.OptionalNumber(n, "forgetting_time_s", p, s.ergodic.forgetting_time_s);
+    r.OptionalNumber(n, "min_turn_radius_m", p, s.ergodic.min_turn_radius_m);
+  });
+  r.Optional(root, "guard", "", [&](const YAML::Node& n, const std::string& p) {
+    r.ExpectMap(n, p, {"enabled", "weight_floor", "revisit_bound_s"});
+    r.Optional(n, "enabled", p, [&](const YAML::Node& v, const std::string& q) { s.guard.enabled = r.Bool(v, q); });
+    r.OptionalNumber(n, "weight_floor", p, s.guard.weight_floor);
+    r.OptionalNumber(n, "revisit_bound_s", p, s.guard.revisit_bound_s);
+  });
+  r.Optional(root, "astar", "", [&](const YAML::Node& n, const std::string& p) {
+    r.ExpectMap(n, p, {"grid_resolution_m", "clearance_m", "wait_per_lap_s"});
+    r.OptionalNumber(n, "grid_resolution_m", p, s.astar.grid_resolution_m);
+    r.OptionalNumber(n, "clearance_m", p, s.astar.clearance_m);
+    r.OptionalNumber(n, "wait_per_lap_s", p, s.astar.wait_per_lap_s);
+  });
+  const YAML::Node structures = r.Require(root, "structures", "");
+  r.ExpectList(structures, "structures");
+  for (std::size_t i = 0; i < structures.size(); ++i) {
+    s.structures.push_back(ReadStructure(r, structures[i], "structures[" + std::to_string(i) + "]"));
+  }
+  const YAML::Node vehicles = r.Require(root, "vehicles", "");
+  r.ExpectList(vehicles, "vehicles");
+  for (std::size_t i = 0; i < vehicles.size(); ++i) {
+    s.vehicles.push_back(ReadVehicle(r, vehicles[i], "vehicles[" + std::to_string(i) + "]"));
+  }
+  const YAML::Node profiles = r.Require(root, "profiles", "");
+  r.ExpectMap(profiles, "profiles", {});
+  for (const auto& entry : profiles) {
+    const std::string name = entry.first.Scalar();
+    s.profiles.push_back(ReadProfile(r, name, entry.second, "profiles." + name));
+  }
+  r.Optional(root, "default_profile", "", [&](const YAML::Node& n, const std::string& p) {
+    s.default_profile = r.Text(n, p);
+  });
+  if (s.default_profile.empty() && !s.profiles.empty()) s.default_profile = s.profiles.front().name;
+  r.Optional(root, "fleet", "", [&](const YAML::Node& n, const std::string& p) {
+    r.ExpectMap(n, p, {"assignment", "coverage_period_s", "liveliness_lease_s"});
+    r.Optional(n, "assignment", p, [&](const YAML::Node& v, const std::string& q) {
+      s.fleet.assignment = ParseFleetAssignment(r.Text(v, q), r.file() + ": " + q);
+    });
+    r.OptionalNumber(n, "coverage_period_s", p, s.fleet.coverage_period_s);
+    r.OptionalNumber(n, "liveliness_lease_s", p, s.fleet.liveliness_lease_s);
+  });
+  r.Optional(root, "fleet_events", "", [&](const YAML::Node& list, const std::string& p) {
+    r.ExpectList(list, p);
+    for (std::size_t i = 0; i < list.size(); ++i) {
+      s.fleet_events.push_back(ReadFleetEvent(r, list[i], p + "[" + std::to_string(i) + "]"));
+    }
+  });
+  return s;
+}
+
+std::string Position(const YAML::Mark& mark) {
+  if (mark.is_null()) return "";
+  return "line " + std::to_string(mark.line + 1) + ", column " + std::to_string(mark.column + 1) + ": ";
+}
+
+}  // namespace
+
+Scenario ParseScenario(const std::string& yaml_text, const std::string& source) {
+  const Reader reader(source);
+  Scenario scenario;
+  try {
+    scenario = ReadScenario(reader, YAML::Load(yaml_text), source);
+  } catch (const YAML::ParserException& e) {
+    throw ScenarioError(OneLine(source + ": " + Position(e.mark) + "YAML syntax error: " + e.msg));
+  } catch (const YAML::Exception& e) {
+    // Safety net: ReadScenario checks types itself, so yaml-cpp should not throw past it.
+    throw ScenarioError(OneLine(source + ": " + Position(e.mark) + "cannot read: " + e.msg));
+  }
+  scenario.Validate();
+  for (RiskProfile& profile : scenario.profiles) {
+    std::stable_sort(profile.events.begin(), profile.events.end(),
+                     [](const RiskEvent& a, const RiskEvent& b) { return a.time_s < b.time_s; });
+  }
+  std::stable_sort(scenario.fleet_events.begin(), scenario.fleet_events.end(),
+                   [](const FleetEvent& a, const FleetEvent& b) { return a.time_s < b.time_s; });
+  return scenario;
+}
+
+Scenario LoadScenario(const std::string& path) {
+  const std::unique_ptr<std::FILE, int (*)(std::FILE*)> file(std::fopen(path.c_str(), "rb"), &std::fclose);
+  if (!file) throw ScenarioError(path + ": cannot open: " + std::strerror(errno));
+  std::string text;
+  char buffer[4096];
+  std::size_t count = 0;
+  while ((count = std::fread(buffer, 1, sizeof buffer, file.get())) > 0) text.append(buffer, count);
+  if (std::ferror(file.get())) throw ScenarioError(path + ": cannot read: " + std::strerror(errno));
+  return ParseScenario(text, path);
+}
+
+}  // namespace sage::maps

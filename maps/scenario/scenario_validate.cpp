@@ -1,0 +1,278 @@
+// Scenario::Validate: the rules on a loaded scenario. Every broken rule becomes one ScenarioError
+// line "FILE: FIELD = VALUE: RULE", with field paths as in the YAML.
+#include "maps/scenario/scenario.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "maps/scenario/scenario_detail.h"
+
+namespace sage::maps {
+namespace {
+
+using detail::EventKey;
+using detail::FormatNumber;
+using detail::InsideBox;
+using detail::OneLine;
+
+// std::string("[") rather than "[": "[" + std::string&& trips a GCC 12 -Wrestrict false positive.
+std::string FormatVector(const Eigen::Vector2d& v) {
+  return std::string("[") + FormatNumber(v.x()) + ", " + FormatNumber(v.y()) + "]";
+}
+
+std::string FormatMatrix(const Eigen::Matrix2d& m) {
+  return std::string("[") + FormatVector(m.row(0).transpose()) + ", " + FormatVector(m.row(1).transpose()) + "]";
+}
+
+// Rules on the loaded structs. Field paths match the YAML, so a message points at the line to fix.
+class Checker {
+ public:
+  explicit Checker(std::string file) : file_(std::move(file)) {}
+
+  [[noreturn]] void Fail(const std::string& field, const std::string& value, const std::string& rule) const {
+    throw ScenarioError(OneLine(file_ + ": " + field + " = " + value + ": " + rule));
+  }
+  [[noreturn]] void Fail(const std::string& field, const std::string& rule) const {
+    throw ScenarioError(OneLine(file_ + ": " + field + ": " + rule));
+  }
+  void Finite(const std::string& field, double v) const {
+    if (!std::isfinite(v)) Fail(field, FormatNumber(v), "must be a finite number");
+  }
+  void Finite(const std::string& field, const Eigen::Vector2d& v) const {
+    if (!v.allFinite()) Fail(field, FormatVector(v), "must be finite numbers");
+  }
+  // Infinity is accepted only where it means "never" (forgetting time, revisit bound).
+  void Positive(const std::string& field, double v, bool infinity_ok = false) const {
+    if (!(infinity_ok && v == std::numeric_limits<double>::infinity())) Finite(field, v);
+    if (!(v > 0)) Fail(field, FormatNumber(v), "must be > 0");
+  }
+  void NonNegative(const std::string& field, double v) const {
+    Finite(field, v);
+    if (!(v >= 0)) Fail(field, FormatNumber(v), "must be >= 0");
+  }
+  void RawWeight(const std::string& field, double v) const {
+    NonNegative(field, v);
+    if (v > kMaxRawWeight) Fail(field, FormatNumber(v), "must be in [0, 1e12] (weights are relative)");
+  }
+  // A non-empty name not used before by another entry of the same kind.
+  void UniqueName(std::map<std::string, std::string>& seen, const std::string& field, const std::string& name) const {
+    if (name.empty()) Fail(field, "\"\"", "must not be empty");
+    const auto [it, inserted] = seen.emplace(name, field);
+    if (!inserted) Fail(field, name, "duplicate name (also " + it->second + ")");
+  }
+
+ private:
+  std::string file_;
+};
+
+std::string ShowName(const std::string& name) { return name.empty() ? "\"\"" : name; }
+
+// Fleet events: times and joined vehicles in file order, then who is present, walking the events
+// in time order (stable, as they are sorted on load) but naming each by its index in the file.
+template <typename CheckVehicle>
+void CheckFleetEvents(const Checker& c, const std::vector<FleetEvent>& events, const std::vector<VehicleSpec>& vehicles,
+                      double duration_s, const CheckVehicle& check_vehicle) {
+  const auto path_of = [](std::size_t i) { return "fleet_events[" + std::to_string(i) + "]"; };
+  std::map<std::string, double> join_time;
+  for (std::size_t i = 0; i < events.size(); ++i) {
+    const FleetEvent& event = events[i];
+    if (!(event.time_s >= 0 && event.time_s <= duration_s)) {
+      c.Fail(path_of(i) + ".time_s", FormatNumber(event.time_s),
+             "must be in [0, duration_s = " + FormatNumber(duration_s) + "]");
+    }
+    if (event.kind == FleetEvent::Kind::kJoin) {
+      check_vehicle(path_of(i) + ".join", event.vehicle);
+      join_time[event.vehicle.name] = event.time_s;
+    } else if (event.kind != FleetEvent::Kind::kLose && event.kind != FleetEvent::Kind::kLeave) {
+      c.Fail(path_of(i), std::to_string(static_cast<int>(event.kind)), "must be a join, lose or leave");
+    }
+  }
+  std::vector<std::size_t> order(events.size());
+  for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
+  std::stable_sort(order.begin(), order.end(),
+                   [&](std::size_t a, std::size_t b) { return events[a].time_s < events[b].time_s; });
+  std::vector<std::string> present;
+  for (const VehicleSpec& vehicle : vehicles) present.push_back(vehicle.name);
+  std::map<std::string, std::string> gone;  // name -> "was lost at t = 400"
+  for (std::size_t i : order) {
+    const FleetEvent& event = events[i];
+    const std::string& name = event.vehicle.name;
+    if (event.kind == FleetEvent::Kind::kJoin) {
+      present.push_back(name);
+      continue;
+    }
+    const std::string field = path_of(i) + "." + EventKey(event.kind);
+    const std::string time_text = "t = " + FormatNumber(event.time_s);
+    const auto it = std::find(present.begin(), present.end(), name);
+    if (it == present.end()) {
+      std::string list;
+      for (const std::string& other : present) list += (list.empty() ? "" : ", ") + other;
+      std::string why;
+      if (gone.count(name) != 0) why = "; " + name + " " + gone[name];
+      else if (join_time.count(name) != 0) why = "; " + name + " joins only at t = " + FormatNumber(join_time[name]);
+      c.Fail(field, ShowName(name), "must name a vehicle present at " + time_text + " (present: " + list + ")" + why);
+    }
+    if (present.size() == 1) c.Fail(field, name, "would leave no vehicle");
+    present.erase(it);
+    gone[name] = std::string(event.kind == FleetEvent::Kind::kLose ? "was lost" : "left") + " at " + time_text;
+  }
+}
+
+}  // namespace
+
+void Scenario::Validate() const {
+  const Checker c(source_path.empty() ? "<scenario>" : source_path);
+  if (name.empty()) c.Fail("name", "\"\"", "must not be empty");
+  c.Positive("workspace.width_m", workspace.width_m);
+  c.Positive("workspace.height_m", workspace.height_m);
+  const Eigen::Vector2d workspace_max(workspace.width_m, workspace.height_m);
+  const std::string workspace_text = "[0, " + FormatNumber(workspace.width_m) + "] x [0, " +
+                                     FormatNumber(workspace.height_m) + "]";
+  c.Positive("duration_s", duration_s);
+  c.Positive("control_rate_hz", control_rate_hz);
+  c.Positive("physics_rate_hz", physics_rate_hz);
+  // Whole number of physics steps per control step, up to rounding of the decimal rates.
+  const double steps = physics_rate_hz / control_rate_hz;
+  if (steps < 1 - 1e-9 || std::abs(steps - std::round(steps)) > 1e-9 * steps) {
+    c.Fail("physics_rate_hz", FormatNumber(physics_rate_hz),
+           "must be a whole multiple of control_rate_hz = " + FormatNumber(control_rate_hz));
+  }
+  c.Positive("visit_radius_m", visit_radius_m);
+  c.Positive("rearm_radius_m", rearm_radius_m);
+  if (!(rearm_radius_m > visit_radius_m)) {
+    c.Fail("rearm_radius_m", FormatNumber(rearm_radius_m), "must be > visit_radius_m = " + FormatNumber(visit_radius_m));
+  }
+  if (ergodic.basis_order < 1 || ergodic.basis_order > 64) {
+    c.Fail("ergodic.basis_order", std::to_string(ergodic.basis_order), "must be in 1..64");
+  }
+  c.Positive("ergodic.forgetting_time_s", ergodic.forgetting_time_s, /*infinity_ok=*/true);
+  c.NonNegative("ergodic.min_turn_radius_m", ergodic.min_turn_radius_m);
+  c.Positive("astar.grid_resolution_m", astar.grid_resolution_m);
+  c.NonNegative("astar.clearance_m", astar.clearance_m);
+  c.NonNegative("astar.wait_per_lap_s", astar.wait_per_lap_s);
+
+  if (structures.empty()) c.Fail("structures", "must list at least one structure");
+  std::map<std::string, std::string> structure_names, valve_names, vehicle_names, profile_names;
+  for (std::size_t i = 0; i < structures.size(); ++i) {
+    const ChristmasTree& tree = structures[i];
+    const std::string path = "structures[" + std::to_string(i) + "]";
+    c.UniqueName(structure_names, path + ".name", tree.name);
+    c.Finite(path + ".center_m", tree.center_m);
+    if (!(tree.size_m.array() > 0).all() || !tree.size_m.allFinite()) {
+      c.Fail(path + ".size_m", FormatVector(tree.size_m), "must be > 0 and finite");
+    }
+    c.Positive(path + ".height_m", tree.height_m);
+    if (!InsideBox(tree.center_m - tree.size_m / 2, Eigen::Vector2d::Zero(), workspace_max) ||
+        !InsideBox(tree.center_m + tree.size_m / 2, Eigen::Vector2d::Zero(), workspace_max)) {
+      c.Fail(path + ".center_m", FormatVector(tree.center_m),
+             "footprint of size " + FormatVector(tree.size_m) + " must lie inside the workspace " + workspace_text);
+    }
+  }
+  // Checked after all footprints are known: a valve may sit inside another XT's footprint.
+  const auto inside_structure = [&](const Eigen::Vector2d& p) -> const ChristmasTree* {
+    for (const ChristmasTree& tree : structures) {
+      const Eigen::Vector2d half = tree.size_m / 2;
+      if (((p - tree.center_m).array().abs() < half.array()).all()) return &tree;
+    }
+    return nullptr;
+  };
+  // A valve or a vehicle's start: finite, inside the workspace, outside every footprint.
+  const auto check_in_open_water = [&](const std::string& field, const Eigen::Vector2d& p) {
+    c.Finite(field, p);
+    if (!InsideBox(p, Eigen::Vector2d::Zero(), workspace_max)) {
+      c.Fail(field, FormatVector(p), "must be inside the workspace " + workspace_text);
+    }
+    if (const ChristmasTree* tree = inside_structure(p)) {
+      c.Fail(field, FormatVector(p), "must not be inside the footprint of " + tree->name);
+    }
+  };
+  for (std::size_t i = 0; i < structures.size(); ++i) {
+    for (std::size_t j = 0; j < structures[i].valves.size(); ++j) {
+      const Valve& valve = structures[i].valves[j];
+      const std::string path = "structures[" + std::to_string(i) + "].valves[" + std::to_string(j) + "]";
+      c.UniqueName(valve_names, path + ".name", valve.name);
+      check_in_open_water(path + ".position_m", valve.position_m);
+      const Eigen::Matrix2d& m = valve.covariance_m2;
+      if (!m.allFinite() || std::abs(m(0, 1) - m(1, 0)) > 1e-12 * m.cwiseAbs().maxCoeff()) {
+        c.Fail(path + ".covariance_m2", FormatMatrix(m), "must be symmetric and finite");
+      }
+      // Sylvester's criterion for a symmetric 2x2 matrix.
+      if (!(m(0, 0) > 0) || !(m(0, 0) * m(1, 1) - m(0, 1) * m(1, 0) > 0)) {
+        c.Fail(path + ".covariance_m2", FormatMatrix(m), "must be positive definite");
+      }
+    }
+  }
+  if (valve_names.empty()) c.Fail("structures", "must hold at least one valve");
+  const auto valve_list = [&] {
+    std::string list;
+    for (const Valve& valve : AllValves()) list += (list.empty() ? "" : ", ") + valve.name;
+    return "(valves: " + list + ")";
+  };
+
+  // A vehicle of `vehicles:` or one joining later; names are unique across both.
+  const auto check_vehicle = [&](const std::string& path, const VehicleSpec& vehicle) {
+    c.UniqueName(vehicle_names, path + ".name", vehicle.name);
+    check_in_open_water(path + ".start_m", vehicle.start_m);
+    c.Finite(path + ".start_heading_rad", vehicle.start_heading_rad);
+    if (vehicle.model != MotionModel::kSingleIntegrator && vehicle.model != MotionModel::kBlueRov2) {
+      c.Fail(path + ".model", std::to_string(static_cast<int>(vehicle.model)), "must be single_integrator or bluerov2");
+    }
+    c.Positive(path + ".transit_speed_mps", vehicle.transit_speed_mps);
+    if (vehicle.model == MotionModel::kBlueRov2 && vehicle.transit_speed_mps > kBlueRov2TopSpeed_mps) {
+      c.Fail(path + ".transit_speed_mps", FormatNumber(vehicle.transit_speed_mps),
+             "must be <= 0.85 for model bluerov2 (its top speed in surge)");
+    }
+  };
+  if (vehicles.empty()) c.Fail("vehicles", "must list at least one vehicle");
+  for (std::size_t i = 0; i < vehicles.size(); ++i) check_vehicle("vehicles[" + std::to_string(i) + "]", vehicles[i]);
+
+  if (fleet.assignment != FleetAssignment::kShared && fleet.assignment != FleetAssignment::kPartition) {
+    c.Fail("fleet.assignment", std::to_string(static_cast<int>(fleet.assignment)), "must be shared or partition");
+  }
+  c.Positive("fleet.coverage_period_s", fleet.coverage_period_s);
+  c.Positive("fleet.liveliness_lease_s", fleet.liveliness_lease_s);
+  CheckFleetEvents(c, fleet_events, vehicles, duration_s, check_vehicle);
+
+  const std::size_t valve_count = valve_names.size();
+  c.Positive("guard.revisit_bound_s", guard.revisit_bound_s, /*infinity_ok=*/true);
+  c.NonNegative("guard.weight_floor", guard.weight_floor);
+  // M floors of 1/M or more would leave no weight for the risk itself; only matters when enabled.
+  if (guard.enabled && !(guard.weight_floor * static_cast<double>(valve_count) < 1)) {
+    c.Fail("guard.weight_floor", FormatNumber(guard.weight_floor),
+           "must be < 1/M = " + FormatNumber(1.0 / static_cast<double>(valve_count)) + " for M = " +
+               std::to_string(valve_count) + " valves");
+  }
+
+  if (profiles.empty()) c.Fail("profiles", "must define at least one profile");
+  for (const RiskProfile& profile : profiles) {
+    const std::string path = "profiles." + profile.name;
+    c.UniqueName(profile_names, path, profile.name);
+    double total = 0;
+    for (const auto& [valve, weight] : profile.weights) {
+      if (valve_names.count(valve) == 0) c.Fail(path + ".weights." + valve, FormatNumber(weight), "unknown valve " + valve_list());
+      c.RawWeight(path + ".weights." + valve, weight);
+      total += weight;
+    }
+    for (const Valve& valve : AllValves()) {
+      if (profile.weights.count(valve.name) == 0) c.Fail(path + ".weights", "missing valve " + valve.name);
+    }
+    if (!(total > 0)) c.Fail(path + ".weights", "must not all be zero");
+    for (std::size_t k = 0; k < profile.events.size(); ++k) {
+      const RiskEvent& event = profile.events[k];
+      const std::string event_path = path + ".events[" + std::to_string(k) + "]";
+      if (!(event.time_s >= 0 && event.time_s <= duration_s)) {
+        c.Fail(event_path + ".time_s", FormatNumber(event.time_s), "must be in [0, duration_s = " + FormatNumber(duration_s) + "]");
+      }
+      if (valve_names.count(event.valve) == 0) c.Fail(event_path + ".valve", event.valve, "unknown valve " + valve_list());
+      c.RawWeight(event_path + ".weight", event.weight);
+    }
+  }
+  if (FindProfile(default_profile) == nullptr) {
+    std::string list;
+    for (const RiskProfile& profile : profiles) list += (list.empty() ? "" : ", ") + profile.name;
+    c.Fail("default_profile", default_profile.empty() ? "\"\"" : default_profile, "must name a profile (" + list + ")");
+  }
+}
+
+}  // namespace sage::maps

@@ -1,0 +1,28 @@
+#include "server/report/atomic_write.h"
+
+#include <cerrno>
+#include <cstdio>
+#include <cstring>
+#include <stdexcept>
+
+#include <fmt/format.h>
+
+namespace sage::server::detail {
+
+void WriteAtomically(const std::string& path, std::string_view content) {
+  const std::string tmp = path + ".tmp";
+  const auto fail = [&](int error) {
+    std::remove(tmp.c_str());
+    throw std::runtime_error(fmt::format("{}: cannot write: {}", path, std::strerror(error)));
+  };
+  std::FILE* file = std::fopen(tmp.c_str(), "wb");
+  if (file == nullptr) fail(errno);
+  const bool written = std::fwrite(content.data(), 1, content.size(), file) == content.size();
+  int error = errno;
+  const bool closed = std::fclose(file) == 0;
+  if (written && !closed) error = errno;
+  if (!written || !closed) fail(error);
+  if (std::rename(tmp.c_str(), path.c_str()) != 0) fail(errno);
+}
+
+}  // namespace sage::server::detail

@@ -1,0 +1,251 @@
+// The terminal table in the layout of the paper's Table 1, and metrics.json. trajectory.csv and
+// plot.svg are written by trajectory_csv.cpp and plot_svg.cpp.
+#include "server/report/report.h"
+
+#include <algorithm>
+#include <cerrno>
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <system_error>
+#include <cmath>
+#include <utility>
+
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+
+#include "server/report/atomic_write.h"
+
+namespace sage::server {
+
+void PrepareRunDirectory(const std::string& dir) {
+  const auto fail = [&](const std::string& reason) {
+    throw maps::ScenarioError("--out = " + dir + ": cannot write there: " + reason);
+  };
+  std::error_code error;
+  std::filesystem::create_directories(dir, error);
+  if (error) fail(error.message());
+  if (!std::filesystem::is_directory(dir, error)) fail("not a directory");
+  const std::string probe = (std::filesystem::path(dir) / ".sage_write_probe").string();
+  std::FILE* file = std::fopen(probe.c_str(), "wb");
+  if (file == nullptr) fail(std::strerror(errno));
+  std::fclose(file);
+  std::filesystem::remove(probe, error);
+}
+namespace {
+
+using detail::WriteAtomically;
+
+constexpr int kTableWidth = 100;  // the terminal width the table must fit
+
+// ---- Table 1 ----------------------------------------------------------------------------------
+
+struct Column {
+  std::string header;
+  std::vector<std::string> cells;  // one per valve row
+  bool left_aligned = false;
+};
+
+// A group of columns under one label (a run), with one spanning cell per summary row.
+struct Block {
+  std::string label;
+  std::vector<Column> columns;
+  std::vector<std::string> summary;
+};
+
+std::string Pad(const std::string& text, std::size_t width, bool left) {
+  const std::string fill(width > text.size() ? width - text.size() : 0, ' ');
+  return left ? text + fill : fill + text;
+}
+
+// `gap` spaces separate the columns inside a block; blocks are separated by " | ".
+std::string RenderTable(const std::vector<Block>& blocks, std::size_t rows, std::size_t gap) {
+  struct Layout {
+    std::vector<std::size_t> widths;
+    std::size_t inner = 0, width = 0;
+  };
+  std::vector<Layout> layouts;
+  for (const Block& block : blocks) {
+    Layout layout;
+    for (const Column& column : block.columns) {
+      std::size_t w = column.header.size();
+      for (const std::string& cell : column.cells) w = std::max(w, cell.size());
+      layout.widths.push_back(w);
+      layout.inner += w + (layout.widths.size() > 1 ? gap : 0);
+    }
+    layout.width = std::max(layout.inner, block.label.size());
+    for (const std::string& cell : block.summary) layout.width = std::max(layout.width, cell.size());
+    layouts.push_back(layout);
+  }
+  // One line: each block's text padded to its width, blocks joined by " | ".
+  const auto line = [&](auto block_text) {
+    std::string out;
+    for (std::size_t b = 0; b < blocks.size(); ++b) {
+      if (b > 0) out += " | ";
+      out += Pad(block_text(b), layouts[b].width, true);
+    }
+    out.erase(out.find_last_not_of(' ') + 1);
+    return out + "\n";
+  };
+  const auto cells = [&](std::size_t b, auto cell_of) {
+    // Spare width goes before the numbers (they hug the " | "), or into a leading name column.
+    const Block& block = blocks[b];
+    const std::size_t spare = layouts[b].width - layouts[b].inner;
+    const bool names_first = block.columns.front().left_aligned;
+    std::string out(names_first ? 0 : spare, ' ');
+    for (std::size_t c = 0; c < block.columns.size(); ++c) {
+      if (c > 0) out.append(gap, ' ');
+      const std::size_t width = layouts[b].widths[c] + (names_first && c == 0 ? spare : 0);
+      out += Pad(cell_of(block.columns[c]), width, block.columns[c].left_aligned);
+    }
+    return out;
+  };
+  const auto rule = [&] {
+    std::string out;
+    for (std::size_t b = 0; b < blocks.size(); ++b) {
+      out += (b > 0 ? "-+-" : "") + std::string(layouts[b].width, '-');
+    }
+    return out + "\n";
+  };
+
+  std::string out = line([&](std::size_t b) {
+    return b == 0 ? cells(0, [](const Column& c) { return c.header; }) : blocks[b].label;
+  });
+  out += line([&](std::size_t b) {
+    return b == 0 ? std::string() : cells(b, [](const Column& c) { return c.header; });
+  });
+  out += rule();
+  for (std::size_t r = 0; r < rows; ++r) {
+    out += line([&](std::size_t b) { return cells(b, [r](const Column& c) { return c.cells[r]; }); });
+  }
+  out += rule();
+  for (std::size_t s = 0; s < blocks.front().summary.size(); ++s) {
+    out += line([&](std::size_t b) {
+      return b == 0 ? blocks[b].summary[s] : Pad(blocks[b].summary[s], layouts[b].width, false);
+    });
+  }
+  return out;
+}
+
+std::string Seconds(double s) { return std::isfinite(s) ? fmt::format("{:.1f} s", s) : "---"; }
+
+std::string BuildTable(const std::vector<MissionMetrics>& runs, bool with_gaps, std::size_t gap) {
+  const MissionMetrics& first = runs.front();
+  const std::size_t rows = first.valves.size();
+  const auto valve_of = [](const MissionMetrics& run, const std::string& name) -> const ValveMetrics* {
+    for (const ValveMetrics& v : run.valves) {
+      if (v.name == name) return &v;
+    }
+    return nullptr;
+  };
+  // One Weight column if every run prints the same weights (the paper's case), else one per run.
+  bool same_profile = true, same_weights = true;
+  for (const MissionMetrics& run : runs) {
+    same_profile = same_profile && run.profile == first.profile;
+    for (const ValveMetrics& v : first.valves) {
+      const ValveMetrics* other = valve_of(run, v.name);
+      same_weights = same_weights && other != nullptr &&
+                     fmt::format("{:.2f}", other->weight) == fmt::format("{:.2f}", v.weight);
+    }
+  }
+
+  Block lead{"", {{"Valve", {}, true}}, {"corr(visits, weight)", "ergodic metric", "time at boundary"}};
+  for (const ValveMetrics& v : first.valves) lead.columns[0].cells.push_back(v.name);
+  if (same_weights) {
+    lead.columns.push_back({"Weight", {}});
+    for (const ValveMetrics& v : first.valves) lead.columns[1].cells.push_back(fmt::format("{:.2f}", v.weight));
+  }
+  std::vector<Block> blocks = {lead};
+  for (const MissionMetrics& run : runs) {
+    Block block;
+    block.label = run.controller;
+    if (!same_profile && !run.profile.empty()) block.label += " (" + run.profile + ")";
+    Column weight{"weight", {}}, visits{"visits", {}}, interval{"interval", {}}, gap{"longest gap", {}};
+    for (const ValveMetrics& v : first.valves) {
+      const ValveMetrics* m = valve_of(run, v.name);
+      weight.cells.push_back(m ? fmt::format("{:.2f}", m->weight) : "-");
+      visits.cells.push_back(m ? fmt::format("{}", m->visits) : "-");
+      interval.cells.push_back(m ? Seconds(m->mean_interval_s) : "-");
+      gap.cells.push_back(m ? Seconds(m->max_gap_s) : "-");
+    }
+    if (!same_weights) block.columns.push_back(weight);
+    block.columns.push_back(visits);
+    block.columns.push_back(interval);
+    if (with_gaps) block.columns.push_back(gap);
+    const double vehicle_time = run.duration_s * run.vehicle_count;
+    block.summary = {
+        std::isnan(run.visit_weight_correlation) ? "undefined"
+                                                 : fmt::format("{:+.2f}", run.visit_weight_correlation),
+        std::isfinite(run.ergodic_metric) ? fmt::format("{:.2e}", run.ergodic_metric) : "---",
+        vehicle_time > 0.0
+            ? fmt::format("{:.1f} %", 100.0 * (run.time_outside_s + run.time_pinned_s) / vehicle_time)
+            : "---"};
+    blocks.push_back(std::move(block));
+  }
+  return RenderTable(blocks, rows, gap);
+}
+
+}  // namespace
+
+std::string FormatTable(const std::vector<MissionMetrics>& runs) {
+  if (runs.empty()) return "(no runs)\n";
+  const auto widest_line = [](const std::string& text) {
+    std::size_t widest = 0;
+    for (std::size_t start = 0, end; (end = text.find('\n', start)) != std::string::npos; start = end + 1) {
+      widest = std::max(widest, end - start);
+    }
+    return widest;
+  };
+  // To fit the terminal, drop the longest-gap column first, then tighten the column spacing.
+  std::string table;
+  for (const auto& [with_gaps, gap] : {std::pair{true, 2}, std::pair{false, 2}, std::pair{false, 1}}) {
+    table = BuildTable(runs, with_gaps, gap);
+    if (widest_line(table) <= static_cast<std::size_t>(kTableWidth)) break;
+  }
+  return table;
+}
+
+void WriteMetricsJson(const std::string& path, const MissionMetrics& metrics) {
+  using Json = nlohmann::ordered_json;  // keys in the documented order, easier to read
+  const auto number = [](double v) { return std::isfinite(v) ? Json(v) : Json(nullptr); };
+  Json over_time = Json::array();
+  for (const MetricSample& s : metrics.metric_over_time) {
+    over_time.push_back({{"t", s.time_s}, {"ergodic_metric", number(s.ergodic_metric)}});
+  }
+  Json valves = Json::array();
+  for (const ValveMetrics& v : metrics.valves) {
+    Json times = Json::array();
+    for (double t : v.visit_times_s) times.push_back(number(t));
+    valves.push_back({{"name", v.name},
+                      {"weight", number(v.weight)},
+                      {"visits", v.visits},
+                      {"mean_interval_s", number(v.mean_interval_s)},
+                      {"max_gap_s", number(v.max_gap_s)},
+                      {"time_near_s", number(v.time_near_s)},
+                      {"visit_times_s", times}});
+  }
+  Json events = Json::array();
+  for (const EventResponse& e : metrics.events) {
+    events.push_back({{"time_s", number(e.time_s)},
+                      {"valve", e.valve},
+                      {"new_weight", number(e.new_weight)},
+                      {"heading_change_rad", number(e.heading_change_rad)},
+                      {"time_to_next_visit_s", number(e.time_to_next_visit_s)},
+                      {"interval_before_s", number(e.interval_before_s)},
+                      {"interval_after_s", number(e.interval_after_s)}});
+  }
+  const Json json = {{"controller", metrics.controller},
+                     {"profile", metrics.profile},
+                     {"duration_s", number(metrics.duration_s)},
+                     {"vehicle_count", metrics.vehicle_count},
+                     {"visit_weight_correlation", number(metrics.visit_weight_correlation)},
+                     {"ergodic_metric", number(metrics.ergodic_metric)},
+                     {"time_outside_s", number(metrics.time_outside_s)},
+                     {"time_pinned_s", number(metrics.time_pinned_s)},
+                     {"metric_over_time", over_time},
+                     {"valves", valves},
+                     {"events", events}};
+  WriteAtomically(path, json.dump(2) + "\n");
+}
+
+}  // namespace sage::server

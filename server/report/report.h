@@ -1,0 +1,41 @@
+#pragma once
+// The run directory a mission leaves behind: metrics.json, trajectory.csv and plot.svg
+// (trajectory over the risk field with XTs and valves, like the SAGE paper's Fig. 1), and the
+// terminal table in the layout of the paper's Table 1.
+#include <string>
+#include <vector>
+
+#include "maps/scenario/scenario.h"
+#include "server/metrics.h"
+#include "server/trajectory.h"
+
+namespace sage::server {
+
+/// Creates the run directory (and its parents) and checks that a file can be written in it,
+/// before a mission runs rather than after it. Throws maps::ScenarioError with one line:
+/// "--out = DIR: cannot write there: REASON".
+void PrepareRunDirectory(const std::string& dir);
+
+/// Table 1 layout: Valve | Weight | for each run: visits, interval; then corr and metric rows.
+std::string FormatTable(const std::vector<MissionMetrics>& runs);
+
+/// Writes metrics as JSON (keys: controller, profile, duration_s, vehicle_count,
+/// visit_weight_correlation (null if undefined), ergodic_metric, time_outside_s, time_pinned_s,
+/// metric_over_time [{t, ergodic_metric}], valves [{name, weight, visits, mean_interval_s
+/// (null if undefined), max_gap_s, time_near_s, visit_times_s}], events [{time_s, valve, new_weight,
+/// heading_change_rad, time_to_next_visit_s, interval_before_s, interval_after_s}]). Throws std::runtime_error naming the path.
+void WriteMetricsJson(const std::string& path, const MissionMetrics& metrics);
+
+/// CSV header: t,vehicle,x,y,heading,vx,vy,cmd_x,cmd_y
+void WriteTrajectoryCsv(const std::string& path, const Trajectory& trajectory);
+/// Reads a CSV with at least the columns t, vehicle, x, y (any order; others optional). The
+/// vehicle column may hold integers or names. Throws maps::ScenarioError with one line naming
+/// the file, the line and the problem.
+Trajectory ReadTrajectoryCsv(const std::string& path);
+
+/// SVG of the risk field (weights = normalised weights to draw), XT footprints, valves with
+/// their names and visit circles, and each vehicle's path in its own colour.
+void WritePlotSvg(const std::string& path, const maps::Scenario& scenario, const Eigen::VectorXd& weights,
+                  const Trajectory& trajectory, const std::string& title);
+
+}  // namespace sage::server

@@ -1,0 +1,198 @@
+// trajectory.csv: writing a recorded mission, and reading one back (ours, or a vehicle's log).
+#include "server/report/report.h"
+
+#include <algorithm>
+#include <cerrno>
+#include <charconv>
+#include <cmath>
+#include <cstdlib>
+#include <cstring>
+#include <fstream>
+#include <iterator>
+#include <map>
+#include <set>
+#include <string_view>
+
+#include <fmt/format.h>
+
+#include "server/report/atomic_write.h"
+
+namespace sage::server {
+namespace {
+
+using detail::WriteAtomically;
+
+std::string_view Trim(std::string_view text) {
+  const auto begin = text.find_first_not_of(" \t\r");
+  if (begin == std::string_view::npos) return {};
+  return text.substr(begin, text.find_last_not_of(" \t\r") - begin + 1);
+}
+
+std::vector<std::string> SplitCsv(std::string_view line) {
+  std::vector<std::string> fields;
+  for (std::size_t start = 0;;) {
+    const std::size_t comma = line.find(',', start);
+    std::string_view field = Trim(line.substr(start, comma - start));
+    // Strip one pair of quotes (a quoted vehicle name); embedded commas are not supported.
+    if (field.size() >= 2 && field.front() == '"' && field.back() == '"') field = field.substr(1, field.size() - 2);
+    fields.emplace_back(field);
+    if (comma == std::string_view::npos) return fields;
+    start = comma + 1;
+  }
+}
+
+bool ParseInt(const std::string& text, int* value) {
+  const char* end = text.data() + text.size();
+  const auto [ptr, ec] = std::from_chars(text.data(), end, *value);
+  return ec == std::errc() && ptr == end && !text.empty();
+}
+
+// Vehicle names are written instead of ids when reading them back gives the same ids: every id
+// has a plain, unique, non-numeric name, and ids first appear in the order 0, 1, 2, ...
+bool CanWriteNames(const Trajectory& trajectory) {
+  std::set<std::string> seen_names;
+  for (const std::string& name : trajectory.vehicle_names) {
+    int unused = 0;
+    if (name.empty() || name != Trim(name) || ParseInt(name, &unused) ||
+        name.find_first_of(",\"\r\n") != std::string::npos || !seen_names.insert(name).second) {
+      return false;
+    }
+  }
+  int next_new = 0;
+  std::vector<bool> seen(trajectory.vehicle_names.size(), false);
+  for (const TrajectorySample& s : trajectory.samples) {
+    if (s.vehicle < 0 || s.vehicle >= static_cast<int>(seen.size())) return false;
+    if (!seen[s.vehicle]) {
+      if (s.vehicle != next_new++) return false;
+      seen[s.vehicle] = true;
+    }
+  }
+  return true;
+}
+
+}  // namespace
+
+void WriteTrajectoryCsv(const std::string& path, const Trajectory& trajectory) {
+  const bool names = CanWriteNames(trajectory);
+  fmt::memory_buffer out;
+  fmt::format_to(std::back_inserter(out), "t,vehicle,x,y,heading,vx,vy,cmd_x,cmd_y\n");
+  for (const TrajectorySample& s : trajectory.samples) {
+    // "{}" prints the shortest text that parses back to the same double.
+    fmt::format_to(std::back_inserter(out), "{},{},{},{},{},{},{},{},{}\n", s.time_s,
+                   names ? trajectory.vehicle_names[s.vehicle] : std::to_string(s.vehicle),
+                   s.position_m.x(), s.position_m.y(), s.heading_rad, s.velocity_mps.x(),
+                   s.velocity_mps.y(), s.command_mps.x(), s.command_mps.y());
+  }
+  WriteAtomically(path, std::string_view(out.data(), out.size()));
+}
+
+Trajectory ReadTrajectoryCsv(const std::string& path) {
+  using maps::ScenarioError;
+  constexpr int kMaxVehicleId = 65535;  // ids index per-vehicle arrays downstream
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw ScenarioError(fmt::format("{}: cannot read: {}", path, std::strerror(errno)));
+
+  std::string text;
+  int line_number = 0;
+  std::vector<std::string> header;
+  while (header.empty() && std::getline(in, text)) {
+    ++line_number;
+    // A UTF-8 byte-order mark (spreadsheet exports) is not part of the first column's name.
+    if (line_number == 1 && text.rfind("\xEF\xBB\xBF", 0) == 0) text.erase(0, 3);
+    if (!Trim(text).empty()) header = SplitCsv(text);
+  }
+  if (header.empty()) {
+    throw ScenarioError(fmt::format("{}: empty file (need a header with t, vehicle, x, y)", path));
+  }
+  std::map<std::string, int> column_of;
+  for (std::size_t c = 0; c < header.size(); ++c) {
+    if (!column_of.emplace(header[c], static_cast<int>(c)).second) {
+      throw ScenarioError(fmt::format("{}:{}: duplicate column '{}'", path, line_number, header[c]));
+    }
+  }
+  for (const char* required : {"t", "vehicle", "x", "y"}) {
+    if (!column_of.count(required)) {
+      throw ScenarioError(fmt::format("{}: missing column '{}' (need t, vehicle, x, y)", path, required));
+    }
+  }
+  const auto column = [&](const char* name) {
+    const auto it = column_of.find(name);
+    return it == column_of.end() ? -1 : it->second;
+  };
+
+  struct Row {
+    TrajectorySample sample;
+    std::string vehicle;
+    int line;
+  };
+  std::vector<Row> rows;
+  while (std::getline(in, text)) {
+    ++line_number;
+    if (Trim(text).empty()) continue;
+    const std::vector<std::string> fields = SplitCsv(text);
+    if (fields.size() != header.size()) {
+      throw ScenarioError(fmt::format("{}:{}: {} fields, the header has {}", path, line_number,
+                                      fields.size(), header.size()));
+    }
+    // A missing optional column reads as 0.
+    const auto number = [&](const char* name) {
+      const int c = column(name);
+      if (c < 0) return 0.0;
+      const std::string& field = fields[c];
+      const char* begin = field.data() + (!field.empty() && field[0] == '+' ? 1 : 0);
+      const char* end = field.data() + field.size();
+      double value = 0.0;
+      const auto [ptr, ec] = std::from_chars(begin, end, value);
+      if (ptr != end || field.empty() || (ec != std::errc() && ec != std::errc::result_out_of_range)) {
+        throw ScenarioError(fmt::format("{}:{}: column '{}' = '{}': not a number", path, line_number, name, field));
+      }
+      // Out of range is an overflow (1e999, rejected below) or an underflow (1e-400, which
+      // strtod rounds to a tiny or zero value, fine for a position or speed).
+      if (ec == std::errc::result_out_of_range) value = std::strtod(field.c_str(), nullptr);
+      if (!std::isfinite(value)) {
+        throw ScenarioError(fmt::format("{}:{}: column '{}' = '{}': not finite", path, line_number, name, field));
+      }
+      return value;
+    };
+    Row row{{}, fields[column("vehicle")], line_number};
+    if (row.vehicle.empty()) {
+      throw ScenarioError(fmt::format("{}:{}: column 'vehicle' is empty", path, line_number));
+    }
+    TrajectorySample& s = row.sample;
+    s.time_s = number("t");
+    s.position_m = {number("x"), number("y")};
+    s.heading_rad = number("heading");
+    s.velocity_mps = {number("vx"), number("vy")};
+    s.command_mps = {number("cmd_x"), number("cmd_y")};
+    rows.push_back(std::move(row));
+  }
+
+  // Integer ids if every row has one; otherwise every value is a name (so "2" in a file of names
+  // is a name too), numbered in order of first appearance.
+  Trajectory trajectory;
+  const bool ids = std::all_of(rows.begin(), rows.end(), [](const Row& r) {
+    int unused = 0;
+    return ParseInt(r.vehicle, &unused);
+  });
+  std::map<std::string, int> index_of_name;
+  for (Row& row : rows) {
+    if (ids) {
+      ParseInt(row.vehicle, &row.sample.vehicle);
+      if (row.sample.vehicle < 0 || row.sample.vehicle > kMaxVehicleId) {
+        throw ScenarioError(fmt::format("{}:{}: column 'vehicle' = '{}': must be an id in 0..{} or a name",
+                                        path, row.line, row.vehicle, kMaxVehicleId));
+      }
+    } else {
+      const auto [it, added] = index_of_name.emplace(row.vehicle, static_cast<int>(index_of_name.size()));
+      if (added) trajectory.vehicle_names.push_back(row.vehicle);
+      row.sample.vehicle = it->second;
+    }
+    trajectory.samples.push_back(row.sample);
+  }
+  std::stable_sort(trajectory.samples.begin(), trajectory.samples.end(), [](const auto& a, const auto& b) {
+    return a.time_s != b.time_s ? a.time_s < b.time_s : a.vehicle < b.vehicle;
+  });
+  return trajectory;
+}
+
+}  // namespace sage::server

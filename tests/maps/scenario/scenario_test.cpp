@@ -1,0 +1,646 @@
+// Scenario YAML: the shipped scenarios load, emit/parse round-trips exactly, every bad input
+// gives one line naming file, field and value, and --vehicles N resizes a fleet.
+#include "maps/scenario/scenario.h"
+
+#include <algorithm>
+#include <cmath>
+#include <set>
+#include <string>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+namespace sage::maps {
+namespace {
+
+const std::string kTwoXtPath = std::string(SAGE_SOURCE_DIR) + "/scenarios/two_xt.yaml";
+const std::string kFleetFieldPath = std::string(SAGE_SOURCE_DIR) + "/scenarios/fleet_field.yaml";
+const std::string kFleetLargePath = std::string(SAGE_SOURCE_DIR) + "/scenarios/fleet_large.yaml";
+
+// A small valid scenario that the bad-input table mutates one substring at a time.
+const char* const kBase = R"(name: base
+workspace: {width_m: 7.0, height_m: 5.0}
+duration_s: 300
+control_rate_hz: 10
+physics_rate_hz: 50
+visit_radius_m: 0.3
+rearm_radius_m: 0.6
+ergodic: {basis_order: 10, forgetting_time_s: .inf}
+guard: {enabled: true, weight_floor: 0.05, revisit_bound_s: 60}
+structures:
+  - name: XT-A
+    center_m: [2.0, 2.9]
+    size_m: [0.8, 0.8]
+    valves:
+      - {name: P1, position_m: [2.75, 3.15], sigma_m: 0.3}
+      - {name: P2, position_m: [1.8, 2.15], covariance_m2: [[0.09, 0.02], [0.02, 0.06]]}
+vehicles:
+  - {name: rov1, start_m: [0.5, 0.5], model: bluerov2, transit_speed_mps: 0.7}
+  - {name: rov2, start_m: [6.5, 0.5], model: single_integrator, transit_speed_mps: 0.7}
+  - {name: rov3, start_m: [6.5, 4.5], transit_speed_mps: 0.7}
+profiles:
+  equal: {weights: {P1: 1, P2: 1}}
+  leak:
+    weights: {P1: 1, P2: 1}
+    events: [{time_s: 200, valve: P2, weight: 2}, {time_s: 150, valve: P1, weight: 4}]
+default_profile: leak
+fleet: {assignment: partition, coverage_period_s: 0.25, liveliness_lease_s: 1.5}
+fleet_events:
+  - {time_s: 250, lose: rov3}
+  - {time_s: 100, join: {name: rov4, start_m: [3.5, 0.5], model: single_integrator, transit_speed_mps: 0.6}}
+  - {time_s: 120, leave: rov1}
+  - {time_s: 250, lose: rov4}
+)";
+
+std::string Replace(std::string text, const std::string& from, const std::string& to) {
+  const std::size_t at = text.find(from);
+  if (at == std::string::npos) ADD_FAILURE() << "base scenario has no '" << from << "'";
+  else text.replace(at, from.size(), to);
+  return text;
+}
+
+void ExpectSameVehicle(const VehicleSpec& x, const VehicleSpec& y) {
+  EXPECT_EQ(x.name, y.name);
+  EXPECT_EQ(x.start_m, y.start_m) << x.name;
+  EXPECT_EQ(x.start_heading_rad, y.start_heading_rad) << x.name;
+  EXPECT_EQ(x.model, y.model) << x.name;
+  EXPECT_EQ(x.transit_speed_mps, y.transit_speed_mps) << x.name;
+}
+
+// Field-by-field equality; doubles compare exactly because emission is round-trip exact.
+void ExpectSameScenario(const Scenario& a, const Scenario& b) {
+  EXPECT_EQ(a.name, b.name);
+  EXPECT_EQ(a.workspace.width_m, b.workspace.width_m);
+  EXPECT_EQ(a.workspace.height_m, b.workspace.height_m);
+  EXPECT_EQ(a.duration_s, b.duration_s);
+  EXPECT_EQ(a.control_rate_hz, b.control_rate_hz);
+  EXPECT_EQ(a.physics_rate_hz, b.physics_rate_hz);
+  EXPECT_EQ(a.visit_radius_m, b.visit_radius_m);
+  EXPECT_EQ(a.rearm_radius_m, b.rearm_radius_m);
+  EXPECT_EQ(a.seed, b.seed);
+  EXPECT_EQ(a.ergodic.basis_order, b.ergodic.basis_order);
+  EXPECT_EQ(a.ergodic.forgetting_time_s, b.ergodic.forgetting_time_s);
+  EXPECT_EQ(a.ergodic.min_turn_radius_m, b.ergodic.min_turn_radius_m);
+  EXPECT_EQ(a.guard.enabled, b.guard.enabled);
+  EXPECT_EQ(a.guard.weight_floor, b.guard.weight_floor);
+  EXPECT_EQ(a.guard.revisit_bound_s, b.guard.revisit_bound_s);
+  EXPECT_EQ(a.astar.grid_resolution_m, b.astar.grid_resolution_m);
+  EXPECT_EQ(a.astar.clearance_m, b.astar.clearance_m);
+  EXPECT_EQ(a.astar.wait_per_lap_s, b.astar.wait_per_lap_s);
+  EXPECT_EQ(a.default_profile, b.default_profile);
+  ASSERT_EQ(a.structures.size(), b.structures.size());
+  for (std::size_t i = 0; i < a.structures.size(); ++i) {
+    const ChristmasTree &x = a.structures[i], &y = b.structures[i];
+    EXPECT_EQ(x.name, y.name);
+    EXPECT_EQ(x.center_m, y.center_m) << x.name;
+    EXPECT_EQ(x.size_m, y.size_m) << x.name;
+    EXPECT_EQ(x.height_m, y.height_m) << x.name;
+    ASSERT_EQ(x.valves.size(), y.valves.size());
+    for (std::size_t j = 0; j < x.valves.size(); ++j) {
+      EXPECT_EQ(x.valves[j].name, y.valves[j].name);
+      EXPECT_EQ(x.valves[j].position_m, y.valves[j].position_m) << x.valves[j].name;
+      EXPECT_EQ(x.valves[j].covariance_m2, y.valves[j].covariance_m2) << x.valves[j].name;
+    }
+  }
+  ASSERT_EQ(a.vehicles.size(), b.vehicles.size());
+  for (std::size_t i = 0; i < a.vehicles.size(); ++i) ExpectSameVehicle(a.vehicles[i], b.vehicles[i]);
+  EXPECT_EQ(a.fleet.assignment, b.fleet.assignment);
+  EXPECT_EQ(a.fleet.coverage_period_s, b.fleet.coverage_period_s);
+  EXPECT_EQ(a.fleet.liveliness_lease_s, b.fleet.liveliness_lease_s);
+  ASSERT_EQ(a.fleet_events.size(), b.fleet_events.size());
+  for (std::size_t i = 0; i < a.fleet_events.size(); ++i) {
+    const FleetEvent &x = a.fleet_events[i], &y = b.fleet_events[i];
+    EXPECT_EQ(x.time_s, y.time_s);
+    EXPECT_EQ(x.kind, y.kind);
+    if (x.kind == FleetEvent::Kind::kJoin) ExpectSameVehicle(x.vehicle, y.vehicle);
+    else EXPECT_EQ(x.vehicle.name, y.vehicle.name);
+  }
+  ASSERT_EQ(a.profiles.size(), b.profiles.size());
+  for (std::size_t i = 0; i < a.profiles.size(); ++i) {
+    const RiskProfile &x = a.profiles[i], &y = b.profiles[i];
+    EXPECT_EQ(x.name, y.name);
+    EXPECT_EQ(x.weights, y.weights) << x.name;
+    ASSERT_EQ(x.events.size(), y.events.size()) << x.name;
+    for (std::size_t k = 0; k < x.events.size(); ++k) {
+      EXPECT_EQ(x.events[k].time_s, y.events[k].time_s);
+      EXPECT_EQ(x.events[k].valve, y.events[k].valve);
+      EXPECT_EQ(x.events[k].weight, y.events[k].weight);
+    }
+  }
+}
+
+// The shipped paper scenario loads with its 2 + 3 valves, profiles and the leak event.
+TEST(Scenario, TwoXtLoads) {
+  const Scenario s = LoadScenario(kTwoXtPath);
+  EXPECT_EQ(s.name, "two_xt");
+  EXPECT_EQ(s.source_path, kTwoXtPath);
+  ASSERT_EQ(s.structures.size(), 2u);
+  EXPECT_EQ(s.structures[0].valves.size(), 2u);
+  EXPECT_EQ(s.structures[1].valves.size(), 3u);
+  const std::vector<Valve> valves = s.AllValves();
+  ASSERT_EQ(valves.size(), 5u);
+  for (int i = 0; i < 5; ++i) {
+    EXPECT_EQ(valves[i].name, "P" + std::to_string(i + 1));
+    EXPECT_EQ(s.ValveIndex(valves[i].name), i);
+    // sigma_m: 0.35 in the file becomes covariance sigma^2 I.
+    EXPECT_TRUE(valves[i].covariance_m2.isApprox(0.35 * 0.35 * Eigen::Matrix2d::Identity(), 1e-12));
+  }
+  EXPECT_EQ(s.ValveIndex("P9"), -1);
+  EXPECT_EQ(s.default_profile, "one_extreme");
+  ASSERT_NE(s.FindProfile("one_extreme"), nullptr);
+  EXPECT_EQ(s.FindProfile("one_extreme")->weights.at("P1"), 0.55);
+  EXPECT_EQ(s.FindProfile("missing"), nullptr);
+  const RiskProfile* leak = s.FindProfile("leak_injection");
+  ASSERT_NE(leak, nullptr);
+  ASSERT_EQ(leak->events.size(), 1u);
+  EXPECT_EQ(leak->events[0].valve, "P1");
+  EXPECT_EQ(leak->events[0].time_s, 150.0);
+  ASSERT_EQ(s.vehicles.size(), 1u);
+  EXPECT_EQ(s.vehicles[0].model, MotionModel::kBlueRov2);
+  EXPECT_TRUE(std::isinf(s.ergodic.forgetting_time_s));
+}
+
+// ParseScenario(EmitScenario(s)) == s, field by field, and emitting again gives the same text.
+TEST(Scenario, EmitParseRoundTripIsExact) {
+  for (const Scenario& s : {LoadScenario(kTwoXtPath), ParseScenario(kBase, "base.yaml"), LoadScenario(kFleetFieldPath),
+                            LoadScenario(kFleetLargePath)}) {
+    SCOPED_TRACE(s.name);
+    const std::string text = EmitScenario(s);
+    const Scenario again = ParseScenario(text, s.source_path);
+    ExpectSameScenario(s, again);
+    EXPECT_EQ(EmitScenario(again), text);
+  }
+}
+
+// Omitted sections take the struct defaults; the name defaults to the file stem.
+TEST(Scenario, OmittedSectionsTakeDefaults) {
+  const std::string minimal = R"(
+structures: [{name: A, center_m: [3, 3], valves: [{name: V, position_m: [1, 1]}]}]
+vehicles: [{name: r, start_m: [0.5, 0.5]}]
+profiles: {only: {weights: {V: 1}}}
+)";
+  const Scenario s = ParseScenario(minimal, "dir/minimal.yaml");
+  const Scenario defaults;
+  EXPECT_EQ(s.name, "minimal");
+  EXPECT_EQ(s.default_profile, "only");
+  EXPECT_EQ(s.workspace.width_m, defaults.workspace.width_m);
+  EXPECT_EQ(s.duration_s, defaults.duration_s);
+  EXPECT_EQ(s.ergodic.basis_order, defaults.ergodic.basis_order);
+  EXPECT_EQ(s.ergodic.min_turn_radius_m, 0.0);  // the paper's law unless asked for
+  EXPECT_EQ(s.astar.clearance_m, defaults.astar.clearance_m);
+  EXPECT_EQ(s.structures[0].size_m, ChristmasTree().size_m);
+  EXPECT_EQ(s.structures[0].valves[0].covariance_m2, Valve().covariance_m2);
+  EXPECT_EQ(s.vehicles[0].transit_speed_mps, VehicleSpec().transit_speed_mps);
+  EXPECT_EQ(s.fleet.assignment, defaults.fleet.assignment);
+  EXPECT_EQ(s.fleet.coverage_period_s, defaults.fleet.coverage_period_s);
+  EXPECT_EQ(s.fleet.liveliness_lease_s, defaults.fleet.liveliness_lease_s);
+  EXPECT_TRUE(s.fleet_events.empty());
+}
+
+// .inf, inf and infinity (any case, quoted or not) all mean no forgetting.
+TEST(Scenario, InfinitySpellings) {
+  for (const char* spelling : {".inf", "inf", "infinity", "Infinity", "\"infinity\"", ".Inf"}) {
+    const std::string text = Replace(kBase, "forgetting_time_s: .inf", std::string("forgetting_time_s: ") + spelling);
+    EXPECT_TRUE(std::isinf(ParseScenario(text, "base.yaml").ergodic.forgetting_time_s)) << spelling;
+  }
+}
+
+// Events are sorted by time on load, whatever order the file gives.
+TEST(Scenario, EventsSortedOnLoad) {
+  const Scenario s = ParseScenario(kBase, "base.yaml");
+  const RiskProfile* leak = s.FindProfile("leak");
+  ASSERT_NE(leak, nullptr);
+  ASSERT_EQ(leak->events.size(), 2u);
+  EXPECT_EQ(leak->events[0].time_s, 150.0);
+  EXPECT_EQ(leak->events[1].time_s, 200.0);
+}
+
+// Fleet events are sorted by time on load, stably: the two at t = 250 keep their file order.
+TEST(Scenario, FleetEventsParseAndSortOnLoad) {
+  const Scenario s = ParseScenario(kBase, "base.yaml");
+  EXPECT_EQ(s.fleet.assignment, FleetAssignment::kPartition);
+  EXPECT_EQ(s.fleet.coverage_period_s, 0.25);
+  EXPECT_EQ(s.fleet.liveliness_lease_s, 1.5);
+  ASSERT_EQ(s.fleet_events.size(), 4u);
+  const std::vector<double> times = {100, 120, 250, 250};
+  const std::vector<FleetEvent::Kind> kinds = {FleetEvent::Kind::kJoin, FleetEvent::Kind::kLeave,
+                                               FleetEvent::Kind::kLose, FleetEvent::Kind::kLose};
+  const std::vector<std::string> names = {"rov4", "rov1", "rov3", "rov4"};
+  for (std::size_t i = 0; i < 4; ++i) {
+    EXPECT_EQ(s.fleet_events[i].time_s, times[i]) << i;
+    EXPECT_EQ(s.fleet_events[i].kind, kinds[i]) << i;
+    EXPECT_EQ(s.fleet_events[i].vehicle.name, names[i]) << i;
+  }
+  const VehicleSpec& joined = s.fleet_events[0].vehicle;
+  EXPECT_EQ(joined.start_m, Eigen::Vector2d(3.5, 0.5));
+  EXPECT_EQ(joined.model, MotionModel::kSingleIntegrator);
+  EXPECT_EQ(joined.transit_speed_mps, 0.6);
+  EXPECT_EQ(joined.start_heading_rad, 0.0);
+}
+
+// The fleet field: 6 XTs with 2-5 valves (20 in all), 4 BlueROV2s at 0.7 m/s, a joiner at 200 s,
+// rov2 lost at 400 s, and the routine / graded / leak profiles.
+TEST(Scenario, FleetFieldLoads) {
+  const Scenario s = LoadScenario(kFleetFieldPath);
+  EXPECT_EQ(s.name, "fleet_field");
+  ASSERT_EQ(s.structures.size(), 6u);
+  for (const ChristmasTree& tree : s.structures) {
+    EXPECT_GE(tree.valves.size(), 2u) << tree.name;
+    EXPECT_LE(tree.valves.size(), 5u) << tree.name;
+  }
+  const std::vector<Valve> valves = s.AllValves();
+  ASSERT_EQ(valves.size(), 20u);
+  for (int i = 0; i < 20; ++i) EXPECT_EQ(valves[i].name, std::string("P").append(std::to_string(i + 1)));
+  EXPECT_EQ(s.duration_s, 600.0);
+  ASSERT_EQ(s.vehicles.size(), 4u);
+  for (const VehicleSpec& vehicle : s.vehicles) {
+    EXPECT_EQ(vehicle.model, MotionModel::kBlueRov2) << vehicle.name;
+    EXPECT_EQ(vehicle.transit_speed_mps, 0.7) << vehicle.name;
+  }
+  EXPECT_EQ(s.fleet.assignment, FleetAssignment::kShared);
+  ASSERT_EQ(s.fleet_events.size(), 2u);
+  EXPECT_EQ(s.fleet_events[0].time_s, 200.0);
+  EXPECT_EQ(s.fleet_events[0].kind, FleetEvent::Kind::kJoin);
+  EXPECT_EQ(s.fleet_events[0].vehicle.name, "rov5");
+  EXPECT_EQ(s.fleet_events[0].vehicle.transit_speed_mps, 0.7);
+  EXPECT_EQ(s.fleet_events[1].time_s, 400.0);
+  EXPECT_EQ(s.fleet_events[1].kind, FleetEvent::Kind::kLose);
+  EXPECT_EQ(s.fleet_events[1].vehicle.name, "rov2");
+  EXPECT_EQ(s.default_profile, "graded");
+  for (const char* name : {"routine", "graded", "leak"}) ASSERT_NE(s.FindProfile(name), nullptr) << name;
+  int high = 0;
+  for (const auto& [valve, weight] : s.FindProfile("graded")->weights) high += weight > 1 ? 1 : 0;
+  EXPECT_EQ(high, 3);
+  const RiskProfile& leak = *s.FindProfile("leak");
+  ASSERT_EQ(leak.events.size(), 1u);
+  EXPECT_EQ(leak.events[0].time_s, 300.0);
+  EXPECT_EQ(leak.events[0].weight, 20.0);
+  EXPECT_EQ(s.ergodic.basis_order, 20);
+  EXPECT_EQ(s.ergodic.min_turn_radius_m, 0.3);
+  EXPECT_TRUE(s.guard.enabled);
+}
+
+// The scale-test field: at least 50 XTs and 200 valves, 8 vehicles, the capped basis order.
+TEST(Scenario, FleetLargeLoads) {
+  const Scenario s = LoadScenario(kFleetLargePath);
+  EXPECT_GE(s.structures.size(), 50u);
+  EXPECT_GE(s.AllValves().size(), 200u);
+  for (const ChristmasTree& tree : s.structures) {
+    EXPECT_GE(tree.valves.size(), 3u) << tree.name;
+    EXPECT_LE(tree.valves.size(), 5u) << tree.name;
+  }
+  EXPECT_EQ(s.vehicles.size(), 8u);
+  EXPECT_EQ(s.ergodic.basis_order, 40);
+  EXPECT_EQ(s.duration_s, 300.0);
+  EXPECT_EQ(s.astar.grid_resolution_m, 0.1);
+  ASSERT_NE(s.FindProfile("routine"), nullptr);
+  ASSERT_NE(s.FindProfile("hotspots"), nullptr);
+  int hot = 0;
+  for (const auto& [valve, weight] : s.FindProfile("hotspots")->weights) hot += weight == 10 ? 1 : 0;
+  EXPECT_GE(hot, 3);
+}
+
+// Free water between two footprints (m): the larger of the per-axis gaps.
+double FootprintGap(const ChristmasTree& a, const ChristmasTree& b) {
+  const Eigen::Vector2d gap = (a.center_m - b.center_m).cwiseAbs() - (a.size_m + b.size_m) / 2;
+  return gap.maxCoeff();
+}
+
+double DistanceToFootprint(const Eigen::Vector2d& p, const ChristmasTree& tree) {
+  return ((p - tree.center_m).cwiseAbs() - tree.size_m / 2).cwiseMax(0.0).norm();
+}
+
+// The layout rules learned on two_xt.yaml hold in the fleet scenarios: footprints 0.5-0.8 m,
+// >= 1.2 m of water between them, each valve at the inspection standoff off its own footprint
+// (0.8 m in fleet_field as in two_xt; 0.5 m in the scale field; 1e-9 m), >= 1.0 m from the
+// edges and from other footprints, >= 0.8 m between valves; starts 1.0 m apart.
+TEST(Scenario, FleetScenariosFollowLayoutRules) {
+  for (const auto& [path, standoff] : {std::pair{kFleetFieldPath, 0.8}, std::pair{kFleetLargePath, 0.5}}) {
+    SCOPED_TRACE(path);
+    const Scenario s = LoadScenario(path);
+    const Eigen::Vector2d workspace(s.workspace.width_m, s.workspace.height_m);
+    for (std::size_t i = 0; i < s.structures.size(); ++i) {
+      const ChristmasTree& tree = s.structures[i];
+      EXPECT_GE(tree.size_m.minCoeff(), 0.5 - 1e-9) << tree.name;
+      EXPECT_LE(tree.size_m.maxCoeff(), 0.8 + 1e-9) << tree.name;
+      for (std::size_t j = i + 1; j < s.structures.size(); ++j) {
+        EXPECT_GE(FootprintGap(tree, s.structures[j]), 1.2 - 1e-9) << tree.name << " " << s.structures[j].name;
+      }
+      for (const Valve& valve : tree.valves) {
+        EXPECT_NEAR(DistanceToFootprint(valve.position_m, tree), standoff, 1e-9) << valve.name;
+        const double edge = std::min(valve.position_m.minCoeff(), (workspace - valve.position_m).minCoeff());
+        EXPECT_GE(edge, 1.0 - 1e-9) << valve.name;
+        for (const ChristmasTree& other : s.structures) {
+          if (&other != &tree) {
+            EXPECT_GE(DistanceToFootprint(valve.position_m, other), 1.0 - 1e-9) << valve.name << " " << other.name;
+          }
+        }
+      }
+    }
+    const std::vector<Valve> valves = s.AllValves();
+    for (std::size_t i = 0; i < valves.size(); ++i) {
+      for (std::size_t j = i + 1; j < valves.size(); ++j) {
+        EXPECT_GE((valves[i].position_m - valves[j].position_m).norm(), 0.8 - 1e-9)
+            << valves[i].name << " " << valves[j].name;
+      }
+    }
+    std::vector<Eigen::Vector2d> starts;
+    for (const VehicleSpec& vehicle : s.vehicles) starts.push_back(vehicle.start_m);
+    for (const FleetEvent& event : s.fleet_events) {
+      if (event.kind == FleetEvent::Kind::kJoin) starts.push_back(event.vehicle.start_m);
+    }
+    for (std::size_t i = 0; i < starts.size(); ++i) {
+      for (const ChristmasTree& tree : s.structures) EXPECT_GE(DistanceToFootprint(starts[i], tree), 1.0) << i;
+      for (std::size_t j = i + 1; j < starts.size(); ++j) {
+        EXPECT_GE((starts[i] - starts[j]).norm(), 1.0) << i << " " << j;
+      }
+    }
+  }
+}
+
+struct BadInput {
+  std::string from, to;                 // substring of kBase and its replacement
+  std::vector<std::string> expected;    // the message must contain each (field path, value, rule)
+};
+
+// Each bad input throws ScenarioError: one line, starting with the file, naming field and value.
+TEST(Scenario, BadInputsGiveOneLineNamingFieldAndValue) {
+  const std::vector<BadInput> cases = {
+      {"rov3, start_m: [6.5, 4.5], transit_speed_mps: 0.7", "rov3, start_m: [6.5, 4.5], transit_speed_mps: -1",
+       {"base.yaml: vehicles[2].transit_speed_mps = -1: must be > 0"}},
+      {"rov1, start_m: [0.5, 0.5], model: bluerov2, transit_speed_mps: 0.7",
+       "rov1, start_m: [0.5, 0.5], model: bluerov2, transit_speed_mps: 50",
+       {"base.yaml: vehicles[0].transit_speed_mps = 50: must be <= 0.85 for model bluerov2"}},
+      {"width_m: 7.0", "width_m: abc", {"workspace.width_m = abc", "must be a number"}},
+      {"height_m: 5.0}", "heigth_m: 5.0}", {"workspace.heigth_m", "unknown key", "width_m, height_m"}},
+      {"duration_s: 300", "duraton_s: 300", {"duraton_s", "unknown key", "duration_s"}},
+      {"rearm_radius_m: 0.6", "rearm_radius_m: 0.2", {"rearm_radius_m = 0.2", "> visit_radius_m = 0.3"}},
+      {"physics_rate_hz: 50", "physics_rate_hz: 25", {"physics_rate_hz = 25", "whole multiple"}},
+      {"basis_order: 10", "basis_order: 65", {"ergodic.basis_order = 65", "1..64"}},
+      {"basis_order: 10", "basis_order: 10.5", {"ergodic.basis_order = 10.5", "whole number"}},
+      {"forgetting_time_s: .inf", "forgetting_time_s: -5", {"ergodic.forgetting_time_s = -5", "> 0"}},
+      {"forgetting_time_s: .inf", "forgetting_time_s: .inf, min_turn_radius_m: -0.1",
+       {"ergodic.min_turn_radius_m = -0.1", ">= 0"}},
+      {"weight_floor: 0.05", "weight_floor: 0.5", {"guard.weight_floor = 0.5", "1/M = 0.5"}},
+      {"enabled: true", "enabled: maybe", {"guard.enabled = maybe", "true or false"}},
+      {"duration_s: 300", "duration_s: 300\nseed: -3", {"seed = -3", "whole number >= 0"}},
+      {"duration_s: 300", "duration_s: --5", {"duration_s = --5", "must be a number"}},
+      {"equal: {weights: {P1: 1, P2: 1}}", "equal: {weights: {P1: 1}}", {"profiles.equal.weights: missing valve P2"}},
+      {"equal: {weights: {P1: 1, P2: 1}}", "equal: {weights: {P1: -1, P2: 1}}", {"profiles.equal.weights.P1 = -1"}},
+      {"equal: {weights: {P1: 1, P2: 1}}", "equal: {weights: {P1: 1e308, P2: 1e308}}",
+       {"profiles.equal.weights.P1 = 1e+308", "[0, 1e12]"}},
+      {"equal: {weights: {P1: 1, P2: 1}}", "equal: {weights: {P1: 0, P2: 0}}", {"profiles.equal.weights", "all be zero"}},
+      {"equal: {weights: {P1: 1, P2: 1}}", "equal: {weights: {P1: 1, P2: 1, P7: 1}}",
+       {"profiles.equal.weights.P7 = 1", "unknown valve"}},
+      {"valve: P1", "valve: P9", {"profiles.leak.events[1].valve = P9", "unknown valve (valves: P1, P2)"}},
+      {"time_s: 150", "time_s: 400", {"profiles.leak.events[1].time_s = 400", "[0, duration_s = 300]"}},
+      {"events: [", "events: 5 #[", {"profiles.leak.events = 5", "must be a list"}},
+      {"position_m: [2.75, 3.15]", "position_m: [2.0, 2.9]",
+       {"structures[0].valves[0].position_m = [2, 2.9]", "footprint of XT-A"}},
+      {"position_m: [2.75, 3.15]", "position_m: [7.5, 3]", {"structures[0].valves[0].position_m = [7.5, 3]", "workspace"}},
+      {"sigma_m: 0.3", "sigma_m: -0.3", {"structures[0].valves[0].sigma_m = -0.3", "> 0"}},
+      {"[[0.09, 0.02], [0.02, 0.06]]", "[[0.09, 0.5], [0.5, 0.06]]",
+       {"structures[0].valves[1].covariance_m2 = [[0.09, 0.5], [0.5, 0.06]]", "positive definite"}},
+      {"[[0.09, 0.02], [0.02, 0.06]]", "[[0.09, 0.02], [0.03, 0.06]]", {"covariance_m2 = [[0.09, 0.02], [0.03, 0.06]]", "symmetric"}},
+      {"name: P2", "name: P1", {"structures[0].valves[1].name = P1", "duplicate", "structures[0].valves[0].name"}},
+      {"center_m: [2.0, 2.9]", "center_m: 2.0", {"structures[0].center_m = 2.0", "list of 2 numbers"}},
+      {"center_m: [2.0, 2.9]", "center_m: [2.0, x]", {"structures[0].center_m[1] = x", "must be a number"}},
+      {"model: bluerov2", "model: torpedo", {"vehicles[0].model = torpedo", "single_integrator or bluerov2"}},
+      {"name: rov2", "name: rov1", {"vehicles[1].name = rov1", "duplicate"}},
+      {"start_m: [0.5, 0.5]", "start_m: [0.5, 9]", {"vehicles[0].start_m = [0.5, 9]", "workspace"}},
+      {"default_profile: leak", "default_profile: calm", {"default_profile = calm", "equal, leak"}},
+      {"  leak:\n", "  equal:\n", {"profiles.equal", "duplicate key"}},
+      {"vehicles:", "vehicle:", {"vehicle", "unknown key"}},
+      // Fleet settings and events.
+      {"assignment: partition", "assignment: split",
+       {"base.yaml: fleet.assignment = split: must be shared or partition"}},
+      {"coverage_period_s: 0.25", "coverage_period_s: 0", {"base.yaml: fleet.coverage_period_s = 0: must be > 0"}},
+      {"liveliness_lease_s: 1.5", "liveliness_lease_s: -1", {"fleet.liveliness_lease_s = -1: must be > 0"}},
+      {"liveliness_lease_s: 1.5", "lease_s: 1.5", {"fleet.lease_s", "unknown key", "liveliness_lease_s"}},
+      {"{time_s: 250, lose: rov3}", "{time_s: 301, lose: rov3}",
+       {"base.yaml: fleet_events[0].time_s = 301: must be in [0, duration_s = 300]"}},
+      {"{time_s: 250, lose: rov3}", "{time_s: -1, lose: rov3}", {"fleet_events[0].time_s = -1", "[0, duration_s"}},
+      {"lose: rov3}", "lose: rov9}",
+       {"base.yaml: fleet_events[0].lose = rov9: must name a vehicle present at t = 250 (present: rov2, rov3, rov4)"}},
+      {"lose: rov3}", "lose: [rov3]}", {"fleet_events[0].lose = [rov3]", "must be a name"}},
+      {"{time_s: 120, leave: rov1}", "{time_s: 120, leave: rov3}",
+       {"fleet_events[0].lose = rov3", "rov3 left at t = 120"}},
+      {"{time_s: 120, leave: rov1}", "{time_s: 50, leave: rov4}",
+       {"fleet_events[2].leave = rov4", "rov4 joins only at t = 100"}},
+      {"{time_s: 250, lose: rov4}", "{time_s: 250, lose: rov4}\n  - {time_s: 260, lose: rov2}",
+       {"base.yaml: fleet_events[4].lose = rov2: would leave no vehicle"}},
+      {"{time_s: 120, leave: rov1}", "{time_s: 120, leave: rov1, lose: rov2}",
+       {"fleet_events[2] = {", "must give exactly one of join, lose, leave"}},
+      {"{time_s: 120, leave: rov1}", "{time_s: 120}", {"fleet_events[2] = {time_s: 120}", "exactly one of"}},
+      {"{time_s: 120, leave: rov1}", "{leave: rov1}", {"fleet_events[2].time_s: missing (required)"}},
+      {"{time_s: 120, leave: rov1}", "{time_s: 120, leave: rov1, reason: battery}",
+       {"fleet_events[2].reason", "unknown key", "time_s, join, lose, leave"}},
+      {"join: {name: rov4", "join: {name: rov2", {"fleet_events[1].join.name = rov2", "duplicate", "vehicles[1].name"}},
+      {"join: {name: rov4", "join: {nom: rov4", {"fleet_events[1].join.nom", "unknown key"}},
+      {"start_m: [3.5, 0.5]", "start_m: [2.0, 2.9]", {"fleet_events[1].join.start_m = [2, 2.9]", "footprint of XT-A"}},
+      {"start_m: [3.5, 0.5]", "start_m: [3.5, -0.5]",
+       {"fleet_events[1].join.start_m = [3.5, -0.5]", "inside the workspace"}},
+      {"transit_speed_mps: 0.6", "transit_speed_mps: 0",
+       {"base.yaml: fleet_events[1].join.transit_speed_mps = 0: must be > 0"}},
+      {"model: single_integrator, transit_speed_mps: 0.6", "model: glider, transit_speed_mps: 0.6",
+       {"fleet_events[1].join.model = glider", "single_integrator or bluerov2"}},
+  };
+  for (const BadInput& bad : cases) {
+    const std::string text = Replace(kBase, bad.from, bad.to);
+    try {
+      ParseScenario(text, "base.yaml");
+      ADD_FAILURE() << "no error for " << bad.to;
+    } catch (const ScenarioError& e) {
+      const std::string message = e.what();
+      EXPECT_EQ(message.rfind("base.yaml: ", 0), 0u) << message;
+      EXPECT_EQ(message.find('\n'), std::string::npos) << message;
+      for (const std::string& part : bad.expected) EXPECT_NE(message.find(part), std::string::npos) << message;
+    }
+  }
+}
+
+// YAML syntax errors name the line; a missing file says why it cannot be opened.
+TEST(Scenario, SyntaxErrorAndMissingFile) {
+  try {
+    ParseScenario("workspace: {width_m: 7.0\nduration_s: [1, 2\n", "broken.yaml");
+    ADD_FAILURE() << "no error";
+  } catch (const ScenarioError& e) {
+    const std::string message = e.what();
+    EXPECT_EQ(message.rfind("broken.yaml: line ", 0), 0u) << message;
+    EXPECT_NE(message.find("YAML syntax error"), std::string::npos) << message;
+    EXPECT_EQ(message.find('\n'), std::string::npos) << message;
+  }
+  try {
+    LoadScenario("/nonexistent/x.yaml");
+    ADD_FAILURE() << "no error";
+  } catch (const ScenarioError& e) {
+    EXPECT_STREQ(e.what(), "/nonexistent/x.yaml: cannot open: No such file or directory");
+  }
+  EXPECT_THROW(ParseScenario("", "empty.yaml"), ScenarioError);
+  EXPECT_THROW(ParseScenario("- just\n- a list\n", "list.yaml"), ScenarioError);
+}
+
+// Validate() on a scenario built in code gives the same style of message.
+TEST(Scenario, ValidateNamesFieldValueAndRule) {
+  Scenario s = ParseScenario(kBase, "scenarios/x.yaml");
+  s.vehicles[2].transit_speed_mps = -1;
+  try {
+    s.Validate();
+    ADD_FAILURE() << "no error";
+  } catch (const ScenarioError& e) {
+    EXPECT_STREQ(e.what(), "scenarios/x.yaml: vehicles[2].transit_speed_mps = -1: must be > 0");
+  }
+}
+
+// Motion model names convert both ways; an unknown name throws with the given location.
+TEST(Scenario, MotionModelNames) {
+  for (MotionModel model : {MotionModel::kSingleIntegrator, MotionModel::kBlueRov2}) {
+    EXPECT_EQ(ParseMotionModel(ToString(model), "x"), model);
+  }
+  try {
+    ParseMotionModel("auv", "cli: --model");
+    ADD_FAILURE() << "no error";
+  } catch (const ScenarioError& e) {
+    EXPECT_STREQ(e.what(), "cli: --model = auv: must be single_integrator or bluerov2");
+  }
+}
+
+// Assignment names convert both ways; an unknown name throws with the given location.
+TEST(Scenario, FleetAssignmentNames) {
+  for (FleetAssignment assignment : {FleetAssignment::kShared, FleetAssignment::kPartition}) {
+    EXPECT_EQ(ParseFleetAssignment(ToString(assignment), "x"), assignment);
+  }
+  EXPECT_STREQ(ToString(FleetAssignment::kShared), "shared");
+  EXPECT_STREQ(ToString(FleetAssignment::kPartition), "partition");
+  try {
+    ParseFleetAssignment("voronoi", "command line: --assignment");
+    ADD_FAILURE() << "no error";
+  } catch (const ScenarioError& e) {
+    EXPECT_STREQ(e.what(), "command line: --assignment = voronoi: must be shared or partition");
+  }
+}
+
+std::vector<std::string> VehicleNames(const Scenario& s) {
+  std::vector<std::string> names;
+  for (const VehicleSpec& vehicle : s.vehicles) names.push_back(vehicle.name);
+  return names;
+}
+
+// --vehicles N below the file's count keeps the first N and drops fleet events naming the others;
+// equal changes nothing; 0 is refused.
+TEST(Scenario, WithVehicleCountKeepsFirstVehicles) {
+  const Scenario field = LoadScenario(kFleetFieldPath);
+  try {
+    WithVehicleCount(field, 0);
+    ADD_FAILURE() << "no error";
+  } catch (const ScenarioError& e) {
+    EXPECT_STREQ(e.what(), "--vehicles = 0: must be >= 1");
+  }
+  ExpectSameScenario(WithVehicleCount(field, 4), field);
+
+  // rov2 is dropped, so its loss at t = 400 goes; rov5 still joins at t = 200.
+  const Scenario one = WithVehicleCount(field, 1);
+  EXPECT_EQ(VehicleNames(one), std::vector<std::string>{"rov1"});
+  ASSERT_EQ(one.fleet_events.size(), 1u);
+  EXPECT_EQ(one.fleet_events[0].kind, FleetEvent::Kind::kJoin);
+  EXPECT_EQ(one.fleet_events[0].vehicle.name, "rov5");
+  EXPECT_NO_THROW(one.Validate());
+
+  // base: keeping rov1 and rov2 drops the loss of rov3 only.
+  const Scenario base = ParseScenario(kBase, "base.yaml");
+  const Scenario two = WithVehicleCount(base, 2);
+  EXPECT_EQ(VehicleNames(two), (std::vector<std::string>{"rov1", "rov2"}));
+  ASSERT_EQ(two.fleet_events.size(), 3u);
+  for (const FleetEvent& event : two.fleet_events) EXPECT_NE(event.vehicle.name, "rov3");
+  // Keeping rov1 alone: it leaves at 120 s and the joiner rov4 is lost at 250 s, leaving no one.
+  try {
+    WithVehicleCount(base, 1);
+    ADD_FAILURE() << "no error";
+  } catch (const ScenarioError& e) {
+    EXPECT_STREQ(e.what(), "base.yaml: fleet_events[2].lose = rov4: would leave no vehicle (with --vehicles = 1)");
+  }
+}
+
+// --vehicles N above the file's count adds rov<k> (skipping names in use, joiners' included) with
+// the first vehicle's model and speed, heading 0, near y = 0.5 m, inside the workspace 0.5 m in,
+// 0.5 m clear of every footprint and 1 m from every other start; the result validates.
+TEST(Scenario, WithVehicleCountAddsVehiclesAlongTheSouthEdge) {
+  for (const auto& [path, count] : std::vector<std::pair<std::string, int>>{
+           {kTwoXtPath, 2}, {kTwoXtPath, 5}, {kFleetFieldPath, 12}, {kFleetLargePath, 32}}) {
+    SCOPED_TRACE(path + " --vehicles " + std::to_string(count));
+    const Scenario file = LoadScenario(path);
+    const Scenario s = WithVehicleCount(file, count);
+    EXPECT_NO_THROW(s.Validate());
+    ASSERT_EQ(s.vehicles.size(), static_cast<std::size_t>(count));
+    for (std::size_t i = 0; i < file.vehicles.size(); ++i) ExpectSameVehicle(s.vehicles[i], file.vehicles[i]);
+    std::set<std::string> names;
+    std::vector<Eigen::Vector2d> starts;
+    for (const VehicleSpec& vehicle : s.vehicles) {
+      names.insert(vehicle.name);
+      starts.push_back(vehicle.start_m);
+    }
+    for (const FleetEvent& event : s.fleet_events) {
+      if (event.kind != FleetEvent::Kind::kJoin) continue;
+      EXPECT_EQ(names.count(event.vehicle.name), 0u) << event.vehicle.name;
+      starts.push_back(event.vehicle.start_m);
+    }
+    EXPECT_EQ(names.size(), s.vehicles.size());
+    for (std::size_t i = file.vehicles.size(); i < s.vehicles.size(); ++i) {
+      const VehicleSpec& added = s.vehicles[i];
+      EXPECT_EQ(added.name.rfind("rov", 0), 0u) << added.name;
+      EXPECT_EQ(added.model, file.vehicles[0].model) << added.name;
+      EXPECT_EQ(added.transit_speed_mps, file.vehicles[0].transit_speed_mps) << added.name;
+      EXPECT_EQ(added.start_heading_rad, 0.0) << added.name;
+      const Eigen::Vector2d& p = added.start_m;
+      EXPECT_GE(p.x(), 0.5 - 1e-9) << added.name;
+      EXPECT_LE(p.x(), s.workspace.width_m - 0.5 + 1e-9) << added.name;
+      EXPECT_GE(p.y(), 0.5 - 1e-9) << added.name;
+      EXPECT_LE(p.y(), 2.0) << added.name;  // still along the south edge
+      for (const ChristmasTree& tree : s.structures) {
+        EXPECT_GE(((p - tree.center_m).cwiseAbs() - tree.size_m / 2).maxCoeff(), 0.5 - 1e-9)
+            << added.name << " " << tree.name;
+      }
+      for (std::size_t j = 0; j < starts.size(); ++j) {
+        if (j != i) {
+          EXPECT_GE((p - starts[j]).norm(), 1.0 - 1e-9) << added.name << " and start " << j;
+        }
+      }
+    }
+    // The resized scenario is written and read back like any other.
+    ExpectSameScenario(ParseScenario(EmitScenario(s), s.source_path), s);
+  }
+  // Names in use are skipped: fleet_field's joiner is rov5, so the 5th listed vehicle is rov6.
+  const Scenario five = WithVehicleCount(LoadScenario(kFleetFieldPath), 5);
+  EXPECT_EQ(five.vehicles.back().name, "rov6");
+}
+
+// A server and an agent host compare VehicleFingerprint before the host joins: it ignores what
+// only the server uses, and changes with anything that shapes the vehicles' world or control.
+TEST(Scenario, VehicleFingerprintSeesWhatShapesTheVehiclesOnly) {
+  const Scenario base = LoadScenario(kFleetFieldPath);
+  const std::uint64_t fingerprint = VehicleFingerprint(base);
+  EXPECT_EQ(VehicleFingerprint(LoadScenario(kFleetFieldPath)), fingerprint);
+
+  Scenario server_only = base;
+  server_only.duration_s = 60;
+  server_only.fleet_events.clear();
+  server_only.default_profile = "leak";
+  server_only.guard.enabled = false;
+  server_only.astar.clearance_m = 0.5;
+  server_only.fleet.assignment = FleetAssignment::kPartition;
+  EXPECT_EQ(VehicleFingerprint(server_only), fingerprint);
+
+  std::vector<Scenario> vehicle_side(6, base);
+  vehicle_side[0].ergodic.basis_order = 24;
+  vehicle_side[1].seed = 2;
+  vehicle_side[2].ergodic.min_turn_radius_m = 0.4;
+  vehicle_side[3] = WithVehicleCount(base, 3);
+  vehicle_side[4].structures[0].center_m.x() += 0.1;
+  vehicle_side[5].vehicles[0].model = MotionModel::kSingleIntegrator;
+  for (std::size_t i = 0; i < vehicle_side.size(); ++i) {
+    EXPECT_NE(VehicleFingerprint(vehicle_side[i]), fingerprint) << "change " << i;
+  }
+}
+
+}  // namespace
+}  // namespace sage::maps

@@ -1,0 +1,317 @@
+#include "server/report/report.h"
+
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+namespace sage::server {
+namespace {
+
+namespace fs = std::filesystem;
+
+// A fresh directory per test for the files written.
+class ReportTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    std::string pattern = (fs::temp_directory_path() / "sage_report_test_XXXXXX").string();
+    ASSERT_NE(mkdtemp(pattern.data()), nullptr);
+    dir_ = pattern;
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+
+  std::string Path(const std::string& name) const { return (dir_ / name).string(); }
+  std::string WriteText(const std::string& name, const std::string& text) const {
+    std::ofstream(Path(name)) << text;
+    return Path(name);
+  }
+  static std::string ReadText(const std::string& path) {
+    std::ifstream in(path);
+    std::stringstream buffer;
+    buffer << in.rdbuf();
+    return buffer.str();
+  }
+  // The ScenarioError message of reading `text` as a CSV (empty if it reads fine).
+  std::string ReadError(const std::string& text) const {
+    const std::string path = WriteText("bad.csv", text);
+    try {
+      ReadTrajectoryCsv(path);
+    } catch (const maps::ScenarioError& e) {
+      return e.what();
+    }
+    return "";
+  }
+
+  fs::path dir_;
+};
+
+Trajectory TwoVehicleTrajectory() {
+  Trajectory trajectory;
+  trajectory.vehicle_names = {"rov1", "rov2"};
+  for (int k = 0; k < 50; ++k) {
+    for (int v = 0; v < 2; ++v) {
+      TrajectorySample s;
+      s.time_s = k / 3.0;
+      s.vehicle = v;
+      s.position_m = {std::sin(k * 0.1) * 3.0 + 6.0, 1e-7 * k + v};
+      s.heading_rad = -k / 7.0;
+      s.velocity_mps = {1.0 / (k + 1), -2e-300};
+      s.command_mps = {0.1 * v, 1.0 / 3.0};
+      trajectory.samples.push_back(s);
+    }
+  }
+  return trajectory;
+}
+
+void ExpectSameSamples(const Trajectory& a, const Trajectory& b) {
+  ASSERT_EQ(a.samples.size(), b.samples.size());
+  for (std::size_t i = 0; i < a.samples.size(); ++i) {
+    const TrajectorySample &x = a.samples[i], &y = b.samples[i];
+    EXPECT_NEAR(x.time_s, y.time_s, 1e-9);
+    EXPECT_EQ(x.vehicle, y.vehicle);
+    EXPECT_LE((x.position_m - y.position_m).norm(), 1e-9);
+    EXPECT_NEAR(x.heading_rad, y.heading_rad, 1e-9);
+    EXPECT_LE((x.velocity_mps - y.velocity_mps).norm(), 1e-9);
+    EXPECT_LE((x.command_mps - y.command_mps).norm(), 1e-9);
+  }
+}
+
+// Write then read gives the same samples (within 1e-9) and names; without names, integer ids.
+TEST_F(ReportTest, CsvRoundTrip) {
+  Trajectory named = TwoVehicleTrajectory();
+  WriteTrajectoryCsv(Path("named.csv"), named);
+  EXPECT_EQ(ReadText(Path("named.csv")).substr(0, 40), "t,vehicle,x,y,heading,vx,vy,cmd_x,cmd_y\n");
+  const Trajectory named_back = ReadTrajectoryCsv(Path("named.csv"));
+  ExpectSameSamples(named, named_back);
+  EXPECT_EQ(named_back.vehicle_names, named.vehicle_names);
+
+  Trajectory ids = named;
+  ids.vehicle_names.clear();
+  WriteTrajectoryCsv(Path("ids.csv"), ids);
+  const Trajectory ids_back = ReadTrajectoryCsv(Path("ids.csv"));
+  ExpectSameSamples(ids, ids_back);
+  EXPECT_TRUE(ids_back.vehicle_names.empty());
+  EXPECT_FALSE(fs::exists(Path("ids.csv.tmp")));
+}
+
+// Columns in any order, extra columns ignored, optional ones default to 0, names numbered in
+// order of first appearance, samples sorted by (time, vehicle); CRLF, a BOM and blank lines pass.
+TEST_F(ReportTest, CsvColumnsInAnyOrderAndVehicleNames) {
+  const std::string path = WriteText("log.csv",
+                                     "\xEF\xBB\xBF" "depth,y,x,vehicle,t\r\n"
+                                     "7,2.5,1.5,rov_b,0.2\r\n"
+                                     "7,3.5,4.5,rov_a,0.1\r\n"
+                                     "\r\n"
+                                     "whatever,5,6,rov_b,0.1\r\n");
+  const Trajectory t = ReadTrajectoryCsv(path);
+  ASSERT_EQ(t.samples.size(), 3u);
+  EXPECT_EQ(t.vehicle_names, (std::vector<std::string>{"rov_b", "rov_a"}));
+  EXPECT_EQ(t.samples[0].time_s, 0.1);
+  EXPECT_EQ(t.samples[0].vehicle, 0);
+  EXPECT_EQ(t.samples[0].position_m, Eigen::Vector2d(6, 5));
+  EXPECT_EQ(t.samples[1].vehicle, 1);
+  EXPECT_EQ(t.samples[1].position_m, Eigen::Vector2d(4.5, 3.5));
+  EXPECT_EQ(t.samples[2].time_s, 0.2);
+  EXPECT_EQ(t.samples[2].heading_rad, 0.0);
+  EXPECT_EQ(t.samples[2].command_mps, Eigen::Vector2d::Zero());
+}
+
+// Each malformed file gives one line naming the file (and the line where there is one).
+TEST_F(ReportTest, CsvErrorsAreOneLineNamingFileAndLine) {
+  const std::string file = Path("bad.csv");
+  const std::string header = "t,vehicle,x,y\n";
+  EXPECT_EQ(ReadError(""), file + ": empty file (need a header with t, vehicle, x, y)");
+  EXPECT_EQ(ReadError("t,vehicle,y\n0,0,1\n"), file + ": missing column 'x' (need t, vehicle, x, y)");
+  EXPECT_EQ(ReadError(header + "0,0,1,2\n0.1,0,abc,2\n"), file + ":3: column 'x' = 'abc': not a number");
+  EXPECT_EQ(ReadError(header + "0,0,,2\n"), file + ":2: column 'x' = '': not a number");
+  EXPECT_EQ(ReadError(header + "0,0,1\n"), file + ":2: 3 fields, the header has 4");
+  EXPECT_EQ(ReadError(header + "0,0,1,2,3\n"), file + ":2: 5 fields, the header has 4");
+  EXPECT_EQ(ReadError(header + "inf,0,1,2\n"), file + ":2: column 't' = 'inf': not finite");
+  EXPECT_EQ(ReadError(header + "0,0,nan,2\n"), file + ":2: column 'x' = 'nan': not finite");
+  EXPECT_EQ(ReadError(header + "0,0,1e999,2\n"), file + ":2: column 'x' = '1e999': not finite");
+  EXPECT_EQ(ReadError(header + "0,-1,1,2\n"), file + ":2: column 'vehicle' = '-1': must be an id in 0..65535 or a name");
+  EXPECT_EQ(ReadError("t,x,x,y,vehicle\n"), file + ":1: duplicate column 'x'");
+  EXPECT_EQ(ReadError(header + "0,0,1,2\n"), "");
+  EXPECT_EQ(ReadError(header + "+0.5,0,1e-400,5e-324\n"), "");  // a sign, an underflow, a subnormal
+  try {
+    ReadTrajectoryCsv(Path("missing.csv"));
+    FAIL() << "no error for a missing file";
+  } catch (const maps::ScenarioError& e) {
+    EXPECT_EQ(std::string(e.what()).rfind(Path("missing.csv") + ": cannot read:", 0), 0u) << e.what();
+  }
+}
+
+MissionMetrics SampleMetrics() {
+  MissionMetrics m;
+  m.controller = "ergodic";
+  m.profile = "one_extreme";
+  m.duration_s = 300.0;
+  m.vehicle_count = 2;
+  m.ergodic_metric = 1.25e-3;
+  m.time_outside_s = 3.5;
+  m.time_pinned_s = 1.25;
+  m.metric_over_time = {{1.0, 0.5}, {2.0, 0.25}};
+  ValveMetrics p1{"P1", 0.55, 3, 6.5, 8.0, 1.5, {2.0, 7.0, 15.0}};
+  ValveMetrics p3{"P3", 0.10, 0, std::numeric_limits<double>::quiet_NaN(), 300.0, 0.0, {}};
+  m.valves = {p1, p3};
+  EventResponse leak;
+  leak.time_s = 150.0;
+  leak.valve = "P1";
+  leak.new_weight = 0.56;
+  leak.heading_change_rad = 0.7;
+  leak.time_to_next_visit_s = 3.2;
+  leak.interval_before_s = 12.0;
+  leak.interval_after_s = std::numeric_limits<double>::quiet_NaN();
+  m.events = {leak};
+  return m;  // visit_weight_correlation stays NaN
+}
+
+// metrics.json parses back with every documented key and value; NaN is written as null.
+TEST_F(ReportTest, MetricsJsonHasEveryKey) {
+  WriteMetricsJson(Path("metrics.json"), SampleMetrics());
+  EXPECT_FALSE(fs::exists(Path("metrics.json.tmp")));
+  const nlohmann::json j = nlohmann::json::parse(ReadText(Path("metrics.json")));
+  EXPECT_EQ(j.size(), 11u);
+  EXPECT_EQ(j.at("controller"), "ergodic");
+  EXPECT_EQ(j.at("profile"), "one_extreme");
+  EXPECT_EQ(j.at("duration_s"), 300.0);
+  EXPECT_EQ(j.at("vehicle_count"), 2);
+  EXPECT_TRUE(j.at("visit_weight_correlation").is_null());
+  EXPECT_EQ(j.at("ergodic_metric"), 1.25e-3);
+  EXPECT_EQ(j.at("time_outside_s"), 3.5);
+  EXPECT_EQ(j.at("time_pinned_s"), 1.25);
+  ASSERT_EQ(j.at("metric_over_time").size(), 2u);
+  EXPECT_EQ(j.at("metric_over_time")[1].at("t"), 2.0);
+  EXPECT_EQ(j.at("metric_over_time")[1].at("ergodic_metric"), 0.25);
+  ASSERT_EQ(j.at("valves").size(), 2u);
+  const nlohmann::json& p1 = j.at("valves")[0];
+  EXPECT_EQ(p1.size(), 7u);
+  EXPECT_EQ(p1.at("name"), "P1");
+  EXPECT_EQ(p1.at("weight"), 0.55);
+  EXPECT_EQ(p1.at("visits"), 3);
+  EXPECT_EQ(p1.at("mean_interval_s"), 6.5);
+  EXPECT_EQ(p1.at("max_gap_s"), 8.0);
+  EXPECT_EQ(p1.at("time_near_s"), 1.5);
+  EXPECT_EQ(p1.at("visit_times_s"), nlohmann::json({2.0, 7.0, 15.0}));
+  EXPECT_TRUE(j.at("valves")[1].at("mean_interval_s").is_null());
+  EXPECT_TRUE(j.at("valves")[1].at("visit_times_s").empty());
+  ASSERT_EQ(j.at("events").size(), 1u);
+  const nlohmann::json& leak = j.at("events")[0];
+  EXPECT_EQ(leak.size(), 7u);
+  EXPECT_EQ(leak.at("valve"), "P1");
+  EXPECT_EQ(leak.at("time_s"), 150.0);
+  EXPECT_EQ(leak.at("heading_change_rad"), 0.7);
+  EXPECT_EQ(leak.at("time_to_next_visit_s"), 3.2);
+  EXPECT_TRUE(leak.at("interval_after_s").is_null());
+}
+
+// A path that cannot be written throws std::runtime_error naming it, and leaves no file behind.
+TEST_F(ReportTest, UnwritablePathThrowsNamingIt) {
+  const std::string path = Path("no_such_dir/metrics.json");
+  try {
+    WriteMetricsJson(path, SampleMetrics());
+    FAIL() << "no error";
+  } catch (const std::runtime_error& e) {
+    EXPECT_EQ(std::string(e.what()), path + ": cannot write: No such file or directory");
+  }
+}
+
+// A run directory is made (with its parents) and proven writable before a mission runs; a file
+// in the way is one error naming the option and the path, and nothing is left behind.
+TEST_F(ReportTest, RunDirectoryIsPreparedOrRefusedUpFront) {
+  const std::string nested = Path("runs/a/b");
+  PrepareRunDirectory(nested);
+  EXPECT_TRUE(fs::is_directory(nested));
+  EXPECT_TRUE(fs::is_empty(nested)) << "the write probe was left behind";
+  const std::string blocked = WriteText("a_file", "x") + "/run";
+  try {
+    PrepareRunDirectory(blocked);
+    FAIL() << "no error";
+  } catch (const maps::ScenarioError& e) {
+    EXPECT_EQ(std::string(e.what()).rfind("--out = " + blocked + ": cannot write there: ", 0), 0u) << e.what();
+  }
+}
+
+// The SVG is one document: <svg ...> to </svg>\n, one polyline per vehicle (a long path decimated
+// to at most ~5000 points), one label per valve with its weight.
+TEST_F(ReportTest, PlotSvgHasPathsAndLabels) {
+  maps::Scenario scenario;
+  scenario.workspace = {12.0, 10.0};
+  maps::ChristmasTree a{"XT-A", {3.0, 5.0}, {1.5, 1.5}, 2.5, {}};
+  a.valves = {{"P1", {3.0, 6.2}, 0.25 * Eigen::Matrix2d::Identity()}, {"P2", {4.2, 5.0}, 0.25 * Eigen::Matrix2d::Identity()}};
+  maps::ChristmasTree b{"XT-B", {9.0, 5.0}, {1.5, 1.5}, 2.5, {}};
+  b.valves = {{"P3", {9.0, 3.8}, 0.25 * Eigen::Matrix2d::Identity()}};
+  scenario.structures = {a, b};
+  Trajectory trajectory = TwoVehicleTrajectory();
+  for (int k = 0; k < 20000; ++k) trajectory.samples.push_back({k * 0.01, 2, Eigen::Vector2d(0.5 + k * 1e-4, 9.0)});
+
+  WritePlotSvg(Path("plot.svg"), scenario, Eigen::Vector3d(0.55, 0.35, 0.10), trajectory, "ergodic <one_extreme>");
+  const std::string svg = ReadText(Path("plot.svg"));
+  const auto count = [&](const std::string& needle) {
+    int n = 0;
+    for (std::size_t at = svg.find(needle); at != std::string::npos; at = svg.find(needle, at + 1)) ++n;
+    return n;
+  };
+  EXPECT_EQ(svg.rfind("<svg", 0), 0u);
+  ASSERT_GE(svg.size(), 7u);
+  EXPECT_EQ(svg.substr(svg.size() - 7), "</svg>\n");
+  EXPECT_NE(svg.find("width=\"800\""), std::string::npos);
+  EXPECT_EQ(count("<polyline"), 3);
+  EXPECT_EQ(count(">P1 (0.55)<"), 1);
+  EXPECT_EQ(count(">P2 (0.35)<"), 1);
+  EXPECT_EQ(count(">P3 (0.10)<"), 1);
+  EXPECT_EQ(count(">rov1<"), 1);
+  EXPECT_EQ(count(">vehicle 2<"), 1);
+  EXPECT_EQ(count("ergodic &lt;one_extreme&gt;"), 1);
+  // The 20000-point path keeps at most 5001 points (each followed by a space or the quote).
+  const std::size_t last = svg.rfind("<polyline");
+  const std::string points = svg.substr(last, svg.find("/>", last) - last);
+  EXPECT_LE(std::count(points.begin(), points.end(), ','), 5001);
+  EXPECT_GT(std::count(points.begin(), points.end(), ','), 4000);
+}
+
+MissionMetrics AstarRun() {
+  MissionMetrics m = SampleMetrics();
+  m.controller = "astar";
+  m.valves[0].visits = m.valves[1].visits = 37;
+  m.valves[0].mean_interval_s = m.valves[1].mean_interval_s = 8.1;
+  return m;
+}
+
+// Table 1: every valve, both runs, "---" for P3's undefined interval, the signed correlation,
+// "undefined" for A*'s, and no line wider than 100 columns, even with three runs.
+TEST(FormatTable, PaperLayout) {
+  MissionMetrics ergodic = SampleMetrics();
+  ergodic.visit_weight_correlation = 0.93;
+  const std::string table = FormatTable({AstarRun(), ergodic});
+  for (const char* needle : {"Valve", "Weight", "astar", "ergodic", "visits", "interval", "P1", "P3", "0.55",
+                             "8.1 s", "6.5 s", "---", "+0.93", "undefined", "1.25e-03", "longest gap"}) {
+    EXPECT_NE(table.find(needle), std::string::npos) << needle << " missing from\n" << table;
+  }
+  EXPECT_EQ(table.find("one_extreme"), std::string::npos);  // same profile: not in the labels
+  const auto widest = [](const std::string& text) {
+    std::size_t widest = 0, start = 0;
+    for (std::size_t end; (end = text.find('\n', start)) != std::string::npos; start = end + 1) {
+      widest = std::max(widest, end - start);
+    }
+    return widest;
+  };
+  EXPECT_LE(widest(table), 100u) << table;
+
+  // Runs under different profiles: labels name the profile and each run shows its own weights.
+  MissionMetrics graded = ergodic;
+  graded.profile = "graded";
+  graded.valves[0].weight = 0.40;
+  const std::string three = FormatTable({AstarRun(), ergodic, graded});
+  EXPECT_NE(three.find("ergodic (graded)"), std::string::npos) << three;
+  EXPECT_NE(three.find("ergodic (one_extreme)"), std::string::npos) << three;
+  EXPECT_NE(three.find("0.40"), std::string::npos) << three;
+  EXPECT_LE(widest(three), 100u) << three;
+}
+
+}  // namespace
+}  // namespace sage::server
