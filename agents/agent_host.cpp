@@ -9,8 +9,6 @@
 #include "agents/physics_world.h"
 #include "agents/tour_controller.h"
 #include "agents/tour_planner.h"
-#include "maps/distance_field.h"
-#include "maps/seabed_map.h"
 
 namespace sage::agents {
 
@@ -24,12 +22,11 @@ struct AgentHost::Impl {
     Eigen::Vector2d command = Eigen::Vector2d::Zero();
   };
 
-  maps::Scenario scenario;
+  const maps::Scenario& scenario;
   Guidance guidance;
-  maps::SpectralBasis basis;
-  maps::OccupancyGrid obstacles;  // the seabed OctoMap projected over the operating depth band
-  maps::DistanceField clearance;  // distance to the nearest structure, for the obstacle filter
-  maps::OccupancyGrid grid;       // obstacles inflated by the A* clearance
+  const maps::SpectralBasis& basis;
+  const maps::DistanceField& clearance;  // distance to the nearest structure, for the obstacle filter
+  const maps::OccupancyGrid& grid;       // obstacles inflated by the A* clearance
   PhysicsWorld world;
   Tour tour;                      // shared by every A* vehicle (same valves, same grid)
   std::vector<Vehicle> vehicles;
@@ -37,13 +34,12 @@ struct AgentHost::Impl {
   int physics_substeps = 1;
   double control_dt = 0.1;
 
-  Impl(const maps::Scenario& s, Guidance g)
+  Impl(const maps::World& w, const maps::Scenario& s, Guidance g)
       : scenario(s),
         guidance(g),
-        basis(s.workspace.width_m, s.workspace.height_m, s.ergodic.basis_order),
-        obstacles(maps::SeabedMap::OperatingSlice(s)),
-        clearance(obstacles),
-        grid(obstacles.Inflated(s.astar.clearance_m)),
+        basis(w.basis()),
+        clearance(w.clearance()),
+        grid(w.astar_grid()),
         world(s.workspace, s.structures) {
     control_dt = 1.0 / s.control_rate_hz;
     physics_substeps = std::max(1, static_cast<int>(std::lround(s.physics_rate_hz / s.control_rate_hz)));
@@ -77,8 +73,8 @@ struct AgentHost::Impl {
   }
 };
 
-AgentHost::AgentHost(const maps::Scenario& scenario, Guidance guidance)
-    : impl_(std::make_unique<Impl>(scenario, guidance)) {}
+AgentHost::AgentHost(const maps::World& world, const maps::Scenario& scenario, Guidance guidance)
+    : impl_(std::make_unique<Impl>(world, scenario, guidance)) {}
 AgentHost::~AgentHost() = default;
 
 void AgentHost::AddVehicle(VehicleId id, const maps::VehicleSpec& spec, const Eigen::VectorXd& tour_weights) {
@@ -118,6 +114,8 @@ std::vector<VehicleId> AgentHost::ids() const {
   for (const Impl::Vehicle& v : impl_->vehicles) out.push_back(v.id);
   return out;
 }
+
+Guidance AgentHost::guidance() const { return impl_->guidance; }
 
 int AgentHost::vehicle_count() const { return static_cast<int>(impl_->vehicles.size()); }
 
@@ -162,6 +160,11 @@ Eigen::Vector2d AgentHost::LastCommand(VehicleId id) const { return impl_->Find(
 const CoverageAccumulator* AgentHost::Coverage(VehicleId id) const {
   const Impl::Vehicle& v = impl_->Find(id);
   return v.ergodic ? &v.ergodic->coverage() : nullptr;
+}
+
+void AgentHost::RestoreCoverage(VehicleId id, const Eigen::VectorXd& sums, double kernel_time_s) {
+  Impl::Vehicle& v = impl_->Find(id);
+  if (v.ergodic) v.ergodic->RestoreCoverage(sums, kernel_time_s);
 }
 
 Eigen::Vector2d AgentHost::PreviewCommand(VehicleId id, const Eigen::VectorXd& phi, double time_s) const {

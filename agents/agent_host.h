@@ -11,9 +11,11 @@
 #include <Eigen/Core>
 
 #include "agents/ergodic_controller.h"
+#include "agents/fleet_messages.h"
 #include "agents/vehicle_controller.h"
 #include "maps/scenario/scenario.h"
 #include "maps/spectral_basis.h"
+#include "maps/world.h"
 
 namespace sage::agents {
 
@@ -22,26 +24,20 @@ enum class Guidance {
   kAstar,    ///< the fixed A* inspection tour (the paper's baseline)
 };
 
-/// What the server assigns one vehicle: its target coefficients and the coverage of the rest of
-/// the fleet (Mathew & Mezic shared coverage; empty sums = the vehicle covers alone).
-struct VehicleTarget {
-  Eigen::VectorXd phi;         ///< target phi_k, flat-indexed as the basis
-  Eigen::VectorXd fleet_sums;  ///< the other vehicles' running sums, or empty
-  double fleet_time_s = 0.0;   ///< the other vehicles' kernel time (s)
-};
-
 class AgentHost {
  public:
-  /// Builds the world of `scenario` (seabed OctoMap, its projection, the distance field, the
-  /// Box2D structures, the basis).
-  AgentHost(const maps::Scenario& scenario, Guidance guidance);
+  /// Vehicles of `scenario` in `world` (its basis, distance field and A* grid; both must
+  /// outlive the host); the host builds its own Box2D world with the structures.
+  AgentHost(const maps::World& world, const maps::Scenario& scenario, Guidance guidance);
   ~AgentHost();
   AgentHost(const AgentHost&) = delete;
   AgentHost& operator=(const AgentHost&) = delete;
 
-  /// Adds a vehicle under a fleet-wide id chosen by the caller (unique across hosts). An A*
-  /// vehicle starts its tour with `tour_weights` (normalised per valve).
+  /// Adds a vehicle under a fleet-wide id chosen by the caller (unique across hosts) at
+  /// spec.start_m and spec.start_heading_rad. An A* vehicle starts its tour with `tour_weights`
+  /// (normalised per valve; empty: equal).
   void AddVehicle(VehicleId id, const maps::VehicleSpec& spec, const Eigen::VectorXd& tour_weights = {});
+  Guidance guidance() const;
   void RemoveVehicle(VehicleId id);
   bool Contains(VehicleId id) const;
   std::vector<VehicleId> ids() const;  ///< in the order they were added
@@ -63,6 +59,9 @@ class AgentHost {
   Eigen::Vector2d LastCommand(VehicleId id) const;  ///< commanded velocity of the last Step (m/s)
   /// The vehicle's own coverage (nullptr under A*).
   const CoverageAccumulator* Coverage(VehicleId id) const;
+  /// Starts the vehicle's coverage from given sums and kernel time (a resumed mission). No-op
+  /// under A*.
+  void RestoreCoverage(VehicleId id, const Eigen::VectorXd& sums, double kernel_time_s);
   /// The command vehicle `id` would give now at its current state with target phi instead of its
   /// own (no state changes). For measuring how a risk change redirects a vehicle.
   Eigen::Vector2d PreviewCommand(VehicleId id, const Eigen::VectorXd& phi, double time_s) const;

@@ -15,30 +15,6 @@ Eigen::Vector2d TurnToward(const Eigen::Vector2d& from, const Eigen::Vector2d& t
   return {c * from.x() - s * from.y(), s * from.x() + c * from.y()};
 }
 
-
-CoverageAccumulator::CoverageAccumulator(int size, double forgetting_time_s)
-    : forgetting_time_s_(forgetting_time_s), sums_(Eigen::VectorXd::Zero(size)) {
-  if (!(forgetting_time_s > 0.0)) throw std::invalid_argument("CoverageAccumulator: forgetting time must be > 0");
-}
-
-void CoverageAccumulator::Add(const Eigen::VectorXd& f, double dt_s) {
-  if (dt_s <= 0.0) return;
-  if (std::isfinite(forgetting_time_s_)) {
-    // Exponential kernel g(s) = exp(-s/T): the history decays by exp(-dt/T) each step, so after
-    // a risk change the old coverage stops dominating within a few T.
-    const double decay = std::exp(-dt_s / forgetting_time_s_);
-    sums_ *= decay;
-    time_s_ *= decay;
-  }
-  sums_.noalias() += dt_s * f;
-  time_s_ += dt_s;
-}
-
-void CoverageAccumulator::Reset() {
-  sums_.setZero();
-  time_s_ = 0.0;
-}
-
 ErgodicController::ErgodicController(const maps::SpectralBasis& basis, double speed_mps, double forgetting_time_s,
                                      double min_turn_radius_m)
     : basis_(basis),

@@ -15,28 +15,12 @@
 #include <Eigen/Core>
 
 #include "agents/vehicle_controller.h"
+#include "maps/coverage.h"
 #include "maps/spectral_basis.h"
 
 namespace sage::agents {
 
-/// Running, optionally forgetting, integral of the basis along a path.
-class CoverageAccumulator {
- public:
-  /// size: number of coefficients; forgetting_time_s: T (> 0, infinity = none).
-  CoverageAccumulator(int size, double forgetting_time_s = std::numeric_limits<double>::infinity());
-
-  /// Decays the history by exp(-dt/T) and adds f * dt (f = F_k at the current position).
-  void Add(const Eigen::VectorXd& f, double dt_s);
-  const Eigen::VectorXd& sums() const { return sums_; }
-  double time_s() const { return time_s_; }  ///< W(t): integral of the kernel (s)
-  double forgetting_time_s() const { return forgetting_time_s_; }
-  void Reset();
-
- private:
-  double forgetting_time_s_;
-  Eigen::VectorXd sums_;
-  double time_s_ = 0.0;
-};
+using maps::CoverageAccumulator;
 
 /// Rotates unit vector `from` toward unit vector `to` by at most max_angle_rad (>= 0). A
 /// reversal (opposite to within 1e-9 rad, where the sign of the cross product is rounding
@@ -66,6 +50,8 @@ class ErgodicController final : public VehicleController {
   /// Ergodic metric of CoverageError().
   double Metric() const;
   const CoverageAccumulator& coverage() const { return coverage_; }
+  /// Starts from given coverage (a resumed vehicle's last accounted sums and kernel time).
+  void RestoreCoverage(const Eigen::VectorXd& sums, double time_s) { coverage_.Restore(sums, time_s); }
 
  private:
   const maps::SpectralBasis& basis_;

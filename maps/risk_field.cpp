@@ -1,15 +1,29 @@
 #include "maps/risk_field.h"
 
-#include "maps/seabed_map.h"
-
 #include <cmath>
 #include <numbers>
 #include <stdexcept>
 
-#include <Eigen/Eigenvalues>
-#include <Eigen/LU>
+#include "maps/seabed_map.h"
 
 namespace sage::maps {
+namespace {
+
+// Closed forms for a symmetric 2x2 covariance [[a, b], [b, d]]: its largest eigenvalue
+// (a + d)/2 + sqrt(((a - d)/2)^2 + b^2), determinant and inverse. Eigen's general EigenSolver
+// cost seven seconds of compile time for this one number.
+double LargestEigenvalue(const Eigen::Matrix2d& m) {
+  const double b = 0.5 * (m(0, 1) + m(1, 0));
+  return 0.5 * (m(0, 0) + m(1, 1)) + std::hypot(0.5 * (m(0, 0) - m(1, 1)), b);
+}
+double Determinant(const Eigen::Matrix2d& m) { return m(0, 0) * m(1, 1) - m(0, 1) * m(1, 0); }
+Eigen::Matrix2d Inverse(const Eigen::Matrix2d& m) {
+  Eigen::Matrix2d inverse;
+  inverse << m(1, 1), -m(0, 1), -m(1, 0), m(0, 0);
+  return inverse / Determinant(m);
+}
+
+}  // namespace
 
 RiskField::RiskField(const SpectralBasis& basis, std::vector<GaussianComponent> components)
     : components_(std::move(components)) {
@@ -22,10 +36,14 @@ RiskField::RiskField(const SpectralBasis& basis, std::vector<GaussianComponent> 
 }
 
 RiskField RiskField::ForScenario(const Scenario& scenario, const SpectralBasis& basis) {
+  return ForScenario(scenario, basis, SeabedMap::OperatingSlice(scenario));
+}
+
+RiskField RiskField::ForScenario(const Scenario& scenario, const SpectralBasis& basis, const OccupancyGrid& obstacles) {
   std::vector<GaussianComponent> components;
   for (const Valve& valve : scenario.AllValves()) components.push_back({valve.position_m, valve.covariance_m2});
   RiskField field(basis, std::move(components));
-  field.ExcludeBlocked(basis, SeabedMap::OperatingSlice(scenario).Inflated(kVehicleClearance_m));
+  field.ExcludeBlocked(basis, obstacles.Inflated(kVehicleClearance_m));
   return field;
 }
 
@@ -35,9 +53,9 @@ void RiskField::ExcludeBlocked(const SpectralBasis& basis, const OccupancyGrid& 
   Eigen::VectorXd f;
   for (int i = 0; i < component_count(); ++i) {
     const GaussianComponent& g = components_[i];
-    const Eigen::Matrix2d inverse = g.covariance_m2.inverse();
-    const double norm = 1.0 / (2.0 * std::numbers::pi * std::sqrt(g.covariance_m2.determinant()));
-    const double reach = 5.0 * std::sqrt(g.covariance_m2.eigenvalues().real().maxCoeff());
+    const Eigen::Matrix2d inverse = Inverse(g.covariance_m2);
+    const double norm = 1.0 / (2.0 * std::numbers::pi * std::sqrt(Determinant(g.covariance_m2)));
+    const double reach = 5.0 * std::sqrt(LargestEigenvalue(g.covariance_m2));
     const Eigen::Vector2i lo = blocked.CellOf(g.mean_m - Eigen::Vector2d::Constant(reach));
     const Eigen::Vector2i hi = blocked.CellOf(g.mean_m + Eigen::Vector2d::Constant(reach));
     double mass = 0.0;
@@ -101,6 +119,13 @@ void RiskField::SetWeight(int component, double weight) {
   SetWeights(w);
 }
 
+Eigen::VectorXd RiskField::CoefficientsFor(const Eigen::VectorXd& weights) const {
+  if (weights.size() != component_count() || !(weights.sum() > 0.0)) {
+    throw std::invalid_argument("RiskField::CoefficientsFor: wrong size or all-zero weights");
+  }
+  return per_component_ * (weights / weights.sum());
+}
+
 void RiskField::Recompute() {
   weights_ = raw_weights_ / raw_weights_.sum();
   coefficients_.noalias() = per_component_ * weights_;  // phi_k is linear in the weights: O(M K^2)
@@ -111,8 +136,8 @@ double RiskField::Density(const Eigen::Vector2d& x) const {
   for (int i = 0; i < component_count(); ++i) {
     const Eigen::Matrix2d& cov = components_[i].covariance_m2;
     const Eigen::Vector2d d = x - components_[i].mean_m;
-    const double det = cov.determinant();
-    const double mahalanobis = d.dot(cov.inverse() * d);
+    const double det = Determinant(cov);
+    const double mahalanobis = d.dot(Inverse(cov) * d);
     density += weights_[i] * std::exp(-0.5 * mahalanobis) / (2.0 * std::numbers::pi * std::sqrt(det));
   }
   return density;

@@ -48,6 +48,10 @@ class RiskField {
   /// The scenario's risk field: one component per valve (file order), with the water no
   /// vehicle can reach (structures grown by kVehicleClearance_m, from the seabed map) excluded.
   static RiskField ForScenario(const Scenario& scenario, const SpectralBasis& basis);
+  /// The same, given the seabed's obstacle grid at the operating depth (World builds it once).
+  static RiskField ForScenario(const Scenario& scenario, const SpectralBasis& basis, const OccupancyGrid& obstacles);
+  /// phi_k of the mixture with other (raw, >= 0, not all zero) weights, leaving this field as it is.
+  Eigen::VectorXd CoefficientsFor(const Eigen::VectorXd& weights) const;
 
   /// Takes out of each component the part of its mass in the blocked cells (no hull can be
   /// there) and renormalises it:  phi_k^i <- (phi_k^i - sum_c N_i(x_c) F_k(x_c) A) / (1 - sum_c N_i(x_c) A),

@@ -6,6 +6,7 @@
 #include <cerrno>
 #include <cmath>
 #include <cstring>
+#include <sstream>
 #include <stdexcept>
 
 #include <fcntl.h>
@@ -116,17 +117,15 @@ OccupancyGrid SeabedMap::Project(double z_min_m, double z_max_m, double grid_res
   return grid;
 }
 
-void SeabedMap::WriteBinary(const std::string& path) const {
-  errno = 0;
+std::string SeabedMap::BinaryBytes() const {
+  std::ostringstream out;
   bool written = false;
   {
     QuietStderr quiet;
-    written = tree_->writeBinaryConst(path);
+    written = tree_->writeBinaryConst(out);
   }
-  if (!written) {
-    throw std::runtime_error("SeabedMap: cannot write OctoMap binary to " + path +
-                             (errno != 0 ? std::string(": ") + std::strerror(errno) : std::string()));
-  }
+  if (!written) throw std::runtime_error("SeabedMap: OctoMap could not serialise the seabed tree");
+  return std::move(out).str();
 }
 
 OccupancyGrid SeabedMap::OperatingSlice(const Scenario& scenario) {

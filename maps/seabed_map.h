@@ -2,7 +2,7 @@
 // The seabed as an OctoMap: the scenario's XT structures (boxes from the seabed up to their
 // height) inserted as occupied voxels into an octomap::OcTree. It is the source of the world's
 // obstacles: the 2-D occupancy grid the planners and vehicles use is its projection over the
-// vehicles' operating depth band. Saved as .bt so octovis can show it.
+// vehicles' operating depth band. Serialised as .bt so octovis can show it.
 #include <memory>
 #include <string>
 
@@ -43,8 +43,9 @@ class SeabedMap {
   /// Project() over the operating depth band at the scenario's A* grid resolution.
   static OccupancyGrid OperatingSlice(const Scenario& scenario);
 
-  /// Writes the tree as OctoMap binary (.bt). Throws std::runtime_error naming the path on failure.
-  void WriteBinary(const std::string& path) const;
+  /// The tree as OctoMap binary (.bt bytes; the run directory writes them as seabed.bt, which
+  /// octovis shows).
+  std::string BinaryBytes() const;
 
  private:
   std::unique_ptr<octomap::OcTree> tree_;

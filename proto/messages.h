@@ -25,8 +25,10 @@ using RiskUpdate = sage_msgs_msg_dds__RiskUpdate_;
 using RiskUpdateResult = sage_msgs_msg_dds__RiskUpdateResult_;
 /// The server's mission status (unkeyed).
 using MissionStatus = sage_msgs_msg_dds__MissionStatus_;
-/// An operator's command: "add" count / "remove" vehicle_id / "stop" (unkeyed).
+/// A command: operators' "reserve" / "remove" / "stop", the server's "retire" (unkeyed).
 using FleetCommand = sage_msgs_msg_dds__FleetCommand_;
+/// The server's answer to an operator's FleetCommand (unkeyed).
+using FleetCommandResult = sage_msgs_msg_dds__FleetCommandResult_;
 
 #define SAGE_PROTO_MESSAGE_TRAITS(Type, c_name, topic)                           \
   template <>                                                                    \
@@ -44,6 +46,7 @@ SAGE_PROTO_MESSAGE_TRAITS(RiskUpdate, sage_msgs_msg_dds__RiskUpdate_, kRiskUpdat
 SAGE_PROTO_MESSAGE_TRAITS(RiskUpdateResult, sage_msgs_msg_dds__RiskUpdateResult_, kRiskUpdateResultTopic);
 SAGE_PROTO_MESSAGE_TRAITS(MissionStatus, sage_msgs_msg_dds__MissionStatus_, kMissionStatusTopic);
 SAGE_PROTO_MESSAGE_TRAITS(FleetCommand, sage_msgs_msg_dds__FleetCommand_, kFleetCommandTopic);
+SAGE_PROTO_MESSAGE_TRAITS(FleetCommandResult, sage_msgs_msg_dds__FleetCommandResult_, kFleetCommandResultTopic);
 
 #undef SAGE_PROTO_MESSAGE_TRAITS
 

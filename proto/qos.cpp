@@ -70,6 +70,13 @@ Qos VehicleStateReaderQos() {
   return qos;
 }
 
+Qos VehicleStateRecordQos(int depth) {
+  if (depth < 1) throw std::invalid_argument("VehicleStateRecordQos: depth must be >= 1");
+  Qos qos = VehicleStateReaderQos();
+  SetKeepLast(qos, depth);
+  return qos;
+}
+
 Qos VehicleCoverageQos() {
   Qos qos;
   // Reliable although each sample supersedes the previous (running sums with seq): a coverage
@@ -110,6 +117,8 @@ Qos RiskUpdateQos() {
   SetTransientLocal(qos, 16);
   return qos;
 }
+
+Qos FleetCommandResultQos() { return RiskUpdateResultQos(); }
 
 Qos RiskUpdateResultQos() {
   Qos qos;

@@ -41,6 +41,11 @@ Qos VehicleStateWriterQos(std::chrono::milliseconds lease = kDefaultVehicleLease
 /// AUTOMATIC liveliness with an infinite lease so it matches writers of any lease.
 Qos VehicleStateReaderQos();
 
+/// VehicleState reader of the mission's record (the server): as VehicleStateReaderQos but
+/// keep-last `depth` per vehicle, so the states a stalled server could not take meanwhile are
+/// still there when it wakes (best-effort: as many as the socket buffer held).
+Qos VehicleStateRecordQos(int depth = 64);
+
 /// VehicleCoverage (vehicles -> server): reliable, keep-last 1 per vehicle, volatile.
 Qos VehicleCoverageQos();
 
@@ -60,7 +65,11 @@ Qos RiskUpdateResultQos();
 /// MissionStatus (server -> everyone): reliable, transient-local, keep-last 1.
 Qos MissionStatusQos();
 
-/// FleetCommand (operators -> server): reliable, volatile, keep-all.
+/// FleetCommand (operators -> server, server -> hosts): reliable, volatile, keep-all.
 Qos FleetCommandQos();
+
+/// FleetCommandResult (server -> the operator who sent the command): reliable, transient-local,
+/// keep-last 16, like RiskUpdateResult.
+Qos FleetCommandResultQos();
 
 }  // namespace sage::proto

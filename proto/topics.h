@@ -9,4 +9,5 @@ inline constexpr const char* kRiskUpdateTopic = "rt/sage/risk_update";
 inline constexpr const char* kRiskUpdateResultTopic = "rt/sage/risk_update_result";
 inline constexpr const char* kMissionStatusTopic = "rt/sage/mission_status";
 inline constexpr const char* kFleetCommandTopic = "rt/sage/fleet_command";
+inline constexpr const char* kFleetCommandResultTopic = "rt/sage/fleet_command_result";
 }  // namespace sage::proto

@@ -8,16 +8,12 @@
 #include <fmt/format.h>
 
 namespace sage::server {
-FleetServer::FleetServer(const maps::Scenario& scenario, const std::string& profile)
-    : scenario_(scenario),
-      basis_(scenario.workspace.width_m, scenario.workspace.height_m, scenario.ergodic.basis_order),
-      risk_(maps::RiskField::ForScenario(scenario, basis_)),
-      valve_positions_(scenario.ValvePositions()),
-      visits_(valve_positions_, scenario.visit_radius_m, scenario.rearm_radius_m) {
+FleetServer::FleetServer(maps::World& world, const maps::Scenario& scenario, const std::string& profile)
+    : world_(world), scenario_(scenario), valve_positions_(scenario.ValvePositions()) {
   profile_ = &scenario_.ProfileOrThrow(profile);
   raw_weights_ = scenario_.ProfileWeights(*profile_);
   schedule_.push_back({0.0, raw_weights_ / raw_weights_.sum()});
-  coverage_.sums = Eigen::VectorXd::Zero(basis_.size());
+  coverage_.sums = Eigen::VectorXd::Zero(basis().size());
   UpdateEffectiveWeights(0.0);
 }
 
@@ -26,10 +22,6 @@ void FleetServer::AddVehicle(int id, const std::string& name) {
   if (!inserted && it->second.alive) return;
   it->second.name = name;
   it->second.alive = true;
-  if (inserted) {
-    it->second.sums = Eigen::VectorXd::Zero(basis_.size());
-    it->second.dense = static_cast<int>(vehicles_.size()) - 1;
-  }
   partition_dirty_ = true;
 }
 
@@ -37,7 +29,6 @@ void FleetServer::RemoveVehicle(int id, bool /*lost*/, double /*time_s*/) {
   auto it = vehicles_.find(id);
   if (it == vehicles_.end() || !it->second.alive) return;
   it->second.alive = false;
-  visits_.Forget(it->second.dense);
   partition_dirty_ = true;
 }
 
@@ -55,26 +46,24 @@ std::vector<int> FleetServer::alive() const {
 
 const std::string& FleetServer::Name(int id) const { return vehicles_.at(id).name; }
 
-void FleetServer::OnState(int id, double time_s, const Eigen::Vector2d& position_m) {
+void FleetServer::SetPosition(int id, const Eigen::Vector2d& position_m) {
   auto it = vehicles_.find(id);
-  if (it == vehicles_.end() || !it->second.alive) return;
-  it->second.position_m = position_m;
-  visits_.Update(it->second.dense, position_m, time_s);
+  if (it != vehicles_.end() && it->second.alive) it->second.position_m = position_m;
 }
 
 bool FleetServer::OnCoverage(int id, std::uint64_t seq, double stamp_s, double kernel_time_s,
                              const Eigen::VectorXd& sums) {
   auto it = vehicles_.find(id);
-  if (it == vehicles_.end() || sums.size() != basis_.size()) return false;
+  if (it == vehicles_.end() || sums.size() != basis().size()) return false;
   VehicleRecord& v = it->second;
   // Late or duplicated: the newer totals are already in. A restarted vehicle counts from 1 again
   // but stamps later: its new running sums replace the old ones.
-  if (v.reported && seq <= v.seq && !(seq < v.seq && stamp_s > v.stamp_s)) return false;
+  if (v.reported && seq <= v.report.seq && !(seq < v.report.seq && stamp_s > v.report.stamp_s)) return false;
   v.reported = true;
-  v.seq = seq;
-  v.stamp_s = stamp_s;
-  v.kernel_time_s = kernel_time_s;
-  v.sums = sums;
+  v.report.seq = seq;
+  v.report.stamp_s = stamp_s;
+  v.report.kernel_time_s = kernel_time_s;
+  v.report.sums = sums;
   return true;
 }
 
@@ -101,9 +90,8 @@ void FleetServer::RecordWeightChange(double time_s, int valve, const std::string
   partition_dirty_ = true;
 }
 
-double FleetServer::Decay(double age_s) const {
-  const double T = scenario_.ergodic.forgetting_time_s;
-  return std::isfinite(T) ? std::exp(-std::max(0.0, age_s) / T) : 1.0;
+double FleetServer::LastVisit(int valve) const {
+  return visits_ != nullptr ? visits_->LastVisit(valve) : -std::numeric_limits<double>::infinity();
 }
 
 // The no-starving-valve guard: a floor under every weight, and a valve no vehicle has visited
@@ -114,7 +102,7 @@ void FleetServer::UpdateEffectiveWeights(double time_s) {
   if (guard.enabled) {
     const double heaviest = w.maxCoeff();
     for (int i = 0; i < w.size(); ++i) {
-      if (time_s - std::max(0.0, visits_.LastVisit(i)) > guard.revisit_bound_s) w[i] = heaviest;
+      if (time_s - std::max(0.0, LastVisit(i)) > guard.revisit_bound_s) w[i] = heaviest;
     }
     w /= w.sum();
     // The floor holds after normalising: valves under it are pinned to it and the rest share
@@ -136,7 +124,7 @@ void FleetServer::UpdateEffectiveWeights(double time_s) {
   }
   if (effective_.size() == w.size() && (effective_ - w).cwiseAbs().maxCoeff() < 1e-15) return;
   effective_ = w;
-  risk_.SetWeights(effective_);
+  world_.mutable_risk().SetWeights(effective_);
 }
 
 // Partition: seed each live vehicle with the free valve nearest to it, then hand out the rest,
@@ -201,51 +189,70 @@ int FleetServer::Cycle(double time_s) {
   UpdateEffectiveWeights(time_s);
   if (partition_dirty_) Repartition();
 
-  coverage_.time_s = time_s;
-  coverage_.sums.setZero();
-  coverage_.kernel_time_s = 0.0;
-  coverage_.accounted_seq.clear();
-  for (const auto& [id, v] : vehicles_) {
-    if (!v.reported) continue;
-    const double decay = Decay(time_s - v.stamp_s);
-    coverage_.sums += decay * v.sums;
-    coverage_.kernel_time_s += decay * v.kernel_time_s;
-    coverage_.accounted_seq[id] = v.seq;
-  }
+  std::map<int, const maps::CoverageReport*> reports;
+  for (const auto& [id, v] : vehicles_)
+    if (v.reported) reports[id] = &v.report;
+  coverage_ = maps::SumFleetCoverage(reports, time_s, basis().size(), scenario_.ergodic.forgetting_time_s);
   return fired;
 }
 
-agents::VehicleTarget FleetServer::TargetFor(int id) const {
+Eigen::VectorXd FleetServer::ShareOf(int id) const {
   const VehicleRecord& v = vehicles_.at(id);
+  if (scenario_.fleet.assignment != maps::FleetAssignment::kPartition || v.valves.empty()) return {};
+  // Its share alone: the mixture of its valves, weighted as the field is (guard included).
+  Eigen::VectorXd phi = Eigen::VectorXd::Zero(basis().size());
+  double total = 0.0;
+  for (int i : v.valves) total += effective_[i];
+  // A share whose valves all weigh zero is still watched, evenly.
+  const double count = static_cast<double>(v.valves.size());
+  for (int i : v.valves) {
+    phi += (total > 0.0 ? effective_[i] / total : 1.0 / count) * world_.risk().ComponentCoefficients(i);
+  }
+  return phi;
+}
+
+agents::VehicleTarget FleetServer::TargetFor(int id) const {
   agents::VehicleTarget target;
-  if (scenario_.fleet.assignment == maps::FleetAssignment::kPartition && !v.valves.empty()) {
-    // Its share alone: the mixture of its valves, weighted as the field is (guard included).
-    target.phi = Eigen::VectorXd::Zero(basis_.size());
-    double total = 0.0;
-    for (int i : v.valves) total += effective_[i];
-    // A share whose valves all weigh zero is still watched, evenly.
-    const double count = static_cast<double>(v.valves.size());
-    for (int i : v.valves) {
-      target.phi += (total > 0.0 ? effective_[i] / total : 1.0 / count) * risk_.ComponentCoefficients(i);
-    }
-    return target;
-  }
-  target.phi = risk_.coefficients();
+  target.phi = ShareOf(id);
+  if (target.phi.size() > 0) return target;
+  target.phi = phi();
   // Shared: the rest of the fleet's coverage, i.e. all of it minus this vehicle's accounted part.
-  target.fleet_sums = coverage_.sums;
-  target.fleet_time_s = coverage_.kernel_time_s;
-  if (v.reported) {
-    const double decay = Decay(time_s_ - v.stamp_s);
-    target.fleet_sums -= decay * v.sums;
-    target.fleet_time_s -= decay * v.kernel_time_s;
-  }
-  target.fleet_time_s = std::max(0.0, target.fleet_time_s);
+  const VehicleRecord& v = vehicles_.at(id);
+  maps::Coverage others =
+      maps::OthersCoverage(coverage_, v.reported ? &v.report : nullptr, time_s_, scenario_.ergodic.forgetting_time_s);
+  target.fleet_sums = std::move(others.sums);
+  target.fleet_time_s = others.kernel_time_s;
   return target;
 }
 
 double FleetServer::FleetMetric() const {
-  if (coverage_.kernel_time_s <= 0.0) return basis_.Metric(-phi());
-  return basis_.Metric(coverage_.sums / coverage_.kernel_time_s - phi());
+  if (coverage_.kernel_time_s <= 0.0) return basis().Metric(-phi());
+  return basis().Metric(coverage_.sums / coverage_.kernel_time_s - phi());
+}
+
+FleetServer::State FleetServer::Checkpoint() const {
+  return {raw_weights_, schedule_, responses_, next_event_, vehicles_, time_s_};
+}
+
+void FleetServer::Restore(const State& state) {
+  const Eigen::Index valves = static_cast<Eigen::Index>(valve_positions_.size());
+  if (state.raw_weights.size() != valves || state.schedule.empty() || state.next_event > profile_->events.size()) {
+    throw std::invalid_argument("FleetServer::Restore: the checkpoint is of another scenario or profile");
+  }
+  for (const auto& [id, v] : state.vehicles) {
+    if (v.reported && v.report.sums.size() != basis().size()) {
+      throw std::invalid_argument("FleetServer::Restore: coverage of another basis order");
+    }
+  }
+  raw_weights_ = state.raw_weights;
+  schedule_ = state.schedule;
+  responses_ = state.responses;
+  next_event_ = state.next_event;
+  vehicles_ = state.vehicles;
+  time_s_ = state.time_s;
+  partition_dirty_ = true;
+  effective_.resize(0);  // derived again (guard, visits) on the next cycle
+  UpdateEffectiveWeights(time_s_);
 }
 
 }  // namespace sage::server

@@ -1,9 +1,9 @@
 #pragma once
-// The server side of a SAGE mission, free of any transport: it keeps the live risk field (the
-// profile's weights, timed and runtime risk updates, the no-starving-valve guard), accounts the
-// whole fleet's coverage from each vehicle's running sums, counts visits, and gives every live
-// vehicle its ergodic target each cycle. The in-process mission and the DDS server node drive
-// the same object.
+// The server side of a SAGE mission's risk and coverage, free of any transport: it keeps the
+// live risk field (the profile's weights, timed and runtime risk updates, the no-starving-valve
+// guard), accounts the whole fleet's coverage from each vehicle's running sums, and gives every
+// live vehicle its ergodic target each cycle (shared coverage or its share of the valves). The
+// mission core (server/mission_core.h) wraps it with the roster, the metrics and the record.
 #include <cstdint>
 #include <map>
 #include <string>
@@ -11,35 +11,35 @@
 
 #include <Eigen/Core>
 
-#include "agents/agent_host.h"
+#include "agents/fleet_messages.h"
+#include "agents/vehicle_controller.h"
+#include "maps/coverage.h"
 #include "maps/risk_field.h"
 #include "maps/scenario/scenario.h"
 #include "maps/spectral_basis.h"
+#include "maps/world.h"
 #include "server/metrics.h"
 #include "server/trajectory.h"
 
 namespace sage::server {
 
-/// The fleet's coverage as the server accounts it at `time_s`: sums and kernel time of every
-/// vehicle that ever reported (the lost ones too: what they covered stays covered, fading with
-/// the forgetting window), and which report of each vehicle is inside.
-struct FleetCoverage {
-  double time_s = 0.0;
-  Eigen::VectorXd sums;
-  double kernel_time_s = 0.0;
-  std::map<int, std::uint64_t> accounted_seq;  ///< vehicle id -> seq of the report included
-};
+using maps::FleetCoverage;
 
 class FleetServer {
  public:
-  /// profile: a profile name (empty: the scenario's default). Throws maps::ScenarioError.
-  FleetServer(const maps::Scenario& scenario, const std::string& profile);
-  FleetServer(const FleetServer&) = delete;  // profile_ points into scenario_
+  /// world: the mission's one World (its risk field is written here); scenario: validated, both
+  /// outlive the server. profile: a profile name (empty: the scenario's default). Throws
+  /// maps::ScenarioError for an unknown profile.
+  FleetServer(maps::World& world, const maps::Scenario& scenario, const std::string& profile);
+  FleetServer(const FleetServer&) = delete;
   FleetServer& operator=(const FleetServer&) = delete;
 
   const maps::Scenario& scenario() const { return scenario_; }
   const maps::RiskProfile& profile() const { return *profile_; }
-  const maps::SpectralBasis& basis() const { return basis_; }
+  const maps::SpectralBasis& basis() const { return world_.basis(); }
+
+  /// The visits the guard reads (the mission's metrics own them); without, no valve is overdue.
+  void UseVisits(const VisitTracker* visits) { visits_ = visits; }
 
   /// A vehicle joined (or was first heard of). Idempotent.
   void AddVehicle(int id, const std::string& name);
@@ -47,18 +47,19 @@ class FleetServer {
   /// Its past coverage stays in the fleet's; the others' targets change on the next cycle.
   void RemoveVehicle(int id, bool lost, double time_s);
   bool IsAlive(int id) const;
+  bool Knows(int id) const { return vehicles_.count(id) != 0; }
   std::vector<int> alive() const;  ///< ascending ids
   const std::string& Name(int id) const;
 
-  /// A vehicle's position at `time_s` (visit accounting).
-  void OnState(int id, double time_s, const Eigen::Vector2d& position_m);
+  /// A vehicle's latest position (m): partition shares start from where vehicles are.
+  void SetPosition(int id, const Eigen::Vector2d& position_m);
   /// A vehicle's running coverage (sums of F_k dt with its forgetting, and its kernel time) as of
   /// mission time stamp_s. Reports with seq <= the last one seen and no newer stamp are stale
   /// (late or duplicated) and ignored: returns false. A lost report costs nothing, the next one
   /// carries the totals. A lower seq with a newer stamp is a restarted vehicle: taken.
   bool OnCoverage(int id, std::uint64_t seq, double stamp_s, double kernel_time_s, const Eigen::VectorXd& sums);
   /// An operator's or sensor's risk update: the valve's raw weight from now on. Throws
-  /// maps::ScenarioError for an unknown valve or a negative weight.
+  /// maps::ScenarioError for an unknown valve or a weight outside [0, 1e12].
   void SetRiskWeight(const std::string& valve, double weight, double time_s, const std::string& source);
 
   /// Applies the profile's events due by `time_s` and the guard; recomputes targets. Returns the
@@ -69,8 +70,10 @@ class FleetServer {
   /// field's phi_k and the rest of the fleet's coverage; partition gives each its share of the
   /// valves and no coverage of the others.
   agents::VehicleTarget TargetFor(int id) const;
+  /// Partition: the vehicle's share as phi_k; empty in shared mode (or before its share exists).
+  Eigen::VectorXd ShareOf(int id) const;
   /// Phi_k of the whole field (guard applied) as of the last Cycle.
-  const Eigen::VectorXd& phi() const { return risk_.coefficients(); }
+  const Eigen::VectorXd& phi() const { return world_.risk().coefficients(); }
   /// The fleet's coverage as of the last Cycle.
   const FleetCoverage& coverage() const { return coverage_; }
   /// Ergodic metric of the fleet's coverage against phi as of the last Cycle.
@@ -78,38 +81,54 @@ class FleetServer {
 
   /// Normalised weights the controllers see (guard applied).
   const Eigen::VectorXd& effective_weights() const { return effective_; }
+  /// Raw weights as the profile and updates set them.
+  const Eigen::VectorXd& raw_weights() const { return raw_weights_; }
   /// The profile's normalised weights over time (events and runtime updates; no guard).
   const std::vector<WeightChange>& schedule() const { return schedule_; }
   /// One record per risk change, for the report (time-to-visit etc. filled in by FillResponses).
   std::vector<EventResponse>& responses() { return responses_; }
+  const std::vector<EventResponse>& responses() const { return responses_; }
   /// Valve index -> the vehicle ids it is assigned to (partition); empty in shared mode.
   const std::vector<std::vector<int>>& assignment() const { return assignment_; }
 
- private:
-  struct VehicleRecord {
+  /// A vehicle as the server accounts it.
+  struct Vehicle {
     std::string name;
     bool alive = true;
-    std::uint64_t seq = 0;
-    bool reported = false;
-    double stamp_s = 0.0;
-    double kernel_time_s = 0.0;
-    Eigen::VectorXd sums;
+    bool reported = false;           ///< has sent coverage
+    maps::CoverageReport report;     ///< its latest accepted coverage report
     Eigen::Vector2d position_m = Eigen::Vector2d::Zero();
-    std::vector<int> valves;  // partition: the valves this vehicle covers
-    int dense = 0;            // 0, 1, 2... in order of joining: the VisitTracker's index (ids may be huge)
+    std::vector<int> valves;         ///< partition: the valves it covers (derived each cycle)
   };
+  const std::map<int, Vehicle>& vehicles() const { return vehicles_; }
+
+  /// What changes during a mission, as plain data (the mission's checkpoint). Effective weights
+  /// and partition shares are derived again on the next Cycle.
+  struct State {
+    Eigen::VectorXd raw_weights;
+    std::vector<WeightChange> schedule;
+    std::vector<EventResponse> responses;
+    std::size_t next_event = 0;
+    std::map<int, Vehicle> vehicles;
+    double time_s = 0.0;
+  };
+  State Checkpoint() const;
+  /// Throws std::invalid_argument if the state does not fit this scenario (valve count, basis).
+  void Restore(const State& state);
+
+ private:
+  using VehicleRecord = Vehicle;
 
   void UpdateEffectiveWeights(double time_s);
   void RecordWeightChange(double time_s, int valve, const std::string& source);
   void Repartition();
-  double Decay(double age_s) const;
+  double LastVisit(int valve) const;
 
-  maps::Scenario scenario_;
+  maps::World& world_;
+  const maps::Scenario& scenario_;
   const maps::RiskProfile* profile_ = nullptr;
-  maps::SpectralBasis basis_;
-  maps::RiskField risk_;
   std::vector<Eigen::Vector2d> valve_positions_;
-  VisitTracker visits_;
+  const VisitTracker* visits_ = nullptr;
   std::map<int, VehicleRecord> vehicles_;
   Eigen::VectorXd raw_weights_;
   Eigen::VectorXd effective_;

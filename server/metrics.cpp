@@ -7,8 +7,7 @@
 #include <string>
 #include <utility>
 
-#include "maps/risk_field.h"
-#include "maps/spectral_basis.h"
+#include <fmt/format.h>
 
 namespace sage::server {
 namespace {
@@ -23,66 +22,14 @@ bool IsConstant(const std::vector<double>& v) {
   return *hi - *lo <= 1e-12 * scale;
 }
 
-// The samples of the mission window [0, duration], sorted by time then vehicle.
-std::vector<TrajectorySample> MissionSamples(const Trajectory& trajectory, double duration_s) {
-  std::vector<TrajectorySample> samples;
-  samples.reserve(trajectory.samples.size());
-  for (const TrajectorySample& s : trajectory.samples) {
-    if (s.time_s >= 0.0 && s.time_s <= duration_s) samples.push_back(s);
-  }
-  std::stable_sort(samples.begin(), samples.end(), [](const auto& a, const auto& b) {
-    return a.time_s != b.time_s ? a.time_s < b.time_s : a.vehicle < b.vehicle;
-  });
-  return samples;
-}
-
-// How long each sample stands for (s): the time to the same vehicle's next sample. A vehicle's
-// last sample has no successor, so it gets the median spacing (a log's typical period), or the
-// control period if no vehicle has two samples. Clipped so no sample outlasts the mission.
-std::vector<double> HoldTimes(const std::vector<TrajectorySample>& samples, double duration_s,
-                              double fallback_period_s, int* vehicle_count) {
-  std::vector<double> dt(samples.size(), kNaN);
-  std::map<int, std::size_t> last_of_vehicle;
-  std::vector<double> spacings;
-  for (std::size_t i = 0; i < samples.size(); ++i) {
-    auto [it, first] = last_of_vehicle.try_emplace(samples[i].vehicle, i);
-    if (!first) {
-      dt[it->second] = samples[i].time_s - samples[it->second].time_s;
-      if (dt[it->second] > 0.0) spacings.push_back(dt[it->second]);
-      it->second = i;
-    }
-  }
-  double median = fallback_period_s;
-  if (!spacings.empty()) {
-    const std::size_t mid = spacings.size() / 2;
-    std::nth_element(spacings.begin(), spacings.begin() + mid, spacings.end());
-    median = spacings[mid];
-    if (spacings.size() % 2 == 0) {
-      median = 0.5 * (median + *std::max_element(spacings.begin(), spacings.begin() + mid));
-    }
-  }
-  for (std::size_t i = 0; i < samples.size(); ++i) {
-    if (std::isnan(dt[i])) dt[i] = median;
-    dt[i] = std::clamp(dt[i], 0.0, duration_s - samples[i].time_s);
-  }
-  *vehicle_count = static_cast<int>(last_of_vehicle.size());
-  return dt;
-}
-
 // Each schedule entry's weights, checked and normalised to sum 1 (a raw schedule is accepted).
-std::vector<Eigen::VectorXd> NormalisedSchedule(const std::vector<WeightChange>& schedule, int valves) {
-  if (schedule.empty()) throw std::invalid_argument("ComputeMetrics: empty weight schedule");
-  std::vector<Eigen::VectorXd> out;
-  for (const WeightChange& change : schedule) {
-    const Eigen::VectorXd& w = change.weights;
-    if (w.size() != valves || (w.array() < 0.0).any() || !w.allFinite() || !(w.sum() > 0.0)) {
-      throw std::invalid_argument("ComputeMetrics: weights at t = " + std::to_string(change.time_s) +
-                                  " must be " + std::to_string(valves) +
-                                  " finite values >= 0, not all zero");
-    }
-    out.push_back(w / w.sum());
+Eigen::VectorXd Normalised(const WeightChange& change, int valves) {
+  const Eigen::VectorXd& w = change.weights;
+  if (w.size() != valves || (w.array() < 0.0).any() || !w.allFinite() || !(w.sum() > 0.0)) {
+    throw std::invalid_argument("ComputeMetrics: weights at t = " + std::to_string(change.time_s) + " must be " +
+                                std::to_string(valves) + " finite values >= 0, not all zero");
   }
-  return out;
+  return w / w.sum();
 }
 
 // Index of the schedule entry in force at t, by WeightsAt's own rule.
@@ -93,77 +40,18 @@ std::size_t ScheduleIndex(const std::vector<WeightChange>& schedule, double time
   return i;
 }
 
-// (1/T) integral_0^T w(t) dt of the piecewise-constant schedule.
-Eigen::VectorXd TimeAveragedWeights(const std::vector<WeightChange>& schedule,
-                                    const std::vector<Eigen::VectorXd>& normalised, double duration_s) {
+// (1/T) integral_0^T w(t) dt of the piecewise-constant (normalised) schedule.
+Eigen::VectorXd TimeAveragedWeights(const std::vector<WeightChange>& schedule, double duration_s) {
   std::vector<double> breaks = {0.0, duration_s};
   for (const WeightChange& change : schedule) {
     if (change.time_s > 0.0 && change.time_s < duration_s) breaks.push_back(change.time_s);
   }
   std::sort(breaks.begin(), breaks.end());
-  Eigen::VectorXd sum = Eigen::VectorXd::Zero(normalised.front().size());
+  Eigen::VectorXd sum = Eigen::VectorXd::Zero(schedule.front().weights.size());
   for (std::size_t j = 0; j + 1 < breaks.size(); ++j) {
-    sum += (breaks[j + 1] - breaks[j]) * normalised[ScheduleIndex(schedule, breaks[j])];
+    sum += (breaks[j + 1] - breaks[j]) * schedule[ScheduleIndex(schedule, breaks[j])].weights;
   }
   return sum / duration_s;
-}
-
-// The fleet's time-averaged coverage c_k(t) = sum_samples F_k(x) dt / sum dt against phi_k(t),
-// every period and at the end. A sample still "running" at a checkpoint counts only up to it,
-// so the curve does not depend on where the samples fall relative to the checkpoints.
-void ErgodicMetrics(const std::vector<TrajectorySample>& samples, const std::vector<double>& dt,
-                    const maps::Scenario& scenario, const std::vector<WeightChange>& schedule,
-                    const std::vector<Eigen::VectorXd>& normalised, double duration_s,
-                    double period_s, MissionMetrics& out) {
-  const maps::SpectralBasis basis(scenario.workspace.width_m, scenario.workspace.height_m,
-                                  scenario.ergodic.basis_order);
-  // The same target the server steers on: the valves' risk where a vehicle can be.
-  maps::RiskField field = maps::RiskField::ForScenario(scenario, basis);
-  std::vector<Eigen::VectorXd> phi;
-  for (const Eigen::VectorXd& w : normalised) {
-    field.SetWeights(w);
-    phi.push_back(field.coefficients());
-  }
-
-  struct Running {
-    double end_s;
-    Eigen::VectorXd f;
-  };
-  std::map<int, Running> last_sample;  // per vehicle, the latest sample added to the sums
-  Eigen::VectorXd sum_f = Eigen::VectorXd::Zero(basis.size());
-  double sum_dt = 0.0;
-  Eigen::VectorXd f;
-  std::size_t next = 0;
-  const auto metric_at = [&](double t) {
-    while (next < samples.size() && samples[next].time_s < t) {
-      basis.Evaluate(samples[next].position_m, f);
-      sum_f += dt[next] * f;
-      sum_dt += dt[next];
-      Running& running = last_sample[samples[next].vehicle];
-      running.end_s = samples[next].time_s + dt[next];
-      running.f = f;  // reuses the vector's storage after the first sample
-      ++next;
-    }
-    Eigen::VectorXd covered = sum_f;
-    double covered_dt = sum_dt;
-    for (const auto& [vehicle, running] : last_sample) {
-      const double beyond = running.end_s - t;
-      if (beyond > 0.0) {
-        covered -= beyond * running.f;
-        covered_dt -= beyond;
-      }
-    }
-    if (!(covered_dt > 0.0)) return kNaN;  // nothing observed yet
-    return basis.Metric(covered / covered_dt - phi[ScheduleIndex(schedule, t)]);
-  };
-
-  // Checkpoints k * period strictly before the end (within rounding), then the end itself.
-  for (int k = 1; k * period_s < duration_s * (1.0 - 1e-12); ++k) {
-    const double value = metric_at(k * period_s);
-    if (!std::isnan(value)) out.metric_over_time.push_back({k * period_s, value});
-  }
-  out.ergodic_metric = metric_at(duration_s);
-  if (!std::isnan(out.ergodic_metric)) out.metric_over_time.push_back({duration_s, out.ergodic_metric});
 }
 
 }  // namespace
@@ -190,13 +78,24 @@ std::vector<int> VisitTracker::Update(int vehicle, const Eigen::Vector2d& positi
     const double distance = (position_m - valves_[i]).norm();
     if (armed[i] && distance <= visit_radius_m_) {
       armed[i] = 0;
-      visit_times_[i].push_back(time_s);
+      // Vehicles' samples may interleave out of time order (a late host over DDS): keep each
+      // valve's visits sorted.
+      std::vector<double>& times = visit_times_[i];
+      times.insert(std::upper_bound(times.begin(), times.end(), time_s), time_s);
       visited.push_back(static_cast<int>(i));
     } else if (!armed[i] && distance > rearm_radius_m_) {
       armed[i] = 1;
     }
   }
   return visited;
+}
+
+void VisitTracker::Restore(std::vector<std::vector<unsigned char>> armed, std::vector<std::vector<double>> visit_times) {
+  if (visit_times.size() != valves_.size()) throw std::invalid_argument("VisitTracker::Restore: wrong valve count");
+  for (const auto& a : armed)
+    if (a.size() != valves_.size()) throw std::invalid_argument("VisitTracker::Restore: wrong valve count");
+  armed_ = std::move(armed);
+  visit_times_ = std::move(visit_times);
 }
 
 void VisitTracker::Forget(int vehicle) {
@@ -228,80 +127,239 @@ double PearsonCorrelation(const std::vector<double>& a, const std::vector<double
   return std::clamp(ab / std::sqrt(aa * bb), -1.0, 1.0);
 }
 
-MissionMetrics ComputeMetrics(const Trajectory& trajectory, const maps::Scenario& scenario,
-                              const std::vector<WeightChange>& weights, double duration_s,
-                              const MetricsOptions& options) {
-  if (!(duration_s > 0.0) || !std::isfinite(duration_s)) {
-    throw std::invalid_argument("ComputeMetrics: duration_s must be finite and > 0");
-  }
-  // Bounded so a typo (1e-9 s) cannot ask for billions of metric evaluations.
-  if (!(options.metric_sample_period_s > 0.0) || duration_s / options.metric_sample_period_s > 1e6) {
-    throw std::invalid_argument("ComputeMetrics: metric_sample_period_s must be > 0 and >= duration / 1e6");
-  }
-  const std::vector<maps::Valve> valves = scenario.AllValves();
-  if (valves.empty()) throw std::invalid_argument("ComputeMetrics: the scenario has no valves");
-  const std::vector<Eigen::VectorXd> normalised =
-      NormalisedSchedule(weights, static_cast<int>(valves.size()));
+MetricsAccumulator::MetricsAccumulator(const maps::Scenario& scenario, const maps::SpectralBasis& basis,
+                                       const maps::RiskField& risk, const MetricsOptions& options)
+    : scenario_(scenario),
+      basis_(basis),
+      risk_(risk),
+      options_(options),
+      valves_(scenario.ValvePositions()),
+      visits_(valves_, scenario.visit_radius_m, scenario.rearm_radius_m) {
+  if (valves_.empty()) throw std::invalid_argument("MetricsAccumulator: the scenario has no valves");
+  if (!(options.metric_sample_period_s > 0.0)) throw std::invalid_argument("MetricsAccumulator: period must be > 0");
+  state_.time_near_s.assign(valves_.size(), 0.0);
+  state_.sum_f = Eigen::VectorXd::Zero(basis.size());
+}
 
+void MetricsAccumulator::OnWeights(double time_s, const Eigen::VectorXd& weights) {
+  WeightChange change{time_s, Normalised({time_s, weights}, static_cast<int>(valves_.size()))};
+  phi_.push_back(risk_.CoefficientsFor(change.weights));
+  state_.schedule.push_back(std::move(change));
+}
+
+std::vector<int> MetricsAccumulator::Add(const TrajectorySample& sample) {
+  if (!(sample.time_s >= 0.0) || !sample.position_m.allFinite()) {
+    ++state_.refused;
+    return {};
+  }
+  auto pending = state_.pending.find(sample.vehicle);
+  if (pending != state_.pending.end()) {
+    const double dt = sample.time_s - pending->second.time_s;
+    if (!(dt > 0.0)) {
+      ++state_.refused;  // not after its vehicle's previous sample
+      return {};
+    }
+    ++state_.spacings[dt];
+    TakeCheckpointsBefore(pending->second.time_s);
+    Hold(pending->second, dt);
+    pending->second = sample;
+  } else {
+    state_.pending[sample.vehicle] = sample;
+  }
+  return visits_.Update(sample.vehicle, sample.position_m, sample.time_s);
+}
+
+void MetricsAccumulator::Retire(int vehicle) {
+  // Its last sample holds for the median spacing, as checkpoints since have counted it; should
+  // the vehicle come back (a host that stalled), its next sample starts afresh.
+  auto it = state_.pending.find(vehicle);
+  if (it != state_.pending.end()) {
+    TakeCheckpointsBefore(it->second.time_s);
+    Hold(it->second, MedianSpacing());
+    state_.pending.erase(it);
+  }
+  visits_.Forget(vehicle);
+}
+
+void MetricsAccumulator::Advance(double time_s) { TakeCheckpointsBefore(time_s); }
+
+double MetricsAccumulator::latest_metric() const {
+  return state_.metric_over_time.empty() ? kNaN : state_.metric_over_time.back().ergodic_metric;
+}
+
+void MetricsAccumulator::Restore(State state, VisitTracker visits) {
+  if (state.time_near_s.size() != valves_.size() || state.sum_f.size() != basis_.size() || state.schedule.empty()) {
+    throw std::invalid_argument("MetricsAccumulator::Restore: state of another mission");
+  }
+  phi_.clear();
+  for (const WeightChange& change : state.schedule) phi_.push_back(risk_.CoefficientsFor(change.weights));
+  state_ = std::move(state);
+  visits_ = std::move(visits);
+}
+
+// A sample held for dt: time near each valve, at the boundary, and its share of the coverage.
+void MetricsAccumulator::Hold(const TrajectorySample& sample, double dt_s) {
+  const Eigen::Vector2d& p = sample.position_m;
+  for (std::size_t v = 0; v < valves_.size(); ++v) {
+    if ((p - valves_[v]).norm() <= scenario_.visit_radius_m) state_.time_near_s[v] += dt_s;
+  }
+  const double to_edge =
+      std::min({p.x(), scenario_.workspace.width_m - p.x(), p.y(), scenario_.workspace.height_m - p.y()});
+  if (to_edge < 0.0) {
+    state_.time_outside_s += dt_s;
+  } else if (to_edge <= options_.boundary_margin_m) {
+    state_.time_pinned_s += dt_s;
+  }
+  basis_.Evaluate(p, f_);
+  state_.sum_f.noalias() += dt_s * f_;
+  state_.sum_dt += dt_s;
+  state_.last_held[sample.vehicle] = {sample.time_s, sample.time_s + dt_s, p};
+}
+
+double MetricsAccumulator::MedianSpacing() const {
+  if (state_.spacings.empty()) return 1.0 / scenario_.control_rate_hz;
+  std::size_t total = 0;
+  for (const auto& [dt, count] : state_.spacings) total += count;
+  // The middle element (odd count) or the mean of the two middle ones, as a sorted list gives.
+  const std::size_t upper = total / 2, lower = total % 2 == 0 ? upper - 1 : upper;
+  double lower_value = 0.0, upper_value = 0.0;
+  std::size_t seen = 0;
+  for (const auto& [dt, count] : state_.spacings) {
+    if (seen <= lower && lower < seen + count) lower_value = dt;
+    if (seen <= upper && upper < seen + count) {
+      upper_value = dt;
+      break;
+    }
+    seen += count;
+  }
+  return 0.5 * (lower_value + upper_value);
+}
+
+// The fleet's time-averaged coverage of the samples before `time_s` against phi_k(time_s): a
+// held sample running past it counts only up to it; a sample whose hold is not known yet counts
+// for the median spacing, also only up to time_s.
+double MetricsAccumulator::MetricAt(double time_s) const {
+  Eigen::VectorXd covered = state_.sum_f;
+  double covered_dt = state_.sum_dt;
+  for (const auto& [vehicle, held] : state_.last_held) {
+    const double beyond = held.end_s - std::max(time_s, held.time_s);
+    if (beyond > 0.0 && held.time_s < time_s) {
+      basis_.Evaluate(held.position_m, f_);
+      covered.noalias() -= beyond * f_;
+      covered_dt -= beyond;
+    }
+  }
+  const double median = MedianSpacing();
+  for (const auto& [vehicle, pending] : state_.pending) {
+    if (!(pending.time_s < time_s)) continue;
+    const double dt = std::min(median, time_s - pending.time_s);
+    basis_.Evaluate(pending.position_m, f_);
+    covered.noalias() += dt * f_;
+    covered_dt += dt;
+  }
+  if (!(covered_dt > 0.0)) return kNaN;  // nothing observed yet
+  return basis_.Metric(covered / covered_dt - phi_[ScheduleIndex(state_.schedule, time_s)]);
+}
+
+// Checkpoints k * period at or before time_s, each before any sample at or after it is held.
+void MetricsAccumulator::TakeCheckpointsBefore(double time_s) {
+  if (state_.schedule.empty()) throw std::logic_error("MetricsAccumulator: OnWeights before the first sample");
+  const double period = options_.metric_sample_period_s;
+  for (; state_.next_checkpoint * period <= time_s; ++state_.next_checkpoint) {
+    const double t = state_.next_checkpoint * period;
+    const double value = MetricAt(t);
+    if (!std::isnan(value)) state_.metric_over_time.push_back({t, value});
+  }
+}
+
+MissionMetrics MetricsAccumulator::Result(double end_s) const {
+  if (!(end_s > 0.0) || !std::isfinite(end_s)) {
+    throw maps::ScenarioError(fmt::format("metrics: mission length = {}: must be finite and > 0", end_s));
+  }
+  if (state_.schedule.empty()) throw std::logic_error("MetricsAccumulator: no weights");
+  // Finish a copy: each vehicle's last sample holds for the median spacing, clipped to the end.
+  MetricsAccumulator done = *this;
+  const double median = done.MedianSpacing();
+  // Checkpoints strictly before the end (within rounding), then the end itself.
+  const double period = options_.metric_sample_period_s;
+  for (; done.state_.next_checkpoint * period < end_s * (1.0 - 1e-12); ++done.state_.next_checkpoint) {
+    const double t = done.state_.next_checkpoint * period;
+    const double value = done.MetricAt(t);
+    if (!std::isnan(value)) done.state_.metric_over_time.push_back({t, value});
+  }
+  for (const auto& [vehicle, pending] : state_.pending) {
+    if (pending.time_s <= end_s) done.Hold(pending, std::clamp(median, 0.0, end_s - pending.time_s));
+  }
+  done.state_.pending.clear();
   MissionMetrics out;
-  out.controller = options.controller;
-  out.profile = options.profile;
-  out.duration_s = duration_s;
-  out.boundary_margin_m = options.boundary_margin_m;
+  out.controller = options_.controller;
+  out.profile = options_.profile;
+  out.duration_s = end_s;
+  out.boundary_margin_m = options_.boundary_margin_m;
+  out.vehicle_count = static_cast<int>(done.state_.last_held.size());
+  out.time_outside_s = done.state_.time_outside_s;
+  out.time_pinned_s = done.state_.time_pinned_s;
+  out.metric_over_time = done.state_.metric_over_time;
+  out.ergodic_metric = done.MetricAt(end_s);
+  if (!std::isnan(out.ergodic_metric)) out.metric_over_time.push_back({end_s, out.ergodic_metric});
 
-  const std::vector<TrajectorySample> samples = MissionSamples(trajectory, duration_s);
-  const double control_period_s = scenario.control_rate_hz > 0.0 ? 1.0 / scenario.control_rate_hz : 0.1;
-  const std::vector<double> dt = HoldTimes(samples, duration_s, control_period_s, &out.vehicle_count);
-
-  std::vector<Eigen::Vector2d> positions;
-  for (const maps::Valve& valve : valves) positions.push_back(valve.position_m);
-  VisitTracker tracker(positions, scenario.visit_radius_m, scenario.rearm_radius_m);
-  std::vector<double> time_near(valves.size(), 0.0);
-  const double width = scenario.workspace.width_m, height = scenario.workspace.height_m;
-  for (std::size_t i = 0; i < samples.size(); ++i) {
-    const Eigen::Vector2d& p = samples[i].position_m;
-    tracker.Update(samples[i].vehicle, p, samples[i].time_s);
-    for (std::size_t v = 0; v < valves.size(); ++v) {
-      if ((p - positions[v]).norm() <= scenario.visit_radius_m) time_near[v] += dt[i];
-    }
-    const double to_edge = std::min({p.x(), width - p.x(), p.y(), height - p.y()});
-    if (to_edge < 0.0) {
-      out.time_outside_s += dt[i];
-    } else if (to_edge <= options.boundary_margin_m) {
-      out.time_pinned_s += dt[i];
-    }
-  }
-
-  const Eigen::VectorXd average_weights = TimeAveragedWeights(weights, normalised, duration_s);
+  const std::vector<maps::Valve> valves = scenario_.AllValves();
+  const Eigen::VectorXd average_weights = TimeAveragedWeights(state_.schedule, end_s);
   std::vector<double> visit_counts, weight_values;
   for (std::size_t v = 0; v < valves.size(); ++v) {
     ValveMetrics m;
     m.name = valves[v].name;
     m.weight = average_weights[v];
-    m.visit_times_s = tracker.visit_times()[v];
+    for (double t : visits_.visit_times()[v])
+      if (t <= end_s) m.visit_times_s.push_back(t);
     m.visits = static_cast<int>(m.visit_times_s.size());
-    m.time_near_s = time_near[v];
-    m.max_gap_s = duration_s;
+    m.time_near_s = done.state_.time_near_s[v];
+    m.max_gap_s = end_s;
     if (!m.visit_times_s.empty()) {
-      m.max_gap_s = std::max(m.visit_times_s.front(), duration_s - m.visit_times_s.back());
+      m.max_gap_s = std::max(m.visit_times_s.front(), end_s - m.visit_times_s.back());
       for (std::size_t j = 1; j < m.visit_times_s.size(); ++j) {
         m.max_gap_s = std::max(m.max_gap_s, m.visit_times_s[j] - m.visit_times_s[j - 1]);
       }
     }
     // The mean of consecutive differences telescopes to (last - first) / (n - 1): the paper's
     // A* row, 37 visits one lap apart, gives its 8.1 s.
-    if (m.visits >= 2) {
-      m.mean_interval_s = (m.visit_times_s.back() - m.visit_times_s.front()) / (m.visits - 1);
-    }
+    if (m.visits >= 2) m.mean_interval_s = (m.visit_times_s.back() - m.visit_times_s.front()) / (m.visits - 1);
     visit_counts.push_back(m.visits);
     weight_values.push_back(m.weight);
     out.valves.push_back(std::move(m));
   }
   out.visit_weight_correlation = PearsonCorrelation(visit_counts, weight_values);
-
-  ErgodicMetrics(samples, dt, scenario, weights, normalised, duration_s,
-                 options.metric_sample_period_s, out);
   return out;
+}
+
+MissionMetrics ComputeMetrics(const Trajectory& trajectory, const maps::Scenario& scenario,
+                              const std::vector<WeightChange>& weights, double duration_s,
+                              const MetricsOptions& options) {
+  if (!(duration_s > 0.0) || !std::isfinite(duration_s)) {
+    throw maps::ScenarioError(fmt::format("mission length = {} s: must be finite and > 0", duration_s));
+  }
+  // Bounded so a typo (1e-9 s) cannot ask for billions of metric evaluations.
+  if (!(options.metric_sample_period_s > 0.0) || duration_s / options.metric_sample_period_s > 1e6) {
+    throw maps::ScenarioError(fmt::format("mission length = {} s: at most 1e6 metric checkpoints of {} s", duration_s,
+                                          options.metric_sample_period_s));
+  }
+  if (weights.empty()) throw std::invalid_argument("ComputeMetrics: empty weight schedule");
+  const maps::SpectralBasis basis(scenario.workspace.width_m, scenario.workspace.height_m,
+                                  scenario.ergodic.basis_order);
+  // The same target the server steers on: the valves' risk where a vehicle can be.
+  const maps::RiskField field = maps::RiskField::ForScenario(scenario, basis);
+  MetricsAccumulator metrics(scenario, basis, field, options);
+  for (const WeightChange& change : weights) metrics.OnWeights(change.time_s, change.weights);
+  std::vector<const TrajectorySample*> samples;
+  samples.reserve(trajectory.samples.size());
+  for (const TrajectorySample& s : trajectory.samples) {
+    if (s.time_s >= 0.0 && s.time_s <= duration_s) samples.push_back(&s);
+  }
+  std::stable_sort(samples.begin(), samples.end(), [](const auto* a, const auto* b) {
+    return a->time_s != b->time_s ? a->time_s < b->time_s : a->vehicle < b->vehicle;
+  });
+  for (const TrajectorySample* s : samples) metrics.Add(*s);
+  return metrics.Result(duration_s);
 }
 
 }  // namespace sage::server

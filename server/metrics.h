@@ -4,12 +4,15 @@
 // correlation of visits with weight, the ergodic metric over time, and the time spent outside
 // or pinned to the workspace boundary (the paper's corner excursions).
 #include <limits>
+#include <map>
 #include <string>
 #include <vector>
 
 #include <Eigen/Core>
 
+#include "maps/risk_field.h"
 #include "maps/scenario/scenario.h"
+#include "maps/spectral_basis.h"
 #include "server/trajectory.h"
 
 namespace sage::server {
@@ -26,6 +29,9 @@ class VisitTracker {
   const std::vector<std::vector<double>>& visit_times() const { return visit_times_; }
   /// Time of the last visit of valve i, or -infinity before the first.
   double LastVisit(int valve) const;
+  /// Arming state [vehicle][valve] (1 = armed), for a checkpoint; and its restoration.
+  const std::vector<std::vector<unsigned char>>& armed() const { return armed_; }
+  void Restore(std::vector<std::vector<unsigned char>> armed, std::vector<std::vector<double>> visit_times);
 
  private:
   std::vector<Eigen::Vector2d> valves_;
@@ -89,9 +95,80 @@ struct MetricsOptions {
 /// Pearson correlation; NaN if either side has zero variance or fewer than 2 entries.
 double PearsonCorrelation(const std::vector<double>& a, const std::vector<double>& b);
 
+/// The metrics of a mission computed online, sample by sample, so a running mission can report
+/// them at any time (metrics.json every few seconds) and nothing needs the whole trajectory in
+/// memory. Each sample stands for the time to the same vehicle's next sample (its hold time);
+/// a vehicle's last sample, whose successor never comes, holds for the median spacing seen. The
+/// ergodic metric over time is the fleet's time-averaged coverage c_k(T) = sum F_k(x) dt / sum dt
+/// of the samples before each checkpoint T against phi_k(T), with a sample still running at T
+/// counted only up to it. Samples of one vehicle must come in increasing time; vehicles may
+/// interleave, and a sample out of order for its vehicle is refused (counted).
+class MetricsAccumulator {
+ public:
+  /// basis and risk (for phi_k of any weights) must outlive the accumulator.
+  MetricsAccumulator(const maps::Scenario& scenario, const maps::SpectralBasis& basis, const maps::RiskField& risk,
+                     const MetricsOptions& options = {});
+
+  /// The normalised weights in force from time_s on (the first call sets t = 0's).
+  void OnWeights(double time_s, const Eigen::VectorXd& weights);
+  /// One sample; returns the valves it visited. A sample before 0, not finite, or not after
+  /// its vehicle's previous one is refused (counted, no effect).
+  std::vector<int> Add(const TrajectorySample& sample);
+  /// Vehicle `vehicle` sends no more samples (it left or was lost).
+  void Retire(int vehicle);
+  /// Every sample before time_s has been added: the metric checkpoints up to time_s are taken.
+  void Advance(double time_s);
+
+  /// The metrics of [0, end_s] as they stand (a copy is finished; this one goes on).
+  MissionMetrics Result(double end_s) const;
+  /// The latest checkpoint's ergodic metric (NaN before the first): what a progress line shows.
+  double latest_metric() const;
+  const VisitTracker& visits() const { return visits_; }
+  std::size_t refused_samples() const { return state_.refused; }
+
+  /// Everything that changes as samples come in, as plain data (a mission's checkpoint).
+  struct LastHeld {
+    double time_s = 0.0, end_s = 0.0;
+    Eigen::Vector2d position_m = Eigen::Vector2d::Zero();
+  };
+  struct State {
+    std::map<int, TrajectorySample> pending;  ///< per vehicle, the sample whose hold time is not known yet
+    std::map<int, LastHeld> last_held;      ///< per vehicle, the latest sample with a known hold
+    std::map<double, std::size_t> spacings; ///< positive spacings seen, with counts (for the median)
+    std::vector<double> time_near_s;        ///< per valve
+    double time_outside_s = 0.0, time_pinned_s = 0.0;
+    Eigen::VectorXd sum_f;                  ///< sum of F_k(x) dt of held samples
+    double sum_dt = 0.0;
+    std::vector<MetricSample> metric_over_time;
+    int next_checkpoint = 1;                ///< checkpoint k is at k * metric_sample_period_s
+    std::vector<WeightChange> schedule;
+    std::size_t refused = 0;
+  };
+  const State& state() const { return state_; }
+  /// Restores a checkpoint's state (and its visits).
+  void Restore(State state, VisitTracker visits);
+
+ private:
+  void Hold(const TrajectorySample& sample, double dt_s);
+  void TakeCheckpointsBefore(double time_s);
+  double MetricAt(double time_s) const;
+  double MedianSpacing() const;
+
+  const maps::Scenario& scenario_;
+  const maps::SpectralBasis& basis_;
+  const maps::RiskField& risk_;
+  MetricsOptions options_;
+  std::vector<Eigen::Vector2d> valves_;
+  VisitTracker visits_;
+  State state_;
+  std::vector<Eigen::VectorXd> phi_;  // phi_k of each schedule entry
+  mutable Eigen::VectorXd f_;         // scratch
+};
+
 /// Evaluates a trajectory against the scenario's valves and the weight schedule. The mission
 /// runs from 0 to duration_s (samples outside are ignored). The ergodic metric uses the
-/// scenario's basis order with no forgetting.
+/// scenario's basis order with no forgetting. Throws maps::ScenarioError for a duration that is
+/// not finite and > 0, or a period that would ask for more than 1e6 checkpoints.
 MissionMetrics ComputeMetrics(const Trajectory& trajectory, const maps::Scenario& scenario,
                               const std::vector<WeightChange>& weights, double duration_s,
                               const MetricsOptions& options = {});

@@ -1,92 +1,67 @@
 #include "server/mission.h"
 
-#include <algorithm>
 #include <chrono>
 #include <cmath>
-#include <numbers>
-#include <random>
 
-#include "agents/agent_host.h"
-#include "server/fleet_server.h"
+#include "agents/agent_mission.h"
+#include "maps/world.h"
 
 namespace sage::server {
-namespace {
 
-// Start positions are jittered within this radius (m) by the seed, so seeds give distinct but
-// repeatable missions.
-constexpr double kStartJitter_m = 0.2;
-
-double MeanInterval(const std::vector<double>& times) {
-  if (times.size() < 2) return std::numeric_limits<double>::quiet_NaN();
-  return (times.back() - times.front()) / static_cast<double>(times.size() - 1);
-}
-
-}  // namespace
-
-double HeadingChange(const Eigen::Vector2d& before_mps, const Eigen::Vector2d& after_mps) {
-  if (before_mps.norm() < 1e-12 || after_mps.norm() < 1e-12) return 0.0;
-  return std::acos(std::clamp(before_mps.dot(after_mps) / (before_mps.norm() * after_mps.norm()), -1.0, 1.0));
-}
-
-void FillEventResponses(const maps::Scenario& scenario, MissionMetrics& metrics) {
-  for (EventResponse& response : metrics.events) {
-    const int valve = scenario.ValveIndex(response.valve);
-    const std::vector<double>& times = metrics.valves[valve].visit_times_s;
-    std::vector<double> before, after;
-    for (double v : times) (v < response.time_s ? before : after).push_back(v);
-    response.time_to_next_visit_s =
-        after.empty() ? std::numeric_limits<double>::quiet_NaN() : after.front() - response.time_s;
-    response.interval_before_s = MeanInterval(before);
-    response.interval_after_s = MeanInterval(after);
+void TrajectoryRecorder::OnSample(const TrajectorySample& sample, const std::string& vehicle_name) {
+  if (static_cast<std::size_t>(sample.vehicle) >= trajectory.vehicle_names.size()) {
+    trajectory.vehicle_names.resize(sample.vehicle + 1);
   }
+  trajectory.vehicle_names[sample.vehicle] = vehicle_name;
+  trajectory.samples.push_back(sample);
 }
 
-const char* ToString(ControllerKind kind) { return kind == ControllerKind::kErgodic ? "ergodic" : "astar"; }
-
-ControllerKind ParseControllerKind(const std::string& text) {
-  if (text == "ergodic") return ControllerKind::kErgodic;
-  if (text == "astar") return ControllerKind::kAstar;
-  throw maps::ScenarioError("--controller = " + text + ": must be one of ergodic, astar");
-}
-
+// Both sides of the mission and the messages between them, handed over in the DDS pipeline's
+// order: vehicles step on the server's last word; the server answers their reports.
 struct Mission::Impl {
+  /// Hands the record to the memory copy (kept for the result) and to the caller's recorder.
+  class Tee final : public MissionRecorder {
+   public:
+    Tee(MissionRecorder* a, MissionRecorder* b) : a_(a), b_(b) {}
+    void OnSample(const TrajectorySample& s, const std::string& name) override {
+      if (a_) a_->OnSample(s, name);
+      if (b_) b_->OnSample(s, name);
+    }
+    void OnFleetEvent(const FleetEventRecord& e) override {
+      if (a_) a_->OnFleetEvent(e);
+      if (b_) b_->OnFleetEvent(e);
+    }
+    void OnRiskEvent(const RiskEventRecord& e) override {
+      if (a_) a_->OnRiskEvent(e);
+      if (b_) b_->OnRiskEvent(e);
+    }
+
+   private:
+    MissionRecorder* a_;
+    MissionRecorder* b_;
+  };
+
   maps::Scenario scenario;
-  ControllerKind controller;
-  FleetServer server;
-  agents::AgentHost host;
-  std::mt19937_64 rng;
+  MissionOptions options;
+  maps::World world;
+  TrajectoryRecorder memory;
+  Tee tee;
+  MissionCore core;
+  agents::AgentMission agents;
   std::size_t next_fleet_event = 0;
-  long cycle = 0;
-  long cycles_total = 0;
-  double control_dt = 0.1;
-  Trajectory trajectory;  // vehicle index = fleet id; names in trajectory.vehicle_names
+  std::int64_t cycle = 0;
+  std::int64_t cycles_total = 0;
 
-  Impl(maps::Scenario s, ControllerKind kind, const std::string& profile_name)
+  Impl(maps::Scenario s, const MissionOptions& o)
       : scenario(std::move(s)),
-        controller(kind),
-        server(scenario, profile_name),
-        host(scenario, kind == ControllerKind::kErgodic ? agents::Guidance::kErgodic : agents::Guidance::kAstar),
-        rng(scenario.seed) {
-    control_dt = 1.0 / scenario.control_rate_hz;
-    cycles_total = static_cast<long>(std::lround(scenario.duration_s / control_dt));
-    for (const maps::VehicleSpec& spec : scenario.vehicles) Join(spec);
-  }
-
-  // Start positions are jittered by the seed, so seeds give distinct but repeatable missions.
-  void Join(maps::VehicleSpec spec) {
-    std::uniform_real_distribution<double> unit(0.0, 1.0);
-    const double r = kStartJitter_m * std::sqrt(unit(rng)), a = 2 * std::numbers::pi * unit(rng);
-    spec.start_m += r * Eigen::Vector2d(std::cos(a), std::sin(a));
-    const int id = static_cast<int>(trajectory.vehicle_names.size());
-    trajectory.vehicle_names.push_back(spec.name);
-    host.AddVehicle(id, spec, server.schedule().back().weights);
-    server.AddVehicle(id, spec.name);
-  }
-
-  int IdOf(const std::string& name) const {
-    for (std::size_t i = 0; i < trajectory.vehicle_names.size(); ++i)
-      if (trajectory.vehicle_names[i] == name && host.Contains(static_cast<int>(i))) return static_cast<int>(i);
-    return -1;
+        options(o),
+        world(scenario),
+        tee(o.keep_trajectory ? &memory : nullptr, o.recorder),
+        core(world, scenario, o.profile, o.controller, &tee),
+        agents(world, scenario,
+               o.controller == ControllerKind::kErgodic ? agents::Guidance::kErgodic : agents::Guidance::kAstar) {
+    cycles_total = std::llround(scenario.duration_s * scenario.control_rate_hz);
+    for (std::size_t i = 0; i < scenario.vehicles.size(); ++i) agents.AddVehicle(static_cast<int>(i), scenario.vehicles[i]);
   }
 
   void ApplyFleetEvents(double t) {
@@ -94,87 +69,66 @@ struct Mission::Impl {
            scenario.fleet_events[next_fleet_event].time_s <= t + 1e-9) {
       const maps::FleetEvent& event = scenario.fleet_events[next_fleet_event++];
       if (event.kind == maps::FleetEvent::Kind::kJoin) {
-        Join(event.vehicle);
+        agents.AddVehicle(JoinVehicleId(scenario, event.vehicle.name), event.vehicle);
         continue;
       }
-      const int id = IdOf(event.vehicle.name);
-      if (id < 0) continue;  // validated on load; a vehicle can only go once
-      host.RemoveVehicle(id);
-      // In-process the loss is known at once; over DDS it takes the liveliness lease.
-      server.RemoveVehicle(id, event.kind == maps::FleetEvent::Kind::kLose, t);
+      for (const agents::VehicleId id : agents.ids()) {
+        if (agents.Name(id) != event.vehicle.name) continue;
+        agents.RemoveVehicle(id);
+        // In-process the loss is known at once; over DDS it takes the liveliness lease.
+        core.OnVehicleGone(id, event.kind == maps::FleetEvent::Kind::kLose);
+        break;
+      }
     }
   }
 
   bool Step() {
     if (cycle > cycles_total) return false;
-    const double t = cycle * control_dt;
-    ApplyFleetEvents(t);
-    const std::vector<int> ids = host.ids();
-    const Eigen::VectorXd phi_before = server.phi();
-    const int fired = server.Cycle(t);
-    if (fired > 0 && controller == ControllerKind::kAstar) host.SetTourWeights(server.schedule().back().weights);
-    if (controller == ControllerKind::kErgodic) {
-      for (int id : ids) host.SetTarget(id, server.TargetFor(id));
-    }
-    if (fired > 0 && controller == ControllerKind::kErgodic && !ids.empty()) {
-      // How the first vehicle's command turns in this very cycle, against keeping the old target.
-      const Eigen::Vector2d without = host.PreviewCommand(ids.front(), phi_before, t);
-      const Eigen::Vector2d with = host.PreviewCommand(ids.front(), server.phi(), t);
-      server.responses().back().heading_change_rad = HeadingChange(without, with);
-    }
-    std::vector<agents::VehicleState> states;
-    for (int id : ids) {
-      states.push_back(host.State(id));
-      server.OnState(id, t, states.back().position_m);
-    }
-    host.Step(t);
-    for (std::size_t i = 0; i < ids.size(); ++i) {
-      const agents::VehicleState& state = states[i];
-      trajectory.samples.push_back({t, ids[i], state.position_m, state.heading_rad, state.velocity_mps,
-                                    host.LastCommand(ids[i])});
-      if (const agents::CoverageAccumulator* coverage = host.Coverage(ids[i])) {
-        server.OnCoverage(ids[i], static_cast<std::uint64_t>(cycle) + 1, t, coverage->time_s(), coverage->sums());
-      }
-    }
+    ApplyFleetEvents(static_cast<double>(cycle) / scenario.control_rate_hz);
+    const agents::AgentMission::CycleOutput reports = agents.Step(cycle);
+    for (const agents::StateReport& s : reports.states) core.OnState(s);
+    for (const agents::CoverageMessage& c : reports.coverage) core.OnCoverage(c);
+    const CycleOutput answer = core.Cycle(cycle);
+    agents.OnFleetSnapshot(answer.snapshot);
+    for (const agents::Assignment& a : answer.assignments) agents.OnAssignment(a);
     ++cycle;
     return cycle <= cycles_total;
   }
 };
 
 Mission::Mission(maps::Scenario scenario, ControllerKind controller, const std::string& profile)
-    : impl_(std::make_unique<Impl>(std::move(scenario), controller, profile)) {}
+    : Mission(std::move(scenario), MissionOptions{profile, controller}) {}
+Mission::Mission(maps::Scenario scenario, const MissionOptions& options)
+    : impl_(std::make_unique<Impl>(std::move(scenario), options)) {}
 Mission::~Mission() = default;
 
 bool Mission::Step() { return impl_->Step(); }
-double Mission::time_s() const { return impl_->cycle * impl_->control_dt; }
+double Mission::time_s() const { return static_cast<double>(impl_->cycle) / impl_->scenario.control_rate_hz; }
 double Mission::duration_s() const { return impl_->scenario.duration_s; }
 const maps::Scenario& Mission::scenario() const { return impl_->scenario; }
-const Eigen::VectorXd& Mission::effective_weights() const { return impl_->server.effective_weights(); }
+const Eigen::VectorXd& Mission::effective_weights() const { return impl_->core.fleet().effective_weights(); }
+const MissionCore& Mission::core() const { return impl_->core; }
+const maps::World& Mission::world() const { return impl_->world; }
+OperatorAnswer Mission::SetRisk(const std::string& valve, double weight, const std::string& source) {
+  return impl_->core.OnRiskUpdate(valve, weight, source);
+}
 
 MissionResult Mission::Run(const std::function<void(double)>& progress) {
   const auto start = std::chrono::steady_clock::now();
-  const long report_every = std::max(1L, impl_->cycles_total / 100);
+  const std::int64_t report_every = std::max<std::int64_t>(1, impl_->cycles_total / 100);
   while (Step()) {
-    if (progress && impl_->cycle % report_every == 0) progress(static_cast<double>(impl_->cycle) / impl_->cycles_total);
+    if (progress && impl_->cycle % report_every == 0) {
+      progress(static_cast<double>(impl_->cycle) / static_cast<double>(impl_->cycles_total));
+    }
   }
   if (progress) progress(1.0);
   MissionResult result;
-  MetricsOptions options;
-  options.controller = ToString(impl_->controller);
-  options.profile = impl_->server.profile().name;
-  result.metrics = ComputeMetrics(impl_->trajectory, impl_->scenario, impl_->server.schedule(),
-                                  impl_->scenario.duration_s, options);
-  result.metrics.events = impl_->server.responses();
-  FillEventResponses(impl_->scenario, result.metrics);
-  result.trajectory = std::move(impl_->trajectory);
-  result.weights = impl_->server.schedule();
+  result.metrics = impl_->core.Metrics(impl_->scenario.duration_s);
+  result.trajectory = std::move(impl_->memory.trajectory);
+  result.weights = impl_->core.fleet().schedule();
   result.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return result;
 }
-
-}  // namespace sage::server
-
-namespace sage::server {
 
 double CalibratedAstarWait(maps::Scenario scenario, const std::string& profile, const MissionMetrics& ergodic) {
   std::size_t dominant = 0;
@@ -184,7 +138,9 @@ double CalibratedAstarWait(maps::Scenario scenario, const std::string& profile, 
   // Time near the valve grows with the wait (longer stops, fewer laps, but the stop dominates).
   auto shortfall = [&](double wait) {
     scenario.astar.wait_per_lap_s = wait;
-    Mission mission(scenario, ControllerKind::kAstar, profile);
+    MissionOptions options{profile, ControllerKind::kAstar};
+    options.keep_trajectory = false;
+    Mission mission(scenario, options);
     return mission.Run().metrics.valves[dominant].time_near_s - target;
   };
   if (shortfall(0.0) >= 0.0) return 0.0;

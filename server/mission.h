@@ -1,9 +1,10 @@
 #pragma once
-// A SAGE mission run in-process, in deterministic lockstep: the server side (risk field with
-// its timed events and the no-starving-valve guard, visit accounting, the fleet's shared
-// coverage) and the vehicles (Box2D bodies, each with its SMC or A* guidance) advance one
-// control cycle at a time, with several physics steps per cycle. The same objects are what a
-// DDS launch drives; here nothing crosses a process boundary, so a fixed seed gives the same run.
+// A SAGE mission run in-process, in deterministic lockstep: the same server-side mission core
+// and agent-side objects that a DDS launch runs, with the messages handed over directly. Each
+// control cycle the vehicles steer on the server's latest word, step their physics and report
+// their states (and, every coverage period, their coverage); then the server takes them in and
+// answers with the fleet's snapshot and any assignments due — the order the DDS pipeline has
+// too. Nothing crosses a process boundary, so a fixed seed gives the same run.
 #include <cstdint>
 #include <functional>
 #include <memory>
@@ -13,39 +14,60 @@
 #include <Eigen/Core>
 
 #include "maps/scenario/scenario.h"
+#include "maps/world.h"
 #include "server/metrics.h"
+#include "server/mission_core.h"
 #include "server/trajectory.h"
 
 namespace sage::server {
 
-enum class ControllerKind { kErgodic, kAstar };
-const char* ToString(ControllerKind kind);
-/// Throws maps::ScenarioError unless text is "ergodic" or "astar".
-ControllerKind ParseControllerKind(const std::string& text);
-
 struct MissionResult {
-  Trajectory trajectory;
+  Trajectory trajectory;              ///< empty unless the mission keeps it (MissionOptions)
   std::vector<WeightChange> weights;  ///< the profile's normalised weights over time (no guard)
   MissionMetrics metrics;
   double wall_time_s = 0.0;
 };
 
+struct MissionOptions {
+  std::string profile;                 ///< empty: the scenario's default
+  ControllerKind controller = ControllerKind::kErgodic;
+  MissionRecorder* recorder = nullptr; ///< where the record streams (e.g. a run directory); may be null
+  bool keep_trajectory = true;         ///< also keep the trajectory in memory for the result
+};
+
+/// A recorder that keeps the trajectory in memory (tests, benchmarks, the result of Run).
+class TrajectoryRecorder final : public MissionRecorder {
+ public:
+  void OnSample(const TrajectorySample& sample, const std::string& vehicle_name) override;
+  void OnFleetEvent(const FleetEventRecord& event) override { fleet_events.push_back(event); }
+  void OnRiskEvent(const RiskEventRecord& event) override { risk_events.push_back(event); }
+  Trajectory trajectory;
+  std::vector<FleetEventRecord> fleet_events;
+  std::vector<RiskEventRecord> risk_events;
+};
+
 class Mission {
  public:
-  /// scenario must already be validated; profile: a profile name (empty: the default).
+  /// scenario must already be validated.
   Mission(maps::Scenario scenario, ControllerKind controller, const std::string& profile = "");
+  Mission(maps::Scenario scenario, const MissionOptions& options);
   ~Mission();
   Mission(const Mission&) = delete;
   Mission& operator=(const Mission&) = delete;
 
-  /// Advances one control cycle: events, guard, guidance, physics. Returns false once the
-  /// mission time has reached the duration.
+  /// Advances one control cycle: fleet events, the vehicles, the server. Returns false once
+  /// the mission time has reached the duration.
   bool Step();
   double time_s() const;
   double duration_s() const;
   const maps::Scenario& scenario() const;
   /// The risk weights the controllers see now (normalised, guard applied).
   const Eigen::VectorXd& effective_weights() const;
+  const MissionCore& core() const;
+  /// The mission's one World (seabed, maps, basis, risk).
+  const maps::World& world() const;
+  /// An operator's risk update, taken in the next cycle (as the DDS server does).
+  OperatorAnswer SetRisk(const std::string& valve, double weight, const std::string& source = "operator");
 
   /// Runs to the end; calls progress(fraction) about every percent. Computes metrics.
   MissionResult Run(const std::function<void(double)>& progress = {});
@@ -54,14 +76,6 @@ class Mission {
   struct Impl;
   std::unique_ptr<Impl> impl_;
 };
-
-/// Angle (rad, 0..pi) between two commanded velocities; 0 if either is (near) zero. The
-/// heading change of a risk event (EventResponse::heading_change_rad).
-double HeadingChange(const Eigen::Vector2d& before_mps, const Eigen::Vector2d& after_mps);
-
-/// Fills each risk event's time to the valve's next visit and its revisit interval before and
-/// after, from the visit times in `metrics`.
-void FillEventResponses(const maps::Scenario& scenario, MissionMetrics& metrics);
 
 /// The SAGE paper's protocol for a fair baseline: the A* wait per lap (s) that makes A* spend as
 /// long near the dominant valve (highest time-averaged weight) as the given ergodic run did, to

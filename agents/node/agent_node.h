@@ -1,29 +1,34 @@
 #pragma once
-// An agent host behind Cyclone DDS: one AgentHost (many BlueROV2s in one Box2D world) on the
-// mission clock the server announces. Each control cycle every vehicle steers on its latest
-// assignment and the fleet's coverage (its own part taken out exactly, by sequence number),
-// then publishes its state; every coverage period it publishes its running sums. If the
-// server goes silent the vehicles cover on with their last target.
+// An agent host behind Cyclone DDS: one AgentMission (many BlueROV2s in one Box2D world and
+// what they know of the mission) on the mission clock the server announces. It translates the
+// server's snapshot, assignments and commands in, and the vehicles' states and coverage out;
+// the mission logic is AgentMission's. It follows the server that runs the mission now: a
+// restarted or resumed server (another instance) replaces the last one's clock and word at once.
 #include <atomic>
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <vector>
 
+#include "agents/agent_host.h"
+#include "agents/agent_mission.h"
 #include "maps/scenario/scenario.h"
 
 namespace sage::agents {
 
 struct AgentNodeOptions {
   int domain_id = 0;                         ///< DDS domain of the mission
+  Guidance guidance = Guidance::kErgodic;    ///< must be the server's controller
   std::vector<maps::VehicleSpec> vehicles;   ///< the vehicles this host simulates
   std::vector<std::uint32_t> ids;            ///< their fleet-wide ids (unique across hosts)
+  std::vector<std::optional<VehicleResume>> resume;  ///< per vehicle: where a resumed one picks up (or empty)
   double server_timeout_s = 60.0;            ///< wall seconds without the server before giving up
   double wait_for_server_s = 30.0;           ///< wall seconds to wait for the mission to start
   const std::atomic<bool>* stop = nullptr;   ///< set (SIGINT/SIGTERM): the vehicles leave cleanly
 };
 
-/// Runs until the mission finishes, every vehicle was removed, or stop is set. Returns 0 on a
-/// normal end, 1 if no server was found.
+/// Runs until the mission finishes, every vehicle was retired, or stop is set. Returns 0 on a
+/// normal end, 1 if no server was found, 2 if the server flies another world.
 int RunAgentNode(const maps::Scenario& scenario, const AgentNodeOptions& options);
 
 }  // namespace sage::agents

@@ -2,6 +2,10 @@
 // and writing a scenario live in scenario_parse.cpp, scenario_validate.cpp and scenario_emit.cpp.
 #include "maps/scenario/scenario.h"
 
+#include <cmath>
+#include <numbers>
+#include <random>
+
 #include "maps/scenario/scenario_detail.h"
 
 namespace sage::maps {
@@ -54,6 +58,28 @@ Eigen::VectorXd Scenario::ProfileWeights(const RiskProfile& profile) const {
   Eigen::VectorXd w(valves.size());
   for (std::size_t i = 0; i < valves.size(); ++i) w[i] = profile.weights.at(valves[i].name);
   return w;
+}
+
+Eigen::Vector2d JitteredStart(const VehicleSpec& spec, std::uint64_t seed, int id, double jitter_m) {
+  if (!(jitter_m > 0.0)) return spec.start_m;
+  // SplitMix64 of (seed, id): neighbouring ids get unrelated draws, and the draw depends on
+  // nothing else (not on which host adds the vehicle, nor in what order).
+  std::uint64_t z = seed + 0x9E3779B97F4A7C15ull * (static_cast<std::uint64_t>(id) + 1);
+  z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+  z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
+  std::mt19937_64 rng(z ^ (z >> 31));
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  // Uniform over the disc: radius ~ sqrt(u).
+  const double r = jitter_m * std::sqrt(unit(rng)), a = 2 * std::numbers::pi * unit(rng);
+  return spec.start_m + r * Eigen::Vector2d(std::cos(a), std::sin(a));
+}
+
+Scenario WithDuration(const Scenario& scenario, double duration_s) {
+  Scenario s = scenario;
+  s.duration_s = duration_s;
+  for (RiskProfile& p : s.profiles) std::erase_if(p.events, [&](const auto& e) { return e.time_s > duration_s; });
+  std::erase_if(s.fleet_events, [&](const auto& e) { return e.time_s > duration_s; });
+  return s;
 }
 
 const char* ToString(MotionModel model) {

@@ -66,6 +66,9 @@ enum class MotionModel {
   kBlueRov2,          ///< Box2D dynamic body with BlueROV2 Heavy added mass, drag, thrust limits
 };
 
+/// Largest start jitter (m): a vehicle's start stays near the start_m the scenario names.
+inline constexpr double kMaxStartJitter_m = 0.5;
+
 /// The BlueROV2 Heavy's top speed in surge at full thrust (m/s): the drag law of its model
 /// (agents/physics_world) gives 0.848, and tests/agents/physics_world_test.cpp checks the two
 /// agree. A faster commanded transit speed could not be flown, only asked for.
@@ -142,6 +145,9 @@ struct Scenario {
   double visit_radius_m = 0.5;              ///< a visit is an entry within this of a valve (m), > 0
   double rearm_radius_m = 1.0;              ///< re-armed only after leaving this (m), > visit radius
   std::uint64_t seed = 1;                   ///< fixed seed, same mission
+  /// Each vehicle starts within this radius (m) of its start_m, at a point drawn from the seed
+  /// and its id, so seeds give distinct but repeatable missions; 0 = exactly at start_m.
+  double start_jitter_m = 0.2;
   ErgodicSettings ergodic;
   StarvationGuard guard;
   AstarSettings astar;
@@ -168,11 +174,20 @@ Scenario ParseScenario(const std::string& yaml_text, const std::string& source);
 /// Writes YAML that LoadScenario reads back to an equal Scenario.
 std::string EmitScenario(const Scenario& scenario);
 
+/// A copy that lasts `duration_s`; risk and fleet events after the new end are dropped (they
+/// would never happen).
+Scenario WithDuration(const Scenario& scenario, double duration_s);
+
 /// A copy with exactly `count` vehicles (>= 1): the first `count` of the file's, or all of them
 /// plus new ones named rov<N> with the first vehicle's model and speed, their starts spread
 /// evenly along the bottom edge of the workspace (0.5 m in), so a fleet size can be chosen on
 /// the command line. Fleet events naming a dropped vehicle are dropped too.
 Scenario WithVehicleCount(const Scenario& scenario, int count);
+
+/// Where vehicle `id` of a mission with `seed` starts: spec.start_m moved by up to `jitter_m`
+/// (uniform over the disc) by a generator seeded from (seed, id), so in-process and over DDS,
+/// whichever host adds it and in whatever order, a vehicle starts at the same point.
+Eigen::Vector2d JitteredStart(const VehicleSpec& spec, std::uint64_t seed, int id, double jitter_m);
 
 /// A hash (FNV-1a) of what shapes the vehicles' own simulation and control: workspace,
 /// structures and valves, rates, seed, vehicles, SMC settings (K, forgetting, turning radius)
@@ -180,6 +195,9 @@ Scenario WithVehicleCount(const Scenario& scenario, int count);
 /// coverage assignment or fleet events, which only the server uses. A server and an agent host
 /// that disagree on it would fly vehicles in a different world than the one accounted.
 std::uint64_t VehicleFingerprint(const Scenario& scenario);
+/// A hash (FNV-1a) of the whole scenario as EmitScenario writes it: a checkpoint is resumed
+/// only by the scenario it was taken of.
+std::uint64_t ScenarioHash(const Scenario& scenario);
 
 const char* ToString(MotionModel model);
 const char* ToString(FleetAssignment assignment);

@@ -44,6 +44,7 @@ std::string EmitScenario(const Scenario& s) {
   number("visit_radius_m", s.visit_radius_m);
   number("rearm_radius_m", s.rearm_radius_m);
   key("seed") << std::to_string(s.seed);
+  number("start_jitter_m", s.start_jitter_m);
   key("ergodic") << YAML::Flow << YAML::BeginMap;
   key("basis_order") << std::to_string(s.ergodic.basis_order);
   number("forgetting_time_s", s.ergodic.forgetting_time_s);

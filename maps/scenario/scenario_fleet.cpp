@@ -24,6 +24,15 @@ constexpr double kDenseStartSeparation_m = 0.8;  // large fleets, when 1.0 m doe
 constexpr std::size_t kLineStartsMax = 50;       // more added vehicles than this fill a lattice
 constexpr double kStartSearchStep_m = 0.05;      // grid step of the search for a free start
 
+std::uint64_t Fnv1a(const std::string& text) {
+  std::uint64_t hash = 14695981039346656037ull;
+  for (const char c : text) {
+    hash ^= static_cast<unsigned char>(c);
+    hash *= 1099511628211ull;
+  }
+  return hash;
+}
+
 bool IsFreeStart(const Scenario& s, const std::vector<Eigen::Vector2d>& taken, const Eigen::Vector2d& p) {
   for (const ChristmasTree& tree : s.structures) {
     const Eigen::Vector2d half = tree.size_m / 2 + Eigen::Vector2d::Constant(kStartFootprintMargin_m);
@@ -181,12 +190,9 @@ std::uint64_t VehicleFingerprint(const Scenario& scenario) {
   vehicles_only.astar = AstarSettings{};
   vehicles_only.fleet.assignment = FleetAssignment::kShared;
   vehicles_only.fleet_events.clear();
-  std::uint64_t hash = 14695981039346656037ull;
-  for (const char c : EmitScenario(vehicles_only)) {
-    hash ^= static_cast<unsigned char>(c);
-    hash *= 1099511628211ull;
-  }
-  return hash;
+  return Fnv1a(EmitScenario(vehicles_only));
 }
+
+std::uint64_t ScenarioHash(const Scenario& scenario) { return Fnv1a(EmitScenario(scenario)); }
 
 }  // namespace sage::maps

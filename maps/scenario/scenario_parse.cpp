@@ -247,17 +247,19 @@ RiskProfile ReadProfile(const Reader& r, const std::string& name, const YAML::No
 Scenario ReadScenario(const Reader& r, const YAML::Node& root, const std::string& source) {
   if (!root.IsMap()) r.Fail("scenario", root, "must be a YAML map of sections (workspace, structures, ...)");
   r.ExpectMap(root, "", {"name", "workspace", "duration_s", "control_rate_hz", "physics_rate_hz",
-                         "visit_radius_m", "rearm_radius_m", "seed", "ergodic", "guard", "astar",
+                         "visit_radius_m", "rearm_radius_m", "seed", "start_jitter_m", "ergodic", "guard", "astar",
                          "structures", "vehicles", "default_profile", "profiles", "fleet", "fleet_events"});
   Scenario s;
   s.source_path = source;
   s.name = source.empty() ? "scenario" : std::filesystem::path(source).stem().string();
   r.Optional(root, "name", "", [&](const YAML::Node& n, const std::string& p) { s.name = r.Text(n, p); });
-  r.Optional(root, "workspace", "", [&](const YAML::Node& n, const std::string& p) {
-    r.ExpectMap(n, p, {"width_m", "height_m"});
-    r.OptionalNumber(n, "width_m", p, s.workspace.width_m);
-    r.OptionalNumber(n, "height_m", p, s.workspace.height_m);
-  });
+  {
+    // Required: a mission silently flown in a default box would cover the wrong water.
+    const YAML::Node workspace = r.Require(root, "workspace", "");
+    r.ExpectMap(workspace, "workspace", {"width_m", "height_m"});
+    s.workspace.width_m = r.Number(r.Require(workspace, "width_m", "workspace"), "workspace.width_m");
+    s.workspace.height_m = r.Number(r.Require(workspace, "height_m", "workspace"), "workspace.height_m");
+  }
   r.OptionalNumber(root, "duration_s", "", s.duration_s);
   r.OptionalNumber(root, "control_rate_hz", "", s.control_rate_hz);
   r.OptionalNumber(root, "physics_rate_hz", "", s.physics_rate_hz);
@@ -266,6 +268,7 @@ Scenario ReadScenario(const Reader& r, const YAML::Node& root, const std::string
   r.Optional(root, "seed", "", [&](const YAML::Node& n, const std::string& p) {
     s.seed = r.WholeNumber<std::uint64_t>(n, p, "must be a whole number >= 0");
   });
+  r.OptionalNumber(root, "start_jitter_m", "", s.start_jitter_m);
   r.Optional(root, "ergodic", "", [&](const YAML::Node& n, const std::string& p) {
     r.ExpectMap(n, p, {"basis_order", "forgetting_time_s", "min_turn_radius_m"});
     r.Optional(n, "basis_order", p, [&](const YAML::Node& v, const std::string& q) {

@@ -143,6 +143,11 @@ void Scenario::Validate() const {
   if (!(rearm_radius_m > visit_radius_m)) {
     c.Fail("rearm_radius_m", FormatNumber(rearm_radius_m), "must be > visit_radius_m = " + FormatNumber(visit_radius_m));
   }
+  c.NonNegative("start_jitter_m", start_jitter_m);
+  if (start_jitter_m > kMaxStartJitter_m) {
+    c.Fail("start_jitter_m", FormatNumber(start_jitter_m),
+           "must be in [0, " + FormatNumber(kMaxStartJitter_m) + "] m (0 = start exactly at start_m)");
+  }
   if (ergodic.basis_order < 1 || ergodic.basis_order > 64) {
     c.Fail("ergodic.basis_order", std::to_string(ergodic.basis_order), "must be in 1..64");
   }

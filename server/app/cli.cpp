@@ -1,170 +1,116 @@
+// The `sage` command line: every subcommand and option is declared here, the only file that
+// sees CLI11 (it costs seconds of compile time per file that includes it); the commands
+// themselves take plain option structs (server/app/options.h).
 #include "server/app/cli.h"
 
-#include <unistd.h>
-
-#include <cmath>
-#include <cstdio>
-#include <filesystem>
 #include <iostream>
-#include <limits>
-#include <optional>
 #include <string>
 
 #include <CLI/CLI.hpp>
-#include <fmt/format.h>
 #include <spdlog/spdlog.h>
 
-#include "maps/scenario/scenario.h"
-#include "maps/seabed_map.h"
-#include "server/report/atomic_write.h"
-#include "server/app/cli_fleet.h"
-#include "server/app/cli_scenario.h"
-#include "server/metrics.h"
-#include "server/mission.h"
-#include "server/report/report.h"
+#include "server/app/fleet_commands.h"
+#include "server/app/launch.h"
+#include "server/app/operators.h"
+#include "server/app/options.h"
+#include "server/app/run_commands.h"
+#include "proto/dds_config.h"
 
 namespace sage::server {
 namespace {
 
-namespace fs = std::filesystem;
-
-/// Options of `run` and `compare`: the scenario overrides and the run directory.
-struct MissionOverrides : ScenarioOverrides {
-  std::string out_dir;
+enum class OverrideSet {
+  kMission,   // all of them: run, compare, launch, server
+  kVehicles,  // what shapes the vehicles' own control (agent hosts)
 };
 
-// Progress on stderr: a redrawn bar on a terminal, a line every 10 % otherwise (CI logs).
-class ProgressPrinter {
- public:
-  ProgressPrinter(std::string label, double duration_s)
-      : label_(std::move(label)), duration_s_(duration_s), tty_(isatty(fileno(stderr)) != 0) {}
-  void operator()(double fraction) {
-    const int percent = static_cast<int>(std::floor(fraction * 100.0 + 1e-9));
-    if (tty_) {
-      const int filled = percent / 5;
-      std::fprintf(stderr, "\r%s [%s%s] %3d%%  t = %.0f / %.0f s", label_.c_str(), std::string(filled, '#').c_str(),
-                   std::string(20 - filled, ' ').c_str(), percent, fraction * duration_s_, duration_s_);
-      if (percent >= 100) std::fprintf(stderr, "\n");
-    } else if (percent >= next_line_percent_) {
-      std::fprintf(stderr, "%s %3d%%  t = %.0f / %.0f s\n", label_.c_str(), percent, fraction * duration_s_, duration_s_);
-      next_line_percent_ = percent - percent % 10 + 10;
+// CLI11's PositiveNumber prints the whole range of a double; users need "must be > 0".
+std::string MustBePositive(const std::string& text) {
+  try {
+    return std::stod(text) > 0.0 ? std::string() : std::string("must be > 0");
+  } catch (const std::exception&) {
+    return "must be a number > 0";
+  }
+}
+
+void AddScenarioOverrides(CLI::App& cmd, ScenarioOverrides& o, OverrideSet set, const std::string& example_scenario,
+                          bool scenario_required = true) {
+  const bool mission = set == OverrideSet::kMission;
+  CLI::Option* positional = cmd.add_option("scenario", o.scenario_path, "Scenario YAML (e.g. " + example_scenario + ")");
+  if (scenario_required) positional->required();
+  cmd.add_option("--vehicles,-n", o.vehicles,
+                 "Fleet size: the scenario's first N vehicles, or more at free starts (default: the scenario's)");
+  if (mission) {
+    cmd.add_option("--profile,-p", o.profile, "Risk profile named in the scenario (default: its default_profile)");
+    cmd.add_option("--duration", o.duration_s, "Mission length in seconds (default: the scenario's)");
+    cmd.add_option("--assignment", o.assignment,
+                   "Fleet coverage: shared (Mathew-Mezic) or partition (valves split among vehicles)")
+        ->check(CLI::IsMember({"shared", "partition"}));
+    cmd.add_option("--guard", o.guard,
+                   "No-starving-valve guard (weight floor + revisit bound): on|off (default: the scenario's; off "
+                   "reproduces the paper)")
+        ->check(CLI::IsMember({"on", "off"}));
+  }
+  cmd.add_option("--seed", o.seed, "Seed of the start-pose jitter; the same seed gives the same mission")
+      ->check([](const std::string& text) {
+        return text.find_first_not_of("0123456789") == std::string::npos && !text.empty()
+                   ? std::string()
+                   : std::string("must be a whole number >= 0");
+      });
+  cmd.add_option("--start-jitter", o.start_jitter_m,
+                 "Radius (m) within which each vehicle starts around its start_m, drawn from the seed (default: the "
+                 "scenario's, 0.2; 0 = exactly at start_m)");
+  cmd.add_option("--forgetting", o.forgetting_time_s,
+                 "Coverage forgetting time constant in seconds (default: the scenario's; inf = the paper's)");
+  cmd.add_option("--basis-order,-K", o.basis_order, "Wave numbers per dimension K (default: the scenario's)");
+  cmd.add_option("--turn-radius", o.min_turn_radius_m,
+                 "Tightest turn of the SMC direction in metres: the vehicle loops back through a hot valve instead of "
+                 "hovering on it (default: the scenario's; 0 = turn at once, the paper's law)");
+  cmd.add_option("--model", o.model,
+                 "Motion model of every vehicle: bluerov2 (Box2D dynamics) or single_integrator (the paper's "
+                 "constant-speed point); default: as in the scenario")
+      ->check(CLI::IsMember({"bluerov2", "single_integrator"}));
+  if (!mission) {
+    cmd.footer("An agent host must run the server's scenario with the same --vehicles, --seed, --start-jitter, -K, "
+               "--forgetting, --turn-radius, --model and --controller (sage launch sees to it).");
+  }
+}
+
+void AddController(CLI::App& cmd, std::string& controller) {
+  cmd.add_option("--controller,-c", controller, "ergodic (SMC) or astar (the fixed inspection tour)")
+      ->check(CLI::IsMember({"ergodic", "astar"}))
+      ->capture_default_str();
+}
+
+void AddMissionDir(CLI::App& cmd, OperatorCommand& o) {
+  cmd.add_option("--mission", o.mission_dir, "Run directory of the mission (default: $SAGE_MISSION or runs/latest)");
+}
+
+// One line for a mistyped command word, at any depth: "unknown command 'frobnicate' of sage
+// vehicle (commands: add, remove)".
+bool ReportUnknownCommand(const CLI::App& app, int argc, char** argv) {
+  const CLI::App* level = &app;
+  std::string path = "sage";
+  for (int i = 1; i < argc; ++i) {
+    const std::string word = argv[i];
+    if (word.empty() || word[0] == '-') return false;
+    const auto subs = level->get_subcommands([](const CLI::App*) { return true; });
+    if (subs.empty()) return false;
+    const CLI::App* next = nullptr;
+    std::string commands;
+    for (const CLI::App* sub : subs) {
+      if (sub->get_name() == word) next = sub;
+      commands += (commands.empty() ? "" : ", ") + sub->get_name();
     }
+    if (next == nullptr) {
+      std::cerr << "sage: error: unknown command '" << word << "' of " << path << " (commands: " << commands << "; see "
+                << path << " --help)\n";
+      return true;
+    }
+    level = next;
+    path += " " + word;
   }
-
- private:
-  std::string label_;
-  double duration_s_;
-  bool tty_;
-  int next_line_percent_ = 0;
-};
-
-double Degrees(double rad) { return rad * 180.0 / M_PI; }
-
-std::string FormatSeconds(double s) { return std::isnan(s) ? std::string("---") : fmt::format("{:.1f} s", s); }
-
-void PrintEventResponses(const MissionResult& result) {
-  for (const EventResponse& e : result.metrics.events) {
-    std::cout << fmt::format(
-        "event at t = {:.1f} s: {} weight -> {:.2f}; first-cycle heading change {:.1f} deg; next {} visit after {}; "
-        "{} interval {} before, {} after\n",
-        e.time_s, e.valve, e.new_weight, Degrees(e.heading_change_rad), e.valve, FormatSeconds(e.time_to_next_visit_s),
-        e.valve, FormatSeconds(e.interval_before_s), FormatSeconds(e.interval_after_s));
-  }
-}
-
-void WriteRunDirectory(const fs::path& dir, const maps::Scenario& scenario, const MissionResult& result) {
-  fs::create_directories(dir);
-  WriteTrajectoryCsv((dir / "trajectory.csv").string(), result.trajectory);
-  WriteMetricsJson((dir / "metrics.json").string(), result.metrics);
-  const std::string title = fmt::format("{}: {} on '{}', {:.0f} s", scenario.name, result.metrics.controller,
-                                        result.metrics.profile, result.metrics.duration_s);
-  WritePlotSvg((dir / "plot.svg").string(), scenario, result.weights.back().weights, result.trajectory, title);
-  // The seabed the mission ran on, as OctoMap binary: octovis shows it.
-  maps::SeabedMap(scenario, scenario.astar.grid_resolution_m).WriteBinary((dir / "seabed.bt").string());
-  // The effective scenario, command-line overrides included: `sage run DIR/scenario.yaml` runs
-  // the same mission again, and two runs can be told apart.
-  detail::WriteAtomically((dir / "scenario.yaml").string(), maps::EmitScenario(scenario));
-}
-
-std::string DefaultOutDir(const maps::Scenario& scenario, const std::string& profile, const std::string& what) {
-  return (fs::path("runs") / fmt::format("{}_{}_{}", scenario.name, profile, what)).string();
-}
-
-MissionResult RunOne(const maps::Scenario& scenario, ControllerKind kind, const std::string& profile) {
-  Mission mission(scenario, kind, profile);
-  ProgressPrinter progress(fmt::format("{:>7}", ToString(kind)), scenario.duration_s);
-  return mission.Run(std::ref(progress));
-}
-
-int CmdRun(const MissionOverrides& o, const std::string& controller_text) {
-  const maps::Scenario scenario = LoadWithOverrides(o);
-  const ControllerKind kind = ParseControllerKind(controller_text);
-  const std::string profile = o.profile.empty() ? scenario.default_profile : o.profile;
-  const fs::path dir = o.out_dir.empty() ? DefaultOutDir(scenario, profile, ToString(kind)) : o.out_dir;
-  PrepareRunDirectory(dir.string());
-  MissionResult result = RunOne(scenario, kind, profile);
-  std::cout << FormatTable({result.metrics});
-  PrintEventResponses(result);
-  WriteRunDirectory(dir, scenario, result);
-  spdlog::info("{:.0f} s mission simulated in {:.2f} s wall time; wrote {}/metrics.json, trajectory.csv, plot.svg",
-               scenario.duration_s, result.wall_time_s, dir.string());
-  return 0;
-}
-
-int CmdCompare(const MissionOverrides& o, bool calibrate_wait) {
-  maps::Scenario scenario = LoadWithOverrides(o);
-  const std::string profile = o.profile.empty() ? scenario.default_profile : o.profile;
-  const fs::path dir = o.out_dir.empty() ? DefaultOutDir(scenario, profile, "compare") : o.out_dir;
-  PrepareRunDirectory(dir.string());
-  const MissionResult ergodic = RunOne(scenario, ControllerKind::kErgodic, profile);
-  if (calibrate_wait) {
-    scenario.astar.wait_per_lap_s = CalibratedAstarWait(scenario, profile, ergodic.metrics);
-    spdlog::info("A* wait per lap set to {:.2f} s so that A* spends as long near the dominant valve as ergodic "
-                 "control (the paper's protocol; --calibrate-wait off keeps the scenario's)",
-                 scenario.astar.wait_per_lap_s);
-  }
-  const MissionResult astar = RunOne(scenario, ControllerKind::kAstar, profile);
-  std::cout << FormatTable({astar.metrics, ergodic.metrics});
-  if (!ergodic.metrics.events.empty()) {
-    std::cout << "A*:\n";
-    PrintEventResponses(astar);
-    std::cout << "ergodic:\n";
-    PrintEventResponses(ergodic);
-  }
-  WriteRunDirectory(dir / "astar", scenario, astar);
-  WriteRunDirectory(dir / "ergodic", scenario, ergodic);
-  spdlog::info("wrote {}/astar and {}/ergodic", dir.string(), dir.string());
-  return 0;
-}
-
-int CmdEvaluate(const std::string& trajectory_path, const std::string& scenario_path, const std::string& profile_name,
-                std::optional<double> duration_s, const std::string& out_dir) {
-  const maps::Scenario scenario = maps::LoadScenario(scenario_path);
-  const maps::RiskProfile* profile = &scenario.ProfileOrThrow(profile_name);
-  const std::string& name = profile->name;
-  const Trajectory trajectory = ReadTrajectoryCsv(trajectory_path);
-  if (trajectory.samples.empty()) throw maps::ScenarioError(trajectory_path + ": no samples");
-  // The weights over time follow the profile and its events, as they would have in a mission.
-  std::vector<WeightChange> schedule;
-  Eigen::VectorXd raw = scenario.ProfileWeights(*profile);
-  schedule.push_back({0.0, raw / raw.sum()});
-  for (const maps::RiskEvent& e : profile->events) {
-    raw[scenario.ValveIndex(e.valve)] = e.weight;
-    schedule.push_back({e.time_s, raw / raw.sum()});
-  }
-  const double duration = duration_s.value_or(trajectory.samples.back().time_s);
-  MetricsOptions options;
-  options.profile = name;
-  const MissionMetrics metrics = ComputeMetrics(trajectory, scenario, schedule, duration, options);
-  std::cout << FormatTable({metrics});
-  if (!out_dir.empty()) {
-    PrepareRunDirectory(out_dir);
-    WriteMetricsJson((fs::path(out_dir) / "metrics.json").string(), metrics);
-    WritePlotSvg((fs::path(out_dir) / "plot.svg").string(), scenario, schedule.back().weights, trajectory,
-                 fmt::format("{}: recorded trajectory {}", scenario.name, trajectory_path));
-    spdlog::info("wrote {}/metrics.json and plot.svg", out_dir);
-  }
-  return 0;
+  return false;
 }
 
 }  // namespace
@@ -176,41 +122,106 @@ int RunCli(int argc, char** argv) {
       "coverage law; the A* inspection tour is the baseline.",
       "sage"};
   app.require_subcommand(1);
-  app.set_version_flag("--version", "sage 0.1.0");
+  app.set_version_flag("--version", "sage 0.2.0");
 
-  MissionOverrides run_opts;
-  std::string controller = "ergodic";
-  CLI::App* run = app.add_subcommand("run", "Run one mission; print the per-valve table (the paper's Table 1 layout) "
-                                            "and write DIR/metrics.json, trajectory.csv, plot.svg");
-  AddScenarioOverrides(*run, run_opts, OverrideSet::kMission, "scenarios/two_xt.yaml");
-  run->add_option("--controller,-c", controller, "ergodic (SMC) or astar (fixed tour)")
-      ->check(CLI::IsMember({"ergodic", "astar"}))
-      ->capture_default_str();
-  run->add_option("--out,-o", run_opts.out_dir, "Run directory (default: runs/<scenario>_<profile>_<controller>)");
+  RunCommand run_cmd;
+  CLI::App* run = app.add_subcommand("run", "Run one mission in-process; print the per-valve table (the paper's Table 1 "
+                                            "layout) and write DIR/metrics.json, trajectory.csv, plot.svg as it runs");
+  AddScenarioOverrides(*run, run_cmd.scenario, OverrideSet::kMission, "scenarios/two_xt.yaml");
+  AddController(*run, run_cmd.controller);
+  run->add_option("--out,-o", run_cmd.out_dir, "Run directory (default: runs/<scenario>_<profile>_<controller>)");
 
-  MissionOverrides compare_opts;
+  RunCommand compare_cmd;
+  std::string calibrate = "on";
   CLI::App* compare = app.add_subcommand("compare", "Run A* and ergodic control on the same mission, side by side; "
                                                     "writes DIR/astar and DIR/ergodic");
-  AddScenarioOverrides(*compare, compare_opts, OverrideSet::kMission, "scenarios/two_xt.yaml");
-  compare->add_option("--out,-o", compare_opts.out_dir, "Output directory (default: runs/<scenario>_<profile>_compare)");
-  std::string calibrate = "on";
+  AddScenarioOverrides(*compare, compare_cmd.scenario, OverrideSet::kMission, "scenarios/two_xt.yaml");
+  compare->add_option("--out,-o", compare_cmd.out_dir, "Output directory (default: runs/<scenario>_<profile>_compare)");
   compare->add_option("--calibrate-wait", calibrate,
-                      "on: set A*'s wait per lap so it spends as long near the dominant valve as ergodic control "
-                      "(the paper's protocol); off: use the scenario's astar.wait_per_lap_s")
+                      "on: set A*'s wait per lap so it spends as long near the dominant valve as ergodic control (the "
+                      "paper's protocol); off: use the scenario's astar.wait_per_lap_s")
       ->check(CLI::IsMember({"on", "off"}))
       ->capture_default_str();
 
-  std::string trajectory_path, eval_scenario, eval_profile, eval_out;
-  std::optional<double> eval_duration;
-  CLI::App* evaluate = app.add_subcommand("evaluate", "Inspection metrics of a recorded trajectory (CSV with columns "
-                                                      "t, vehicle, x, y), e.g. a real vehicle's log");
-  evaluate->add_option("trajectory", trajectory_path, "Trajectory CSV")->required();
-  evaluate->add_option("--scenario,-s", eval_scenario, "Scenario YAML giving the valves and risk profiles")->required();
-  evaluate->add_option("--profile,-p", eval_profile, "Risk profile (default: the scenario's default_profile)");
-  evaluate->add_option("--duration", eval_duration, "Mission length in seconds (default: the last sample's time)");
-  evaluate->add_option("--out,-o", eval_out, "Also write metrics.json and plot.svg here");
+  EvaluateCommand eval_cmd;
+  CLI::App* evaluate = app.add_subcommand("evaluate", "Inspection metrics of a recorded trajectory (CSV with columns t, "
+                                                      "vehicle, x, y), e.g. a real vehicle's log");
+  evaluate->add_option("trajectory", eval_cmd.trajectory_path, "Trajectory CSV")->required();
+  evaluate->add_option("--scenario,-s", eval_cmd.scenario_path, "Scenario YAML giving the valves and risk profiles")->required();
+  evaluate->add_option("--profile,-p", eval_cmd.profile, "Risk profile (default: the scenario's default_profile)");
+  evaluate->add_option("--duration", eval_cmd.duration_s, "Mission length in seconds (default: the last sample's time)");
+  evaluate->add_option("--out,-o", eval_cmd.out_dir, "Also write metrics.json and plot.svg here");
 
-  const std::shared_ptr<FleetCli> fleet = AddFleetSubcommands(app);
+  LaunchCommand launch_cmd;
+  CLI::App* launch = app.add_subcommand("launch", "Run a fleet mission over Cyclone DDS: the server and agent hosts as "
+                                                  "processes on a private loopback-only domain; Ctrl-C stops cleanly");
+  AddScenarioOverrides(*launch, launch_cmd.scenario, OverrideSet::kMission, "scenarios/fleet_field.yaml",
+                       /*scenario_required=*/false);
+  AddController(*launch, launch_cmd.controller);
+  launch->add_option("--time-scale", launch_cmd.time_scale, "Mission seconds per wall second (1 = real time)")
+      ->check(MustBePositive)
+      ->capture_default_str();
+  launch->add_option("--out,-o", launch_cmd.out_dir, "Run directory (default: runs/<scenario>_launch)");
+  launch->add_option("--hosts", launch_cmd.hosts, "Agent host processes (default: one per 250 vehicles)")->check(MustBePositive);
+  launch->add_option("--domain", launch_cmd.domain, "DDS domain id 0..232 (default: a free one, reserved machine-wide)");
+  launch->add_option("--resume", launch_cmd.resume_dir,
+                     "Bring back the mission whose server died, from the checkpoint in this run directory (no "
+                     "scenario or overrides: the run's own are used); vehicles still flying carry on, the others are "
+                     "restarted where the record last saw them");
+
+  ServerCommand server_cmd;
+  CLI::App* server = app.add_subcommand("server", "The mission server alone (sage launch starts it for you)");
+  AddScenarioOverrides(*server, server_cmd.scenario, OverrideSet::kMission, "scenarios/fleet_field.yaml");
+  AddController(*server, server_cmd.controller);
+  server->add_option("--time-scale", server_cmd.time_scale, "Mission seconds per wall second (1 = real time)")
+      ->check(MustBePositive)
+      ->capture_default_str();
+  server->add_option("--out,-o", server_cmd.out_dir, "Run directory (default: runs/<scenario>_server)");
+  server->add_option("--domain", server_cmd.domain, "DDS domain id 0..232")->required();
+  server->add_flag("--quiet", server_cmd.quiet, "No progress lines");
+  server->add_flag("--resume", server_cmd.resume,
+                   "Continue the mission recorded in --out from its checkpoint (give the run's scenario.yaml)");
+  server->add_option("--resumes", server_cmd.resumes, "How many times the mission was resumed before (for metrics.json)");
+
+  AgentsCommand agents_cmd;
+  CLI::App* agents = app.add_subcommand("agents", "An agent host: several BlueROV2s in one Box2D world (sage launch "
+                                                  "starts them)");
+  AddScenarioOverrides(*agents, agents_cmd.scenario, OverrideSet::kVehicles, "scenarios/fleet_field.yaml");
+  AddController(*agents, agents_cmd.controller);
+  agents->add_option("--domain", agents_cmd.domain, "DDS domain id 0..232")->required();
+  agents->add_option("--offset", agents_cmd.offset, "First of the fleet's vehicles this host simulates")->capture_default_str();
+  agents->add_option("--count", agents_cmd.count, "How many of them (default: all from --offset on)");
+  agents->add_option("--join", agents_cmd.join, "Simulate the vehicle that joins in the scenario's fleet_events under this name");
+  agents->add_option("--add", agents_cmd.add, "Simulate this many new vehicles with the ids the server issued (sage vehicle add)");
+  agents->add_option("--first-id", agents_cmd.first_id, "Fleet id of the first vehicle (default: its index in the fleet)");
+  agents->add_option("--resume", agents_cmd.resume_dir,
+                     "Pick the --ids vehicles up where the crashed mission recorded in this run directory left them");
+  agents->add_option("--ids", agents_cmd.ids, "With --resume: the fleet ids to simulate")->delimiter(',');
+
+  OperatorCommand op;
+  CLI::App* vehicle = app.add_subcommand("vehicle", "Add vehicles to, or remove one from, the running mission");
+  vehicle->require_subcommand(1);
+  CLI::App* vehicle_add = vehicle->add_subcommand("add", "Vehicles with ids the server issues join the running mission "
+                                                         "(a new agent host process)");
+  vehicle_add->add_option("--count,-c", op.add_count, "How many vehicles (1..10000)")->capture_default_str();
+  AddMissionDir(*vehicle_add, op);
+  CLI::App* vehicle_remove = vehicle->add_subcommand("remove", "Take a vehicle out of the running mission cleanly");
+  vehicle_remove->add_option("id", op.remove_id,
+                             "Vehicle id: the launch's vehicles are 0..N-1 in scenario order (rov1 is 0), joins and "
+                             "added ones follow; the server's log names every vehicle with its id as it joins")
+      ->required();
+  AddMissionDir(*vehicle_remove, op);
+
+  CLI::App* risk = app.add_subcommand("risk", "Change a valve's risk in the running mission");
+  risk->require_subcommand(1);
+  CLI::App* risk_set = risk->add_subcommand("set", "Set a valve's raw risk weight; vehicles re-allocate on the next cycle");
+  risk_set->add_option("valve", op.valve, "Valve name, e.g. P1")->required();
+  risk_set->add_option("weight", op.weight, "Raw weight >= 0 (weights are normalised over all valves)")->required();
+  risk_set->add_option("--source", op.source, "Who says so (logged by the server)")->capture_default_str();
+  AddMissionDir(*risk_set, op);
+
+  CLI::App* stop = app.add_subcommand("stop", "End the running mission now; its server writes the run directory");
+  AddMissionDir(*stop, op);
 
   try {
     app.parse(argc, argv);
@@ -221,30 +232,43 @@ int RunCli(int argc, char** argv) {
   } catch (const CLI::CallForVersion& e) {
     return app.exit(e);
   } catch (const CLI::ParseError& e) {
-    // Bad arguments: one line, like every other input error. A mistyped command word gets its
-    // own message (CLI11 would only say that a subcommand is required).
-    if (argc > 1 && argv[1][0] != '-') {
-      std::string commands;
-      bool known = false;
-      for (const CLI::App* sub : app.get_subcommands([](CLI::App*) { return true; })) {
-        known = known || sub->get_name() == argv[1];
-        commands += (commands.empty() ? "" : ", ") + sub->get_name();
-      }
-      if (!known) {
-        std::cerr << "sage: error: unknown command '" << argv[1] << "' (commands: " << commands << "; see sage --help)\n";
-        return 2;
-      }
-    }
+    // Bad arguments: one line, like every other input error.
+    if (ReportUnknownCommand(app, argc, argv)) return 2;
     std::cerr << "sage: error: " << e.what() << " (see sage --help)\n";
     return 2;
   }
 
   spdlog::set_pattern("%^[%l]%$ %v");
   try {
-    if (*run) return CmdRun(run_opts, controller);
-    if (*compare) return CmdCompare(compare_opts, calibrate == "on");
-    if (*evaluate) return CmdEvaluate(trajectory_path, eval_scenario, eval_profile, eval_duration, eval_out);
-    return RunFleetSubcommand(*fleet);
+    for (const int domain : {server_cmd.domain, agents_cmd.domain, launch_cmd.domain.value_or(0)}) {
+      if (domain < 0 || domain > proto::kMaxDomainId) {
+        throw maps::ScenarioError("--domain = " + std::to_string(domain) + ": must be in 0..232");
+      }
+    }
+    if (*run) return CmdRun(run_cmd);
+    if (*compare) {
+      compare_cmd.calibrate_wait = calibrate == "on";
+      return CmdCompare(compare_cmd);
+    }
+    if (*evaluate) return CmdEvaluate(eval_cmd);
+    if (*launch) {
+      if (launch_cmd.resume_dir.empty() && launch_cmd.scenario.scenario_path.empty()) {
+        throw maps::ScenarioError("scenario: give a scenario YAML (e.g. scenarios/fleet_field.yaml), or --resume RUN_DIR");
+      }
+      if (!launch_cmd.resume_dir.empty() && !launch_cmd.scenario.scenario_path.empty()) {
+        throw maps::ScenarioError("--resume: resumes the run's own scenario; give no scenario file with it");
+      }
+      launch_cmd.stop = StopOnSignals();
+      const int status = Launch(launch_cmd);
+      // Stopped by a signal: the shell's convention, 128 + its number (130 for Ctrl-C).
+      return status == 130 && StopSignal() != 0 ? 128 + StopSignal() : status;
+    }
+    if (*server) return CmdServer(server_cmd);
+    if (*agents) return CmdAgents(agents_cmd);
+    if (*vehicle_add) return AddVehicles(FindMission(op.mission_dir), op.add_count);
+    if (*vehicle_remove) return RemoveVehicle(FindMission(op.mission_dir), op.remove_id);
+    if (*risk_set) return SetRisk(FindMission(op.mission_dir), op.valve, op.weight, op.source);
+    if (*stop) return StopMission(FindMission(op.mission_dir));
   } catch (const maps::ScenarioError& e) {
     std::cerr << "sage: error: " << e.what() << "\n";
     return 2;

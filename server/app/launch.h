@@ -2,44 +2,18 @@
 // `sage launch`: one command that starts a mission's server and agent hosts as processes on a
 // private, loopback-only DDS domain, shows progress, carries out the scenario's fleet events
 // (a vehicle joining, lost with SIGKILL, leaving cleanly), stops cleanly on Ctrl-C or at the
-// duration, and leaves the run directory. Plus the operator's commands on a running mission.
-#include <atomic>
-#include <optional>
-#include <string>
-
-#include "maps/scenario/scenario.h"
+// duration, and leaves the run directory. If the server dies it says so (which process, which
+// signal, what the run directory kept) and exits non-zero; `sage launch --resume DIR` brings
+// the mission back from its checkpoint, restarting the vehicles no host runs any more.
+#include "server/app/options.h"
 
 namespace sage::server {
 
-struct LaunchOptions {
-  std::string scenario_path;
-  std::string profile;
-  std::string out_dir;           ///< run directory (default runs/<scenario>_launch)
-  std::optional<int> domain;     ///< DDS domain (default: a free one, reserved machine-wide)
-  int hosts = 0;                 ///< agent host processes (0: one per 250 vehicles)
-  double time_scale = 1.0;       ///< mission seconds per wall second
-  const std::atomic<bool>* stop = nullptr;
-};
+/// Exit codes of sage launch besides 0 (done), 2 (bad input) and 128 + signal (stopped).
+inline constexpr int kServerDied = 3;     ///< the server died; the run directory holds the partial mission
+inline constexpr int kFleetGone = 4;      ///< every agent host exited with no vehicle left
 
-/// Runs the mission; `scenario` already carries the command line's overrides (vehicle count,
-/// duration...). Returns the server's exit code.
-int Launch(const maps::Scenario& scenario, const LaunchOptions& options);
-
-/// What a running mission's directory says about it (mission.json, written by Launch).
-struct MissionHandle {
-  int domain_id = 0;
-  std::string scenario_path;
-  std::string run_dir;
-};
-/// Reads DIR/mission.json (DIR default: $SAGE_MISSION, else runs/latest). Throws
-/// maps::ScenarioError with one line if there is none.
-MissionHandle FindMission(const std::string& dir);
-
-/// `sage vehicle add`: starts a detached agent host with `count` new vehicles that join the
-/// mission; returns their ids. `sage vehicle remove`: asks the host of vehicle `id` to take it
-/// out cleanly. `sage risk set`: publishes a valve's new risk weight.
-int AddVehicles(const MissionHandle& mission, int count);
-int RemoveVehicle(const MissionHandle& mission, unsigned id);
-int SetRisk(const MissionHandle& mission, const std::string& valve, double weight, const std::string& source);
+/// Runs a new mission (command.resume_dir empty) or resumes the one recorded there.
+int Launch(const LaunchCommand& command);
 
 }  // namespace sage::server

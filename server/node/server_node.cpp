@@ -4,74 +4,105 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
-#include <filesystem>
-#include <fstream>
 #include <iostream>
-#include <limits>
 #include <map>
+#include <random>
 #include <thread>
 
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
 
-#include "maps/seabed_map.h"
+#include "agents/node/wire.h"
+#include "maps/world.h"
 #include "proto/dds_config.h"
 #include "proto/dds_endpoints.h"
 #include "proto/messages.h"
 #include "proto/mission_clock.h"
 #include "proto/qos.h"
-#include "server/fleet_server.h"
-#include "server/mission.h"
-#include "server/report/atomic_write.h"
+#include "server/report/checkpoint.h"
 #include "server/report/report.h"
+#include "server/report/run_directory.h"
 
 namespace sage::server {
-
 namespace {
 
-namespace fs = std::filesystem;
-using proto::NowRealtimeNs;
-using proto::AsSpan;
 using proto::AsStringView;
-using proto::BorrowSequence;
 using proto::BorrowString;
+using proto::NowRealtimeNs;
+using SteadyClock = std::chrono::steady_clock;
 
-struct FleetLogEntry {
-  double time_s;
-  std::string what;  // joined, lost, left
-  unsigned vehicle_id;
-  std::string name;
+// Up to this many joins of one cycle are logged by name; more are summed up in one line.
+constexpr std::size_t kJoinsNamed = 5;
+
+// The record, and the log lines an operator reads: joins, losses and risk changes as they
+// happen (joins of one cycle summed up when many).
+class LoggedRecord final : public MissionRecorder {
+ public:
+  explicit LoggedRecord(RunDirectory& run) : run_(run) {}
+  void OnSample(const TrajectorySample& s, const std::string& name) override { run_.OnSample(s, name); }
+  void OnFleetEvent(const FleetEventRecord& e) override {
+    run_.OnFleetEvent(e);
+    if (e.what == "joined" || e.what == "rejoined") {
+      joins_.push_back(e);
+    } else if (e.vehicle_id >= 0) {
+      spdlog::info("server: {} (id {}) {} at t = {:.1f} s ({})", e.name, e.vehicle_id, e.what, e.time_s, e.detail);
+    } else {
+      spdlog::warn("server: t = {:.1f} s: {}: {}", e.time_s, e.what, e.detail);
+    }
+  }
+  void OnRiskEvent(const RiskEventRecord& e) override {
+    run_.OnRiskEvent(e);
+    spdlog::info("server: risk of {} set to {} by {} at t = {:.1f} s ({:.1f} % of the field's risk)", e.valve,
+                 e.raw_weight, e.source, e.time_s, 100.0 * e.new_share);
+  }
+  /// The cycle's joins, in one line when there are many.
+  void LogJoins(std::size_t alive) {
+    if (joins_.size() <= kJoinsNamed) {
+      for (const FleetEventRecord& e : joins_) {
+        spdlog::info("server: {} (id {}) {} at t = {:.1f} s", e.name, e.vehicle_id, e.what, e.time_s);
+      }
+    } else {
+      spdlog::info("server: {} vehicles joined at t = {:.1f} s: {} (id {}) .. {} (id {}); {} alive", joins_.size(),
+                   joins_.front().time_s, joins_.front().name, joins_.front().vehicle_id, joins_.back().name,
+                   joins_.back().vehicle_id, alive);
+    }
+    joins_.clear();
+  }
+
+ private:
+  RunDirectory& run_;
+  std::vector<FleetEventRecord> joins_;
 };
 
-// Fleets larger than this get one log line per cycle for their joins instead of one per vehicle.
-constexpr std::size_t kJoinsLoggedOneByOne = 20;
-
-struct KnownVehicle {
-  int index = 0;  // dense index: trajectory.vehicle_names[index]
-  bool alive = false;
-  proto::VehicleState last{};
-  bool has_state = false;
-  bool target_sent = false;
-};
-
-// A risk event whose heading change waits for the first command vehicle_id steers on the
-// event's target (its state's target_cycle reaches `cycle`).
-struct PendingHeadingChange {
-  std::size_t response;  // index into FleetServer::responses()
-  std::uint64_t cycle;   // the server cycle whose FleetCoverage_ first carried the new field
-  unsigned vehicle_id;
-};
-
-Eigen::Vector2d CommandOf(const proto::VehicleState& s) { return {s.cmd_x_mps, s.cmd_y_mps}; }
+std::uint64_t NewServerInstance() {
+  std::random_device device;
+  return (static_cast<std::uint64_t>(device()) << 32) ^ device() ^ static_cast<std::uint64_t>(NowRealtimeNs());
+}
 
 }  // namespace
 
 int RunServerNode(const maps::Scenario& scenario, const ServerNodeOptions& options) {
-  PrepareRunDirectory(options.out_dir);  // a mission of minutes must not end in "cannot write"
-  // The effective scenario beside the results, as sage run and sage launch leave it.
-  detail::WriteAtomically((fs::path(options.out_dir) / "scenario.yaml").string(), maps::EmitScenario(scenario));
-  FleetServer server(scenario, options.profile);
-  const bool partition = scenario.fleet.assignment == maps::FleetAssignment::kPartition;
+  maps::World world(scenario);
+  RunDirectoryOptions record_options;
+  record_options.transport = "dds";
+  record_options.resume = options.resume;
+  record_options.resumes = options.resumes;
+  record_options.checkpoint_period_s = options.checkpoint_period_s;
+  MissionCheckpoint checkpoint;
+  if (options.resume) checkpoint = ReadCheckpoint(options.out_dir);  // before the record is touched
+  RunDirectory run(options.out_dir, scenario, record_options);
+  LoggedRecord record(run);
+  MissionCore core(world, scenario, options.profile, options.controller, &record);
+  std::int64_t first_cycle = 0;
+  if (options.resume) {
+    core.Restore(checkpoint);
+    const RecordTail tail = ReadRecordTail(options.out_dir, checkpoint.time_s);
+    first_cycle = core.Replay(tail.samples, tail.fleet_events, tail.risk_events) + 1;
+    core.Note("resumed", fmt::format("from the checkpoint at t = {:.1f} s and the record to t = {:.1f} s ({} samples "
+                                     "replayed); the mission's clock goes on from there",
+                                     checkpoint.time_s, core.time_s(), tail.samples.size()));
+  }
+
   proto::Participant participant(options.domain_id, proto::LocalhostConfigXml(proto::kMaxLocalParticipants));
   {
     // Two servers on one domain would both adopt the same vehicles and clocks: refuse to be the
@@ -83,274 +114,208 @@ int RunServerNode(const maps::Scenario& scenario, const ServerNodeOptions& optio
                                             options.domain_id));
     }
   }
-  proto::Reader<proto::VehicleState> states(participant, proto::VehicleStateReaderQos());
+  proto::Reader<proto::VehicleState> states(participant, proto::VehicleStateRecordQos());
   proto::Reader<proto::VehicleCoverage> coverage(participant, proto::VehicleCoverageQos());
   proto::Reader<proto::RiskUpdate> risk_updates(participant, proto::RiskUpdateQos());
   proto::Writer<proto::RiskUpdateResult> risk_results(participant, proto::RiskUpdateResultQos());
   proto::Reader<proto::FleetCommand> commands(participant, proto::FleetCommandQos());
+  proto::Writer<proto::FleetCommand> retire(participant, proto::FleetCommandQos());
+  proto::Writer<proto::FleetCommandResult> command_results(participant, proto::FleetCommandResultQos());
   proto::Writer<proto::ErgodicTarget> targets(participant, proto::ErgodicTargetQos());
   proto::Writer<proto::FleetCoverage> fleet_coverage(participant, proto::FleetCoverageQos());
   proto::Writer<proto::MissionStatus> status(participant, proto::MissionStatusQos());
 
-  const double dt = 1.0 / scenario.control_rate_hz;
-  const long cycles_total = std::lround(scenario.duration_s / dt);
-  const long long start_ns = NowRealtimeNs();
-  const auto wall_start = std::chrono::steady_clock::now();
-  auto mission_time = [&](long long stamp_ns) { return (stamp_ns - start_ns) * 1e-9 * options.time_scale; };
+  const double rate = scenario.control_rate_hz;
+  const std::int64_t cycles_total = std::llround(scenario.duration_s * rate);
+  const std::uint64_t instance = NewServerInstance();
+  const std::uint32_t order = static_cast<std::uint32_t>(scenario.ergodic.basis_order);
+  // The mission clock: cycle k is at mission time k / rate; a resumed mission's clock is set so
+  // that its first cycle is now. Vehicles step at k / rate, the server half a period later, when
+  // their states of cycle k are in.
+  const long long start_ns =
+      NowRealtimeNs() - static_cast<long long>(static_cast<double>(first_cycle) / rate / options.time_scale * 1e9);
+  const auto wall_of = [&](double mission_s) {
+    return std::chrono::system_clock::time_point(std::chrono::duration_cast<std::chrono::system_clock::duration>(
+        std::chrono::nanoseconds(start_ns + static_cast<long long>(mission_s / options.time_scale * 1e9))));
+  };
+  const double lease_s = scenario.fleet.liveliness_lease_s;
+  const std::uint64_t fingerprint =
+      maps::VehicleFingerprint(scenario) ^ (options.controller == ControllerKind::kAstar ? 0x5A5Aull : 0ull);
 
-  std::map<unsigned, KnownVehicle> vehicles;
-  std::vector<FleetLogEntry> fleet_log;
-  Trajectory trajectory;
-  std::uint32_t lost_count = 0;
   double last_cycle_ms = 0.0, total_cycle_ms = 0.0, max_cycle_ms = 0.0;
   long cycles_run = 0;
   std::uint64_t messages_in = 0, messages_out = 0;
   bool stop_requested = false;
-  std::vector<PendingHeadingChange> pending_heading_changes;
-  // In-process the heading change compares one state's command with and without the event. Over
-  // DDS the nearest is the first command steered on the event's target against the command
-  // before it, one cycle earlier (more if a best-effort state was lost on the way).
-  auto answer_heading_changes = [&](unsigned id, const proto::VehicleState& before, const proto::VehicleState& now) {
-    std::erase_if(pending_heading_changes, [&](const PendingHeadingChange& p) {
-      if (p.vehicle_id != id || now.target_cycle < p.cycle) return false;
-      if (before.target_cycle < p.cycle) {
-        server.responses()[p.response].heading_change_rad = HeadingChange(CommandOf(before), CommandOf(now));
-      }
-      return true;
-    });
-  };
-
-  const std::uint64_t vehicle_fingerprint = maps::VehicleFingerprint(scenario);
-  auto publish_status = [&](long cycle, double t, bool finished) {
+  auto publish_status = [&](std::int64_t cycle, double t, bool finished) {
     proto::MissionStatus s{};
     s.stamp_ns = NowRealtimeNs();
+    s.server_instance = instance;
     s.start_ns = start_ns;
     s.time_scale = options.time_scale;
-    s.cycle = static_cast<std::uint64_t>(cycle);
+    s.cycle = static_cast<std::uint64_t>(std::max<std::int64_t>(cycle, 0));
     s.mission_time_s = t;
     s.duration_s = scenario.duration_s;
-    s.vehicles_alive = static_cast<std::uint32_t>(server.alive().size());
-    s.vehicles_lost = lost_count;
+    s.vehicles_alive = static_cast<std::uint32_t>(core.roster().alive_count());
+    s.vehicles_lost = static_cast<std::uint32_t>(core.roster().lost_count());
     s.cycle_time_ms = last_cycle_ms;
-    s.ergodic_metric = server.FleetMetric();
+    s.ergodic_metric = core.ergodic_metric();
     s.finished = finished;
-    s.vehicle_fingerprint = vehicle_fingerprint;
+    s.vehicle_fingerprint = fingerprint;
     status.Write(s);
     ++messages_out;
   };
-
-  auto publish_target = [&](unsigned id, long cycle) {
-    Eigen::VectorXd phi;
-    const bool shared = !partition;
-    if (!shared) phi = server.TargetFor(static_cast<int>(id)).phi;
-    proto::ErgodicTarget msg{};
-    msg.vehicle_id = id;
-    msg.stamp_ns = NowRealtimeNs();
-    msg.cycle = static_cast<std::uint64_t>(cycle);
-    msg.basis_order = static_cast<std::uint32_t>(scenario.ergodic.basis_order);
-    msg.shared = shared;
-    msg.phi = BorrowSequence(std::span<const double>(phi.data(), static_cast<std::size_t>(phi.size())));
-    targets.Write(msg);
+  auto answer_command = [&](const proto::FleetCommand& c, const OperatorAnswer& a) {
+    proto::FleetCommandResult r{};
+    r.command_stamp_ns = c.stamp_ns;
+    r.verb = c.verb;
+    r.accepted = a.accepted;
+    r.reason = BorrowString(a.reason);
+    r.first_id = a.first_id;
+    r.count = c.count;
+    r.vehicle_id = c.vehicle_id;
+    r.mission_time_s = core.time_s();
+    command_results.Write(r);
     ++messages_out;
   };
 
-  publish_status(0, 0.0, false);
-  spdlog::info("server: mission '{}' on DDS domain {}, {:.0f} s at {}x real time, {} coverage", scenario.name,
-               options.domain_id, scenario.duration_s, options.time_scale, ToString(scenario.fleet.assignment));
+  const auto wall_start = SteadyClock::now();
+  publish_status(first_cycle, static_cast<double>(first_cycle) / rate, false);
+  spdlog::info("server: mission '{}' on DDS domain {}, {:.0f} s at {}x real time, {} coverage{}", scenario.name,
+               options.domain_id, scenario.duration_s, options.time_scale, ToString(scenario.fleet.assignment),
+               options.resume ? fmt::format(", resumed at t = {:.1f} s", core.time_s()) : std::string());
 
-  long cycle = 0;
-  std::vector<std::vector<int>> last_assignment;
-  Eigen::VectorXd last_weights;
+  // Liveliness losses seen while this server itself was stalled wait two leases for the
+  // vehicle's next state (a stopped server is not a fleet loss).
+  std::map<int, SteadyClock::time_point> suspect;
+  SteadyClock::time_point stalled_until = SteadyClock::now();
+  bool empty_warned = false;
+  std::int64_t cycle = first_cycle;
+  std::vector<std::uint32_t> ids_scratch;
+  std::vector<std::uint64_t> seqs_scratch;
   for (; cycle <= cycles_total; ++cycle) {
-    // cycle / rate rather than cycle * dt: cycle 3 is t = 0.3, not 0.30000000000000004.
-    const double t = static_cast<double>(cycle) / scenario.control_rate_hz;
-    std::this_thread::sleep_until(wall_start + std::chrono::duration<double>(t / options.time_scale));
+    const double t = static_cast<double>(cycle) / rate;
+    const auto due = wall_of(t + 0.5 / rate);
+    std::this_thread::sleep_until(due);
     if ((options.stop && options.stop->load()) || stop_requested) break;
-    const auto compute_start = std::chrono::steady_clock::now();
+    const auto compute_start = SteadyClock::now();
+    if (std::chrono::system_clock::now() - due > std::chrono::duration<double>(lease_s)) {
+      stalled_until = compute_start + std::chrono::duration_cast<SteadyClock::duration>(
+                                          std::chrono::duration<double>(2 * lease_s));
+    }
 
-    // Vehicles: joins (first state), deaths (liveliness lapsed) and clean leaves (disposed).
-    int joined_this_cycle = 0;
-    // Take until empty: one take returns at most 256 samples, and a 1,000-vehicle fleet sends 1,000 a cycle.
+    // Take until empty: one take returns at most what is asked, and a large fleet sends
+    // thousands of states a cycle.
     auto take_all = [](auto& reader, auto&& visit) {
       while (reader.TakeEach(visit, 1024) == 1024) {
       }
     };
-    take_all(states, [&](const proto::VehicleState& s, const dds_sample_info_t& info) {
+    take_all(states, [&](const proto::VehicleState& m, const dds_sample_info_t& info) {
       ++messages_in;
-      KnownVehicle& v = vehicles[s.vehicle_id];
+      const int id = static_cast<int>(m.vehicle_id);
       if (info.valid_data) {
-        if (!v.alive) {
-          if (!v.has_state) {  // first heard of: it gets the next trajectory index
-            v.index = static_cast<int>(trajectory.vehicle_names.size());
-            trajectory.vehicle_names.emplace_back(AsStringView(s.name));
-          }
-          v.alive = true;
-          server.AddVehicle(static_cast<int>(s.vehicle_id), std::string(AsStringView(s.name)));
-          fleet_log.push_back({t, "joined", s.vehicle_id, std::string(AsStringView(s.name))});
-          if (vehicles.size() <= kJoinsLoggedOneByOne) {
-            spdlog::info("server: {} (id {}) joined at t = {:.1f} s", AsStringView(s.name), s.vehicle_id, t);
-          }
-          ++joined_this_cycle;
-        } else {
-          answer_heading_changes(s.vehicle_id, v.last, s);
-        }
-        v.last = s;
-        v.last.name = nullptr;  // the name lives in trajectory.vehicle_names; the sample's memory is a loan
-        v.has_state = true;
+        core.OnState(agents::wire::FromWire(m, rate));
+        suspect.erase(id);
         // A dispose or a lapsed lease that arrives while the vehicle's last state is still
-        // unread comes as that (valid) sample with a not-alive instance state, not as a sample
-        // of its own: take the state, then the leave.
+        // unread comes as that (valid) sample with a not-alive instance state.
         if (info.instance_state == DDS_ALIVE_INSTANCE_STATE) return;
       }
-      if (!v.alive) return;
       const bool lost = info.instance_state == DDS_NOT_ALIVE_NO_WRITERS_INSTANCE_STATE;
-      v.alive = false;
-      // Its answer to a pending event never comes: that heading change stays unknown (NaN).
-      std::erase_if(pending_heading_changes,
-                    [&](const PendingHeadingChange& p) { return p.vehicle_id == s.vehicle_id; });
-      server.RemoveVehicle(static_cast<int>(s.vehicle_id), lost, t);
-      lost_count += lost ? 1 : 0;
-      const std::string& name = trajectory.vehicle_names.at(v.index);
-      fleet_log.push_back({t, lost ? "lost" : "left", s.vehicle_id, name});
-      spdlog::info("server: {} (id {}) {} at t = {:.1f} s (last heard at t = {:.1f} s)", name, s.vehicle_id,
-                   lost ? "lost" : "left", t, mission_time(v.last.stamp_ns));
+      if (lost && compute_start < stalled_until) {
+        suspect.emplace(id, stalled_until);
+      } else {
+        core.OnVehicleGone(id, lost);
+      }
     });
-    if (vehicles.size() > kJoinsLoggedOneByOne && joined_this_cycle > 0) {
-      spdlog::info("server: {} vehicles joined at t = {:.1f} s ({} alive)", joined_this_cycle, t, server.alive().size());
+    for (auto it = suspect.begin(); it != suspect.end();) {
+      if (compute_start < it->second) {
+        ++it;
+        continue;
+      }
+      core.OnVehicleGone(it->first, /*lost=*/true);
+      it = suspect.erase(it);
     }
-    take_all(coverage, [&](const proto::VehicleCoverage& c, const dds_sample_info_t& info) {
+    take_all(coverage, [&](const proto::VehicleCoverage& m, const dds_sample_info_t& info) {
       ++messages_in;
-      if (!info.valid_data) return;
-      const auto sums = AsSpan(c.sums);
-      server.OnCoverage(static_cast<int>(c.vehicle_id), c.seq, mission_time(c.stamp_ns), c.time_s,
-                        Eigen::Map<const Eigen::VectorXd>(sums.data(), static_cast<Eigen::Index>(sums.size())));
+      if (info.valid_data) core.OnCoverage(agents::wire::FromWire(m));
     });
-    const std::size_t responses_before = server.responses().size();
     risk_updates.TakeEach([&](const proto::RiskUpdate& r, const dds_sample_info_t& info) {
       ++messages_in;
       if (!info.valid_data) return;
+      const OperatorAnswer a =
+          core.OnRiskUpdate(std::string(AsStringView(r.valve)), r.weight, std::string(AsStringView(r.source)));
+      if (!a.accepted) spdlog::warn("server: ignored a risk update: {}", a.reason);
       proto::RiskUpdateResult result{};
       result.update_stamp_ns = r.stamp_ns;
       result.valve = r.valve;
       result.mission_time_s = t;
-      std::string reason;
-      try {
-        server.SetRiskWeight(std::string(AsStringView(r.valve)), r.weight, t, std::string(AsStringView(r.source)));
-        result.applied = true;
-        result.new_share = server.responses().back().new_weight;
-        spdlog::info("server: risk of {} set to {} by {} at t = {:.1f} s", AsStringView(r.valve), r.weight,
-                     AsStringView(r.source), t);
-      } catch (const std::exception& e) {  // an operator's message must never end the mission
-        reason = e.what();
-        spdlog::warn("server: ignored {}", reason);
-      }
-      result.reason = proto::BorrowString(reason);
+      result.applied = a.accepted;
+      result.new_share = a.new_share;
+      result.reason = BorrowString(a.reason);
       risk_results.Write(result);
       ++messages_out;
     });
     commands.TakeEach([&](const proto::FleetCommand& c, const dds_sample_info_t& info) {
       ++messages_in;
-      if (info.valid_data && AsStringView(c.verb) == "stop") stop_requested = true;
+      if (!info.valid_data) return;
+      const std::string_view verb = AsStringView(c.verb);
+      if (verb == "stop") {
+        stop_requested = true;
+        answer_command(c, {true, "", 0.0, -1});
+      } else if (verb == "remove") {
+        const OperatorAnswer a = core.RemoveRequest(static_cast<int>(c.vehicle_id));
+        if (a.accepted) {
+          proto::FleetCommand order{};
+          order.stamp_ns = NowRealtimeNs();
+          order.server_instance = instance;
+          std::string retire_verb = "retire";
+          order.verb = BorrowString(retire_verb);
+          order.vehicle_id = c.vehicle_id;
+          retire.Write(order);
+          ++messages_out;
+        }
+        answer_command(c, a);
+      } else if (verb == "reserve") {
+        answer_command(c, core.ReserveIds(static_cast<int>(c.count)));
+      }
     });
 
-    for (auto& [id, v] : vehicles) {
-      if (!v.alive || !v.has_state) continue;
-      const Eigen::Vector2d position(v.last.x_m, v.last.y_m);
-      server.OnState(static_cast<int>(id), t, position);
-      trajectory.samples.push_back({t, v.index, position, v.last.heading_rad, Eigen::Vector2d(v.last.vx_mps, v.last.vy_mps),
-                                    CommandOf(v.last)});
-    }
-    server.Cycle(t);
-    // This cycle's risk changes (operators' and the profile's): measured on the first vehicle, as
-    // in-process; unknown (NaN, null in metrics.json) until its answer arrives, or if none is alive.
-    const std::vector<int> alive = server.alive();
-    for (std::size_t i = responses_before; i < server.responses().size(); ++i) {
-      server.responses()[i].heading_change_rad = std::numeric_limits<double>::quiet_NaN();
-      if (!alive.empty()) {
-        pending_heading_changes.push_back({i, static_cast<std::uint64_t>(cycle), static_cast<unsigned>(alive.front())});
-      }
-    }
-
-    const FleetCoverage& fc = server.coverage();
-    std::vector<std::uint32_t> ids;
-    std::vector<std::uint64_t> seqs;
-    for (const auto& [id, seq] : fc.accounted_seq) {
-      ids.push_back(static_cast<std::uint32_t>(id));
-      seqs.push_back(seq);
-    }
-    proto::FleetCoverage msg{};
-    msg.stamp_ns = NowRealtimeNs();
-    msg.cycle = static_cast<std::uint64_t>(cycle);
-    msg.mission_time_s = t;
-    msg.basis_order = static_cast<std::uint32_t>(scenario.ergodic.basis_order);
-    msg.phi = BorrowSequence(std::span<const double>(server.phi().data(), server.phi().size()));
-    msg.sums = BorrowSequence(std::span<const double>(fc.sums.data(), fc.sums.size()));
-    msg.kernel_time_s = fc.kernel_time_s;
-    msg.vehicle_ids = BorrowSequence(std::span<const std::uint32_t>(ids));
-    msg.accounted_seq = BorrowSequence(std::span<const std::uint64_t>(seqs));
-    fleet_coverage.Write(msg);
+    const CycleOutput out = core.Cycle(cycle);
+    record.LogJoins(core.roster().alive_count());
+    const long long stamp = NowRealtimeNs();
+    fleet_coverage.Write(agents::wire::ToWire(out.snapshot, instance, order, stamp, ids_scratch, seqs_scratch));
     ++messages_out;
-
-    // A partition target is the vehicle's share of the valves weighted by the current risk, so
-    // it is sent again when the shares change and when the risk does (an operator's update, a
-    // profile event, the guard); in-process every vehicle gets it every cycle.
-    const Eigen::VectorXd& weights = server.effective_weights();
-    const bool reweighted = weights.size() != last_weights.size() ||
-                            (weights.size() > 0 && (weights - last_weights).cwiseAbs().maxCoeff() > 0.0);
-    // Also after any risk event, even one that left the weights as they were: its heading change
-    // waits for a command steered on a target of this cycle or later.
-    const bool risk_event = server.responses().size() > responses_before;
-    const bool reassigned = partition && (server.assignment() != last_assignment || reweighted || risk_event);
-    if (reassigned) {
-      last_assignment = server.assignment();
-      last_weights = weights;
+    for (const agents::Assignment& a : out.assignments) {
+      targets.Write(agents::wire::ToWire(a, instance, order, stamp));
+      ++messages_out;
     }
-    for (auto& [id, v] : vehicles) {
-      if (!v.alive || (v.target_sent && !reassigned)) continue;
-      publish_target(id, cycle);
-      v.target_sent = true;
+    if (out.fleet_empty && !empty_warned && cycle > first_cycle + 2 * static_cast<std::int64_t>(rate)) {
+      spdlog::warn("server: no vehicle is alive at t = {:.1f} s; the mission goes on for vehicles that join", t);
     }
-    last_cycle_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - compute_start).count();
+    empty_warned = out.fleet_empty;
+    run.Tick(core);
+    last_cycle_ms = std::chrono::duration<double, std::milli>(SteadyClock::now() - compute_start).count();
     total_cycle_ms += last_cycle_ms;
     max_cycle_ms = std::max(max_cycle_ms, last_cycle_ms);
     ++cycles_run;
     if (cycle % 5 == 0) publish_status(cycle, t, false);
-    if (options.show_progress && cycle % std::max(1L, cycles_total / 20) == 0) {
-      std::fprintf(stderr, "server  t = %5.0f / %.0f s  vehicles %zu (lost %u)  metric %.2e  cycle %.2f ms\n", t,
-                   scenario.duration_s, server.alive().size(), lost_count, server.FleetMetric(), last_cycle_ms);
+    if (options.show_progress && cycle % std::max<std::int64_t>(1, cycles_total / 20) == 0) {
+      std::fprintf(stderr, "server  t = %5.0f / %.0f s  vehicles %zu (lost %zu)  metric %.2e  cycle %.2f ms\n", t,
+                   scenario.duration_s, core.roster().alive_count(), core.roster().lost_count(), core.ergodic_metric(),
+                   last_cycle_ms);
     }
   }
-  const double end_time = std::min(scenario.duration_s, static_cast<double>(cycle) / scenario.control_rate_hz);
+  const bool stopped_early = cycle <= cycles_total;
+  const double end_time = std::max(1.0 / rate, std::min(scenario.duration_s, core.time_s()));
+  run.Finish(core, world, end_time, stopped_early);
   publish_status(cycle, end_time, true);
-  const double wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
-
-  // Samples of one cycle were taken in id order; the file lists them by (time, trajectory index),
-  // so names read back to the same indices.
-  std::stable_sort(trajectory.samples.begin(), trajectory.samples.end(), [](const auto& a, const auto& b) {
-    return a.time_s < b.time_s || (a.time_s == b.time_s && a.vehicle < b.vehicle);
-  });
-  MetricsOptions metrics_options;
-  metrics_options.controller = "ergodic";
-  metrics_options.profile = server.profile().name;
-  MissionMetrics metrics = ComputeMetrics(trajectory, scenario, server.schedule(), std::max(dt, end_time), metrics_options);
-  metrics.events = server.responses();
-  FillEventResponses(scenario, metrics);
-  std::cout << FormatTable({metrics});
-  fs::create_directories(options.out_dir);
-  const fs::path dir(options.out_dir);
-  WriteTrajectoryCsv((dir / "trajectory.csv").string(), trajectory);
-  WriteMetricsJson((dir / "metrics.json").string(), metrics);
-  WritePlotSvg((dir / "plot.svg").string(), scenario, server.schedule().back().weights, trajectory,
-               fmt::format("{}: fleet of {} over DDS, {:.0f} s", scenario.name, trajectory.vehicle_names.size(), end_time));
-  maps::SeabedMap(scenario, scenario.astar.grid_resolution_m).WriteBinary((dir / "seabed.bt").string());
-  std::ofstream log(dir / "fleet_events.csv");
-  log << "t,event,vehicle_id,name\n";
-  for (const FleetLogEntry& e : fleet_log) log << e.time_s << "," << e.what << "," << e.vehicle_id << "," << e.name << "\n";
+  const double wall_s = std::chrono::duration<double>(SteadyClock::now() - wall_start).count();
+  const double mission_s = end_time - static_cast<double>(first_cycle) / rate;
+  std::cout << FormatTable({core.Metrics(end_time)});
   spdlog::info("server: {:.0f} s of mission in {:.1f} s wall ({:.2f}x real time); {} messages in, {} out ({:.0f}/s); "
                "server cycle {:.2f} ms mean, {:.2f} ms max; wrote {}",
-               end_time, wall_s, end_time / std::max(1e-9, wall_s), messages_in, messages_out,
+               mission_s, wall_s, mission_s / std::max(1e-9, wall_s), messages_in, messages_out,
                (messages_in + messages_out) / std::max(1e-9, wall_s), total_cycle_ms / std::max(1L, cycles_run),
-               max_cycle_ms, dir.string());
+               max_cycle_ms, options.out_dir);
   return 0;
 }
 

@@ -1,27 +1,36 @@
 #pragma once
-// The SAGE server behind Cyclone DDS: one FleetServer driven by the mission clock. Each cycle
-// it takes the vehicles' states and coverage sums, operators' risk updates and commands,
-// notices vehicles that died (liveliness lapsed: NOT_ALIVE_NO_WRITERS) or left (disposed),
-// runs FleetServer::Cycle and publishes the fleet's coverage, per-vehicle assignments and the
-// mission status. At the end (duration, a stop command or SIGINT) it writes the run directory.
+// The SAGE server behind Cyclone DDS: the mission core (server/mission_core.h) on the mission
+// clock, with the run directory (server/report/run_directory.h) as its record. Each cycle, half
+// a control period after the vehicles' own, it takes the vehicles' states and coverage,
+// operators' risk updates and commands, notices vehicles that died (liveliness lapsed) or left
+// (disposed), runs the core's cycle and publishes the fleet's snapshot, assignments and the
+// mission status. A server that itself stalled (stopped, swapped out) does not take the lapsed
+// leases of that moment for losses: a vehicle heard again within two leases was never lost.
+// With `resume` it starts from the run directory's checkpoint and the record written after it.
 #include <atomic>
 #include <string>
 
 #include "maps/scenario/scenario.h"
+#include "server/mission_core.h"
 
 namespace sage::server {
 
 struct ServerNodeOptions {
-  int domain_id = 0;               ///< DDS domain of the mission (0..232)
+  int domain_id = 0;               ///< DDS domain of the mission
   std::string profile;             ///< risk profile (empty: the scenario's default)
+  ControllerKind controller = ControllerKind::kErgodic;
   double time_scale = 1.0;         ///< mission seconds per wall second (> 0); 1 = real time
-  std::string out_dir;             ///< run directory to write at the end
+  std::string out_dir;             ///< the run directory
+  bool resume = false;             ///< continue the crashed mission recorded in out_dir
+  int resumes = 0;                 ///< times it was resumed before (for metrics.json)
+  double checkpoint_period_s = 2.0;  ///< wall seconds between checkpoints
   bool show_progress = true;       ///< a progress line on stderr
   const std::atomic<bool>* stop = nullptr;  ///< set (e.g. by SIGINT) to end the mission early
 };
 
-/// Runs the mission to its end and writes out_dir/metrics.json, trajectory.csv, plot.svg and
-/// fleet_events.csv (joins, losses, leaves with their detection times). Returns 0 on success.
+/// Runs the mission to its end (or a stop) with the record in out_dir. Returns 0 on success.
+/// Throws maps::ScenarioError for bad input (another server on the domain, no checkpoint to
+/// resume, a checkpoint of another scenario) before the mission starts.
 int RunServerNode(const maps::Scenario& scenario, const ServerNodeOptions& options);
 
 }  // namespace sage::server

@@ -10,4 +10,10 @@ namespace sage::server::detail {
 // Throws std::runtime_error naming the path.
 void WriteAtomically(const std::string& path, std::string_view content);
 
+// The two halves of WriteAtomically, for a set of files that should appear together: write each
+// as path + ".tmp" (flushed to disk), then rename them all. Both throw std::runtime_error naming
+// the path; a failed write leaves no temporary behind.
+void WriteTemporary(const std::string& path, std::string_view content);
+void CommitTemporary(const std::string& path);
+
 }  // namespace sage::server::detail

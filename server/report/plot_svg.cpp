@@ -63,7 +63,7 @@ double MixtureDensity(const std::vector<maps::Valve>& valves, const Eigen::Vecto
 
 }  // namespace
 
-void WritePlotSvg(const std::string& path, const maps::Scenario& scenario, const Eigen::VectorXd& weights,
+std::string PlotSvg(const maps::Scenario& scenario, const Eigen::VectorXd& weights,
                   const Trajectory& trajectory, const std::string& title) {
   const std::vector<maps::Valve> valves = scenario.AllValves();
   if (weights.size() != static_cast<Eigen::Index>(valves.size())) {
@@ -181,7 +181,12 @@ void WritePlotSvg(const std::string& path, const maps::Scenario& scenario, const
   put("<rect x=\"{:.1f}\" y=\"{:.1f}\" width=\"22\" height=\"10\" fill=\"#404040\"/>\n", tx, ty - 9.0);
   put("<text x=\"{:.1f}\" y=\"{:.1f}\" font-size=\"12\">XT footprint</text>\n", tx + 28.0, ty);
   put("</svg>\n");
-  WriteAtomically(path, std::string_view(out.data(), out.size()));
+  return std::string(out.data(), out.size());
+}
+
+void WritePlotSvg(const std::string& path, const maps::Scenario& scenario, const Eigen::VectorXd& weights,
+                  const Trajectory& trajectory, const std::string& title) {
+  WriteAtomically(path, PlotSvg(scenario, weights, trajectory, title));
 }
 
 }  // namespace sage::server

@@ -205,7 +205,7 @@ std::string FormatTable(const std::vector<MissionMetrics>& runs) {
   return table;
 }
 
-void WriteMetricsJson(const std::string& path, const MissionMetrics& metrics) {
+std::string MetricsJson(const MissionMetrics& metrics, const RunInfo* info) {
   using Json = nlohmann::ordered_json;  // keys in the documented order, easier to read
   const auto number = [](double v) { return std::isfinite(v) ? Json(v) : Json(nullptr); };
   Json over_time = Json::array();
@@ -234,7 +234,7 @@ void WriteMetricsJson(const std::string& path, const MissionMetrics& metrics) {
                       {"interval_before_s", number(e.interval_before_s)},
                       {"interval_after_s", number(e.interval_after_s)}});
   }
-  const Json json = {{"controller", metrics.controller},
+  Json json = {{"controller", metrics.controller},
                      {"profile", metrics.profile},
                      {"duration_s", number(metrics.duration_s)},
                      {"vehicle_count", metrics.vehicle_count},
@@ -245,7 +245,19 @@ void WriteMetricsJson(const std::string& path, const MissionMetrics& metrics) {
                      {"metric_over_time", over_time},
                      {"valves", valves},
                      {"events", events}};
-  WriteAtomically(path, json.dump(2) + "\n");
+  if (info != nullptr) {
+    json["complete"] = info->complete;
+    json["planned_duration_s"] = number(info->planned_duration_s);
+    json["stopped_early"] = info->stopped_early;
+    json["rejected_samples"] = info->rejected_samples;
+    json["transport"] = info->transport;
+    json["resumes"] = info->resumes;
+  }
+  return json.dump(2) + "\n";
+}
+
+void WriteMetricsJson(const std::string& path, const MissionMetrics& metrics) {
+  WriteAtomically(path, MetricsJson(metrics));
 }
 
 }  // namespace sage::server

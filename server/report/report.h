@@ -2,6 +2,7 @@
 // The run directory a mission leaves behind: metrics.json, trajectory.csv and plot.svg
 // (trajectory over the risk field with XTs and valves, like the SAGE paper's Fig. 1), and the
 // terminal table in the layout of the paper's Table 1.
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -19,6 +20,20 @@ void PrepareRunDirectory(const std::string& dir);
 /// Table 1 layout: Valve | Weight | for each run: visits, interval; then corr and metric rows.
 std::string FormatTable(const std::vector<MissionMetrics>& runs);
 
+/// How a run stands, for metrics.json: whether it is complete, and how it came to be.
+struct RunInfo {
+  bool complete = true;               ///< false while the mission runs (or if it died)
+  double planned_duration_s = std::numeric_limits<double>::quiet_NaN();  ///< the scenario's duration
+  bool stopped_early = false;         ///< stopped (Ctrl-C, sage stop) before the planned end
+  std::size_t rejected_samples = 0;   ///< inputs refused at the door (non-finite, stale, ...)
+  std::string transport;              ///< "in-process" or "dds"; empty for a recorded log
+  int resumes = 0;                    ///< times the mission was resumed from a checkpoint
+};
+
+/// metrics.json's text: the metrics (below) and, when given, the run's status
+/// (complete, planned_duration_s, stopped_early, rejected_samples, transport, resumes).
+std::string MetricsJson(const MissionMetrics& metrics, const RunInfo* info = nullptr);
+
 /// Writes metrics as JSON (keys: controller, profile, duration_s, vehicle_count,
 /// visit_weight_correlation (null if undefined), ergodic_metric, time_outside_s, time_pinned_s,
 /// metric_over_time [{t, ergodic_metric}], valves [{name, weight, visits, mean_interval_s
@@ -35,6 +50,8 @@ Trajectory ReadTrajectoryCsv(const std::string& path);
 
 /// SVG of the risk field (weights = normalised weights to draw), XT footprints, valves with
 /// their names and visit circles, and each vehicle's path in its own colour.
+std::string PlotSvg(const maps::Scenario& scenario, const Eigen::VectorXd& weights, const Trajectory& trajectory,
+                    const std::string& title);
 void WritePlotSvg(const std::string& path, const maps::Scenario& scenario, const Eigen::VectorXd& weights,
                   const Trajectory& trajectory, const std::string& title);
 

@@ -1,4 +1,5 @@
 #include "agents/agent_host.h"
+#include "maps/world.h"
 
 #include <algorithm>
 #include <cmath>
@@ -44,7 +45,8 @@ double AngleBetween(const Eigen::Vector2d& a, const Eigen::Vector2d& b) {
 // out only that vehicle (the others keep their own bodies).
 TEST(AgentHost, SparseIdsDuplicatesAndRemoval) {
   const maps::Scenario s = maps::LoadScenario(kTwoXt);
-  AgentHost host(s, Guidance::kErgodic);
+  const maps::World world(s);
+  AgentHost host(world, s, Guidance::kErgodic);
   host.AddVehicle(7, Rov("a", {0.6, 0.6}));
   host.AddVehicle(1000003, Rov("b", {4.9, 3.7}));
   host.AddVehicle(42, Rov("c", {0.6, 3.7}));
@@ -71,7 +73,8 @@ TEST(AgentHost, SparseIdsDuplicatesAndRemoval) {
 TEST(AgentHost, KeepsCoveringWithItsLastTarget) {
   const maps::Scenario s = maps::LoadScenario(kTwoXt);
   ASSERT_TRUE(std::isinf(s.ergodic.forgetting_time_s));
-  AgentHost host(s, Guidance::kErgodic);
+  const maps::World world(s);
+  AgentHost host(world, s, Guidance::kErgodic);
   const VehicleId id = 5;
   host.AddVehicle(id, s.vehicles[0]);
   host.SetTarget(id, {maps::RiskField::ForScenario(s, host.basis()).coefficients(), {}, 0.0});
@@ -100,7 +103,8 @@ TEST(AgentHost, KeepsCoveringWithItsLastTarget) {
 // concern; hull contact itself is PhysicsWorld.BlueRov2sDoNotOverlap.
 TEST(AgentHost, VehiclesInOneHostDoNotOverlap) {
   const maps::Scenario s = maps::LoadScenario(kTwoXt);
-  AgentHost host(s, Guidance::kErgodic);
+  const maps::World world(s);
+  AgentHost host(world, s, Guidance::kErgodic);
   const Eigen::Vector2d a(2.3, 0.9), b(2.8, 0.9);  // open water south of XT-A / XT-B
   host.AddVehicle(1, Rov("a", a, 0.0));
   host.AddVehicle(2, Rov("b", b, 0.0));
@@ -126,7 +130,8 @@ TEST(AgentHost, VehiclesInOneHostDoNotOverlap) {
 // command that Step then issues; a different phi previews a different command (> 1 degree).
 TEST(AgentHost, PreviewCommandChangesNothing) {
   const maps::Scenario s = maps::LoadScenario(kTwoXt);
-  AgentHost previewing(s, Guidance::kErgodic), twin(s, Guidance::kErgodic);
+  const maps::World world(s);
+  AgentHost previewing(world, s, Guidance::kErgodic), twin(world, s, Guidance::kErgodic);
   const Eigen::VectorXd phi = maps::RiskField::ForScenario(s, previewing.basis()).coefficients();
   const Eigen::VectorXd other = BumpAt(previewing.basis(), {4.75, 3.6});
   for (AgentHost* host : {&previewing, &twin}) {
@@ -159,14 +164,15 @@ TEST(AgentHost, FleetSumsChangeTheCommand) {
   const Eigen::VectorXd phi = maps::RiskField::ForScenario(s, basis).coefficients();
 
   // Another vehicle's coverage: 20 s of SMC from the opposite corner.
-  AgentHost other(s, Guidance::kErgodic);
+  const maps::World world(s);
+  AgentHost other(world, s, Guidance::kErgodic);
   other.AddVehicle(9, Rov("other", {4.9, 3.7}, std::numbers::pi));
   other.SetTarget(9, {phi, {}, 0.0});
   for (int i = 0; i <= 200; ++i) other.Step(i * other.control_period_s());
   const CoverageAccumulator& other_coverage = *other.Coverage(9);
   ASSERT_GT(other_coverage.time_s(), 19.0);
 
-  AgentHost shared(s, Guidance::kErgodic), alone(s, Guidance::kErgodic);
+  AgentHost shared(world, s, Guidance::kErgodic), alone(world, s, Guidance::kErgodic);
   const double dt = shared.control_period_s();
   for (AgentHost* host : {&shared, &alone}) {
     host->AddVehicle(1, s.vehicles[0]);
@@ -185,7 +191,8 @@ TEST(AgentHost, FleetSumsChangeTheCommand) {
 // then issues (PreviewCommand's contract: "the command vehicle id would give now").
 TEST(AgentHost, PreviewMatchesStepWithNeighbours) {
   const maps::Scenario s = maps::LoadScenario(kTwoXt);
-  AgentHost host(s, Guidance::kErgodic);
+  const maps::World world(s);
+  AgentHost host(world, s, Guidance::kErgodic);
   host.AddVehicle(1, Rov("a", {0.8, 0.9}));
   host.AddVehicle(2, Rov("b", {1.8, 0.9}));
   const Eigen::VectorXd phi = maps::RiskField::ForScenario(s, host.basis()).coefficients();

@@ -488,8 +488,8 @@ TEST_F(FleetDds, VehicleJoinsAtRuntime) {
   const std::string d = std::to_string(domain.domain_id());
   // 30 mission-s: the scenario's own fleet events (join at 200 s, loss at 400 s) never happen.
   const double duration = 30;
-  const unsigned new_id = 1000000;
-  const std::string new_name = "rov" + std::to_string(new_id);
+  const unsigned new_id = 7;  // as the server would issue it; its name is rov<id + 1>
+  const std::string new_name = "rov" + std::to_string(new_id + 1);
   const fs::path out = run_dir_ / "out";
   MissionWatcher watcher(domain.domain_id());
   ChildProcess& server = Start("server", {"server", Scenario("fleet_field.yaml"), "--vehicles", "2", "--duration",
@@ -687,7 +687,7 @@ TEST_F(FleetDds, OperatorRiskUpdateReachesServer) {
   const int domain_id = FreeDomainForLaunch();
   const double duration = 40;
   const fs::path out = run_dir_ / "out";
-  ChildProcess& launch = StartLaunch("launch", {Scenario("two_xt.yaml"), "--vehicles", "1", "--duration", Num(duration),
+  ChildProcess& launch = StartLaunch("launch", {Scenario("two_xt.yaml"), "--vehicles", "2", "--duration", Num(duration),
                                                 "--time-scale", Num(kTimeScale)},
                                      out, domain_id);
   ASSERT_TRUE(fs::exists(out / "mission.json"));
@@ -731,15 +731,25 @@ TEST_F(FleetDds, OperatorRiskUpdateReachesServer) {
   const std::optional<int> remove_exit = remove.WaitExit(15s);
   ASSERT_TRUE(remove_exit.has_value()) << "sage vehicle remove hung";
   EXPECT_EQ(*remove_exit, 0) << remove.LogText();
-  // The agent host acts on the command (the server only hears the vehicle's dispose).
+  EXPECT_TRUE(std::regex_search(remove.LogText(), std::regex(R"(vehicle 0 left the mission at t = [0-9.]+ s)")))
+      << remove.LogText();
+  // The server decides and tells the vehicle's agent host, which takes it out.
   const fs::path host_log = out / "agents-0.log";
   const auto host_deadline = SteadyClock::now() + 5s;
   bool host_removed = false;
-  while (!(host_removed = ReadFile(host_log).find("(id 0) left the mission") != std::string::npos) &&
+  while (!(host_removed = ReadFile(host_log).find("(id 0) leaves the mission") != std::string::npos) &&
          SteadyClock::now() < host_deadline) {
     std::this_thread::sleep_for(20ms);
   }
-  watcher.PollUntil([&] { return watcher.status() && watcher.status()->vehicles_alive == 0; }, 5s);
+  watcher.PollUntil([&] { return watcher.status() && watcher.status()->vehicles_alive == 1; }, 5s);
+  // What the server knows answers the operator: a vehicle that already left, and the last one.
+  ChildProcess& again = Start("again", {"vehicle", "remove", "0", "--mission", out.string()});
+  EXPECT_EQ(again.WaitExit(15s), std::optional<int>(2)) << again.LogText();
+  EXPECT_TRUE(std::regex_search(again.LogText(), std::regex(R"(rov1 \(id 0\) already left at t = [0-9.]+ s)")))
+      << again.LogText();
+  ChildProcess& last = Start("last", {"vehicle", "remove", "1", "--mission", out.string()});
+  EXPECT_EQ(last.WaitExit(15s), std::optional<int>(2)) << last.LogText();
+  EXPECT_NE(last.LogText().find("is the mission's last vehicle"), std::string::npos) << last.LogText();
 
   const std::optional<int> launch_exit = WaitMissionEnd(launch, duration);
   ASSERT_TRUE(launch_exit.has_value()) << "sage launch did not end";

@@ -75,7 +75,7 @@ TEST(DdsEntities, KeyedVehicleStateRoundTripsFiftyInstances) {
   Writer<VehicleState> writer(participant, VehicleStateWriterQos());
   ASSERT_TRUE(writer.WaitForReaders(1, 2s));
   for (uint32_t id = 0; id < 50; ++id) {
-    writer.Write(VehicleState{id, 1000 + id, const_cast<char*>("rov"), 1.5 * id, -2.0 * id, 0.01 * id, 0.5, -0.25,
+    writer.Write(VehicleState{id, 1000 + id, 0, const_cast<char*>("rov"), 1.5 * id, -2.0 * id, 0.01 * id, 0.5, -0.25,
                               0.1 * id, -0.7, 3u * id});
   }
   std::map<uint32_t, VehicleState> latest;
@@ -110,7 +110,7 @@ TEST(DdsEntities, ErgodicTargetReachesLateJoiner) {
   Writer<ErgodicTarget> writer(server, ErgodicTargetQos());
   std::vector<double> error(400);
   for (std::size_t k = 0; k < error.size(); ++k) error[k] = 0.25 * k - 3.0;
-  writer.Write(ErgodicTarget{7, 123, 9, 20, false, BorrowSequence(error)});
+  writer.Write(ErgodicTarget{7, 123, 0, 9, 20, false, BorrowSequence(error)});
 
   Participant vehicle(domain.domain_id(), TestConfig());
   Reader<ErgodicTarget> late_reader(vehicle, ErgodicTargetQos());
@@ -151,7 +151,7 @@ TEST(DdsEntities, KilledVehicleReadsNotAliveNoWriters) {
       Participant vehicle(domain.domain_id(), TestConfig());
       Writer<VehicleState> writer(vehicle, VehicleStateWriterQos(500ms));
       for (int tick = 0; tick < 200; ++tick) {  // 10 s at most, should the parent die
-        writer.Write(VehicleState{kVehicleId, tick, const_cast<char*>("rov"), 1.0, 2.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0});
+        writer.Write(VehicleState{kVehicleId, tick, 0, const_cast<char*>("rov"), 1.0, 2.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0});
         dds_sleepfor(DDS_MSECS(50));
       }
     } catch (const std::exception& e) {
@@ -207,12 +207,12 @@ TEST(DdsEntities, DisposeAndWriterLossAreDistinguished) {
   {
     Writer<VehicleState> writer(participant, VehicleStateWriterQos());
     ASSERT_TRUE(writer.WaitForReaders(1, 2s));
-    for (uint32_t id : {5u, 6u, 7u}) writer.Write(VehicleState{id, 1, const_cast<char*>("rov"), 0, 0, 0, 0, 0, 0, 0, 0});
+    for (uint32_t id : {5u, 6u, 7u}) writer.Write(VehicleState{id, 1, 0, const_cast<char*>("rov"), 0, 0, 0, 0, 0, 0, 0, 0});
     collect(3);
     ASSERT_EQ(state_of.size(), 3u);
     state_of.clear();
-    writer.Dispose(VehicleState{5, 2, const_cast<char*>("rov"), 0, 0, 0, 0, 0, 0, 0, 0});
-    writer.Unregister(VehicleState{6, 2, const_cast<char*>("rov"), 0, 0, 0, 0, 0, 0, 0, 0});
+    writer.Dispose(VehicleState{5, 2, 0, const_cast<char*>("rov"), 0, 0, 0, 0, 0, 0, 0, 0});
+    writer.Unregister(VehicleState{6, 2, 0, const_cast<char*>("rov"), 0, 0, 0, 0, 0, 0, 0, 0});
     collect(2);
   }  // writer deleted: vehicle 7 loses its only writer
   collect(3);
@@ -246,9 +246,9 @@ TEST(DdsEntities, RiskHistoryAndCommandsCarryStrings) {
   Writer<FleetCommand> command_writer(operator_tool, FleetCommandQos());
   ASSERT_TRUE(command_writer.WaitForReaders(1, 2s));
   std::string add = "add", remove = "remove", stop = "stop";
-  command_writer.Write(FleetCommand{1, BorrowString(add), 5, 0});
-  command_writer.Write(FleetCommand{2, BorrowString(remove), 0, 3});
-  command_writer.Write(FleetCommand{3, BorrowString(stop), 0, 0});
+  command_writer.Write(FleetCommand{1, 0, BorrowString(add), 5, 0});
+  command_writer.Write(FleetCommand{2, 0, BorrowString(remove), 0, 3});
+  command_writer.Write(FleetCommand{3, 0, BorrowString(stop), 0, 0});
   const auto commands = TakeUntil(
       command_reader, [](const auto& s) { return s.size() >= 3; }, 2000ms);
   ASSERT_EQ(commands.size(), 3u);
@@ -270,7 +270,7 @@ TEST(DdsEntities, DifferentDomainsDoNotMeet) {
   Reader<MissionStatus> reader_a(mission_a, MissionStatusQos());
   Reader<MissionStatus> reader_b(mission_b, MissionStatusQos());
   Writer<MissionStatus> writer_a(mission_a, MissionStatusQos());
-  writer_a.Write(MissionStatus{1, 0, 1.0, 77, 1.0, 300.0, 3, 0, 0.0, 0.5, false, 0});
+  writer_a.Write(MissionStatus{1, 0, 0, 1.0, 77, 1.0, 300.0, 3, 0, 0.0, 0.5, false, 0});
   const auto seen_a = TakeUntil(
       reader_a, [](const auto& s) { return !s.empty(); }, 2000ms);
   ASSERT_EQ(seen_a.size(), 1u);

@@ -14,6 +14,7 @@
 
 #include "agents/ergodic_controller.h"
 #include "maps/risk_field.h"
+#include "maps/world.h"
 
 namespace sage::server {
 namespace {
@@ -50,7 +51,8 @@ Eigen::Vector2d ValvePosition(const maps::Scenario& s, const std::string& name) 
 // reports, and each vehicle's target carries exactly the other vehicle's part.
 TEST(FleetServer, SharedCoverageIsTheSumOfTheReports) {
   const maps::Scenario s = maps::LoadScenario(kTwoXt);
-  FleetServer server(s, "");
+  maps::World server_world(s);
+  FleetServer server(server_world, s, "");
   server.AddVehicle(1, "rov1");
   server.AddVehicle(2, "rov2");
   const Report r1 = PathCoverage(server.basis(), {0.6, 0.6}, {0.5, 0.2}, 73);
@@ -78,7 +80,8 @@ TEST(FleetServer, SharedCoverageIsTheSumOfTheReports) {
 // gap in seq is fine and the newer totals replace the old ones (they are not added).
 TEST(FleetServer, StaleReportsIgnoredAndGapsTolerated) {
   const maps::Scenario s = maps::LoadScenario(kTwoXt);
-  FleetServer server(s, "");
+  maps::World server_world(s);
+  FleetServer server(server_world, s, "");
   server.AddVehicle(3, "rov1");
   const Report a = PathCoverage(server.basis(), {0.6, 0.6}, {0.5, 0.2}, 50);
   const Report b = PathCoverage(server.basis(), {0.6, 0.6}, {0.2, 0.5}, 30);
@@ -107,7 +110,8 @@ TEST(FleetServer, StaleReportsIgnoredAndGapsTolerated) {
 // others' targets; added again, it is alive again.
 TEST(FleetServer, LostVehicleCoverageStays) {
   const maps::Scenario s = maps::LoadScenario(kTwoXt);
-  FleetServer server(s, "");
+  maps::World server_world(s);
+  FleetServer server(server_world, s, "");
   server.AddVehicle(10, "rov1");
   server.AddVehicle(20, "rov2");
   server.AddVehicle(30, "rov3");
@@ -142,7 +146,8 @@ TEST(FleetServer, LostVehicleCoverageStays) {
 TEST(FleetServer, ForgettingAgesReports) {
   maps::Scenario s = maps::LoadScenario(kTwoXt);
   s.ergodic.forgetting_time_s = 10.0;
-  FleetServer server(s, "");
+  maps::World server_world(s);
+  FleetServer server(server_world, s, "");
   server.AddVehicle(1, "rov1");
   server.AddVehicle(2, "rov2");
   const Report r1 = PathCoverage(server.basis(), {0.6, 0.6}, {0.5, 0.2}, 60, 10.0);
@@ -168,7 +173,8 @@ TEST(FleetServer, ForgettingAgesReports) {
 TEST(FleetServer, RiskUpdateTakesEffectOnNextCycle) {
   maps::Scenario s = maps::LoadScenario(kTwoXt);
   s.guard.enabled = false;  // effective weights = the profile's, so phi is checkable directly
-  FleetServer server(s, "one_extreme");
+  maps::World server_world(s);
+  FleetServer server(server_world, s, "one_extreme");
   server.Cycle(0.0);
   const Eigen::VectorXd phi_before = server.phi();
   const std::size_t schedule_before = server.schedule().size();
@@ -195,7 +201,8 @@ TEST(FleetServer, RiskUpdateTakesEffectOnNextCycle) {
 // Bad risk updates throw a one-line ScenarioError naming the value, and change nothing.
 TEST(FleetServer, BadRiskUpdateIsAOneLineError) {
   const maps::Scenario s = maps::LoadScenario(kTwoXt);
-  FleetServer server(s, "");
+  maps::World server_world(s);
+  FleetServer server(server_world, s, "");
   server.Cycle(0.0);
   const Eigen::VectorXd phi_before = server.phi();
   const std::size_t schedule_before = server.schedule().size();
@@ -230,7 +237,8 @@ TEST(FleetServer, BadRiskUpdateIsAOneLineError) {
 // leak_injection sets P1 to 1.0 at 150 s (1.0 / 1.8 normalised).
 TEST(FleetServer, ProfileEventFiresAtItsTime) {
   const maps::Scenario s = maps::LoadScenario(kTwoXt);
-  FleetServer server(s, "leak_injection");
+  maps::World server_world(s);
+  FleetServer server(server_world, s, "leak_injection");
   EXPECT_EQ(server.Cycle(149.9), 0);
   EXPECT_EQ(server.schedule().size(), 1u);
   EXPECT_EQ(server.Cycle(150.0), 1);
@@ -250,11 +258,15 @@ TEST(FleetServer, GuardBoostsOverdueValvesUntilVisited) {
   maps::Scenario s = maps::LoadScenario(kTwoXt);
   ASSERT_TRUE(s.guard.enabled);
   ASSERT_EQ(s.guard.revisit_bound_s, 60.0);
-  FleetServer server(s, "one_extreme");  // 0.55, 0.20, 0.10, 0.08, 0.07
+  maps::World server_world(s);
+  FleetServer server(server_world, s, "one_extreme");  // 0.55, 0.20, 0.10, 0.08, 0.07
+  // The guard reads the mission's visits (the metrics own them); vehicle index 0.
+  VisitTracker visits(s.ValvePositions(), s.visit_radius_m, s.rearm_radius_m);
+  server.UseVisits(&visits);
   server.AddVehicle(4, "rov1");
-  server.OnState(4, 30.0, ValvePosition(s, "P1"));
-  server.OnState(4, 30.5, ValvePosition(s, "P2"));
-  server.OnState(4, 31.0, ValvePosition(s, "P3"));
+  visits.Update(0, ValvePosition(s, "P1"), 30.0);
+  visits.Update(0, ValvePosition(s, "P2"), 30.5);
+  visits.Update(0, ValvePosition(s, "P3"), 31.0);
   server.Cycle(59.0);
   Eigen::VectorXd expected(5);
   expected << 0.55, 0.20, 0.10, 0.08, 0.07;
@@ -266,7 +278,7 @@ TEST(FleetServer, GuardBoostsOverdueValvesUntilVisited) {
   EXPECT_LT(MaxAbs(server.effective_weights() - expected), 1e-12);
   EXPECT_EQ(server.schedule().size(), 1u);  // the guard is not a profile change
 
-  server.OnState(4, 62.0, ValvePosition(s, "P4") + Eigen::Vector2d(0.1, -0.1));  // 0.14 m < 0.3 m
+  visits.Update(0, ValvePosition(s, "P4") + Eigen::Vector2d(0.1, -0.1), 62.0);  // 0.14 m < 0.3 m
   server.Cycle(63.0);
   expected << 0.55, 0.20, 0.10, 0.08, 0.55;
   expected /= expected.sum();
@@ -277,7 +289,8 @@ TEST(FleetServer, GuardBoostsOverdueValvesUntilVisited) {
 // "minimum normalised weight of any valve").
 TEST(FleetServer, GuardFloorHoldsAfterNormalising) {
   const maps::Scenario s = maps::LoadScenario(kTwoXt);
-  FleetServer server(s, "one_extreme");
+  maps::World server_world(s);
+  FleetServer server(server_world, s, "one_extreme");
   server.SetRiskWeight("P1", 1.0, 0.0, "operator");  // normalised P5 = 0.07 / 1.45 = 0.048
   server.Cycle(0.0);
   EXPECT_NEAR(server.effective_weights().sum(), 1.0, 1e-12);
@@ -292,11 +305,12 @@ TEST(FleetServer, PartitionCoversEveryValveOnce) {
   maps::Scenario s = maps::LoadScenario(kFleetField);
   s.fleet.assignment = maps::FleetAssignment::kPartition;
   ASSERT_EQ(s.vehicles.size(), 4u);
-  FleetServer server(s, "graded");
+  maps::World server_world(s);
+  FleetServer server(server_world, s, "graded");
   const std::vector<int> ids = {1000001, 7, 424242, 99};
   for (std::size_t j = 0; j < ids.size(); ++j) {
     server.AddVehicle(ids[j], s.vehicles[j].name);
-    server.OnState(ids[j], 0.0, s.vehicles[j].start_m);
+    server.SetPosition(ids[j], s.vehicles[j].start_m);
   }
   server.Cycle(0.0);
 
@@ -334,7 +348,8 @@ TEST(FleetServer, PartitionCoversEveryValveOnce) {
 // whose coverage equals phi scores 0.
 TEST(FleetServer, FleetMetricIsTheBasisMetric) {
   const maps::Scenario s = maps::LoadScenario(kTwoXt);
-  FleetServer server(s, "graded");
+  maps::World server_world(s);
+  FleetServer server(server_world, s, "graded");
   server.AddVehicle(1, "rov1");
   server.AddVehicle(2, "rov2");
   const Report r1 = PathCoverage(server.basis(), {0.6, 0.6}, {0.5, 0.2}, 73);
@@ -346,7 +361,8 @@ TEST(FleetServer, FleetMetricIsTheBasisMetric) {
   EXPECT_GT(expected, 0.0);
   EXPECT_NEAR(server.FleetMetric(), expected, 1e-12 * expected);
 
-  FleetServer perfect(s, "graded");
+  maps::World perfect_world(s);
+  FleetServer perfect(perfect_world, s, "graded");
   perfect.AddVehicle(1, "rov1");
   perfect.Cycle(0.0);
   const double w = 12.5;
@@ -361,11 +377,12 @@ TEST(FleetServer, PartitionShareOfZeroWeightIsFinite) {
   maps::Scenario s = maps::LoadScenario(kTwoXt);
   s.fleet.assignment = maps::FleetAssignment::kPartition;
   s.guard.enabled = false;
-  FleetServer server(s, "one_extreme");
+  maps::World server_world(s);
+  FleetServer server(server_world, s, "one_extreme");
   const std::vector<maps::Valve> valves = s.AllValves();
   for (int j = 0; j < 5; ++j) {
     server.AddVehicle(j + 1, "rov" + std::to_string(j + 1));
-    server.OnState(j + 1, 0.0, valves[j].position_m);  // each is seeded with the valve it sits on
+    server.SetPosition(j + 1, valves[j].position_m);  // each is seeded with the valve it sits on
   }
   server.SetRiskWeight("P5", 0.0, 0.0, "operator");
   server.Cycle(0.0);

@@ -175,6 +175,7 @@ TEST(Scenario, EmitParseRoundTripIsExact) {
 // Omitted sections take the struct defaults; the name defaults to the file stem.
 TEST(Scenario, OmittedSectionsTakeDefaults) {
   const std::string minimal = R"(
+workspace: {width_m: 12, height_m: 10}
 structures: [{name: A, center_m: [3, 3], valves: [{name: V, position_m: [1, 1]}]}]
 vehicles: [{name: r, start_m: [0.5, 0.5]}]
 profiles: {only: {weights: {V: 1}}}
@@ -183,7 +184,7 @@ profiles: {only: {weights: {V: 1}}}
   const Scenario defaults;
   EXPECT_EQ(s.name, "minimal");
   EXPECT_EQ(s.default_profile, "only");
-  EXPECT_EQ(s.workspace.width_m, defaults.workspace.width_m);
+  EXPECT_EQ(s.start_jitter_m, 0.2);
   EXPECT_EQ(s.duration_s, defaults.duration_s);
   EXPECT_EQ(s.ergodic.basis_order, defaults.ergodic.basis_order);
   EXPECT_EQ(s.ergodic.min_turn_radius_m, 0.0);  // the paper's law unless asked for
@@ -195,6 +196,29 @@ profiles: {only: {weights: {V: 1}}}
   EXPECT_EQ(s.fleet.coverage_period_s, defaults.fleet.coverage_period_s);
   EXPECT_EQ(s.fleet.liveliness_lease_s, defaults.fleet.liveliness_lease_s);
   EXPECT_TRUE(s.fleet_events.empty());
+}
+
+// The workspace is required, and both of its sides: a mission silently flown in a default box
+// would cover the wrong water.
+TEST(Scenario, WorkspaceIsRequired) {
+  const std::string body = R"(
+structures: [{name: A, center_m: [3, 3], valves: [{name: V, position_m: [1, 1]}]}]
+vehicles: [{name: r, start_m: [0.5, 0.5]}]
+profiles: {only: {weights: {V: 1}}}
+)";
+  const std::pair<std::string, std::string> cases[] = {
+      {body, "dir/w.yaml: workspace"},
+      {"workspace: {width_m: 12}\n" + body, "dir/w.yaml: workspace.height_m"},
+  };
+  for (const auto& [text, expected] : cases) {
+    try {
+      ParseScenario(text, "dir/w.yaml");
+      ADD_FAILURE() << "accepted: " << text;
+    } catch (const ScenarioError& e) {
+      EXPECT_NE(std::string(e.what()).find(expected), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find("required"), std::string::npos) << e.what();
+    }
+  }
 }
 
 // .inf, inf and infinity (any case, quoted or not) all mean no forgetting.

@@ -1,0 +1,132 @@
+#include "agents/agent_mission.h"
+
+#include <stdexcept>
+
+namespace sage::agents {
+namespace {
+
+// Reports kept per vehicle to match the fleet snapshot's accounted seq. The server accounts the
+// newest report it has, one cycle and at most a coverage period old: 8 at 0.5 s cover 4 s of a
+// server falling behind. (At K = 40 a report is 12.8 kB: 64 kept cost 0.8 MB a vehicle.)
+constexpr std::size_t kReportsKept = 8;
+
+}  // namespace
+
+AgentMission::AgentMission(const maps::World& world, const maps::Scenario& scenario, Guidance guidance)
+    : scenario_(scenario), host_(world, scenario, guidance) {}
+
+void AgentMission::AddVehicle(VehicleId id, const maps::VehicleSpec& spec, const VehicleResume* resume) {
+  maps::VehicleSpec placed = spec;
+  if (resume != nullptr) {
+    placed.start_m = resume->position_m;
+    placed.start_heading_rad = resume->heading_rad;
+  } else {
+    placed.start_m = maps::JitteredStart(spec, scenario_.seed, id, scenario_.start_jitter_m);
+  }
+  host_.AddVehicle(id, placed, tour_weights_);
+  Member& member = members_[id];
+  member.name = spec.name;
+  if (resume != nullptr && resume->coverage.seq > 0) {
+    host_.RestoreCoverage(id, resume->coverage.sums, resume->coverage.kernel_time_s);
+    member.seq = resume->coverage.seq;  // the next report is newer than the one the server holds
+  }
+}
+
+void AgentMission::RemoveVehicle(VehicleId id) {
+  if (members_.erase(id) == 0) throw std::out_of_range("AgentMission: no vehicle " + std::to_string(id));
+  host_.RemoveVehicle(id);
+}
+
+std::vector<VehicleId> AgentMission::ids() const {
+  std::vector<VehicleId> out;
+  for (const auto& [id, member] : members_) out.push_back(id);
+  return out;
+}
+
+bool AgentMission::OnAssignment(const Assignment& assignment) {
+  auto it = members_.find(assignment.id);
+  if (it == members_.end()) return false;
+  Member& m = it->second;
+  if (m.has_assignment && assignment.cycle < m.own_cycle && !new_server_) return false;
+  m.has_assignment = true;
+  m.shared = assignment.shared;
+  m.own_phi = assignment.phi;
+  m.own_cycle = assignment.cycle;
+  return true;
+}
+
+bool AgentMission::OnFleetSnapshot(const FleetSnapshot& snapshot) {
+  if (snapshot_ && snapshot.cycle <= snapshot_->cycle && !new_server_) return false;
+  new_server_ = false;
+  snapshot_ = snapshot;
+  if (host_.guidance() == Guidance::kAstar && snapshot.valve_weights.size() > 0 &&
+      (tour_weights_.size() != snapshot.valve_weights.size() || tour_weights_ != snapshot.valve_weights)) {
+    tour_weights_ = snapshot.valve_weights;
+    host_.SetTourWeights(tour_weights_);  // taken at the start of each tour's next lap
+  }
+  return true;
+}
+
+void AgentMission::OnNewServer() {
+  new_server_ = true;
+  for (auto& [id, member] : members_) member.own_cycle = 0;
+}
+
+VehicleTarget AgentMission::TargetOf(VehicleId id, Member& member, double time_s) const {
+  VehicleTarget target;
+  const int size = host_.basis().size();
+  if (member.has_assignment && !member.shared && member.own_phi.size() == size) {
+    target.phi = member.own_phi;  // partition: its share, alone
+    member.steered_cycle = member.own_cycle;
+    return target;
+  }
+  // Shared coverage (Mathew & Mezic): the field, and the fleet's coverage less this vehicle's
+  // own report that the snapshot holds, aged to now.
+  target.phi = snapshot_->phi;
+  const auto accounted = snapshot_->coverage.accounted_seq.find(id);
+  const maps::CoverageReport* own =
+      accounted == snapshot_->coverage.accounted_seq.end() ? nullptr : maps::FindReport(member.reports, accounted->second);
+  maps::Coverage others = maps::OthersCoverage(snapshot_->coverage, own, time_s, scenario_.ergodic.forgetting_time_s);
+  target.fleet_sums = std::move(others.sums);
+  target.fleet_time_s = others.kernel_time_s;
+  member.steered_cycle = snapshot_->cycle;
+  return target;
+}
+
+AgentMission::CycleOutput AgentMission::Step(std::int64_t cycle) {
+  const double t = static_cast<double>(cycle) / scenario_.control_rate_hz;
+  CycleOutput out;
+  out.states.reserve(members_.size());
+  for (const auto& [id, member] : members_) {
+    StateReport s;
+    s.id = id;
+    s.name = member.name;
+    s.cycle = cycle;
+    s.time_s = t;
+    s.state = host_.State(id);
+    out.states.push_back(std::move(s));
+  }
+  // Vehicles hold still until the server's first word.
+  const bool steer = snapshot_.has_value() && snapshot_->phi.size() == host_.basis().size();
+  if (!steer) return out;
+  for (auto& [id, member] : members_) host_.SetTarget(id, TargetOf(id, member, t));
+  host_.Step(t);
+  for (StateReport& s : out.states) {
+    s.command_mps = host_.LastCommand(s.id);
+    s.target_cycle = members_.at(s.id).steered_cycle;
+  }
+  if (t + 1e-9 >= next_report_s_) {
+    next_report_s_ = t + scenario_.fleet.coverage_period_s;
+    for (auto& [id, member] : members_) {
+      const CoverageAccumulator* acc = host_.Coverage(id);
+      if (acc == nullptr || acc->time_s() <= 0.0) continue;
+      maps::CoverageReport report{++member.seq, t, acc->time_s(), acc->sums()};
+      member.reports.push_back(report);
+      if (member.reports.size() > kReportsKept) member.reports.pop_front();
+      out.coverage.push_back({id, std::move(report)});
+    }
+  }
+  return out;
+}
+
+}  // namespace sage::agents

@@ -1,0 +1,94 @@
+#pragma once
+// The agent side of a fleet mission, free of any transport: one host's vehicles (an AgentHost:
+// many BlueROV2s in one Box2D world) and what they know of the mission — each vehicle's
+// assignment, the latest fleet snapshot, its own recent coverage reports (so that it can take
+// exactly its own part out of the fleet's sums), and when coverage is due. Each control cycle
+// every vehicle steers on the newest word from the server, then the host reports the vehicles'
+// states and, every coverage period, their running coverage. If the server goes silent they
+// cover on with what they last heard; a new server (a restart or a resumed mission) replaces it
+// at its first word. The in-process mission and the DDS agent node drive this same object.
+#include <cstdint>
+#include <deque>
+#include <map>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "agents/agent_host.h"
+#include "agents/fleet_messages.h"
+#include "maps/scenario/scenario.h"
+#include "maps/world.h"
+
+namespace sage::agents {
+
+/// Where a vehicle of a resumed mission picks up: its last recorded pose and the coverage the
+/// server last accounted for it.
+struct VehicleResume {
+  Eigen::Vector2d position_m = Eigen::Vector2d::Zero();
+  double heading_rad = 0.0;
+  maps::CoverageReport coverage;  ///< seq 0 and empty sums: start from nothing
+};
+
+class AgentMission {
+ public:
+  /// world and scenario must outlive the object.
+  AgentMission(const maps::World& world, const maps::Scenario& scenario, Guidance guidance);
+
+  /// Adds a vehicle under its fleet id. A new vehicle starts at its spec's start moved by the
+  /// scenario's seeded start jitter (maps::JitteredStart); a resumed one where it was.
+  void AddVehicle(VehicleId id, const maps::VehicleSpec& spec, const VehicleResume* resume = nullptr);
+  void RemoveVehicle(VehicleId id);
+  bool Contains(VehicleId id) const { return members_.count(id) != 0; }
+  std::vector<VehicleId> ids() const;  ///< ascending
+  int vehicle_count() const { return static_cast<int>(members_.size()); }
+  const std::string& Name(VehicleId id) const { return members_.at(id).name; }
+
+  /// The server's assignment for one of this host's vehicles (others' are ignored: false).
+  bool OnAssignment(const Assignment& assignment);
+  /// The server's snapshot of the field and the fleet's coverage. An older one than held is
+  /// ignored (false), unless a new server has taken over since (OnNewServer).
+  bool OnFleetSnapshot(const FleetSnapshot& snapshot);
+  /// Another server now runs the mission (restarted or resumed): its first snapshot and
+  /// assignments replace what the last one said, whatever their cycle numbers.
+  void OnNewServer();
+  /// True once a snapshot has arrived: until then vehicles hold still.
+  bool has_snapshot() const { return snapshot_.has_value(); }
+  /// Positions of the fleet's vehicles simulated elsewhere, for keeping apart.
+  void SetOtherVehicles(std::vector<Eigen::Vector2d> positions_m) { host_.SetOtherVehicles(std::move(positions_m)); }
+
+  struct CycleOutput {
+    std::vector<StateReport> states;        ///< every vehicle's state at the cycle's time
+    std::vector<CoverageMessage> coverage;  ///< running coverage, when the coverage period is due
+  };
+  /// One control cycle at mission time cycle / control rate: steer, step the physics, report.
+  CycleOutput Step(std::int64_t cycle);
+
+  const AgentHost& host() const { return host_; }
+  double control_period_s() const { return host_.control_period_s(); }
+
+ private:
+  struct Member {
+    std::string name;
+    bool has_assignment = false;
+    bool shared = true;
+    Eigen::VectorXd own_phi;
+    std::uint64_t own_cycle = 0;
+    std::uint64_t steered_cycle = 0;
+    std::uint64_t seq = 0;
+    std::deque<maps::CoverageReport> reports;  // the latest few, newest last
+  };
+
+  VehicleTarget TargetOf(VehicleId id, Member& member, double time_s) const;
+
+  const maps::Scenario& scenario_;
+  AgentHost host_;
+  std::map<VehicleId, Member> members_;
+  std::optional<FleetSnapshot> snapshot_;
+  bool new_server_ = false;
+  Eigen::VectorXd tour_weights_;
+  double next_report_s_ = 0.0;
+};
+
+}  // namespace sage::agents

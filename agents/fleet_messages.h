@@ -1,0 +1,58 @@
+#pragma once
+// What the two sides of a fleet mission say to each other, as plain values: the in-process
+// mission hands them over directly, the DDS nodes translate them to and from
+// proto/sage_msgs.idl field by field. Times are mission seconds.
+#include <cstdint>
+#include <string>
+
+#include <Eigen/Core>
+
+#include "agents/vehicle_controller.h"
+#include "maps/coverage.h"
+
+namespace sage::agents {
+
+/// What one vehicle steers on: its target coefficients and the coverage of the rest of the
+/// fleet (Mathew & Mezic shared coverage; empty sums = the vehicle covers alone).
+struct VehicleTarget {
+  Eigen::VectorXd phi;         ///< target phi_k, flat-indexed as the basis
+  Eigen::VectorXd fleet_sums;  ///< the other vehicles' running sums, or empty
+  double fleet_time_s = 0.0;   ///< the other vehicles' kernel time (s)
+};
+
+/// One vehicle's state in one control cycle, as its host reports it (rt/sage/vehicle_state).
+struct StateReport {
+  VehicleId id = 0;
+  std::string name;
+  std::int64_t cycle = 0;      ///< the host's control cycle; its state is of time cycle / control rate
+  double time_s = 0.0;         ///< mission time of the state (cycle / control rate)
+  VehicleState state;          ///< at time_s, before this cycle's physics
+  Eigen::Vector2d command_mps = Eigen::Vector2d::Zero();  ///< what its guidance commanded this cycle
+  /// The server cycle of the target the command was steered on (its assignment's, or in shared
+  /// coverage the fleet snapshot's); 0 before the first.
+  std::uint64_t target_cycle = 0;
+};
+
+/// One vehicle's running coverage (rt/sage/vehicle_coverage).
+struct CoverageMessage {
+  VehicleId id = 0;
+  maps::CoverageReport report;
+};
+
+/// Once a server cycle to every host (rt/sage/fleet_coverage): the field and the fleet's coverage.
+struct FleetSnapshot {
+  std::uint64_t cycle = 0;     ///< the server cycle (>= 1)
+  Eigen::VectorXd phi;         ///< the field's phi_k (guard applied), flat-indexed as the basis
+  maps::FleetCoverage coverage;  ///< every vehicle's latest report, aged to coverage.time_s
+  Eigen::VectorXd valve_weights;  ///< normalised risk weights (no guard): what A* tours wait by
+};
+
+/// One vehicle's assignment (rt/sage/ergodic_target), sent when it joins and when it changes.
+struct Assignment {
+  VehicleId id = 0;
+  std::uint64_t cycle = 0;     ///< the server cycle it was made in
+  bool shared = true;          ///< true: steer on the fleet snapshot; false: alone on phi
+  Eigen::VectorXd phi;         ///< partition: the vehicle's share of the valves (empty if shared)
+};
+
+}  // namespace sage::agents

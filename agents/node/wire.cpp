@@ -1,0 +1,118 @@
+#include "agents/node/wire.h"
+
+namespace sage::agents::wire {
+namespace {
+
+Eigen::VectorXd Copy(std::span<const double> values) {
+  return Eigen::Map<const Eigen::VectorXd>(values.data(), static_cast<Eigen::Index>(values.size()));
+}
+std::span<const double> View(const Eigen::VectorXd& v) { return {v.data(), static_cast<std::size_t>(v.size())}; }
+
+}  // namespace
+
+StateReport FromWire(const proto::VehicleState& m, double control_rate_hz) {
+  StateReport s;
+  s.id = static_cast<VehicleId>(m.vehicle_id);
+  s.name = std::string(proto::AsStringView(m.name));
+  s.cycle = m.cycle;
+  s.time_s = static_cast<double>(m.cycle) / control_rate_hz;
+  s.state.position_m = {m.x_m, m.y_m};
+  s.state.velocity_mps = {m.vx_mps, m.vy_mps};
+  s.state.heading_rad = m.heading_rad;
+  s.command_mps = {m.cmd_x_mps, m.cmd_y_mps};
+  s.target_cycle = m.target_cycle;
+  return s;
+}
+
+CoverageMessage FromWire(const proto::VehicleCoverage& m) {
+  return {static_cast<VehicleId>(m.vehicle_id), {m.seq, m.mission_time_s, m.time_s, Copy(proto::AsSpan(m.sums))}};
+}
+
+FleetSnapshot FromWire(const proto::FleetCoverage& m) {
+  FleetSnapshot s;
+  s.cycle = m.cycle;
+  s.phi = Copy(proto::AsSpan(m.phi));
+  s.coverage.time_s = m.mission_time_s;
+  s.coverage.sums = Copy(proto::AsSpan(m.sums));
+  s.coverage.kernel_time_s = m.kernel_time_s;
+  const auto ids = proto::AsSpan(m.vehicle_ids);
+  const auto seqs = proto::AsSpan(m.accounted_seq);
+  for (std::size_t i = 0; i < ids.size() && i < seqs.size(); ++i) s.coverage.accounted_seq[static_cast<int>(ids[i])] = seqs[i];
+  s.valve_weights = Copy(proto::AsSpan(m.valve_weights));
+  return s;
+}
+
+Assignment FromWire(const proto::ErgodicTarget& m) {
+  Assignment a;
+  a.id = static_cast<VehicleId>(m.vehicle_id);
+  a.cycle = m.cycle;
+  a.shared = m.shared;
+  a.phi = Copy(proto::AsSpan(m.phi));
+  return a;
+}
+
+proto::VehicleState ToWire(const StateReport& s, long long stamp_ns) {
+  proto::VehicleState m{};
+  m.vehicle_id = static_cast<std::uint32_t>(s.id);
+  m.stamp_ns = stamp_ns;
+  m.cycle = s.cycle;
+  m.name = proto::BorrowString(s.name);
+  m.x_m = s.state.position_m.x();
+  m.y_m = s.state.position_m.y();
+  m.heading_rad = s.state.heading_rad;
+  m.vx_mps = s.state.velocity_mps.x();
+  m.vy_mps = s.state.velocity_mps.y();
+  m.cmd_x_mps = s.command_mps.x();
+  m.cmd_y_mps = s.command_mps.y();
+  m.target_cycle = s.target_cycle;
+  return m;
+}
+
+proto::VehicleCoverage ToWire(const CoverageMessage& c, long long stamp_ns) {
+  proto::VehicleCoverage m{};
+  m.vehicle_id = static_cast<std::uint32_t>(c.id);
+  m.stamp_ns = stamp_ns;
+  m.mission_time_s = c.report.stamp_s;
+  m.seq = c.report.seq;
+  m.time_s = c.report.kernel_time_s;
+  m.sums = proto::BorrowSequence(View(c.report.sums));
+  return m;
+}
+
+proto::FleetCoverage ToWire(const FleetSnapshot& s, std::uint64_t server_instance, std::uint32_t basis_order,
+                            long long stamp_ns, std::vector<std::uint32_t>& ids, std::vector<std::uint64_t>& seqs) {
+  ids.clear();
+  seqs.clear();
+  for (const auto& [id, seq] : s.coverage.accounted_seq) {
+    ids.push_back(static_cast<std::uint32_t>(id));
+    seqs.push_back(seq);
+  }
+  proto::FleetCoverage m{};
+  m.stamp_ns = stamp_ns;
+  m.server_instance = server_instance;
+  m.cycle = s.cycle;
+  m.mission_time_s = s.coverage.time_s;
+  m.basis_order = basis_order;
+  m.phi = proto::BorrowSequence(View(s.phi));
+  m.sums = proto::BorrowSequence(View(s.coverage.sums));
+  m.kernel_time_s = s.coverage.kernel_time_s;
+  m.vehicle_ids = proto::BorrowSequence(std::span<const std::uint32_t>(ids));
+  m.accounted_seq = proto::BorrowSequence(std::span<const std::uint64_t>(seqs));
+  m.valve_weights = proto::BorrowSequence(View(s.valve_weights));
+  return m;
+}
+
+proto::ErgodicTarget ToWire(const Assignment& a, std::uint64_t server_instance, std::uint32_t basis_order,
+                            long long stamp_ns) {
+  proto::ErgodicTarget m{};
+  m.vehicle_id = static_cast<std::uint32_t>(a.id);
+  m.stamp_ns = stamp_ns;
+  m.server_instance = server_instance;
+  m.cycle = a.cycle;
+  m.basis_order = basis_order;
+  m.shared = a.shared;
+  m.phi = proto::BorrowSequence(View(a.phi));
+  return m;
+}
+
+}  // namespace sage::agents::wire

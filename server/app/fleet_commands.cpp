@@ -1,0 +1,107 @@
+#include "server/app/fleet_commands.h"
+
+#include <csignal>
+#include <string>
+
+#include <fmt/format.h>
+
+#include "agents/node/agent_node.h"
+#include "server/app/resume_plan.h"
+#include "server/node/server_node.h"
+
+namespace sage::server {
+namespace {
+
+std::atomic<bool> g_stop{false};
+std::atomic<int> g_stop_signal{0};
+extern "C" void OnStopSignal(int signal) {
+  g_stop_signal.store(signal);
+  g_stop.store(true);
+}
+
+agents::Guidance GuidanceOf(const std::string& controller) {
+  return ParseControllerKind(controller) == ControllerKind::kAstar ? agents::Guidance::kAstar : agents::Guidance::kErgodic;
+}
+
+}  // namespace
+
+const std::atomic<bool>* StopOnSignals() {
+  struct sigaction action {};
+  action.sa_handler = OnStopSignal;
+  sigemptyset(&action.sa_mask);
+  for (int signal : {SIGINT, SIGTERM, SIGHUP, SIGPIPE}) sigaction(signal, &action, nullptr);
+  return &g_stop;
+}
+
+int StopSignal() { return g_stop_signal.load(); }
+
+int CmdServer(const ServerCommand& c) {
+  const std::atomic<bool>* stop = StopOnSignals();
+  const maps::Scenario scenario = LoadWithOverrides(c.scenario);
+  ServerNodeOptions options;
+  options.domain_id = c.domain;
+  options.profile = c.scenario.profile;
+  options.controller = ParseControllerKind(c.controller);
+  options.time_scale = c.time_scale;
+  options.out_dir = c.out_dir.empty() ? "runs/" + scenario.name + "_server" : c.out_dir;
+  options.resume = c.resume;
+  options.resumes = c.resumes;
+  options.show_progress = !c.quiet;
+  options.stop = stop;
+  return RunServerNode(scenario, options);
+}
+
+int CmdAgents(const AgentsCommand& c) {
+  const std::atomic<bool>* stop = StopOnSignals();
+  const maps::Scenario scenario = LoadWithOverrides(c.scenario);
+  agents::AgentNodeOptions options;
+  options.domain_id = c.domain;
+  options.guidance = GuidanceOf(c.controller);
+  options.stop = stop;
+  auto add = [&](const maps::VehicleSpec& spec, int id) {
+    options.vehicles.push_back(spec);
+    options.ids.push_back(static_cast<std::uint32_t>(id));
+    options.resume.emplace_back();
+  };
+  if (!c.resume_dir.empty()) {
+    if (c.ids.empty()) throw maps::ScenarioError("--resume: give the vehicles to resume with --ids ID,ID,...");
+    const std::vector<ResumedVehicle> vehicles = VehiclesToResume(scenario, c.resume_dir);
+    for (const int id : c.ids) {
+      const auto it = std::find_if(vehicles.begin(), vehicles.end(), [&](const ResumedVehicle& v) { return v.id == id; });
+      if (it == vehicles.end()) {
+        throw maps::ScenarioError(fmt::format("--ids: vehicle {} was not alive at the end of the record in {}", id,
+                                              c.resume_dir));
+      }
+      add(it->spec, id);
+      options.resume.back() = it->resume;
+    }
+  } else if (!c.join.empty()) {
+    const int id = JoinVehicleId(scenario, c.join);
+    if (id < 0) throw maps::ScenarioError("--join = " + c.join + ": no such join in fleet_events");
+    add(SpecForVehicle(scenario, id, c.join), c.first_id.value_or(id));
+  } else if (c.add > 0) {
+    if (!c.first_id) throw maps::ScenarioError("--add: give --first-id (the ids the server issued; sage vehicle add does)");
+    // Free starts as --vehicles would place them, after the scenario's own vehicles; names as the
+    // server issues them (rov<id + 1>).
+    const maps::Scenario grown = maps::WithVehicleCount(scenario, static_cast<int>(scenario.vehicles.size()) + c.add);
+    for (int k = 0; k < c.add; ++k) {
+      maps::VehicleSpec spec = grown.vehicles[scenario.vehicles.size() + k];
+      spec.name = "rov" + std::to_string(*c.first_id + k + 1);
+      add(spec, *c.first_id + k);
+    }
+  } else {
+    const int total = static_cast<int>(scenario.vehicles.size());
+    const int count = c.count.value_or(total - c.offset);
+    if (c.offset < 0 || c.offset >= total) {
+      throw maps::ScenarioError(fmt::format("--offset = {}: must be in 0..{} (the fleet's vehicles)", c.offset, total - 1));
+    }
+    if (count < 1 || c.offset + count > total) {
+      throw maps::ScenarioError(fmt::format("--count = {}: must be in 1..{} (vehicles {}..{} of the fleet)", count,
+                                            total - c.offset, c.offset, total - 1));
+    }
+    for (int i = c.offset; i < c.offset + count; ++i) add(scenario.vehicles[i], c.first_id.value_or(0) + i);
+  }
+  return agents::RunAgentNode(scenario, options);
+}
+
+}  // namespace sage::server

@@ -1,0 +1,19 @@
+#pragma once
+// `sage server` and `sage agents`: the two halves of a fleet mission as processes (sage launch
+// starts them; they can be started by hand on a --domain), and the signals that stop them cleanly.
+#include <atomic>
+
+#include "server/app/options.h"
+
+namespace sage::server {
+
+/// Ctrl-C, kill, a closed terminal (SIGHUP) or a closed output pipe (SIGPIPE) set the returned
+/// flag (and the signal's number): missions stop cleanly and still write their run directory.
+const std::atomic<bool>* StopOnSignals();
+/// The signal that set the stop flag, or 0.
+int StopSignal();
+
+int CmdServer(const ServerCommand& command);
+int CmdAgents(const AgentsCommand& command);
+
+}  // namespace sage::server

@@ -1,0 +1,185 @@
+#include "server/app/operators.h"
+
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <optional>
+
+#include <fmt/format.h>
+
+#include "proto/dds_config.h"
+#include "proto/dds_endpoints.h"
+#include "proto/messages.h"
+#include "proto/mission_clock.h"
+#include "proto/qos.h"
+#include "server/app/processes.h"
+
+namespace sage::server {
+namespace {
+
+namespace fs = std::filesystem;
+constexpr auto kAnswerTimeout = std::chrono::seconds(5);
+
+int NoMission(const MissionFile& mission) {
+  std::fprintf(stderr, "sage: error: no mission is listening on DDS domain %d (is it still running?)\n", mission.domain_id);
+  return 1;
+}
+
+struct CommandAnswer {
+  bool accepted = false;
+  std::string reason;
+  int first_id = -1;
+  double mission_time_s = 0.0;
+};
+
+// Sends a fleet command to the server and waits for its answer (matched by the stamp).
+std::optional<CommandAnswer> AskServer(proto::Participant& participant, const std::string& verb, std::uint32_t count,
+                                       std::uint32_t vehicle_id) {
+  proto::Reader<proto::FleetCommandResult> results(participant, proto::FleetCommandResultQos());
+  proto::Writer<proto::FleetCommand> writer(participant, proto::FleetCommandQos());
+  if (!writer.WaitForReaders(1, std::chrono::seconds(3)) || !results.WaitForWriters(1, std::chrono::seconds(3))) {
+    return std::nullopt;
+  }
+  proto::FleetCommand c{};
+  c.stamp_ns = proto::NowRealtimeNs();
+  c.verb = proto::BorrowString(verb);
+  c.count = count;
+  c.vehicle_id = vehicle_id;
+  writer.Write(c);
+  std::optional<CommandAnswer> answer;
+  const auto deadline = std::chrono::steady_clock::now() + kAnswerTimeout;
+  while (!answer && std::chrono::steady_clock::now() < deadline) {
+    results.WaitForData(std::chrono::milliseconds(100));
+    results.TakeEach([&](const proto::FleetCommandResult& r, const dds_sample_info_t& info) {
+      if (!info.valid_data || r.command_stamp_ns != c.stamp_ns) return;
+      answer = CommandAnswer{r.accepted, std::string(proto::AsStringView(r.reason)), r.first_id, r.mission_time_s};
+    });
+  }
+  if (!answer) answer = CommandAnswer{false, "the server did not answer within 5 s", -1, 0.0};
+  return answer;
+}
+
+}  // namespace
+
+MissionFile FindMission(const std::string& dir) {
+  std::string where = dir;
+  if (where.empty()) {
+    const char* env = std::getenv("SAGE_MISSION");
+    where = env ? env : "runs/latest";
+  }
+  return ReadMissionFile(where);
+}
+
+int AddVehicles(const MissionFile& mission, int count) {
+  if (count < 1 || count > 10000) throw maps::ScenarioError(fmt::format("--count = {}: must be in 1..10000", count));
+  proto::Participant participant(mission.domain_id, proto::LocalhostConfigXml(proto::kMaxLocalParticipants));
+  const std::optional<CommandAnswer> answer = AskServer(participant, "reserve", static_cast<std::uint32_t>(count), 0);
+  if (!answer) return NoMission(mission);
+  if (!answer->accepted) {
+    std::fprintf(stderr, "sage: error: the mission refused: %s\n", answer->reason.c_str());
+    return 2;
+  }
+  const int first = answer->first_id;
+  const std::string log = (fs::path(mission.run_dir) / fmt::format("agents-add-{}.log", first)).string();
+  const pid_t pid = Spawn({"agents", mission.scenario_path, "--add", std::to_string(count), "--first-id",
+                           std::to_string(first), "--domain", std::to_string(mission.domain_id), "--controller",
+                           mission.controller},
+                          log, /*detach=*/true);
+  std::printf("started agent host pid %d with %d vehicle(s): rov%d..rov%d, ids %d..%d (log: %s)\n", pid, count,
+              first + 1, first + count, first, first + count - 1, log.c_str());
+  return 0;
+}
+
+int RemoveVehicle(const MissionFile& mission, int id) {
+  if (id < 0) throw maps::ScenarioError(fmt::format("id = {}: must be >= 0", id));
+  proto::Participant participant(mission.domain_id, proto::LocalhostConfigXml(proto::kMaxLocalParticipants));
+  proto::Reader<proto::VehicleState> states(participant, proto::VehicleStateReaderQos());
+  const std::optional<CommandAnswer> answer = AskServer(participant, "remove", 0, static_cast<std::uint32_t>(id));
+  if (!answer) return NoMission(mission);
+  if (!answer->accepted) {
+    std::fprintf(stderr, "sage: error: the mission refused: %s\n", answer->reason.c_str());
+    return 2;
+  }
+  // The server told its host; the vehicle's state is disposed when it has left.
+  const auto deadline = std::chrono::steady_clock::now() + kAnswerTimeout;
+  bool gone = false;
+  while (!gone && std::chrono::steady_clock::now() < deadline) {
+    states.WaitForData(std::chrono::milliseconds(100));
+    while (states.TakeEach([&](const proto::VehicleState& s, const dds_sample_info_t& info) {
+      gone = gone || (s.vehicle_id == static_cast<std::uint32_t>(id) && info.instance_state != DDS_ALIVE_INSTANCE_STATE);
+    }, 1024) == 1024) {
+    }
+  }
+  if (!gone) {
+    std::fprintf(stderr, "sage: error: vehicle %d was told to leave at t = %.1f s but had not left within 5 s\n", id,
+                 answer->mission_time_s);
+    return 1;
+  }
+  std::printf("vehicle %d left the mission at t = %.1f s\n", id, answer->mission_time_s);
+  return 0;
+}
+
+int SetRisk(const MissionFile& mission, const std::string& valve, double weight, const std::string& source) {
+  if (!(weight >= 0.0 && weight <= maps::kMaxRawWeight)) {
+    throw maps::ScenarioError(fmt::format("weight = {}: must be a number in [0, 1e12] (weights are relative)", weight));
+  }
+  const maps::Scenario scenario = maps::LoadScenario(mission.scenario_path);
+  if (scenario.ValveIndex(valve) < 0) {
+    std::string names;
+    for (const maps::Valve& v : scenario.AllValves()) names += (names.empty() ? "" : ", ") + v.name;
+    throw maps::ScenarioError("valve = " + valve + ": not in this mission (valves: " + names + ")");
+  }
+  proto::Participant participant(mission.domain_id, proto::LocalhostConfigXml(proto::kMaxLocalParticipants));
+  // The answer's reader exists before the update is written, so the answer reaches it.
+  proto::Reader<proto::RiskUpdateResult> results(participant, proto::RiskUpdateResultQos());
+  proto::Writer<proto::RiskUpdate> writer(participant, proto::RiskUpdateQos());
+  if (!writer.WaitForReaders(1, std::chrono::seconds(3)) || !results.WaitForWriters(1, std::chrono::seconds(3))) {
+    return NoMission(mission);
+  }
+  proto::RiskUpdate r{};
+  r.stamp_ns = proto::NowRealtimeNs();
+  r.valve = proto::BorrowString(valve);
+  r.weight = weight;
+  r.source = proto::BorrowString(source);
+  writer.Write(r);
+  // The server answers in the cycle it takes the update (every 0.1 mission-s).
+  struct Answer {
+    bool applied;
+    double mission_time_s, new_share;
+    std::string reason;
+  };
+  std::optional<Answer> answer;
+  const auto deadline = std::chrono::steady_clock::now() + kAnswerTimeout;
+  while (!answer && std::chrono::steady_clock::now() < deadline) {
+    results.WaitForData(std::chrono::milliseconds(100));
+    results.TakeEach([&](const proto::RiskUpdateResult& a, const dds_sample_info_t& info) {
+      if (!info.valid_data || a.update_stamp_ns != r.stamp_ns || proto::AsStringView(a.valve) != valve) return;
+      answer = Answer{a.applied, a.mission_time_s, a.new_share, std::string(proto::AsStringView(a.reason))};
+    });
+  }
+  if (!answer) {
+    std::fprintf(stderr, "sage: error: risk update sent, but the server did not answer within 5 s\n");
+    return 1;
+  }
+  if (!answer->applied) {
+    std::fprintf(stderr, "sage: error: the mission did not apply it: %s\n", answer->reason.c_str());
+    return 2;
+  }
+  std::printf("%s: risk %g applied at t = %.1f s; now %.1f %% of the field's risk\n", valve.c_str(), weight,
+              answer->mission_time_s, 100.0 * answer->new_share);
+  return 0;
+}
+
+int StopMission(const MissionFile& mission) {
+  proto::Participant participant(mission.domain_id, proto::LocalhostConfigXml(proto::kMaxLocalParticipants));
+  const std::optional<CommandAnswer> answer = AskServer(participant, "stop", 0, 0);
+  if (!answer) return NoMission(mission);
+  if (!answer->accepted) {
+    std::fprintf(stderr, "sage: error: %s\n", answer->reason.c_str());
+    return 1;
+  }
+  std::printf("the mission stops at t = %.1f s; its server writes %s\n", answer->mission_time_s, mission.run_dir.c_str());
+  return 0;
+}
+
+}  // namespace sage::server

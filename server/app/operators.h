@@ -1,0 +1,23 @@
+#pragma once
+// The operators' commands on a running mission, found through its run directory's mission.json
+// (default $SAGE_MISSION, else runs/latest): each asks the mission's server over DDS and says
+// what the mission did — applied, or refused and why.
+#include "server/app/options.h"
+#include "server/report/mission_file.h"
+
+namespace sage::server {
+
+/// Reads DIR/mission.json (DIR empty: $SAGE_MISSION, else runs/latest).
+MissionFile FindMission(const std::string& dir);
+
+/// `sage vehicle add`: the server issues `count` ids; a detached agent host with that many new
+/// vehicles (rov<id + 1>, at free starts) joins the mission.
+int AddVehicles(const MissionFile& mission, int count);
+/// `sage vehicle remove`: the server takes vehicle `id` out (or says why not); waits for it to leave.
+int RemoveVehicle(const MissionFile& mission, int id);
+/// `sage risk set`: a valve's new raw risk weight.
+int SetRisk(const MissionFile& mission, const std::string& valve, double weight, const std::string& source);
+/// `sage stop`: the mission ends now; the server writes the run directory.
+int StopMission(const MissionFile& mission);
+
+}  // namespace sage::server

@@ -1,0 +1,79 @@
+#pragma once
+// What each `sage` subcommand is asked to do, as plain values: cli.cpp (the only file that sees
+// CLI11) fills them from the command line, and the commands take them from there.
+#include <atomic>
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "server/app/cli_scenario.h"
+
+namespace sage::server {
+
+/// sage run / compare
+struct RunCommand {
+  ScenarioOverrides scenario;
+  std::string controller = "ergodic";
+  std::string out_dir;
+  bool calibrate_wait = true;  ///< compare: the paper's A* wait calibration
+};
+
+/// sage evaluate
+struct EvaluateCommand {
+  std::string trajectory_path;
+  std::string scenario_path;
+  std::string profile;
+  std::optional<double> duration_s;
+  std::string out_dir;
+};
+
+/// sage launch
+struct LaunchCommand {
+  ScenarioOverrides scenario;
+  std::string controller = "ergodic";
+  std::string out_dir;           ///< default runs/<scenario>_launch
+  std::optional<int> domain;     ///< default: a free one, reserved machine-wide
+  std::optional<int> hosts;      ///< agent host processes (default: one per 250 vehicles)
+  double time_scale = 1.0;       ///< mission seconds per wall second
+  std::string resume_dir;        ///< continue the crashed mission recorded there
+  const std::atomic<bool>* stop = nullptr;
+};
+
+/// sage server
+struct ServerCommand {
+  ScenarioOverrides scenario;
+  std::string controller = "ergodic";
+  std::string out_dir;
+  int domain = 0;
+  double time_scale = 1.0;
+  bool quiet = false;
+  bool resume = false;           ///< continue the crashed mission recorded in out_dir
+  int resumes = 0;
+};
+
+/// sage agents
+struct AgentsCommand {
+  ScenarioOverrides scenario;
+  std::string controller = "ergodic";
+  int domain = 0;
+  int offset = 0;                ///< first of the scenario's vehicles this host simulates
+  std::optional<int> count;      ///< how many (default: all from offset on)
+  std::string join;              ///< simulate the scenario's joining vehicle of this name
+  int add = 0;                   ///< simulate this many new vehicles (ids from first_id)
+  std::optional<int> first_id;   ///< fleet id of the first vehicle
+  std::string resume_dir;        ///< pick these vehicles up where the crashed mission left them
+  std::vector<int> ids;          ///< with resume_dir: the fleet ids to simulate
+};
+
+/// The operators' commands on a running mission.
+struct OperatorCommand {
+  std::string mission_dir;       ///< default: $SAGE_MISSION, else runs/latest
+  int add_count = 1;
+  int remove_id = 0;
+  std::string valve;
+  double weight = 0.0;
+  std::string source = "operator";
+};
+
+}  // namespace sage::server

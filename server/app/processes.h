@@ -1,0 +1,56 @@
+#pragma once
+// The processes of a launched mission: spawning this same `sage` binary as the server and the
+// agent hosts, describing how one ended, and the terminal the launcher owns (the server's lines
+// relayed above a live progress line).
+#include <sys/types.h>
+
+#include <string>
+#include <vector>
+
+namespace sage::server {
+
+/// fork + exec of this same `sage` binary with `args`; stdout/stderr go to `log_path` unless it
+/// is empty. detach: a session of its own, outliving the caller (sage vehicle add); otherwise
+/// the child gets SIGTERM when the caller dies, however it dies. With `stdout_pipe` the child's
+/// stdout goes into a pipe whose non-blocking read end is returned there. Throws
+/// std::runtime_error if it cannot fork.
+pid_t Spawn(const std::vector<std::string>& args, const std::string& log_path, bool detach = false,
+            int* stdout_pipe = nullptr);
+
+/// "exited with status 1", "was killed by SIGKILL", from a waitpid status.
+std::string DescribeExit(int wait_status);
+/// The process's exit code for a waitpid status: its status, or 128 + signal.
+int ExitCode(int wait_status);
+/// True if `pid` runs a `sage launch` (another launcher holding a run directory).
+bool IsRunningLauncher(int pid);
+
+// The launcher owns the terminal: the server's output comes through a pipe and is printed here
+// line by line, so on a terminal the redrawn progress line is cleared first and drawn again
+// after, and never ends up with a log line glued to it.
+class TerminalRelay {
+ public:
+  TerminalRelay(int fd, bool tty) : fd_(fd), tty_(tty) {}
+  ~TerminalRelay();
+  TerminalRelay(const TerminalRelay&) = delete;
+  TerminalRelay& operator=(const TerminalRelay&) = delete;
+
+  /// Prints the child's complete lines read so far (all of it, to the end, with `to_eof`).
+  void Relay(bool to_eof = false);
+  /// Shows the launcher's progress: a redrawn line on a terminal, a line of its own otherwise.
+  void Progress(const std::string& text);
+  /// The launcher's own log line, printed like the child's.
+  void Log(const std::string& message, bool warning = false);
+  /// Ends the progress line on a terminal (before the final output).
+  void EndProgress();
+  bool tty() const { return tty_; }
+
+ private:
+  void Print(const std::string& line);
+
+  int fd_;
+  bool tty_;
+  std::string pending_;
+  std::string progress_;
+};
+
+}  // namespace sage::server

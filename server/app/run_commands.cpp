@@ -1,0 +1,161 @@
+#include "server/app/run_commands.h"
+
+#include <unistd.h>
+
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <iostream>
+
+#include <fmt/format.h>
+#include <spdlog/spdlog.h>
+
+#include "server/mission.h"
+#include "server/report/report.h"
+#include "server/report/run_directory.h"
+
+namespace sage::server {
+namespace {
+
+namespace fs = std::filesystem;
+
+// Progress on stderr: a redrawn bar on a terminal, a line every 10 % otherwise (CI logs).
+class ProgressPrinter {
+ public:
+  ProgressPrinter(std::string label, double duration_s)
+      : label_(std::move(label)), duration_s_(duration_s), tty_(isatty(fileno(stderr)) != 0) {}
+  void operator()(double fraction) {
+    const int percent = static_cast<int>(std::floor(fraction * 100.0 + 1e-9));
+    if (tty_) {
+      const int filled = percent / 5;
+      std::fprintf(stderr, "\r%s [%s%s] %3d%%  t = %.0f / %.0f s", label_.c_str(), std::string(filled, '#').c_str(),
+                   std::string(20 - filled, ' ').c_str(), percent, fraction * duration_s_, duration_s_);
+      if (percent >= 100) std::fprintf(stderr, "\n");
+    } else if (percent >= next_line_percent_) {
+      std::fprintf(stderr, "%s %3d%%  t = %.0f / %.0f s\n", label_.c_str(), percent, fraction * duration_s_, duration_s_);
+      next_line_percent_ = percent - percent % 10 + 10;
+    }
+  }
+
+ private:
+  std::string label_;
+  double duration_s_;
+  bool tty_;
+  int next_line_percent_ = 0;
+};
+
+double Degrees(double rad) { return rad * 180.0 / M_PI; }
+
+std::string FormatSeconds(double s) { return std::isnan(s) ? std::string("---") : fmt::format("{:.1f} s", s); }
+
+void PrintEventResponses(const MissionMetrics& metrics) {
+  for (const EventResponse& e : metrics.events) {
+    std::cout << fmt::format(
+        "event at t = {:.1f} s: {} weight -> {:.2f}; heading change {} on the first command steered on it; next {} "
+        "visit after {}; {} interval {} before, {} after\n",
+        e.time_s, e.valve, e.new_weight,
+        std::isnan(e.heading_change_rad) ? std::string("unknown") : fmt::format("{:.1f} deg", Degrees(e.heading_change_rad)),
+        e.valve, FormatSeconds(e.time_to_next_visit_s), e.valve, FormatSeconds(e.interval_before_s),
+        FormatSeconds(e.interval_after_s));
+  }
+}
+
+std::string DefaultOutDir(const maps::Scenario& scenario, const std::string& profile, const std::string& what) {
+  return (fs::path("runs") / fmt::format("{}_{}_{}", scenario.name, profile, what)).string();
+}
+
+// One in-process mission with its record streamed into `dir` as it runs, as a launch's server
+// writes it: the same files, the same checkpoints.
+MissionMetrics RunInto(const maps::Scenario& scenario, ControllerKind kind, const std::string& profile,
+                       const fs::path& dir) {
+  RunDirectory run(dir.string(), scenario);
+  MissionOptions options{profile, kind, &run, /*keep_trajectory=*/false};
+  Mission mission(scenario, options);
+  ProgressPrinter progress(fmt::format("{:>7}", ToString(kind)), scenario.duration_s);
+  const long report_every = std::max(1L, std::lround(scenario.duration_s * scenario.control_rate_hz / 100));
+  long cycle = 0;
+  while (mission.Step()) {
+    run.Tick(mission.core());
+    if (++cycle % report_every == 0) progress(mission.time_s() / scenario.duration_s);
+  }
+  progress(1.0);
+  run.Finish(mission.core(), mission.world(), scenario.duration_s, /*stopped_early=*/false);
+  return mission.core().Metrics(scenario.duration_s);
+}
+
+}  // namespace
+
+int CmdRun(const RunCommand& c) {
+  const maps::Scenario scenario = LoadWithOverrides(c.scenario);
+  const ControllerKind kind = ParseControllerKind(c.controller);
+  const std::string profile = c.scenario.profile.empty() ? scenario.default_profile : c.scenario.profile;
+  const fs::path dir = c.out_dir.empty() ? DefaultOutDir(scenario, profile, ToString(kind)) : c.out_dir;
+  const auto start = std::chrono::steady_clock::now();
+  const MissionMetrics metrics = RunInto(scenario, kind, profile, dir);
+  std::cout << FormatTable({metrics});
+  PrintEventResponses(metrics);
+  spdlog::info("{:.0f} s mission simulated in {:.2f} s wall time; wrote {}/metrics.json, trajectory.csv, plot.svg",
+               scenario.duration_s, std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(),
+               dir.string());
+  return 0;
+}
+
+int CmdCompare(const RunCommand& c) {
+  maps::Scenario scenario = LoadWithOverrides(c.scenario);
+  const std::string profile = c.scenario.profile.empty() ? scenario.default_profile : c.scenario.profile;
+  const fs::path dir = c.out_dir.empty() ? DefaultOutDir(scenario, profile, "compare") : c.out_dir;
+  PrepareRunDirectory(dir.string());
+  const MissionMetrics ergodic = RunInto(scenario, ControllerKind::kErgodic, profile, dir / "ergodic");
+  if (c.calibrate_wait) {
+    scenario.astar.wait_per_lap_s = CalibratedAstarWait(scenario, profile, ergodic);
+    spdlog::info("A* wait per lap set to {:.2f} s so that A* spends as long near the dominant valve as ergodic "
+                 "control (the paper's protocol; --calibrate-wait off keeps the scenario's)",
+                 scenario.astar.wait_per_lap_s);
+  }
+  const MissionMetrics astar = RunInto(scenario, ControllerKind::kAstar, profile, dir / "astar");
+  std::cout << FormatTable({astar, ergodic});
+  if (!ergodic.events.empty()) {
+    std::cout << "A*:\n";
+    PrintEventResponses(astar);
+    std::cout << "ergodic:\n";
+    PrintEventResponses(ergodic);
+  }
+  spdlog::info("wrote {}/astar and {}/ergodic", dir.string(), dir.string());
+  return 0;
+}
+
+int CmdEvaluate(const EvaluateCommand& c) {
+  const maps::Scenario scenario = maps::LoadScenario(c.scenario_path);
+  const maps::RiskProfile* profile = &scenario.ProfileOrThrow(c.profile);
+  const Trajectory trajectory = ReadTrajectoryCsv(c.trajectory_path);
+  if (trajectory.samples.empty()) throw maps::ScenarioError(c.trajectory_path + ": no samples");
+  // The weights over time follow the profile and its events, as they would have in a mission.
+  std::vector<WeightChange> schedule;
+  Eigen::VectorXd raw = scenario.ProfileWeights(*profile);
+  schedule.push_back({0.0, raw / raw.sum()});
+  for (const maps::RiskEvent& e : profile->events) {
+    raw[scenario.ValveIndex(e.valve)] = e.weight;
+    schedule.push_back({e.time_s, raw / raw.sum()});
+  }
+  const double last = trajectory.samples.back().time_s;
+  const double duration = c.duration_s.value_or(last > 0.0 ? last : 1.0 / scenario.control_rate_hz);
+  if (!(duration > 0.0) || !std::isfinite(duration)) {
+    throw maps::ScenarioError(fmt::format("--duration = {}: must be a finite number > 0", duration));
+  }
+  MetricsOptions options;
+  options.profile = profile->name;
+  // A log of hours gets a metric sample every few seconds rather than a million of them.
+  options.metric_sample_period_s = std::max(1.0, duration / 1e5);
+  const MissionMetrics metrics = ComputeMetrics(trajectory, scenario, schedule, duration, options);
+  std::cout << FormatTable({metrics});
+  if (!c.out_dir.empty()) {
+    PrepareRunDirectory(c.out_dir);
+    WriteMetricsJson((fs::path(c.out_dir) / "metrics.json").string(), metrics);
+    WritePlotSvg((fs::path(c.out_dir) / "plot.svg").string(), scenario, schedule.back().weights, trajectory,
+                 fmt::format("{}: recorded trajectory {}", scenario.name, c.trajectory_path));
+    spdlog::info("wrote {}/metrics.json and plot.svg", c.out_dir);
+  }
+  return 0;
+}
+
+}  // namespace sage::server

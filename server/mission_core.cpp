@@ -1,0 +1,405 @@
+#include "server/mission_core.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+
+#include <fmt/format.h>
+
+namespace sage::server {
+namespace {
+
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+// A host may run at most this far ahead of the server's clock (s of mission time): a state
+// stamped later than that is not from this mission's clock.
+constexpr double kMaxStateLead_s = 5.0;
+// Ids an operator may reserve at once (sage vehicle add --count).
+constexpr int kMaxIdsPerRequest = 10000;
+
+// A vehicle's name as the record keeps it: printable, no field separators, never empty.
+std::string SafeName(const std::string& name, int id) {
+  std::string out;
+  for (const char c : name.substr(0, 64)) {
+    const bool plain = static_cast<unsigned char>(c) >= 0x20 && c != 0x7f && c != ',' && c != '"';
+    out += plain ? c : '_';
+  }
+  const bool numeric = !out.empty() && out.find_first_not_of("0123456789") == std::string::npos;
+  return out.empty() || numeric ? fmt::format("vehicle{}", id) : out;
+}
+
+double MeanInterval(const std::vector<double>& times) {
+  if (times.size() < 2) return kNaN;
+  return (times.back() - times.front()) / static_cast<double>(times.size() - 1);
+}
+
+}  // namespace
+
+const char* ToString(ControllerKind kind) { return kind == ControllerKind::kErgodic ? "ergodic" : "astar"; }
+
+ControllerKind ParseControllerKind(const std::string& text) {
+  if (text == "ergodic") return ControllerKind::kErgodic;
+  if (text == "astar") return ControllerKind::kAstar;
+  throw maps::ScenarioError("--controller = " + text + ": must be one of ergodic, astar");
+}
+
+double HeadingChange(const Eigen::Vector2d& before_mps, const Eigen::Vector2d& after_mps) {
+  if (before_mps.norm() < 1e-12 || after_mps.norm() < 1e-12) return 0.0;
+  return std::acos(std::clamp(before_mps.dot(after_mps) / (before_mps.norm() * after_mps.norm()), -1.0, 1.0));
+}
+
+void FillEventResponses(const maps::Scenario& scenario, MissionMetrics& metrics) {
+  for (EventResponse& response : metrics.events) {
+    const int valve = scenario.ValveIndex(response.valve);
+    const std::vector<double>& times = metrics.valves[valve].visit_times_s;
+    std::vector<double> before, after;
+    for (double v : times) (v < response.time_s ? before : after).push_back(v);
+    response.time_to_next_visit_s = after.empty() ? kNaN : after.front() - response.time_s;
+    response.interval_before_s = MeanInterval(before);
+    response.interval_after_s = MeanInterval(after);
+  }
+}
+
+int FirstFreeVehicleId(const maps::Scenario& scenario) {
+  int joins = 0;
+  for (const maps::FleetEvent& e : scenario.fleet_events) joins += e.kind == maps::FleetEvent::Kind::kJoin ? 1 : 0;
+  return static_cast<int>(scenario.vehicles.size()) + joins;
+}
+
+int JoinVehicleId(const maps::Scenario& scenario, const std::string& name) {
+  int joins = 0;
+  for (const maps::FleetEvent& e : scenario.fleet_events) {
+    if (e.kind != maps::FleetEvent::Kind::kJoin) continue;
+    if (e.vehicle.name == name) return static_cast<int>(scenario.vehicles.size()) + joins;
+    ++joins;
+  }
+  return -1;
+}
+
+MissionCore::MissionCore(maps::World& world, const maps::Scenario& scenario, const std::string& profile,
+                         ControllerKind controller, MissionRecorder* recorder)
+    : scenario_(scenario),
+      controller_(controller),
+      recorder_(recorder),
+      fleet_(world, scenario, profile),
+      metrics_(scenario, world.basis(), world.risk(),
+               MetricsOptions{ToString(controller), fleet_.profile().name}),
+      roster_(FirstFreeVehicleId(scenario)) {
+  fleet_.UseVisits(&metrics_.visits());
+  metrics_.OnWeights(0.0, fleet_.schedule().front().weights);
+  schedule_seen_ = 1;
+}
+
+bool MissionCore::OnState(const agents::StateReport& s) {
+  const bool finite = s.state.position_m.allFinite() && s.state.velocity_mps.allFinite() &&
+                      std::isfinite(s.state.heading_rad) && s.command_mps.allFinite() && std::isfinite(s.time_s);
+  if (!finite || s.id < 0 || s.time_s < 0.0 || s.time_s > time_s_ + kMaxStateLead_s) {
+    ++rejected_;
+    return false;
+  }
+  const Roster::Member* known = roster_.Find(s.id);
+  if (known == nullptr || known->status != Roster::Status::kAlive) {
+    // Names reach logs and CSV files: made safe, and unique (another vehicle's name gets its id).
+    std::string name = known != nullptr ? known->name : SafeName(s.name, s.id);
+    if (known == nullptr) {
+      for (const auto& [other_id, other] : roster_.members())
+        if (other.name == name) name = fmt::format("{}#{}", name, s.id);
+    }
+    const FleetEventRecord* joined = roster_.Join(s.id, name, next_time_s());
+    fleet_.AddVehicle(s.id, name);
+    Record(joined);
+  }
+  Roster::Member& m = *roster_.Find(s.id);
+  if (m.has_state && s.cycle <= m.last.cycle) return false;  // seen already (or older)
+  if (m.has_state) {
+    // A risk event's heading change: the first command steered on a target that carries the
+    // event, against the command before it.
+    std::erase_if(pending_heading_changes_, [&](const PendingHeadingChange& p) {
+      if (p.vehicle_id != s.id || s.target_cycle < p.cycle) return false;
+      if (m.last.target_cycle < p.cycle) {
+        fleet_.responses()[p.response].heading_change_rad = HeadingChange(m.last.command_mps, s.command_mps);
+      }
+      return true;
+    });
+  }
+  m.last = s;
+  m.has_state = true;
+  fleet_.SetPosition(s.id, s.state.position_m);
+  if (s.time_s <= scenario_.duration_s + 1e-9) {
+    samples_.push_back({s.time_s, m.index, s.state.position_m, s.state.heading_rad, s.state.velocity_mps, s.command_mps});
+  }
+  return true;
+}
+
+void MissionCore::OnVehicleGone(int id, bool lost) {
+  const FleetEventRecord* event = roster_.Leave(id, lost, next_time_s());
+  if (event == nullptr) return;
+  RecordSamples();  // its last samples go into the record before it leaves
+  // Its answer to a pending risk event never comes: that heading change stays unknown (NaN).
+  std::erase_if(pending_heading_changes_, [&](const PendingHeadingChange& p) { return p.vehicle_id == id; });
+  fleet_.RemoveVehicle(id, lost, next_time_s());
+  metrics_.Retire(roster_.Find(id)->index);
+  Record(event);
+}
+
+bool MissionCore::OnCoverage(const agents::CoverageMessage& c) {
+  const maps::CoverageReport& r = c.report;
+  if (!r.sums.allFinite() || !std::isfinite(r.kernel_time_s) || r.kernel_time_s < 0.0 || !std::isfinite(r.stamp_s) ||
+      r.stamp_s > time_s_ + kMaxStateLead_s) {
+    ++rejected_;
+    return false;
+  }
+  return fleet_.OnCoverage(c.id, r.seq, r.stamp_s, r.kernel_time_s, r.sums);
+}
+
+OperatorAnswer MissionCore::OnRiskUpdate(const std::string& valve, double weight, const std::string& source) {
+  OperatorAnswer answer;
+  try {
+    fleet_.SetRiskWeight(valve, weight, next_time_s(), source);
+    answer.accepted = true;
+    answer.new_share = fleet_.responses().back().new_weight;
+    // Recorded now with its source; the heading change is measured when the cycle sends it.
+    if (recorder_ != nullptr) {
+      recorder_->OnRiskEvent({fleet_.responses().back().time_s, valve, weight, answer.new_share, source});
+    }
+    risk_recorded_ = fleet_.responses().size();
+  } catch (const maps::ScenarioError& e) {  // an operator's message never ends the mission
+    answer.reason = e.what();
+  }
+  return answer;
+}
+
+OperatorAnswer MissionCore::RemoveRequest(int id) const {
+  OperatorAnswer answer;
+  const Roster::Member* m = roster_.Find(id);
+  if (m == nullptr) {
+    answer.reason = fmt::format("no vehicle with id {} in this mission (ids 0..{} have been used)", id,
+                                roster_.next_id() - 1);
+  } else if (m->status != Roster::Status::kAlive) {
+    answer.reason = fmt::format("{} (id {}) {} at t = {:.1f} s", m->name, id,
+                                m->status == Roster::Status::kLost ? "was lost" : "already left", m->gone_s);
+  } else if (roster_.alive_count() <= 1) {
+    answer.reason = fmt::format("{} (id {}) is the mission's last vehicle; stop the mission instead (sage stop)",
+                                m->name, id);
+  } else {
+    answer.accepted = true;
+  }
+  return answer;
+}
+
+OperatorAnswer MissionCore::ReserveIds(int count) {
+  OperatorAnswer answer;
+  if (count < 1 || count > kMaxIdsPerRequest) {
+    answer.reason = fmt::format("count = {}: must be in 1..{}", count, kMaxIdsPerRequest);
+    return answer;
+  }
+  answer.accepted = true;
+  answer.first_id = roster_.ReserveIds(count);
+  return answer;
+}
+
+void MissionCore::Record(const FleetEventRecord* event) {
+  if (event != nullptr && recorder_ != nullptr) recorder_->OnFleetEvent(*event);
+}
+
+void MissionCore::Note(const std::string& what, const std::string& detail) {
+  Record(roster_.Note(std::max(time_s_, 0.0), what, detail));
+}
+
+double MissionCore::next_time_s() const {
+  return static_cast<double>(cycle_ + 1) / scenario_.control_rate_hz;
+}
+
+// The states received since the last cycle go into the record and the metrics in (time,
+// vehicle index) order, whatever order the transport delivered them in.
+void MissionCore::RecordSamples() {
+  std::stable_sort(samples_.begin(), samples_.end(), [](const TrajectorySample& a, const TrajectorySample& b) {
+    return a.time_s != b.time_s ? a.time_s < b.time_s : a.vehicle < b.vehicle;
+  });
+  const std::map<int, Roster::Member>& members = roster_.members();
+  std::vector<const std::string*> names;
+  for (const TrajectorySample& s : samples_) {
+    metrics_.Add(s);
+    if (recorder_ == nullptr) continue;
+    if (names.empty()) {
+      names.resize(members.size(), nullptr);
+      for (const auto& [id, m] : members) names[m.index] = &m.name;
+    }
+    recorder_->OnSample(s, *names[s.vehicle]);
+  }
+  samples_.clear();
+}
+
+CycleOutput MissionCore::Cycle(std::int64_t cycle) {
+  cycle_ = cycle;
+  time_s_ = static_cast<double>(cycle) / scenario_.control_rate_hz;
+  RecordSamples();
+
+  CycleOutput out;
+  out.risk_events = fleet_.Cycle(time_s_);
+  // The profile's events of this cycle (operators' were recorded as they came).
+  for (; risk_recorded_ < fleet_.responses().size(); ++risk_recorded_) {
+    const EventResponse& r = fleet_.responses()[risk_recorded_];
+    if (recorder_ != nullptr) {
+      recorder_->OnRiskEvent({r.time_s, r.valve, fleet_.raw_weights()[scenario_.ValveIndex(r.valve)], r.new_weight,
+                              "scenario"});
+    }
+  }
+  for (; schedule_seen_ < fleet_.schedule().size(); ++schedule_seen_) {
+    const WeightChange& change = fleet_.schedule()[schedule_seen_];
+    metrics_.OnWeights(change.time_s, change.weights);
+  }
+  metrics_.Advance(time_s_);
+  // Every risk change since the last cycle (operators' and the profile's) is measured on the
+  // first live vehicle: unknown (NaN, null in metrics.json) until its answer arrives.
+  const std::uint64_t snapshot_cycle = static_cast<std::uint64_t>(cycle) + 1;
+  const std::vector<int> alive = roster_.alive();
+  const bool risk_changed = fleet_.responses().size() > risk_measured_;
+  for (; risk_measured_ < fleet_.responses().size(); ++risk_measured_) {
+    fleet_.responses()[risk_measured_].heading_change_rad = kNaN;
+    if (!alive.empty()) pending_heading_changes_.push_back({risk_measured_, snapshot_cycle, alive.front()});
+  }
+
+  out.snapshot.cycle = snapshot_cycle;
+  out.snapshot.phi = fleet_.phi();
+  out.snapshot.coverage = fleet_.coverage();
+  out.snapshot.valve_weights = fleet_.schedule().back().weights;
+
+  // A partition target is the vehicle's share weighted by the current risk: sent again when the
+  // shares change and when the risk does (an update, a profile event, the guard), and after any
+  // risk event (its heading change waits for a command steered on this cycle's target or later).
+  // In shared coverage a vehicle's assignment is sent once, when it joins.
+  const bool partition = scenario_.fleet.assignment == maps::FleetAssignment::kPartition;
+  const Eigen::VectorXd& weights = fleet_.effective_weights();
+  const bool reweighted = weights.size() != last_weights_.size() ||
+                          (weights.size() > 0 && (weights - last_weights_).cwiseAbs().maxCoeff() > 0.0);
+  const bool reassigned = partition && (fleet_.assignment() != last_assignment_ || reweighted || risk_changed);
+  if (reassigned) {
+    last_assignment_ = fleet_.assignment();
+    last_weights_ = weights;
+  }
+  for (int id : alive) {
+    Roster::Member& m = *roster_.Find(id);
+    if (m.target_sent && !reassigned) continue;
+    agents::Assignment a;
+    a.id = id;
+    a.cycle = snapshot_cycle;
+    a.phi = partition ? fleet_.ShareOf(id) : Eigen::VectorXd();
+    a.shared = a.phi.size() == 0;
+    out.assignments.push_back(std::move(a));
+    m.target_sent = true;
+  }
+  out.fleet_empty = alive.empty();
+  if (out.fleet_empty && !empty_noted_ && !roster_.members().empty()) {
+    Note("empty", "no vehicle is alive in the mission");
+  }
+  empty_noted_ = out.fleet_empty;
+  return out;
+}
+
+MissionMetrics MissionCore::Metrics(double end_s) const {
+  MissionMetrics metrics = metrics_.Result(std::max(end_s, 1.0 / scenario_.control_rate_hz));
+  metrics.events = fleet_.responses();
+  FillEventResponses(scenario_, metrics);
+  return metrics;
+}
+
+MissionCheckpoint MissionCore::Checkpoint() const {
+  MissionCheckpoint c;
+  c.scenario_hash = maps::ScenarioHash(scenario_);
+  c.profile = fleet_.profile().name;
+  c.controller = ToString(controller_);
+  c.cycle = cycle_;
+  c.time_s = time_s_;
+  c.fleet = fleet_.Checkpoint();
+  c.roster = roster_.Checkpoint();
+  c.metrics = metrics_.state();
+  c.armed = metrics_.visits().armed();
+  c.visit_times = metrics_.visits().visit_times();
+  c.rejected_samples = rejected_;
+  return c;
+}
+
+void MissionCore::Restore(const MissionCheckpoint& c) {
+  if (c.scenario_hash != maps::ScenarioHash(scenario_)) {
+    throw maps::ScenarioError("checkpoint: it was taken of another scenario (or other options) than the one given");
+  }
+  if (c.profile != fleet_.profile().name || c.controller != ToString(controller_)) {
+    throw maps::ScenarioError(fmt::format("checkpoint: it is of profile {} under {}, not {} under {}", c.profile,
+                                          c.controller, fleet_.profile().name, ToString(controller_)));
+  }
+  try {
+    fleet_.Restore(c.fleet);
+    roster_.Restore(c.roster);
+    VisitTracker visits = metrics_.visits();
+    visits.Restore(c.armed, c.visit_times);
+    metrics_.Restore(c.metrics, std::move(visits));
+  } catch (const std::invalid_argument& e) {
+    throw maps::ScenarioError(std::string("checkpoint: does not fit the scenario: ") + e.what());
+  }
+  fleet_.UseVisits(&metrics_.visits());
+  cycle_ = c.cycle;
+  time_s_ = c.time_s;
+  rejected_ = c.rejected_samples;
+  risk_recorded_ = risk_measured_ = fleet_.responses().size();
+  schedule_seen_ = fleet_.schedule().size();
+  last_assignment_.clear();
+  last_weights_.resize(0);
+  pending_heading_changes_.clear();
+  // A new server: every live vehicle gets its assignment again.
+  for (int id : roster_.alive()) roster_.Find(id)->target_sent = false;
+}
+
+std::int64_t MissionCore::Replay(const std::vector<std::pair<TrajectorySample, std::string>>& samples,
+                                 const std::vector<FleetEventRecord>& fleet_events,
+                                 const std::vector<RiskEventRecord>& risk_events) {
+  MissionRecorder* recorder = recorder_;
+  recorder_ = nullptr;  // all of it is in the record already
+  std::map<std::string, int> id_of;
+  for (const auto& [id, m] : roster_.members()) id_of[m.name] = id;
+  std::int64_t last = cycle_;
+  for (const auto& [sample, name] : samples) last = std::max<std::int64_t>(last, std::llround(sample.time_s * scenario_.control_rate_hz));
+  std::size_t next_sample = 0, next_fleet = 0, next_risk = 0;
+  for (std::int64_t k = cycle_ + 1; k <= last; ++k) {
+    const double t = static_cast<double>(k) / scenario_.control_rate_hz;
+    for (; next_fleet < fleet_events.size() && fleet_events[next_fleet].time_s <= t + 1e-9; ++next_fleet) {
+      const FleetEventRecord& e = fleet_events[next_fleet];
+      if (e.vehicle_id < 0) continue;  // outage, empty: notes of the record only
+      if (e.what == "joined" || e.what == "rejoined") {
+        Record(roster_.Join(e.vehicle_id, e.name, t));
+        fleet_.AddVehicle(e.vehicle_id, e.name);
+        id_of[e.name] = e.vehicle_id;
+      } else if (e.what == "lost" || e.what == "left") {
+        OnVehicleGone(e.vehicle_id, e.what == "lost");
+      }
+    }
+    for (; next_risk < risk_events.size() && risk_events[next_risk].time_s <= t + 1e-9; ++next_risk) {
+      const RiskEventRecord& r = risk_events[next_risk];
+      if (r.source != "scenario") OnRiskUpdate(r.valve, r.raw_weight, r.source);  // the profile's fire by themselves
+    }
+    for (; next_sample < samples.size() &&
+           std::llround(samples[next_sample].first.time_s * scenario_.control_rate_hz) <= k;
+         ++next_sample) {
+      const auto& [sample, name] = samples[next_sample];
+      const auto id = id_of.find(name);
+      Roster::Member* m = id == id_of.end() ? nullptr : roster_.Find(id->second);
+      if (m == nullptr) continue;  // a row of a vehicle the record never joined: not ours
+      TrajectorySample s = sample;
+      s.vehicle = m->index;
+      m->last.cycle = k;
+      m->last.time_s = s.time_s;
+      m->last.state.position_m = s.position_m;
+      m->last.state.velocity_mps = s.velocity_mps;
+      m->last.state.heading_rad = s.heading_rad;
+      m->last.command_mps = s.command_mps;
+      m->has_state = true;
+      fleet_.SetPosition(m->id, s.position_m);
+      samples_.push_back(s);
+    }
+    Cycle(k);
+  }
+  recorder_ = recorder;
+  return cycle_;
+}
+
+}  // namespace sage::server

@@ -1,0 +1,183 @@
+#pragma once
+// The server side of a SAGE mission in one object, free of any transport: the risk and the
+// fleet's coverage (FleetServer), who is in the mission (Roster), the metrics as they stand
+// (MetricsAccumulator), the answers to operators, when each vehicle's assignment is (re)sent,
+// how each risk change turned the fleet, and what goes into the mission's record. The DDS
+// server node only translates messages to and from it; the in-process mission hands it the
+// agents' reports directly. Its whole state is a checkpoint a new server resumes from.
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "agents/fleet_messages.h"
+#include "maps/scenario/scenario.h"
+#include "maps/world.h"
+#include "server/fleet_server.h"
+#include "server/metrics.h"
+#include "server/roster.h"
+#include "server/trajectory.h"
+
+namespace sage::server {
+
+enum class ControllerKind { kErgodic, kAstar };
+const char* ToString(ControllerKind kind);
+/// Throws maps::ScenarioError unless text is "ergodic" or "astar".
+ControllerKind ParseControllerKind(const std::string& text);
+
+/// One applied risk change, as risk_events.csv records it.
+struct RiskEventRecord {
+  double time_s = 0.0;
+  std::string valve;
+  double raw_weight = 0.0;
+  double new_share = 0.0;  ///< the valve's normalised weight afterwards
+  std::string source;      ///< "scenario" for a profile event, else who sent it
+};
+
+/// Where the mission's record goes as it happens (the run directory, or memory in tests and
+/// benchmarks). Calls come in mission-time order; samples of a cycle in vehicle index order.
+class MissionRecorder {
+ public:
+  virtual ~MissionRecorder() = default;
+  virtual void OnSample(const TrajectorySample& sample, const std::string& vehicle_name) = 0;
+  virtual void OnFleetEvent(const FleetEventRecord& event) = 0;
+  virtual void OnRiskEvent(const RiskEventRecord& event) = 0;
+};
+
+/// The answer to an operator's request (a risk update, a vehicle's removal, new ids).
+struct OperatorAnswer {
+  bool accepted = false;
+  std::string reason;      ///< why not (refused only), one line
+  double new_share = 0.0;  ///< risk update: the valve's share of the field's risk afterwards
+  int first_id = -1;       ///< id reservation: the first of the ids issued
+};
+
+/// What a server cycle sends to the fleet.
+struct CycleOutput {
+  agents::FleetSnapshot snapshot;
+  std::vector<agents::Assignment> assignments;  ///< (re)sent this cycle
+  int risk_events = 0;                          ///< risk changes that took effect this cycle
+  bool fleet_empty = false;                     ///< no vehicle is alive
+};
+
+/// Everything a mission's server knows, as plain data: what a resumed server starts from.
+struct MissionCheckpoint {
+  std::uint64_t scenario_hash = 0;  ///< maps::ScenarioHash of the effective scenario
+  std::string profile;
+  std::string controller;
+  std::int64_t cycle = 0;           ///< the last server cycle done
+  double time_s = 0.0;              ///< its mission time
+  FleetServer::State fleet;
+  Roster::State roster;
+  MetricsAccumulator::State metrics;
+  std::vector<std::vector<unsigned char>> armed;      ///< visit arming [vehicle index][valve]
+  std::vector<std::vector<double>> visit_times;       ///< [valve]
+  std::size_t rejected_samples = 0;
+};
+
+class MissionCore {
+ public:
+  /// world: the process's one World (the core writes its risk field); scenario: validated. Both
+  /// outlive the core; recorder may be null (nothing recorded). profile: empty = the default.
+  MissionCore(maps::World& world, const maps::Scenario& scenario, const std::string& profile,
+              ControllerKind controller, MissionRecorder* recorder = nullptr);
+  MissionCore(const MissionCore&) = delete;
+  MissionCore& operator=(const MissionCore&) = delete;
+
+  // ---- from the vehicles ----
+  /// A vehicle's state of one of its cycles. The first state of an unknown (or gone) vehicle
+  /// joins it. Refused (counted, false) if not finite, older than its last, or from the future.
+  bool OnState(const agents::StateReport& state);
+  /// The vehicle was lost (lost = true: its liveliness lapsed) or left cleanly.
+  void OnVehicleGone(int id, bool lost);
+  /// A vehicle's running coverage; false if stale, of an unknown vehicle, or malformed.
+  bool OnCoverage(const agents::CoverageMessage& coverage);
+
+  // ---- from operators ----
+  OperatorAnswer OnRiskUpdate(const std::string& valve, double weight, const std::string& source);
+  /// May vehicle `id` be taken out? Refused for an unknown id, one already gone, or the last one.
+  OperatorAnswer RemoveRequest(int id) const;
+  /// Issues `count` new ids (1..10000) for vehicles an operator adds; names are rov<id + 1>.
+  OperatorAnswer ReserveIds(int count);
+
+  /// One server cycle at mission time cycle / control rate: the states and coverage received
+  /// are taken into the record, risk events and the guard applied, and the fleet's snapshot and
+  /// any assignments due are returned.
+  CycleOutput Cycle(std::int64_t cycle);
+
+  // ---- what it knows ----
+  double time_s() const { return time_s_; }
+  std::int64_t cycle() const { return cycle_; }
+  const maps::Scenario& scenario() const { return scenario_; }
+  ControllerKind controller() const { return controller_; }
+  const FleetServer& fleet() const { return fleet_; }
+  const Roster& roster() const { return roster_; }
+  const MetricsAccumulator& metrics_accumulator() const { return metrics_; }
+  /// The ergodic metric of the record so far (the same number metrics.json gives).
+  double ergodic_metric() const { return metrics_.latest_metric(); }
+  /// Metrics of [0, end_s] as they stand; events answered (time to next visit, intervals).
+  MissionMetrics Metrics(double end_s) const;
+  std::size_t rejected_samples() const { return rejected_; }
+
+  MissionCheckpoint Checkpoint() const;
+  /// Takes a checkpoint's state. Throws maps::ScenarioError if it is of another scenario.
+  void Restore(const MissionCheckpoint& checkpoint);
+  /// Notes a whole-mission event in the record (an outage, a resume).
+  void Note(const std::string& what, const std::string& detail);
+
+  /// After Restore: brings the core forward over what the record holds past the checkpoint
+  /// (samples with their vehicles' names, fleet events, operators' risk updates; what a server
+  /// wrote before it died), cycle by cycle as it happened, recording nothing again. Visits and
+  /// metrics then cover the whole record. Returns the last cycle replayed (the checkpoint's if
+  /// there was nothing to replay).
+  std::int64_t Replay(const std::vector<std::pair<TrajectorySample, std::string>>& samples,
+                      const std::vector<FleetEventRecord>& fleet_events,
+                      const std::vector<RiskEventRecord>& risk_events);
+
+ private:
+  struct PendingHeadingChange {
+    std::size_t response;  // index into fleet_.responses()
+    std::uint64_t cycle;   // the snapshot cycle that first carried the new field
+    int vehicle_id;
+  };
+
+  void RecordSamples();
+  void Record(const FleetEventRecord* event);
+  double next_time_s() const;  // the mission time of the coming cycle, when input takes effect
+
+  const maps::Scenario& scenario_;
+  ControllerKind controller_;
+  MissionRecorder* recorder_;
+  FleetServer fleet_;
+  MetricsAccumulator metrics_;
+  Roster roster_;
+  std::vector<TrajectorySample> samples_;  // received since the last cycle
+  std::vector<PendingHeadingChange> pending_heading_changes_;
+  std::vector<std::vector<int>> last_assignment_;
+  Eigen::VectorXd last_weights_;
+  std::size_t risk_recorded_ = 0;  // risk changes handed to the recorder
+  std::size_t risk_measured_ = 0;  // risk changes whose heading change is being measured
+  std::size_t schedule_seen_ = 0;  // weight schedule entries handed to the metrics
+  std::size_t rejected_ = 0;
+  std::int64_t cycle_ = -1;
+  double time_s_ = 0.0;
+  bool empty_noted_ = false;
+};
+
+/// Angle (rad, 0..pi) between two commanded velocities; 0 if either is (near) zero. The
+/// heading change of a risk event (EventResponse::heading_change_rad).
+double HeadingChange(const Eigen::Vector2d& before_mps, const Eigen::Vector2d& after_mps);
+
+/// Fills each risk event's time to the valve's next visit and its revisit interval before and
+/// after, from the visit times in `metrics`.
+void FillEventResponses(const maps::Scenario& scenario, MissionMetrics& metrics);
+
+/// The first id the server issues to vehicles added at runtime: after the scenario's vehicles
+/// (ids 0..N-1) and its fleet_events joins (N, N+1, ... in order).
+int FirstFreeVehicleId(const maps::Scenario& scenario);
+/// The fleet id of the scenario's join event for vehicle `name` (N + its place among the joins),
+/// or -1 if it has none.
+int JoinVehicleId(const maps::Scenario& scenario, const std::string& name);
+
+}  // namespace sage::server

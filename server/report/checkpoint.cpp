@@ -1,0 +1,244 @@
+#include "server/report/checkpoint.h"
+
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+
+#include "server/report/atomic_write.h"
+
+namespace sage::server {
+namespace {
+
+using Json = nlohmann::json;
+constexpr int kFormatVersion = 1;
+
+// Doubles as raw bytes (CBOR byte string): exact and a third of a text encoding's size.
+Json Doubles(const double* data, std::size_t count) {
+  std::vector<std::uint8_t> bytes(count * sizeof(double));
+  if (count > 0) std::memcpy(bytes.data(), data, bytes.size());
+  return Json::binary(std::move(bytes));
+}
+Json Doubles(const Eigen::VectorXd& v) { return Doubles(v.data(), static_cast<std::size_t>(v.size())); }
+Json Doubles(const std::vector<double>& v) { return Doubles(v.data(), v.size()); }
+std::vector<double> ToDoubles(const Json& j) {
+  const auto& bytes = j.get_binary();
+  if (bytes.size() % sizeof(double) != 0) throw std::invalid_argument("a number array of odd length");
+  std::vector<double> out(bytes.size() / sizeof(double));
+  if (!out.empty()) std::memcpy(out.data(), bytes.data(), bytes.size());
+  return out;
+}
+Eigen::VectorXd ToVector(const Json& j) {
+  const std::vector<double> d = ToDoubles(j);
+  return Eigen::Map<const Eigen::VectorXd>(d.data(), static_cast<Eigen::Index>(d.size()));
+}
+Json Vec2(const Eigen::Vector2d& v) { return Json::array({v.x(), v.y()}); }
+Eigen::Vector2d ToVec2(const Json& j) { return {j.at(0).get<double>(), j.at(1).get<double>()}; }
+
+Json Sample(const TrajectorySample& s) {
+  return {{"t", s.time_s}, {"v", s.vehicle}, {"p", Vec2(s.position_m)}, {"h", s.heading_rad},
+          {"vel", Vec2(s.velocity_mps)}, {"cmd", Vec2(s.command_mps)}};
+}
+TrajectorySample ToSample(const Json& j) {
+  return {j.at("t").get<double>(), j.at("v").get<int>(), ToVec2(j.at("p")), j.at("h").get<double>(),
+          ToVec2(j.at("vel")), ToVec2(j.at("cmd"))};
+}
+
+Json Schedule(const std::vector<WeightChange>& schedule) {
+  Json out = Json::array();
+  for (const WeightChange& c : schedule) out.push_back({{"t", c.time_s}, {"w", Doubles(c.weights)}});
+  return out;
+}
+std::vector<WeightChange> ToSchedule(const Json& j) {
+  std::vector<WeightChange> out;
+  for (const Json& c : j) out.push_back({c.at("t").get<double>(), ToVector(c.at("w"))});
+  return out;
+}
+
+Json Report(const maps::CoverageReport& r) {
+  return {{"seq", r.seq}, {"stamp_s", r.stamp_s}, {"kernel_s", r.kernel_time_s}, {"sums", Doubles(r.sums)}};
+}
+maps::CoverageReport ToReport(const Json& j) {
+  return {j.at("seq").get<std::uint64_t>(), j.at("stamp_s").get<double>(), j.at("kernel_s").get<double>(),
+          ToVector(j.at("sums"))};
+}
+
+Json FleetJson(const FleetServer::State& f) {
+  Json responses = Json::array();
+  for (const EventResponse& r : f.responses) {
+    responses.push_back({{"t", r.time_s}, {"valve", r.valve}, {"w", r.new_weight}, {"turn", r.heading_change_rad}});
+  }
+  Json vehicles = Json::array();
+  for (const auto& [id, v] : f.vehicles) {
+    vehicles.push_back({{"id", id}, {"name", v.name}, {"alive", v.alive}, {"reported", v.reported},
+                        {"report", Report(v.report)}, {"p", Vec2(v.position_m)}});
+  }
+  return {{"raw", Doubles(f.raw_weights)}, {"schedule", Schedule(f.schedule)}, {"responses", responses},
+          {"next_event", f.next_event}, {"vehicles", vehicles}, {"t", f.time_s}};
+}
+FleetServer::State ToFleet(const Json& j) {
+  FleetServer::State f;
+  f.raw_weights = ToVector(j.at("raw"));
+  f.schedule = ToSchedule(j.at("schedule"));
+  for (const Json& r : j.at("responses")) {
+    EventResponse e;
+    e.time_s = r.at("t").get<double>();
+    e.valve = r.at("valve").get<std::string>();
+    e.new_weight = r.at("w").get<double>();
+    e.heading_change_rad = r.at("turn").is_number() ? r.at("turn").get<double>() : std::nan("");
+    f.responses.push_back(e);
+  }
+  f.next_event = j.at("next_event").get<std::size_t>();
+  for (const Json& v : j.at("vehicles")) {
+    FleetServer::Vehicle vehicle;
+    vehicle.name = v.at("name").get<std::string>();
+    vehicle.alive = v.at("alive").get<bool>();
+    vehicle.reported = v.at("reported").get<bool>();
+    vehicle.report = ToReport(v.at("report"));
+    vehicle.position_m = ToVec2(v.at("p"));
+    f.vehicles[v.at("id").get<int>()] = std::move(vehicle);
+  }
+  f.time_s = j.at("t").get<double>();
+  return f;
+}
+
+Json RosterJson(const Roster::State& r) {
+  Json members = Json::array();
+  for (const auto& [id, m] : r.members) {
+    const agents::StateReport& s = m.last;
+    members.push_back({{"id", id}, {"name", m.name}, {"index", m.index}, {"status", static_cast<int>(m.status)},
+                       {"joined_s", m.joined_s}, {"gone_s", m.gone_s}, {"has_state", m.has_state},
+                       {"recorded_cycle", m.recorded_cycle}, {"cycle", s.cycle}, {"t", s.time_s},
+                       {"p", Vec2(s.state.position_m)}, {"vel", Vec2(s.state.velocity_mps)},
+                       {"h", s.state.heading_rad}, {"cmd", Vec2(s.command_mps)}, {"target_cycle", s.target_cycle}});
+  }
+  return {{"members", members}, {"next_id", r.next_id}, {"lost", r.lost_count}};
+}
+Roster::State ToRoster(const Json& j) {
+  Roster::State r;
+  for (const Json& m : j.at("members")) {
+    Roster::Member member;
+    member.id = m.at("id").get<int>();
+    member.name = m.at("name").get<std::string>();
+    member.index = m.at("index").get<int>();
+    const int status = m.at("status").get<int>();
+    if (status < 0 || status > 2) throw std::invalid_argument("a vehicle status out of range");
+    member.status = static_cast<Roster::Status>(status);
+    member.joined_s = m.at("joined_s").get<double>();
+    member.gone_s = m.at("gone_s").get<double>();
+    member.has_state = m.at("has_state").get<bool>();
+    member.recorded_cycle = m.at("recorded_cycle").get<std::int64_t>();
+    agents::StateReport& s = member.last;
+    s.id = member.id;
+    s.name = member.name;
+    s.cycle = m.at("cycle").get<std::int64_t>();
+    s.time_s = m.at("t").get<double>();
+    s.state.position_m = ToVec2(m.at("p"));
+    s.state.velocity_mps = ToVec2(m.at("vel"));
+    s.state.heading_rad = m.at("h").get<double>();
+    s.command_mps = ToVec2(m.at("cmd"));
+    s.target_cycle = m.at("target_cycle").get<std::uint64_t>();
+    r.members[member.id] = std::move(member);
+  }
+  r.next_id = j.at("next_id").get<int>();
+  r.lost_count = j.at("lost").get<std::size_t>();
+  return r;
+}
+
+Json MetricsStateJson(const MetricsAccumulator::State& m) {
+  Json pending = Json::array();
+  for (const auto& [v, s] : m.pending) pending.push_back(Sample(s));
+  Json held = Json::array();
+  for (const auto& [v, h] : m.last_held) {
+    held.push_back({{"v", v}, {"t", h.time_s}, {"end", h.end_s}, {"p", Vec2(h.position_m)}});
+  }
+  Json spacings = Json::array();
+  for (const auto& [dt, count] : m.spacings) spacings.push_back({dt, count});
+  Json over_time = Json::array();
+  for (const MetricSample& s : m.metric_over_time) over_time.push_back({s.time_s, s.ergodic_metric});
+  return {{"pending", pending}, {"held", held}, {"spacings", spacings}, {"near", Doubles(m.time_near_s)},
+          {"outside", m.time_outside_s}, {"pinned", m.time_pinned_s}, {"sum_f", Doubles(m.sum_f)},
+          {"sum_dt", m.sum_dt}, {"over_time", over_time}, {"next_checkpoint", m.next_checkpoint},
+          {"schedule", Schedule(m.schedule)}, {"refused", m.refused}};
+}
+MetricsAccumulator::State ToMetrics(const Json& j) {
+  MetricsAccumulator::State m;
+  for (const Json& s : j.at("pending")) {
+    const TrajectorySample sample = ToSample(s);
+    m.pending[sample.vehicle] = sample;
+  }
+  for (const Json& h : j.at("held")) {
+    m.last_held[h.at("v").get<int>()] = {h.at("t").get<double>(), h.at("end").get<double>(), ToVec2(h.at("p"))};
+  }
+  for (const Json& s : j.at("spacings")) m.spacings[s.at(0).get<double>()] = s.at(1).get<std::size_t>();
+  m.time_near_s = ToDoubles(j.at("near"));
+  m.time_outside_s = j.at("outside").get<double>();
+  m.time_pinned_s = j.at("pinned").get<double>();
+  m.sum_f = ToVector(j.at("sum_f"));
+  m.sum_dt = j.at("sum_dt").get<double>();
+  for (const Json& s : j.at("over_time")) m.metric_over_time.push_back({s.at(0).get<double>(), s.at(1).get<double>()});
+  m.next_checkpoint = j.at("next_checkpoint").get<int>();
+  m.schedule = ToSchedule(j.at("schedule"));
+  m.refused = j.at("refused").get<std::size_t>();
+  return m;
+}
+
+}  // namespace
+
+std::vector<std::uint8_t> EncodeCheckpoint(const MissionCheckpoint& c) {
+  Json armed = Json::array();
+  for (const auto& a : c.armed) armed.push_back(Json::binary(std::vector<std::uint8_t>(a.begin(), a.end())));
+  Json visits = Json::array();
+  for (const auto& v : c.visit_times) visits.push_back(Doubles(v));
+  const Json j = {{"format", "sage-checkpoint"}, {"version", kFormatVersion}, {"scenario_hash", c.scenario_hash},
+                  {"profile", c.profile}, {"controller", c.controller}, {"cycle", c.cycle}, {"t", c.time_s},
+                  {"fleet", FleetJson(c.fleet)}, {"roster", RosterJson(c.roster)}, {"metrics", MetricsStateJson(c.metrics)},
+                  {"armed", armed}, {"visit_times", visits}, {"rejected", c.rejected_samples}};
+  return Json::to_cbor(j);
+}
+
+MissionCheckpoint DecodeCheckpoint(const std::vector<std::uint8_t>& bytes, const std::string& source) {
+  try {
+    const Json j = Json::from_cbor(bytes);
+    if (j.at("format").get<std::string>() != "sage-checkpoint" || j.at("version").get<int>() != kFormatVersion) {
+      throw std::invalid_argument("not a checkpoint of this version of sage");
+    }
+    MissionCheckpoint c;
+    c.scenario_hash = j.at("scenario_hash").get<std::uint64_t>();
+    c.profile = j.at("profile").get<std::string>();
+    c.controller = j.at("controller").get<std::string>();
+    c.cycle = j.at("cycle").get<std::int64_t>();
+    c.time_s = j.at("t").get<double>();
+    c.fleet = ToFleet(j.at("fleet"));
+    c.roster = ToRoster(j.at("roster"));
+    c.metrics = ToMetrics(j.at("metrics"));
+    for (const Json& a : j.at("armed")) {
+      const auto& b = a.get_binary();
+      c.armed.emplace_back(b.begin(), b.end());
+    }
+    for (const Json& v : j.at("visit_times")) c.visit_times.push_back(ToDoubles(v));
+    c.rejected_samples = j.at("rejected").get<std::size_t>();
+    return c;
+  } catch (const std::exception& e) {  // nlohmann's parse, type and out-of-range errors
+    throw maps::ScenarioError(fmt::format("{}: not a readable checkpoint: {}", source, e.what()));
+  }
+}
+
+void WriteCheckpoint(const std::string& dir, const MissionCheckpoint& checkpoint) {
+  const std::vector<std::uint8_t> bytes = EncodeCheckpoint(checkpoint);
+  detail::WriteAtomically((std::filesystem::path(dir) / kCheckpointFile).string(),
+                          std::string_view(reinterpret_cast<const char*>(bytes.data()), bytes.size()));
+}
+
+MissionCheckpoint ReadCheckpoint(const std::string& dir) {
+  const std::string path = (std::filesystem::path(dir) / kCheckpointFile).string();
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw maps::ScenarioError(path + ": no checkpoint there: the mission cannot be resumed from this directory");
+  const std::vector<std::uint8_t> bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  return DecodeCheckpoint(bytes, path);
+}
+
+}  // namespace sage::server

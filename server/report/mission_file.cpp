@@ -1,0 +1,92 @@
+#include "server/report/mission_file.h"
+
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+
+#include <nlohmann/json.hpp>
+
+#include "server/report/atomic_write.h"
+#include "server/report/checkpoint.h"
+
+namespace sage::server {
+namespace {
+
+namespace fs = std::filesystem;
+
+// The time of the last row of a CSV file (its first field), read from the file's end.
+double LastRowTime(const std::string& path) {
+  std::ifstream in(path, std::ios::binary | std::ios::ate);
+  if (!in) return -1.0;
+  const std::streamoff size = in.tellg();
+  const std::streamoff chunk = std::min<std::streamoff>(size, 64 * 1024);
+  in.seekg(size - chunk);
+  std::string tail(static_cast<std::size_t>(chunk), '\0');
+  in.read(tail.data(), chunk);
+  while (!tail.empty() && tail.back() == '\n') tail.pop_back();
+  const std::size_t start = tail.rfind('\n');
+  const std::string line = tail.substr(start == std::string::npos ? 0 : start + 1);
+  try {
+    return std::stod(line.substr(0, line.find(',')));
+  } catch (const std::exception&) {  // the header only, or a cut line
+    return -1.0;
+  }
+}
+
+}  // namespace
+
+void WriteMissionFile(const std::string& dir, const MissionFile& m) {
+  const nlohmann::ordered_json j = {{"domain_id", m.domain_id},   {"scenario", m.scenario_path},
+                                    {"run_dir", m.run_dir},        {"time_scale", m.time_scale},
+                                    {"controller", m.controller},  {"profile", m.profile},
+                                    {"launcher_pid", m.launcher_pid}, {"resumes", m.resumes}};
+  detail::WriteAtomically((fs::path(dir) / "mission.json").string(), j.dump(2) + "\n");
+}
+
+MissionFile ReadMissionFile(const std::string& dir) {
+  const fs::path file = fs::path(dir) / "mission.json";
+  std::ifstream in(file);
+  if (!in) {
+    throw maps::ScenarioError(file.string() + ": cannot read: no mission there (start one with sage launch, or give "
+                              "--mission RUN_DIR)");
+  }
+  try {
+    const nlohmann::json j = nlohmann::json::parse(in);
+    MissionFile m;
+    m.domain_id = j.at("domain_id").get<int>();
+    m.scenario_path = j.at("scenario").get<std::string>();
+    m.run_dir = j.at("run_dir").get<std::string>();
+    m.time_scale = j.value("time_scale", 1.0);
+    m.controller = j.value("controller", std::string("ergodic"));
+    m.profile = j.value("profile", std::string());
+    m.launcher_pid = j.value("launcher_pid", -1);
+    m.resumes = j.value("resumes", 0);
+    return m;
+  } catch (const nlohmann::json::exception& e) {
+    throw maps::ScenarioError(file.string() + ": not a mission file: " + e.what());
+  }
+}
+
+void WriteScenarioFile(const std::string& dir, const maps::Scenario& scenario) {
+  detail::WriteAtomically((fs::path(dir) / "scenario.yaml").string(), maps::EmitScenario(scenario));
+}
+
+RecordSummary ReadRecordSummary(const std::string& dir) {
+  RecordSummary s;
+  const fs::path trajectory = fs::path(dir) / "trajectory.csv";
+  const fs::path metrics = fs::path(dir) / "metrics.json";
+  s.exists = fs::exists(trajectory) || fs::exists(metrics);
+  s.recorded_until_s = LastRowTime(trajectory.string());
+  s.has_checkpoint = fs::exists(fs::path(dir) / kCheckpointFile);
+  std::ifstream in(metrics);
+  if (in) {
+    const nlohmann::json j = nlohmann::json::parse(in, nullptr, /*allow_exceptions=*/false);
+    if (j.is_object()) {
+      s.complete = j.value("complete", true);  // a metrics.json without the key is an older, whole run
+      if (!s.complete && j.contains("duration_s") && j["duration_s"].is_number()) s.checkpoint_s = j["duration_s"].get<double>();
+    }
+  }
+  return s;
+}
+
+}  // namespace sage::server

@@ -1,0 +1,41 @@
+#pragma once
+// mission.json: what a running (or crashed) launch's run directory says about its mission, so
+// that operators' commands find it (sage risk set, vehicle add, stop) and `sage launch
+// --resume` can bring it back: its DDS domain, scenario, clock pace, controller and profile.
+#include <string>
+
+#include "maps/scenario/scenario.h"
+
+namespace sage::server {
+
+struct MissionFile {
+  int domain_id = 0;
+  std::string scenario_path;  ///< the run's effective scenario.yaml
+  std::string run_dir;        ///< absolute
+  double time_scale = 1.0;
+  std::string controller = "ergodic";
+  std::string profile;
+  int launcher_pid = -1;
+  int resumes = 0;            ///< times the mission was resumed
+};
+
+/// Writes DIR/mission.json atomically. Throws std::runtime_error naming the file.
+void WriteMissionFile(const std::string& dir, const MissionFile& mission);
+/// Reads DIR/mission.json. Throws maps::ScenarioError with one line if it is missing or wrong.
+MissionFile ReadMissionFile(const std::string& dir);
+
+/// Writes DIR/scenario.yaml (the effective scenario every process of the mission reads)
+/// atomically. Throws std::runtime_error naming the file.
+void WriteScenarioFile(const std::string& dir, const maps::Scenario& scenario);
+
+/// How far a run directory's record goes.
+struct RecordSummary {
+  bool exists = false;              ///< a mission was recorded here (trajectory.csv or metrics.json)
+  bool complete = false;            ///< metrics.json says "complete": true
+  double recorded_until_s = -1.0;   ///< the last trajectory row's time
+  double checkpoint_s = -1.0;       ///< the partial metrics' (and checkpoint's) time; -1 if none
+  bool has_checkpoint = false;
+};
+RecordSummary ReadRecordSummary(const std::string& dir);
+
+}  // namespace sage::server

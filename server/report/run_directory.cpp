@@ -1,0 +1,312 @@
+#include "server/report/run_directory.h"
+
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <charconv>
+#include <cmath>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <stdexcept>
+
+#include <fmt/format.h>
+
+#include "server/report/atomic_write.h"
+#include "server/report/checkpoint.h"
+
+namespace sage::server {
+namespace {
+
+namespace fs = std::filesystem;
+
+constexpr const char* kTrajectoryHeader = "t,vehicle,x,y,heading,vx,vy,cmd_x,cmd_y\n";
+constexpr const char* kFleetEventsHeader = "t,event,vehicle_id,name,detail\n";
+constexpr const char* kRiskEventsHeader = "t,valve,weight,share,source\n";
+// The final set; metrics.json last, since "complete": true says the others are in place.
+constexpr const char* kFinalFiles[] = {"plot.svg", "seabed.bt", "scenario.yaml", "metrics.json"};
+
+// A CSV field for free text: quoted, inner quotes doubled, control characters as spaces, so a
+// name or reason can never start a new line or a new column.
+std::string Quoted(std::string_view text) {
+  std::string out = "\"";
+  for (const char c : text) {
+    if (c == '"') out += "\"\"";
+    else out += (static_cast<unsigned char>(c) < 0x20 || c == 0x7f) ? ' ' : c;
+  }
+  return out + "\"";
+}
+
+[[noreturn]] void Fail(const std::string& path, int error) {
+  throw std::runtime_error(fmt::format("{}: cannot write: {}", path, std::strerror(error)));
+}
+
+// Cuts a file of lines back to its last complete line (a crash or a full disk can leave half a
+// line at the end).
+void CutToLastLine(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) return;
+  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const std::size_t end = text.rfind('\n');
+  const std::size_t keep = end == std::string::npos ? 0 : end + 1;
+  if (keep < text.size()) fs::resize_file(path, keep);
+}
+
+// Fields of one of our own CSV lines: plain fields split at commas, a quoted field taken whole.
+std::vector<std::string> SplitLine(std::string_view line) {
+  std::vector<std::string> fields;
+  std::size_t i = 0;
+  while (i <= line.size()) {
+    std::string field;
+    if (i < line.size() && line[i] == '"') {
+      ++i;
+      while (i < line.size()) {
+        if (line[i] == '"' && i + 1 < line.size() && line[i + 1] == '"') field += '"', i += 2;
+        else if (line[i] == '"') { ++i; break; }
+        else field += line[i++];
+      }
+      while (i < line.size() && line[i] != ',') ++i;
+    } else {
+      const std::size_t comma = std::min(line.find(',', i), line.size());
+      field = std::string(line.substr(i, comma - i));
+      i = comma;
+    }
+    fields.push_back(std::move(field));
+    if (i >= line.size()) break;
+    ++i;  // the comma
+  }
+  return fields;
+}
+
+double NumberField(const std::string& text, const std::string& path, int line) {
+  double value = 0.0;
+  const auto [ptr, ec] = std::from_chars(text.data(), text.data() + text.size(), value);
+  if (ec != std::errc() || ptr != text.data() + text.size()) {
+    throw maps::ScenarioError(fmt::format("{}:{}: '{}' is not a number", path, line, text));
+  }
+  return value;
+}
+
+// The lines of a file after its header, numbered from 2.
+std::vector<std::pair<int, std::string>> Lines(const std::string& path) {
+  std::vector<std::pair<int, std::string>> lines;
+  std::ifstream in(path);
+  std::string text;
+  int number = 0;
+  while (std::getline(in, text)) {
+    if (++number == 1 || text.empty()) continue;
+    lines.emplace_back(number, text);
+  }
+  return lines;
+}
+
+}  // namespace
+
+RunDirectory::RunDirectory(std::string dir, const maps::Scenario& scenario, RunDirectoryOptions options)
+    : dir_(std::move(dir)), scenario_(scenario), options_(std::move(options)) {
+  PrepareRunDirectory(dir_);
+  if (!options_.resume) {
+    // A new mission: nothing of an earlier one in this directory may pass for its results.
+    for (const char* name : {"metrics.json", "plot.svg", "seabed.bt", kCheckpointFile}) {
+      std::error_code ignored;
+      fs::remove(fs::path(dir_) / name, ignored);
+    }
+  }
+  try {
+    Open(trajectory_, "trajectory.csv", kTrajectoryHeader);
+    Open(fleet_events_, "fleet_events.csv", kFleetEventsHeader);
+    Open(risk_events_, "risk_events.csv", kRiskEventsHeader);
+    if (!options_.resume) detail::WriteAtomically((fs::path(dir_) / "scenario.yaml").string(), maps::EmitScenario(scenario_));
+  } catch (const std::runtime_error& e) {
+    throw maps::ScenarioError(fmt::format("--out = {}: cannot write there: {}", dir_, e.what()));
+  }
+  last_flush_ = last_checkpoint_ = std::chrono::steady_clock::now();
+}
+
+RunDirectory::~RunDirectory() {
+  if (checkpoint_write_.valid()) checkpoint_write_.wait();
+  try {
+    Flush();
+  } catch (const std::exception&) {  // a destructor cannot report; Finish and Tick do
+  }
+  for (Appender* f : {&trajectory_, &fleet_events_, &risk_events_})
+    if (f->fd >= 0) ::close(f->fd);
+}
+
+void RunDirectory::Open(Appender& file, const char* name, const char* header) {
+  file.path = (fs::path(dir_) / name).string();
+  const bool append = options_.resume && fs::exists(file.path);
+  if (append) CutToLastLine(file.path);
+  file.fd = ::open(file.path.c_str(), O_WRONLY | O_CREAT | O_CLOEXEC | (append ? O_APPEND : O_TRUNC), 0644);
+  if (file.fd < 0) Fail(file.path, errno);
+  if (!append) {
+    file.buffer = header;
+    FlushOne(file);
+  }
+}
+
+void RunDirectory::OnSample(const TrajectorySample& s, const std::string& name) {
+  // "{}" prints the shortest text that parses back to the same double.
+  fmt::format_to(std::back_inserter(trajectory_.buffer), "{},{},{},{},{},{},{},{},{}\n", s.time_s, name,
+                 s.position_m.x(), s.position_m.y(), s.heading_rad, s.velocity_mps.x(), s.velocity_mps.y(),
+                 s.command_mps.x(), s.command_mps.y());
+  pending_until_s_ = std::max(pending_until_s_, s.time_s);
+  KeepForPlot(s, name);
+}
+
+void RunDirectory::OnFleetEvent(const FleetEventRecord& e) {
+  // Names are made safe for the record when a vehicle joins (no separators, no control
+  // characters); the detail is free text.
+  fmt::format_to(std::back_inserter(fleet_events_.buffer), "{},{},{},{},{}\n", e.time_s, e.what, e.vehicle_id, e.name,
+                 e.detail.empty() ? std::string() : Quoted(e.detail));
+}
+
+void RunDirectory::OnRiskEvent(const RiskEventRecord& e) {
+  fmt::format_to(std::back_inserter(risk_events_.buffer), "{},{},{},{},{}\n", e.time_s, e.valve, e.raw_weight,
+                 e.new_share, Quoted(e.source));
+}
+
+// Samples every plot_stride_-th cycle of each vehicle; the stride doubles whenever the copy
+// outgrows its budget, so a long or large mission still plots from evenly thinned tracks.
+void RunDirectory::KeepForPlot(const TrajectorySample& s, const std::string& name) {
+  const std::int64_t cycle = std::llround(s.time_s * scenario_.control_rate_hz);
+  if (cycle % plot_stride_ != 0) return;
+  if (static_cast<std::size_t>(s.vehicle) >= plot_.vehicle_names.size()) plot_.vehicle_names.resize(s.vehicle + 1);
+  plot_.vehicle_names[s.vehicle] = name;
+  plot_.samples.push_back(s);
+  if (plot_.samples.size() <= options_.plot_points) return;
+  plot_stride_ *= 2;
+  std::erase_if(plot_.samples, [&](const TrajectorySample& kept) {
+    return std::llround(kept.time_s * scenario_.control_rate_hz) % plot_stride_ != 0;
+  });
+}
+
+void RunDirectory::FlushOne(Appender& file) {
+  // One write() per flush: a process killed in between leaves whole cycles behind, not half.
+  std::size_t done = 0;
+  while (done < file.buffer.size()) {
+    const ssize_t n = ::write(file.fd, file.buffer.data() + done, file.buffer.size() - done);
+    if (n < 0 && errno == EINTR) continue;
+    if (n < 0) Fail(file.path, errno);
+    done += static_cast<std::size_t>(n);
+  }
+  file.buffer.clear();
+}
+
+void RunDirectory::Flush() {
+  for (Appender* f : {&trajectory_, &fleet_events_, &risk_events_}) FlushOne(*f);
+  flushed_until_s_ = pending_until_s_;
+  last_flush_ = std::chrono::steady_clock::now();
+}
+
+RunInfo RunDirectory::Info(const MissionCore& core, bool complete, bool stopped_early) const {
+  RunInfo info;
+  info.complete = complete;
+  info.planned_duration_s = scenario_.duration_s;
+  info.stopped_early = stopped_early;
+  info.rejected_samples = core.rejected_samples() + core.metrics_accumulator().refused_samples();
+  info.transport = options_.transport;
+  info.resumes = options_.resumes;
+  return info;
+}
+
+void RunDirectory::Tick(const MissionCore& core) {
+  const auto now = std::chrono::steady_clock::now();
+  if (std::chrono::duration<double>(now - last_checkpoint_).count() >= options_.checkpoint_period_s) {
+    Checkpoint(core);
+  } else if (std::chrono::duration<double>(now - last_flush_).count() >= options_.flush_period_s) {
+    Flush();
+  }
+}
+
+void RunDirectory::Checkpoint(const MissionCore& core) {
+  Flush();
+  if (checkpoint_write_.valid()) {
+    // The last one is still being written (a large fleet on a slow disk): try again next cycle.
+    if (checkpoint_write_.wait_for(std::chrono::seconds(0)) != std::future_status::ready) return;
+    checkpoint_write_.get();  // rethrows its error
+  }
+  last_checkpoint_ = std::chrono::steady_clock::now();
+  checkpoint_time_s_ = core.time_s();
+  // Copies taken now, on the mission's thread; encoding and writing happen off it.
+  MissionCheckpoint checkpoint = core.Checkpoint();
+  const RunInfo partial = Info(core, false, false);
+  std::string metrics = MetricsJson(core.Metrics(core.time_s()), &partial);
+  checkpoint_write_ = std::async(std::launch::async, [dir = dir_, checkpoint = std::move(checkpoint),
+                                                      metrics = std::move(metrics)] {
+    WriteCheckpoint(dir, checkpoint);
+    detail::WriteAtomically((fs::path(dir) / "metrics.json").string(), metrics);
+  });
+}
+
+void RunDirectory::Finish(const MissionCore& core, const maps::World& world, double end_s, bool stopped_early) {
+  if (checkpoint_write_.valid()) checkpoint_write_.get();
+  Flush();
+  const maps::Scenario ran = stopped_early ? maps::WithDuration(scenario_, end_s) : scenario_;
+  const RunInfo info = Info(core, true, stopped_early);
+  const std::string title =
+      fmt::format("{}: {} on '{}', {} vehicles, {:.0f} s", scenario_.name, ToString(core.controller()),
+                  core.fleet().profile().name, core.roster().members().size(), end_s);
+  const std::string contents[] = {PlotSvg(scenario_, core.fleet().schedule().back().weights, plot_, title),
+                                  world.seabed().BinaryBytes(), maps::EmitScenario(ran),
+                                  MetricsJson(core.Metrics(end_s), &info)};
+  std::vector<std::string> paths;
+  for (const char* name : kFinalFiles) paths.push_back((fs::path(dir_) / name).string());
+  try {
+    for (std::size_t i = 0; i < paths.size(); ++i) detail::WriteTemporary(paths[i], contents[i]);
+  } catch (...) {
+    for (const std::string& p : paths) std::remove((p + ".tmp").c_str());
+    throw;
+  }
+  for (const std::string& p : paths) detail::CommitTemporary(p);
+  std::error_code ignored;
+  fs::remove(fs::path(dir_) / kCheckpointFile, ignored);  // complete: nothing to resume
+}
+
+RecordTail ReadRecordTail(const std::string& dir, double after_s) {
+  RecordTail tail;
+  const std::string trajectory = (fs::path(dir) / "trajectory.csv").string();
+  CutToLastLine(trajectory);
+  for (const auto& [line, text] : Lines(trajectory)) {
+    // Only the rows after the checkpoint are parsed; the time is the first field.
+    const std::size_t comma = text.find(',');
+    if (comma == std::string::npos) throw maps::ScenarioError(fmt::format("{}:{}: not a trajectory row", trajectory, line));
+    if (NumberField(text.substr(0, comma), trajectory, line) <= after_s) continue;
+    const std::vector<std::string> f = SplitLine(text);
+    if (f.size() != 9) throw maps::ScenarioError(fmt::format("{}:{}: {} fields, need 9", trajectory, line, f.size()));
+    std::vector<double> v;
+    for (std::size_t i : {0, 2, 3, 4, 5, 6, 7, 8}) v.push_back(NumberField(f[i], trajectory, line));
+    TrajectorySample s;
+    s.time_s = v[0];
+    s.position_m = {v[1], v[2]};
+    s.heading_rad = v[3];
+    s.velocity_mps = {v[4], v[5]};
+    s.command_mps = {v[6], v[7]};
+    tail.samples.emplace_back(s, f[1]);
+  }
+  const std::string fleet = (fs::path(dir) / "fleet_events.csv").string();
+  CutToLastLine(fleet);
+  for (const auto& [line, text] : Lines(fleet)) {
+    const std::vector<std::string> f = SplitLine(text);
+    if (f.size() != 5) throw maps::ScenarioError(fmt::format("{}:{}: {} fields, need 5", fleet, line, f.size()));
+    const double t = NumberField(f[0], fleet, line);
+    if (t <= after_s) continue;
+    tail.fleet_events.push_back({t, f[1], static_cast<int>(NumberField(f[2], fleet, line)), f[3], f[4]});
+  }
+  const std::string risk = (fs::path(dir) / "risk_events.csv").string();
+  CutToLastLine(risk);
+  for (const auto& [line, text] : Lines(risk)) {
+    const std::vector<std::string> f = SplitLine(text);
+    if (f.size() != 5) throw maps::ScenarioError(fmt::format("{}:{}: {} fields, need 5", risk, line, f.size()));
+    const double t = NumberField(f[0], risk, line);
+    if (t <= after_s) continue;
+    tail.risk_events.push_back({t, f[1], NumberField(f[2], risk, line), NumberField(f[3], risk, line), f[4]});
+  }
+  return tail;
+}
+
+}  // namespace sage::server

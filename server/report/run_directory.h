@@ -1,0 +1,98 @@
+#pragma once
+// A mission's run directory, written while the mission runs so that nothing is lost when a
+// process dies: trajectory.csv, fleet_events.csv and risk_events.csv are appended as things
+// happen and flushed at least every second (tail -f works); metrics.json is rewritten
+// atomically every few seconds with "complete": false, beside checkpoint.bin, the state a
+// resumed server starts from. At the end the final set (plot.svg, seabed.bt, scenario.yaml,
+// metrics.json with "complete": true) is written as temporaries and renamed into place with
+// metrics.json last, so a reader sees either the whole final set or the partial one.
+#include <chrono>
+#include <cstdint>
+#include <future>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "maps/scenario/scenario.h"
+#include "maps/world.h"
+#include "server/mission_core.h"
+#include "server/report/report.h"
+#include "server/trajectory.h"
+
+namespace sage::server {
+
+struct RunDirectoryOptions {
+  double flush_period_s = 1.0;       ///< wall seconds between flushes of the appended files
+  double checkpoint_period_s = 2.0;  ///< wall seconds between checkpoints and partial metrics
+  std::size_t plot_points = 200000;  ///< trajectory samples kept in memory for the final plot
+  std::string transport = "in-process";
+  bool resume = false;               ///< append to a crashed mission's record instead of starting one
+  int resumes = 0;                   ///< how many times this mission was resumed before
+};
+
+class RunDirectory final : public MissionRecorder {
+ public:
+  /// Creates `dir` with the record's files (a new mission), or opens them for appending, cut
+  /// back to their last complete line (resume). Writes the effective scenario.yaml at once.
+  /// Throws maps::ScenarioError ("--out = DIR: cannot write there: ...") before anything runs.
+  RunDirectory(std::string dir, const maps::Scenario& scenario, RunDirectoryOptions options = {});
+  ~RunDirectory() override;
+  RunDirectory(const RunDirectory&) = delete;
+  RunDirectory& operator=(const RunDirectory&) = delete;
+
+  void OnSample(const TrajectorySample& sample, const std::string& vehicle_name) override;
+  void OnFleetEvent(const FleetEventRecord& event) override;
+  void OnRiskEvent(const RiskEventRecord& event) override;
+
+  /// Once a cycle: flushes the appended files when the flush period is due, and writes the
+  /// checkpoint and partial metrics when the checkpoint period is.
+  void Tick(const MissionCore& core);
+  /// Flushes, then writes the checkpoint and partial metrics now.
+  void Checkpoint(const MissionCore& core);
+  /// The mission ended at end_s (the planned end, or earlier if stopped): flushes and writes the
+  /// final set. Throws std::runtime_error naming the file that could not be written (the partial
+  /// set stays as it was).
+  void Finish(const MissionCore& core, const maps::World& world, double end_s, bool stopped_early);
+
+  const std::string& dir() const { return dir_; }
+  /// Mission time of the last sample flushed to trajectory.csv (-1 before any).
+  double flushed_until_s() const { return flushed_until_s_; }
+  /// Mission time of the last checkpoint written (-1 before any).
+  double checkpoint_time_s() const { return checkpoint_time_s_; }
+
+ private:
+  struct Appender {
+    std::string path;
+    int fd = -1;
+    std::string buffer;
+  };
+  void Open(Appender& file, const char* name, const char* header);
+  void Flush();
+  void FlushOne(Appender& file);
+  RunInfo Info(const MissionCore& core, bool complete, bool stopped_early) const;
+  void KeepForPlot(const TrajectorySample& sample, const std::string& name);
+
+  std::string dir_;
+  const maps::Scenario& scenario_;
+  RunDirectoryOptions options_;
+  Appender trajectory_, fleet_events_, risk_events_;
+  std::chrono::steady_clock::time_point last_flush_, last_checkpoint_;
+  double pending_until_s_ = -1.0, flushed_until_s_ = -1.0, checkpoint_time_s_ = -1.0;
+  std::future<void> checkpoint_write_;  // the checkpoint is encoded and written off the cycle
+  Trajectory plot_;                     // a thinned copy for plot.svg
+  int plot_stride_ = 1;
+  std::map<int, std::int64_t> plot_cycles_;
+};
+
+/// What a crashed mission's record holds after its checkpoint (time_s): the samples, fleet
+/// events and operators' risk events written later, up to the moment the server died.
+struct RecordTail {
+  std::vector<std::pair<TrajectorySample, std::string>> samples;  ///< with the vehicle's name (index unset)
+  std::vector<FleetEventRecord> fleet_events;
+  std::vector<RiskEventRecord> risk_events;
+};
+/// Reads DIR's record after mission time `after_s`. Throws maps::ScenarioError naming the file
+/// and line of anything unreadable.
+RecordTail ReadRecordTail(const std::string& dir, double after_s);
+
+}  // namespace sage::server

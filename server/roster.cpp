@@ -1,0 +1,83 @@
+#include "server/roster.h"
+
+#include <algorithm>
+#include <stdexcept>
+
+#include <fmt/format.h>
+
+namespace sage::server {
+
+const FleetEventRecord* Roster::Join(int id, const std::string& name, double time_s) {
+  auto [it, first] = members_.try_emplace(id);
+  Member& m = it->second;
+  if (!first && m.status == Status::kAlive) return nullptr;
+  const bool rejoined = !first;
+  if (first) {
+    m.id = id;
+    m.index = static_cast<int>(members_.size()) - 1;
+    ReserveUpTo(id + 1);
+  }
+  if (rejoined && m.status == Status::kLost && lost_count_ > 0) --lost_count_;
+  m.name = name;
+  m.status = Status::kAlive;
+  m.joined_s = time_s;
+  m.target_sent = false;
+  ++alive_count_;
+  event_ = {time_s, rejoined ? "rejoined" : "joined", id, name, ""};
+  return &event_;
+}
+
+const FleetEventRecord* Roster::Leave(int id, bool lost, double time_s) {
+  Member* m = Find(id);
+  if (m == nullptr || m->status != Status::kAlive) return nullptr;
+  m->status = lost ? Status::kLost : Status::kLeft;
+  m->gone_s = time_s;
+  --alive_count_;
+  if (lost) ++lost_count_;
+  const std::string detail =
+      m->has_state ? fmt::format("last heard at t = {:.1f} s", m->last.time_s) : std::string("never heard");
+  event_ = {time_s, lost ? "lost" : "left", id, m->name, detail};
+  return &event_;
+}
+
+Roster::Member* Roster::Find(int id) {
+  auto it = members_.find(id);
+  return it == members_.end() ? nullptr : &it->second;
+}
+
+const Roster::Member* Roster::Find(int id) const {
+  auto it = members_.find(id);
+  return it == members_.end() ? nullptr : &it->second;
+}
+
+std::vector<int> Roster::alive() const {
+  std::vector<int> ids;
+  ids.reserve(alive_count_);
+  for (const auto& [id, m] : members_)
+    if (m.status == Status::kAlive) ids.push_back(id);
+  return ids;
+}
+
+int Roster::ReserveIds(int count) {
+  if (count < 1) throw std::invalid_argument("Roster::ReserveIds: count must be >= 1");
+  const int first = next_id_;
+  next_id_ += count;
+  return first;
+}
+
+void Roster::ReserveUpTo(int id) { next_id_ = std::max(next_id_, id); }
+
+const FleetEventRecord* Roster::Note(double time_s, std::string what, std::string detail) {
+  event_ = {time_s, std::move(what), -1, "", std::move(detail)};
+  return &event_;
+}
+
+void Roster::Restore(State state) {
+  members_ = std::move(state.members);
+  next_id_ = state.next_id;
+  lost_count_ = state.lost_count;
+  alive_count_ = 0;
+  for (const auto& [id, m] : members_) alive_count_ += m.status == Status::kAlive ? 1 : 0;
+}
+
+}  // namespace sage::server

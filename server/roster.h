@@ -1,0 +1,85 @@
+#pragma once
+// Who is in a mission: every vehicle the server has heard of, when it joined, whether it is
+// alive, lost or has left, its index in the run's record (the trajectory's vehicle column, in
+// order of joining), and the ids the server issues to vehicles added at runtime. Every change
+// is an event for the record (fleet_events.csv).
+#include <cstdint>
+#include <map>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "agents/fleet_messages.h"
+
+namespace sage::server {
+
+/// A change of the fleet, as fleet_events.csv records it.
+struct FleetEventRecord {
+  double time_s = 0.0;
+  std::string what;     ///< joined, rejoined, lost, left, outage, resumed, empty
+  int vehicle_id = -1;  ///< -1 for events of the whole mission (outage, empty)
+  std::string name;
+  std::string detail;
+};
+
+class Roster {
+ public:
+  enum class Status { kAlive, kLost, kLeft };
+  struct Member {
+    int id = 0;
+    std::string name;
+    int index = 0;                    ///< the record's vehicle index, in order of first joining
+    Status status = Status::kAlive;
+    double joined_s = 0.0;            ///< latest (re)join
+    double gone_s = 0.0;              ///< when it was lost or left (if it is)
+    bool has_state = false;
+    agents::StateReport last;         ///< its latest state (position, command, target cycle)
+    std::int64_t recorded_cycle = -1; ///< the latest of its cycles in the record
+    bool target_sent = false;         ///< its assignment went out since it (re)joined
+  };
+
+  /// first_free_id: the first id the server may issue (after the scenario's vehicles and joins).
+  explicit Roster(int first_free_id = 0) : next_id_(first_free_id) {}
+
+  /// Vehicle `id` was heard of (its first state, or again after it was gone). Returns the event
+  /// to record, or nullptr if it was already alive.
+  const FleetEventRecord* Join(int id, const std::string& name, double time_s);
+  /// It was lost (its liveliness lapsed) or left cleanly. Returns the event to record, or
+  /// nullptr if it was not alive.
+  const FleetEventRecord* Leave(int id, bool lost, double time_s);
+
+  Member* Find(int id);
+  const Member* Find(int id) const;
+  std::vector<int> alive() const;  ///< ascending ids
+  std::size_t alive_count() const { return alive_count_; }
+  std::size_t lost_count() const { return lost_count_; }
+  const std::map<int, Member>& members() const { return members_; }
+
+  /// Reserves `count` fresh ids for vehicles added at runtime; returns the first.
+  int ReserveIds(int count);
+  int next_id() const { return next_id_; }
+  /// The id the server next issues is at least `id` (ids a host chose itself stay unique).
+  void ReserveUpTo(int id);
+
+  /// A whole-mission event (outage, resumed, empty): the roster keeps the latest for the record.
+  const FleetEventRecord* Note(double time_s, std::string what, std::string detail);
+
+  /// Plain data of a checkpoint.
+  struct State {
+    std::map<int, Member> members;
+    int next_id = 0;
+    std::size_t lost_count = 0;
+  };
+  State Checkpoint() const { return {members_, next_id_, lost_count_}; }
+  void Restore(State state);
+
+ private:
+  std::map<int, Member> members_;
+  int next_id_ = 0;
+  std::size_t alive_count_ = 0;
+  std::size_t lost_count_ = 0;
+  FleetEventRecord event_;
+};
+
+}  // namespace sage::server
