@@ -166,7 +166,7 @@ int RunAgentNode(const maps::Scenario& scenario, const AgentNodeOptions& options
 
     const AgentMission::CycleOutput out = mission.Step(k);
     const long long stamp = proto::NowRealtimeNs();
-    for (const StateReport& s : out.states) states.Write(wire::ToWire(s, stamp));
+    for (const StateReport& s : out.states) states.Write(wire::ToWire(s, clock.instance, stamp));
     for (const CoverageMessage& c : out.coverage) coverage.Write(wire::ToWire(c, stamp));
   }
   for (const VehicleId id : mission.ids()) leave(id);

@@ -51,10 +51,11 @@ Assignment FromWire(const proto::ErgodicTarget& m) {
   return a;
 }
 
-proto::VehicleState ToWire(const StateReport& s, long long stamp_ns) {
+proto::VehicleState ToWire(const StateReport& s, std::uint64_t server_instance, long long stamp_ns) {
   proto::VehicleState m{};
   m.vehicle_id = static_cast<std::uint32_t>(s.id);
   m.stamp_ns = stamp_ns;
+  m.server_instance = server_instance;
   m.cycle = s.cycle;
   m.name = proto::BorrowString(s.name);
   m.x_m = s.state.position_m.x();

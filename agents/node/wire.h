@@ -16,7 +16,8 @@ FleetSnapshot FromWire(const proto::FleetCoverage& m);
 Assignment FromWire(const proto::ErgodicTarget& m);
 
 /// plain -> DDS (borrowing). stamp_ns: when it is written, on the mission clock.
-proto::VehicleState ToWire(const StateReport& s, long long stamp_ns);
+/// server_instance: the server whose clock the state's cycle is on.
+proto::VehicleState ToWire(const StateReport& s, std::uint64_t server_instance, long long stamp_ns);
 proto::VehicleCoverage ToWire(const CoverageMessage& c, long long stamp_ns);
 /// `ids` and `seqs` are scratch the message borrows (the snapshot's accounted reports).
 proto::FleetCoverage ToWire(const FleetSnapshot& s, std::uint64_t server_instance, std::uint32_t basis_order,

@@ -331,7 +331,7 @@ int Launch(const LaunchCommand& c) {
         }
       }
       // On a terminal the line is redrawn with every status; in a log, once per tenth.
-      if (tty || t - last_print >= s.duration_s / 10.0 - 1e-9 || (s.finished && t > last_print)) {
+      if (t > last_print && (tty || t - last_print >= s.duration_s / 10.0 - 1e-9 || s.finished)) {
         last_print = t;
         terminal.Progress(fmt::format("t = {:5.0f} / {:.0f} s  vehicles {} (lost {})  ergodic metric {:.2e}  server cycle "
                                       "{:.2f} ms",

@@ -4,6 +4,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <iostream>
 #include <map>
 #include <random>
@@ -88,6 +89,9 @@ int RunServerNode(const maps::Scenario& scenario, const ServerNodeOptions& optio
   record_options.resume = options.resume;
   record_options.resumes = options.resumes;
   record_options.checkpoint_period_s = options.checkpoint_period_s;
+  // At least every mission second too, so a record cut by a crash ends within one mission
+  // second of it however fast the mission runs.
+  record_options.flush_period_s = std::min(1.0, 1.0 / options.time_scale);
   MissionCheckpoint checkpoint;
   if (options.resume) checkpoint = ReadCheckpoint(options.out_dir);  // before the record is touched
   RunDirectory run(options.out_dir, scenario, record_options);
@@ -98,6 +102,16 @@ int RunServerNode(const maps::Scenario& scenario, const ServerNodeOptions& optio
     core.Restore(checkpoint);
     const RecordTail tail = ReadRecordTail(options.out_dir, checkpoint.time_s);
     first_cycle = core.Replay(tail.samples, tail.fleet_events, tail.risk_events) + 1;
+    // The outage in the record: how long the mission had no server (since the record's last write).
+    std::error_code error;
+    const auto written = std::filesystem::last_write_time(std::filesystem::path(options.out_dir) / "trajectory.csv", error);
+    if (!error) {
+      const double down_s =
+          std::chrono::duration<double>(std::chrono::file_clock::now() - written).count();
+      core.Note("outage", fmt::format("no server for {:.1f} s of wall time after the record's last write; nothing was "
+                                      "recorded meanwhile",
+                                      down_s));
+    }
     core.Note("resumed", fmt::format("from the checkpoint at t = {:.1f} s and the record to t = {:.1f} s ({} samples "
                                      "replayed); the mission's clock goes on from there",
                                      checkpoint.time_s, core.time_s(), tail.samples.size()));
@@ -188,6 +202,12 @@ int RunServerNode(const maps::Scenario& scenario, const ServerNodeOptions& optio
   // vehicle's next state (a stopped server is not a fleet loss).
   std::map<int, SteadyClock::time_point> suspect;
   SteadyClock::time_point stalled_until = SteadyClock::now();
+  // A resumed mission's vehicles must be heard from again: one whose host is gone (and was not
+  // restarted) is lost once its hosts had time to start and discover this server.
+  if (options.resume) {
+    const auto deadline = SteadyClock::now() + std::chrono::seconds(10);
+    for (const int id : core.roster().alive()) suspect.emplace(id, deadline);
+  }
   bool empty_warned = false;
   std::int64_t cycle = first_cycle;
   std::vector<std::uint32_t> ids_scratch;
@@ -213,8 +233,11 @@ int RunServerNode(const maps::Scenario& scenario, const ServerNodeOptions& optio
       ++messages_in;
       const int id = static_cast<int>(m.vehicle_id);
       if (info.valid_data) {
+        suspect.erase(id);  // heard: alive
+        // A state on another server's clock (sent before its host heard of this one) is not a
+        // sample of this mission's time line; the host follows this server within a cycle.
+        if (m.server_instance != instance) return;
         core.OnState(agents::wire::FromWire(m, rate));
-        suspect.erase(id);
         // A dispose or a lapsed lease that arrives while the vehicle's last state is still
         // unread comes as that (valid) sample with a not-alive instance state.
         if (info.instance_state == DDS_ALIVE_INSTANCE_STATE) return;

@@ -75,7 +75,7 @@ TEST(DdsEntities, KeyedVehicleStateRoundTripsFiftyInstances) {
   Writer<VehicleState> writer(participant, VehicleStateWriterQos());
   ASSERT_TRUE(writer.WaitForReaders(1, 2s));
   for (uint32_t id = 0; id < 50; ++id) {
-    writer.Write(VehicleState{id, 1000 + id, 0, const_cast<char*>("rov"), 1.5 * id, -2.0 * id, 0.01 * id, 0.5, -0.25,
+    writer.Write(VehicleState{id, 1000 + id, 0, 0, const_cast<char*>("rov"), 1.5 * id, -2.0 * id, 0.01 * id, 0.5, -0.25,
                               0.1 * id, -0.7, 3u * id});
   }
   std::map<uint32_t, VehicleState> latest;
@@ -151,7 +151,7 @@ TEST(DdsEntities, KilledVehicleReadsNotAliveNoWriters) {
       Participant vehicle(domain.domain_id(), TestConfig());
       Writer<VehicleState> writer(vehicle, VehicleStateWriterQos(500ms));
       for (int tick = 0; tick < 200; ++tick) {  // 10 s at most, should the parent die
-        writer.Write(VehicleState{kVehicleId, tick, 0, const_cast<char*>("rov"), 1.0, 2.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0});
+        writer.Write(VehicleState{kVehicleId, tick, 0, 0, const_cast<char*>("rov"), 1.0, 2.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0});
         dds_sleepfor(DDS_MSECS(50));
       }
     } catch (const std::exception& e) {
@@ -207,12 +207,12 @@ TEST(DdsEntities, DisposeAndWriterLossAreDistinguished) {
   {
     Writer<VehicleState> writer(participant, VehicleStateWriterQos());
     ASSERT_TRUE(writer.WaitForReaders(1, 2s));
-    for (uint32_t id : {5u, 6u, 7u}) writer.Write(VehicleState{id, 1, 0, const_cast<char*>("rov"), 0, 0, 0, 0, 0, 0, 0, 0});
+    for (uint32_t id : {5u, 6u, 7u}) writer.Write(VehicleState{id, 1, 0, 0, const_cast<char*>("rov"), 0, 0, 0, 0, 0, 0, 0, 0});
     collect(3);
     ASSERT_EQ(state_of.size(), 3u);
     state_of.clear();
-    writer.Dispose(VehicleState{5, 2, 0, const_cast<char*>("rov"), 0, 0, 0, 0, 0, 0, 0, 0});
-    writer.Unregister(VehicleState{6, 2, 0, const_cast<char*>("rov"), 0, 0, 0, 0, 0, 0, 0, 0});
+    writer.Dispose(VehicleState{5, 2, 0, 0, const_cast<char*>("rov"), 0, 0, 0, 0, 0, 0, 0, 0});
+    writer.Unregister(VehicleState{6, 2, 0, 0, const_cast<char*>("rov"), 0, 0, 0, 0, 0, 0, 0, 0});
     collect(2);
   }  // writer deleted: vehicle 7 loses its only writer
   collect(3);
