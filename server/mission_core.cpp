@@ -10,7 +10,7 @@
 namespace sage::server {
 namespace {
 
-constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+constexpr double kUnknown = std::numeric_limits<double>::quiet_NaN();  // a measure not (yet) known
 // A host may run at most this far ahead of the server's clock (s of mission time): a state
 // stamped later than that is not from this mission's clock.
 constexpr double kMaxStateLead_s = 5.0;
@@ -29,7 +29,7 @@ std::string SafeName(const std::string& name, int id) {
 }
 
 double MeanInterval(const std::vector<double>& times) {
-  if (times.size() < 2) return kNaN;
+  if (times.size() < 2) return kUnknown;
   return (times.back() - times.front()) / static_cast<double>(times.size() - 1);
 }
 
@@ -54,7 +54,7 @@ void FillEventResponses(const maps::Scenario& scenario, MissionMetrics& metrics)
     const std::vector<double>& times = metrics.valves[valve].visit_times_s;
     std::vector<double> before, after;
     for (double v : times) (v < response.time_s ? before : after).push_back(v);
-    response.time_to_next_visit_s = after.empty() ? kNaN : after.front() - response.time_s;
+    response.time_to_next_visit_s = after.empty() ? kUnknown : after.front() - response.time_s;
     response.interval_before_s = MeanInterval(before);
     response.interval_after_s = MeanInterval(after);
   }
@@ -256,7 +256,7 @@ CycleOutput MissionCore::Cycle(std::int64_t cycle) {
   const std::vector<int> alive = roster_.alive();
   const bool risk_changed = fleet_.responses().size() > risk_measured_;
   for (; risk_measured_ < fleet_.responses().size(); ++risk_measured_) {
-    fleet_.responses()[risk_measured_].heading_change_rad = kNaN;
+    fleet_.responses()[risk_measured_].heading_change_rad = kUnknown;
     if (!alive.empty()) pending_heading_changes_.push_back({risk_measured_, snapshot_cycle, alive.front()});
   }
 
