@@ -232,7 +232,8 @@ bool PlaceClusters(Rng& rng, std::vector<ClusterPlan>& clusters, const Workspace
       ClusterPlan& c = *order[k];
       const double margin = c.envelope_m + kEdgeMargin_m;
       const auto too_near = [&](int other) {
-        return (c.position_m - order[other]->position_m).norm() < c.envelope_m + order[other]->envelope_m + kFieldClusterGap_m;
+        const ClusterPlan& o = *order[other];
+        return (c.position_m - o.position_m).norm() < c.envelope_m + o.envelope_m + kFieldClusterGap_m;
       };
       all = 2 * margin <= std::min(field.width_m, field.height_m);
       for (int attempt = 0; all; ++attempt) {
@@ -269,7 +270,8 @@ void CheckOptions(const FieldOptions& o) {
   if (o.vehicles < 1) fail("--vehicles", std::to_string(o.vehicles), "must be >= 1");
   const std::int64_t least = 2 * std::int64_t{o.xts}, most = 5 * std::int64_t{o.xts};
   if (o.valves < least || o.valves > most) {
-    const std::string bound = o.valves < least ? ">= 2 x --xts = " + std::to_string(least) : "<= 5 x --xts = " + std::to_string(most);
+    const std::string bound = o.valves < least ? ">= 2 x --xts = " + std::to_string(least)
+                                               : "<= 5 x --xts = " + std::to_string(most);
     fail("--valves", std::to_string(o.valves), "must be " + bound + " (2 to 5 valves per XT)");
   }
   if (!(o.area_per_xt_m2 >= 50 && o.area_per_xt_m2 <= 10000)) {
