@@ -217,17 +217,23 @@ RunInfo RunDirectory::Info(const MissionCore& core, bool complete, bool stopped_
 void RunDirectory::Tick(const MissionCore& core) {
   const auto now = std::chrono::steady_clock::now();
   if (std::chrono::duration<double>(now - last_checkpoint_).count() >= options_.checkpoint_period_s) {
-    Checkpoint(core);
+    StartCheckpoint(core, /*wait=*/false);
   } else if (std::chrono::duration<double>(now - last_flush_).count() >= options_.flush_period_s) {
     Flush();
   }
 }
 
 void RunDirectory::Checkpoint(const MissionCore& core) {
+  StartCheckpoint(core, /*wait=*/true);
+  checkpoint_write_.get();
+}
+
+void RunDirectory::StartCheckpoint(const MissionCore& core, bool wait) {
   Flush();
   if (checkpoint_write_.valid()) {
-    // The last one is still being written (a large fleet on a slow disk): try again next cycle.
-    if (checkpoint_write_.wait_for(std::chrono::seconds(0)) != std::future_status::ready) return;
+    // The last one is still being written (a large fleet on a slow disk): a periodic checkpoint
+    // tries again next cycle.
+    if (!wait && checkpoint_write_.wait_for(std::chrono::seconds(0)) != std::future_status::ready) return;
     checkpoint_write_.get();  // rethrows its error
   }
   last_checkpoint_ = std::chrono::steady_clock::now();

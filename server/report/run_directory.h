@@ -47,7 +47,7 @@ class RunDirectory final : public MissionRecorder {
   /// Once a cycle: flushes the appended files when the flush period is due, and writes the
   /// checkpoint and partial metrics when the checkpoint period is.
   void Tick(const MissionCore& core);
-  /// Flushes, then writes the checkpoint and partial metrics now.
+  /// Flushes, then writes the checkpoint and partial metrics now (returns once they are written).
   void Checkpoint(const MissionCore& core);
   /// The mission ended at end_s (the planned end, or earlier if stopped): flushes and writes the
   /// final set. Throws std::runtime_error naming the file that could not be written (the partial
@@ -69,6 +69,7 @@ class RunDirectory final : public MissionRecorder {
   void Open(Appender& file, const char* name, const char* header);
   void Flush();
   void FlushOne(Appender& file);
+  void StartCheckpoint(const MissionCore& core, bool wait);
   RunInfo Info(const MissionCore& core, bool complete, bool stopped_early) const;
   void KeepForPlot(const TrajectorySample& sample, const std::string& name);
 

@@ -1,0 +1,209 @@
+// MissionCore: the server's side of a mission as one object. What it answers operators, how it
+// issues ids and keeps names safe, what it refuses at the door, and that a mission resumed from
+// a checkpoint and the record written after it stands exactly where the original stood.
+#include "server/mission_core.h"
+
+#include <cmath>
+#include <limits>
+#include <string>
+
+#include <gtest/gtest.h>
+
+#include "maps/world.h"
+#include "server/mission.h"
+#include "server/report/checkpoint.h"
+
+namespace sage::server {
+namespace {
+
+const std::string kTwoXt = std::string(SAGE_SOURCE_DIR) + "/scenarios/two_xt.yaml";
+
+agents::StateReport State(int id, const std::string& name, std::int64_t cycle, Eigen::Vector2d position) {
+  agents::StateReport s;
+  s.id = id;
+  s.name = name;
+  s.cycle = cycle;
+  s.time_s = static_cast<double>(cycle) / 10.0;
+  s.state.position_m = position;
+  return s;
+}
+
+// three vehicles on two_xt, a fourth joining at 45 s and the second lost at 50 s: a mission
+// whose record after t = 40 holds joins, a loss and an operator's risk update.
+maps::Scenario EventfulTwoXt() {
+  maps::Scenario s = maps::WithDuration(maps::WithVehicleCount(maps::LoadScenario(kTwoXt), 3), 60.0);
+  maps::FleetEvent join;
+  join.time_s = 45.0;
+  join.kind = maps::FleetEvent::Kind::kJoin;
+  join.vehicle = s.vehicles[0];
+  join.vehicle.name = "late";
+  join.vehicle.start_m = {4.8, 0.6};
+  maps::FleetEvent lose;
+  lose.time_s = 50.0;
+  lose.kind = maps::FleetEvent::Kind::kLose;
+  lose.vehicle.name = s.vehicles[1].name;
+  s.fleet_events = {join, lose};
+  s.Validate();
+  return s;
+}
+
+// Operators get the server's own answer: an unknown id, one that left, the last vehicle.
+TEST(MissionCore, RemoveRequestsAnsweredFromTheRoster) {
+  const maps::Scenario s = maps::WithVehicleCount(maps::LoadScenario(kTwoXt), 2);
+  maps::World world(s);
+  MissionCore core(world, s, "", ControllerKind::kErgodic);
+  core.OnState(State(0, "rov1", 0, {0.6, 0.6}));
+  core.OnState(State(1, "rov2", 0, {4.6, 0.6}));
+  core.Cycle(0);
+  EXPECT_NE(core.RemoveRequest(7).reason.find("no vehicle with id 7"), std::string::npos);
+  EXPECT_TRUE(core.RemoveRequest(1).accepted);
+  core.OnVehicleGone(1, /*lost=*/false);
+  core.Cycle(1);
+  const OperatorAnswer gone = core.RemoveRequest(1);
+  EXPECT_FALSE(gone.accepted);
+  EXPECT_NE(gone.reason.find("rov2 (id 1) already left at t = 0.1 s"), std::string::npos) << gone.reason;
+  const OperatorAnswer last = core.RemoveRequest(0);
+  EXPECT_FALSE(last.accepted);
+  EXPECT_NE(last.reason.find("last vehicle"), std::string::npos) << last.reason;
+}
+
+// Ids the server issues follow the scenario's vehicles and joins, never overlap, and a vehicle a
+// host numbered itself pushes them past its id.
+TEST(MissionCore, IssuesSmallPredictableIds) {
+  const maps::Scenario s = EventfulTwoXt();
+  maps::World world(s);
+  MissionCore core(world, s, "", ControllerKind::kErgodic);
+  EXPECT_EQ(FirstFreeVehicleId(s), 4);  // rov1..rov3 are 0..2, "late" joins as 3
+  EXPECT_EQ(JoinVehicleId(s, "late"), 3);
+  EXPECT_EQ(core.ReserveIds(2).first_id, 4);
+  EXPECT_EQ(core.ReserveIds(1).first_id, 6);
+  core.OnState(State(40, "byhand", 0, {0.6, 3.6}));
+  EXPECT_EQ(core.ReserveIds(1).first_id, 41);
+  EXPECT_FALSE(core.ReserveIds(0).accepted);
+  EXPECT_FALSE(core.ReserveIds(10001).accepted);
+}
+
+// Names reach logs and CSV files: control characters and separators are replaced, a numeric or
+// empty name gets one, and a second vehicle of the same name is told apart by its id.
+TEST(MissionCore, NamesAreMadeSafeAndUnique) {
+  const maps::Scenario s = maps::LoadScenario(kTwoXt);
+  maps::World world(s);
+  MissionCore core(world, s, "", ControllerKind::kErgodic);
+  core.OnState(State(0, "rov\n1,\"x\x1b", 0, {0.6, 0.6}));
+  core.OnState(State(1, "42", 0, {1.6, 0.6}));
+  core.OnState(State(2, "rov_1__x_", 0, {2.6, 0.6}));
+  EXPECT_EQ(core.roster().Find(0)->name, "rov_1__x_");
+  EXPECT_EQ(core.roster().Find(1)->name, "vehicle1");
+  EXPECT_EQ(core.roster().Find(2)->name, "rov_1__x_#2");
+}
+
+// Non-finite states, ones from beyond the clock and old ones are refused and counted; none joins
+// a vehicle or enters the record.
+TEST(MissionCore, RefusesBadStatesAtTheDoor) {
+  const maps::Scenario s = maps::LoadScenario(kTwoXt);
+  maps::World world(s);
+  MissionCore core(world, s, "", ControllerKind::kErgodic);
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_FALSE(core.OnState(State(0, "a", 0, {nan, 1.0})));
+  EXPECT_FALSE(core.OnState(State(0, "a", 1000, {1.0, 1.0})));  // t = 100 s on a clock at 0
+  EXPECT_EQ(core.rejected_samples(), 2u);
+  EXPECT_EQ(core.roster().members().size(), 0u);
+  EXPECT_TRUE(core.OnState(State(0, "a", 3, {1.0, 1.0})));
+  EXPECT_FALSE(core.OnState(State(0, "a", 2, {1.1, 1.0})));  // older than its last: not counted
+  EXPECT_EQ(core.rejected_samples(), 2u);
+}
+
+// Vehicles report coverage every coverage period, in-process as over DDS: after 10 s at 0.5 s
+// the fleet snapshot holds each vehicle's 20th report (reports start once coverage exists).
+TEST(MissionCore, CoverageArrivesEveryCoveragePeriod) {
+  const maps::Scenario s = maps::WithDuration(maps::WithVehicleCount(maps::LoadScenario(kTwoXt), 2), 10.0);
+  Mission mission(s, ControllerKind::kErgodic);
+  mission.Run();
+  const FleetCoverage& coverage = mission.core().fleet().coverage();
+  ASSERT_EQ(coverage.accounted_seq.size(), 2u);
+  for (const auto& [id, seq] : coverage.accounted_seq) {
+    EXPECT_GE(seq, 19u) << id;
+    EXPECT_LE(seq, 20u) << id;
+  }
+}
+
+// A server that died at t = 55 s with its last checkpoint at t = 40 s: a new core restored from
+// that checkpoint (through the file format) and replaying the record written after it (samples,
+// the join at 45 s, the loss at 50 s, an operator's update at 42 s) stands where the original
+// stood: the same visits, the same metrics state, the same weights, the same roster.
+TEST(MissionCore, ResumeReplaysTheRecordToTheSameState) {
+  const maps::Scenario s = EventfulTwoXt();
+  TrajectoryRecorder record;
+  MissionOptions options;
+  options.recorder = &record;
+  options.keep_trajectory = false;
+  Mission original(s, options);
+  std::vector<std::uint8_t> checkpoint;
+  std::size_t samples_at_checkpoint = 0, fleet_at_checkpoint = 0, risk_at_checkpoint = 0;
+  while (original.time_s() < 55.0 - 1e-9) {
+    if (std::abs(original.time_s() - 42.0) < 1e-9) original.SetRisk("P4", 3.0, "operator");
+    original.Step();
+    if (std::abs(original.core().time_s() - 40.0) < 1e-9) {
+      checkpoint = EncodeCheckpoint(original.core().Checkpoint());
+      samples_at_checkpoint = record.trajectory.samples.size();
+      fleet_at_checkpoint = record.fleet_events.size();
+      risk_at_checkpoint = record.risk_events.size();
+    }
+  }
+  ASSERT_FALSE(checkpoint.empty());
+  ASSERT_EQ(record.fleet_events.size() - fleet_at_checkpoint, 2u);  // the join and the loss
+  ASSERT_EQ(record.risk_events.size() - risk_at_checkpoint, 1u);    // the operator's update
+
+  maps::World world(s);
+  MissionCore resumed(world, s, "", ControllerKind::kErgodic);
+  resumed.Restore(DecodeCheckpoint(checkpoint, "test"));
+  std::vector<std::pair<TrajectorySample, std::string>> samples;
+  for (std::size_t i = samples_at_checkpoint; i < record.trajectory.samples.size(); ++i) {
+    const TrajectorySample& t = record.trajectory.samples[i];
+    samples.emplace_back(t, record.trajectory.vehicle_names[t.vehicle]);
+  }
+  const std::vector<FleetEventRecord> fleet(record.fleet_events.begin() + fleet_at_checkpoint, record.fleet_events.end());
+  const std::vector<RiskEventRecord> risk(record.risk_events.begin() + risk_at_checkpoint, record.risk_events.end());
+  EXPECT_EQ(resumed.Replay(samples, fleet, risk), original.core().cycle());
+
+  const MissionCore& a = original.core();
+  EXPECT_EQ(resumed.metrics_accumulator().visits().visit_times(), a.metrics_accumulator().visits().visit_times());
+  const MetricsAccumulator::State& ma = a.metrics_accumulator().state();
+  const MetricsAccumulator::State& mb = resumed.metrics_accumulator().state();
+  EXPECT_EQ(mb.sum_f, ma.sum_f);
+  EXPECT_EQ(mb.sum_dt, ma.sum_dt);
+  EXPECT_EQ(mb.time_near_s, ma.time_near_s);
+  EXPECT_EQ(mb.metric_over_time.size(), ma.metric_over_time.size());
+  EXPECT_EQ(resumed.fleet().raw_weights(), a.fleet().raw_weights());
+  EXPECT_EQ(resumed.fleet().schedule().size(), a.fleet().schedule().size());
+  EXPECT_EQ(resumed.roster().alive(), a.roster().alive());
+  EXPECT_EQ(resumed.roster().lost_count(), 1u);
+  const MissionMetrics ra = a.Metrics(55.0), rb = resumed.Metrics(55.0);
+  EXPECT_EQ(rb.ergodic_metric, ra.ergodic_metric);
+  ASSERT_EQ(rb.events.size(), ra.events.size());
+}
+
+// The codec keeps every value of a real mission's checkpoint: decoding and encoding again gives
+// the same bytes, and a core restored from it checkpoints to the same bytes too.
+TEST(MissionCore, CheckpointRoundTripIsExact) {
+  const maps::Scenario s = EventfulTwoXt();
+  Mission mission(s, ControllerKind::kErgodic);
+  while (mission.time_s() < 52.0) mission.Step();
+  const std::vector<std::uint8_t> bytes = EncodeCheckpoint(mission.core().Checkpoint());
+  const MissionCheckpoint decoded = DecodeCheckpoint(bytes, "test");
+  EXPECT_EQ(EncodeCheckpoint(decoded), bytes);
+  maps::World world(s);
+  MissionCore restored(world, s, "", ControllerKind::kErgodic);
+  restored.Restore(decoded);
+  EXPECT_EQ(EncodeCheckpoint(restored.Checkpoint()), bytes);
+  // Another scenario's checkpoint is refused with one line.
+  maps::Scenario other = s;
+  other.seed = 99;
+  maps::World other_world(other);
+  MissionCore wrong(other_world, other, "", ControllerKind::kErgodic);
+  EXPECT_THROW(wrong.Restore(decoded), maps::ScenarioError);
+  EXPECT_THROW(DecodeCheckpoint({1, 2, 3}, "junk.bin"), maps::ScenarioError);
+}
+
+}  // namespace
+}  // namespace sage::server

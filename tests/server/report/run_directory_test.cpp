@@ -1,0 +1,156 @@
+// RunDirectory: a mission's record as it runs. The appended files hold what happened up to the
+// last flush, metrics.json says "complete": false until the end, the checkpoint decodes, the
+// final set appears whole or not at all, and a resumed record continues the cut one.
+#include "server/report/run_directory.h"
+
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include "server/mission.h"
+#include "server/report/checkpoint.h"
+#include "server/report/mission_file.h"
+
+namespace sage::server {
+namespace {
+
+namespace fs = std::filesystem;
+const std::string kTwoXt = std::string(SAGE_SOURCE_DIR) + "/scenarios/two_xt.yaml";
+
+std::string Read(const fs::path& path) {
+  std::ifstream in(path);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+class RunDirectoryTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() / ("sage_run_dir_test_" + std::to_string(getpid()) + "_" +
+                                        ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    fs::remove_all(dir_);
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+  fs::path dir_;
+};
+
+// Flushed and checkpointed every cycle (periods 0): halfway through, trajectory.csv ends at the
+// last cycle, metrics.json is partial, the checkpoint is of that time; at the end the final set
+// is there, complete, and the checkpoint is gone.
+TEST_F(RunDirectoryTest, PartialWhileRunningCompleteAtTheEnd) {
+  const maps::Scenario s = maps::WithDuration(maps::LoadScenario(kTwoXt), 20.0);
+  RunDirectoryOptions options;
+  options.flush_period_s = 0.0;
+  options.checkpoint_period_s = 0.0;
+  RunDirectory run(dir_.string(), s, options);
+  Mission mission(s, MissionOptions{"", ControllerKind::kErgodic, &run, false});
+  while (mission.time_s() < 10.0) {
+    mission.Step();
+    run.Tick(mission.core());
+  }
+  run.Checkpoint(mission.core());
+  const RecordSummary partial = ReadRecordSummary(dir_.string());
+  EXPECT_FALSE(partial.complete);
+  EXPECT_DOUBLE_EQ(partial.recorded_until_s, mission.core().time_s());
+  EXPECT_TRUE(partial.has_checkpoint);
+  EXPECT_NEAR(ReadCheckpoint(dir_.string()).time_s, mission.core().time_s(), 0.1 + 1e-9);
+  EXPECT_FALSE(fs::exists(dir_ / "plot.svg"));
+  const nlohmann::json metrics = nlohmann::json::parse(Read(dir_ / "metrics.json"));
+  EXPECT_FALSE(metrics.at("complete").get<bool>());
+  EXPECT_EQ(metrics.at("planned_duration_s").get<double>(), 20.0);
+  EXPECT_EQ(metrics.at("transport").get<std::string>(), "in-process");
+
+  while (mission.Step()) run.Tick(mission.core());
+  run.Finish(mission.core(), mission.world(), 20.0, false);
+  const RecordSummary done = ReadRecordSummary(dir_.string());
+  EXPECT_TRUE(done.complete);
+  EXPECT_DOUBLE_EQ(done.recorded_until_s, 20.0);
+  EXPECT_FALSE(done.has_checkpoint);
+  for (const char* name : {"plot.svg", "seabed.bt", "scenario.yaml", "metrics.json", "trajectory.csv",
+                           "fleet_events.csv", "risk_events.csv"}) {
+    EXPECT_TRUE(fs::exists(dir_ / name)) << name;
+    EXPECT_FALSE(fs::exists(dir_ / (std::string(name) + ".tmp"))) << name;
+  }
+  // One row per vehicle and cycle, both ends included.
+  const std::string csv = Read(dir_ / "trajectory.csv");
+  EXPECT_EQ(std::count(csv.begin(), csv.end(), '\n'), 1 + 201);
+}
+
+// If one file of the final set cannot be written, none of it appears: metrics.json stays the
+// partial one (complete: false), no plot, no temporaries, and the error names the file.
+TEST_F(RunDirectoryTest, FinalSetIsAllOrNothing) {
+  const maps::Scenario s = maps::WithDuration(maps::LoadScenario(kTwoXt), 5.0);
+  RunDirectoryOptions options;
+  options.checkpoint_period_s = 0.0;
+  RunDirectory run(dir_.string(), s, options);
+  Mission mission(s, MissionOptions{"", ControllerKind::kErgodic, &run, false});
+  while (mission.Step()) run.Tick(mission.core());
+  run.Checkpoint(mission.core());
+  fs::create_directories(dir_ / "seabed.bt.tmp");  // a directory where a file must go: the write fails
+  try {
+    run.Finish(mission.core(), mission.world(), 5.0, false);
+    ADD_FAILURE() << "no error";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("seabed.bt"), std::string::npos) << e.what();
+  }
+  EXPECT_FALSE(ReadRecordSummary(dir_.string()).complete);
+  EXPECT_FALSE(fs::exists(dir_ / "plot.svg"));
+  EXPECT_FALSE(fs::exists(dir_ / "plot.svg.tmp"));
+  EXPECT_FALSE(fs::exists(dir_ / "metrics.json.tmp"));
+}
+
+// A resumed record is cut back to its last complete line (a crash can leave half a line) and
+// continues after it; a new mission in the same directory starts the files afresh.
+TEST_F(RunDirectoryTest, ResumeContinuesACutRecord) {
+  const maps::Scenario s = maps::LoadScenario(kTwoXt);
+  {
+    RunDirectory run(dir_.string(), s);
+    run.OnSample({0.1, 0, {1.0, 2.0}, 0.0, {0, 0}, {0, 0}}, "rov1");
+  }
+  {
+    std::ofstream cut(dir_ / "trajectory.csv", std::ios::app);
+    cut << "0.2,rov1,1.5";  // half a row
+  }
+  RunDirectoryOptions resume;
+  resume.resume = true;
+  {
+    RunDirectory run(dir_.string(), s, resume);
+    run.OnSample({0.3, 0, {1.0, 2.5}, 0.0, {0, 0}, {0, 0}}, "rov1");
+  }
+  EXPECT_EQ(Read(dir_ / "trajectory.csv"),
+            "t,vehicle,x,y,heading,vx,vy,cmd_x,cmd_y\n0.1,rov1,1,2,0,0,0,0,0\n0.3,rov1,1,2.5,0,0,0,0,0\n");
+  const RecordTail tail = ReadRecordTail(dir_.string(), 0.1);
+  ASSERT_EQ(tail.samples.size(), 1u);
+  EXPECT_EQ(tail.samples[0].first.time_s, 0.3);
+  EXPECT_EQ(tail.samples[0].second, "rov1");
+  { RunDirectory fresh(dir_.string(), s); }
+  EXPECT_EQ(Read(dir_ / "trajectory.csv"), "t,vehicle,x,y,heading,vx,vy,cmd_x,cmd_y\n");
+}
+
+// Free text in the event files cannot break a row: a detail with commas, quotes and a newline
+// reads back as it was (control characters as spaces).
+TEST_F(RunDirectoryTest, EventTextStaysInItsField) {
+  const maps::Scenario s = maps::LoadScenario(kTwoXt);
+  {
+    RunDirectory run(dir_.string(), s);
+    run.OnFleetEvent({1.5, "outage", -1, "", "down, for \"12\" s\nthen back"});
+    run.OnRiskEvent({2.0, "P1", 3.0, 0.5, "sonar, \"port\""});
+  }
+  const RecordTail tail = ReadRecordTail(dir_.string(), 0.0);
+  ASSERT_EQ(tail.fleet_events.size(), 1u);
+  EXPECT_EQ(tail.fleet_events[0].detail, "down, for \"12\" s then back");
+  EXPECT_EQ(tail.fleet_events[0].vehicle_id, -1);
+  ASSERT_EQ(tail.risk_events.size(), 1u);
+  EXPECT_EQ(tail.risk_events[0].source, "sonar, \"port\"");
+  EXPECT_EQ(tail.risk_events[0].new_share, 0.5);
+}
+
+}  // namespace
+}  // namespace sage::server
