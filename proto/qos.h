@@ -44,7 +44,7 @@ Qos VehicleStateReaderQos();
 /// VehicleState reader of the mission's record (the server): as VehicleStateReaderQos but
 /// keep-last `depth` per vehicle, so the states a stalled server could not take meanwhile are
 /// still there when it wakes (best-effort: as many as the socket buffer held).
-Qos VehicleStateRecordQos(int depth = 64);
+Qos VehicleStateRecordQos(int depth = 256);
 
 /// VehicleCoverage (vehicles -> server): reliable, keep-last 1 per vehicle, volatile.
 Qos VehicleCoverageQos();

@@ -93,7 +93,7 @@ MissionCore::MissionCore(maps::World& world, const maps::Scenario& scenario, con
 bool MissionCore::OnState(const agents::StateReport& s) {
   const bool finite = s.state.position_m.allFinite() && s.state.velocity_mps.allFinite() &&
                       std::isfinite(s.state.heading_rad) && s.command_mps.allFinite() && std::isfinite(s.time_s);
-  if (!finite || s.id < 0 || s.time_s < 0.0 || s.time_s > time_s_ + kMaxStateLead_s) {
+  if (!finite || s.id < 0 || s.time_s < 0.0 || s.time_s > std::max(time_s_, clock_s_) + kMaxStateLead_s) {
     ++rejected_;
     return false;
   }
@@ -145,7 +145,7 @@ void MissionCore::OnVehicleGone(int id, bool lost) {
 bool MissionCore::OnCoverage(const agents::CoverageMessage& c) {
   const maps::CoverageReport& r = c.report;
   if (!r.sums.allFinite() || !std::isfinite(r.kernel_time_s) || r.kernel_time_s < 0.0 || !std::isfinite(r.stamp_s) ||
-      r.stamp_s > time_s_ + kMaxStateLead_s) {
+      r.stamp_s > std::max(time_s_, clock_s_) + kMaxStateLead_s) {
     ++rejected_;
     return false;
   }

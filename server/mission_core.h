@@ -85,6 +85,10 @@ class MissionCore {
   MissionCore(const MissionCore&) = delete;
   MissionCore& operator=(const MissionCore&) = delete;
 
+  /// The mission clock as the transport reads it now (wall clock, time scale): states and
+  /// reports up to a few seconds past it are taken. Without it, the last cycle's time.
+  void SetClock(double mission_time_s) { clock_s_ = mission_time_s; }
+
   // ---- from the vehicles ----
   /// A vehicle's state of one of its cycles. The first state of an unknown (or gone) vehicle
   /// joins it. Refused (counted, false) if not finite, older than its last, or from the future.
@@ -162,6 +166,7 @@ class MissionCore {
   std::size_t rejected_ = 0;
   std::int64_t cycle_ = -1;
   double time_s_ = 0.0;
+  double clock_s_ = 0.0;
   bool empty_noted_ = false;
 };
 

@@ -223,6 +223,7 @@ int RunServerNode(const maps::Scenario& scenario, const ServerNodeOptions& optio
                                           std::chrono::duration<double>(2 * lease_s));
     }
 
+    core.SetClock(static_cast<double>(proto::NowRealtimeNs() - start_ns) * 1e-9 * options.time_scale);
     // Take until empty: one take returns at most what is asked, and a large fleet sends
     // thousands of states a cycle.
     auto take_all = [](auto& reader, auto&& visit) {

@@ -195,6 +195,8 @@ class MissionWatcher {
   struct StateSample {
     long long stamp_ns;
     double x, y;
+    std::uint64_t server_instance;  // the server whose clock the state is on
+    std::uint64_t target_cycle;     // the server cycle of the word the vehicle steered on
   };
 
   /// Takes everything available (waiting at most `wait` for something new).
@@ -204,7 +206,9 @@ class MissionWatcher {
       if (info.valid_data) status_last_ = s;
     });
     states_.TakeEach([&](const proto::VehicleState& s, const dds_sample_info_t& info) {
-      if (info.valid_data) states_seen_[s.vehicle_id].push_back({s.stamp_ns, s.x_m, s.y_m});
+      if (info.valid_data) {
+        states_seen_[s.vehicle_id].push_back({s.stamp_ns, s.x_m, s.y_m, s.server_instance, s.target_cycle});
+      }
     });
   }
 
@@ -260,7 +264,7 @@ std::vector<FleetEvent> ReadFleetEvents(const fs::path& path) {
     std::getline(ss, event, ',');
     std::getline(ss, id, ',');
     std::getline(ss, name, ',');
-    events.push_back({std::stod(t), event, static_cast<unsigned>(std::stoul(id)), name});
+    events.push_back({std::stod(t), event, static_cast<unsigned>(std::stol(id)), name});
   }
   return events;
 }
@@ -950,6 +954,192 @@ TEST_F(FleetDds, VehiclesCoverOnWhenTheServerGoesSilent) {
 
   agents.Stop();
   EXPECT_FALSE(agents.Running());
+}
+
+// The visits of a partial record (what the server saw before it died), per valve and time.
+std::multiset<std::pair<std::string, double>> VisitsOf(const fs::path& out, const maps::Scenario& scenario) {
+  std::multiset<std::pair<std::string, double>> visits;
+  for (const Visit& v : PerVehicleVisits(ReadTrajectory(out / "trajectory.csv", ReadFleetEvents(out / "fleet_events.csv")),
+                                         scenario)) {
+    visits.insert({v.valve, v.t});
+  }
+  return visits;
+}
+
+// 7. The server is killed mid-mission: the launcher says which process died of which signal and
+// what the run directory kept, and exits non-zero; the partial record is readable (trajectory to
+// within a mission-second of the kill, metrics marked incomplete, a checkpoint); `sage launch
+// --resume` finishes the mission; the final metrics cover the whole duration and keep every
+// visit made before the kill; the outage is in fleet_events.csv.
+TEST_F(FleetDds, KilledServerResumesFromItsCheckpoint) {
+  const int domain_id = FreeDomainForLaunch();
+  const fs::path out = run_dir_ / "out";
+  const double duration = 60;
+  const maps::Scenario scenario = maps::LoadScenario(Scenario("fleet_field.yaml"));
+  ChildProcess& launch = StartLaunch("launch", {Scenario("fleet_field.yaml"), "--vehicles", "3", "--duration",
+                                                Num(duration), "--time-scale", Num(kTimeScale)},
+                                     out, domain_id);
+  const auto server_pid = WaitForLog(launch, R"(server pid ([0-9]+))", kStartupTimeout);
+  ASSERT_TRUE(server_pid.has_value()) << "the launcher never said which process is the server";
+  MissionWatcher watcher(domain_id);
+  ASSERT_TRUE(watcher.PollUntil(
+      [&] { return watcher.status() && watcher.status()->vehicles_alive == 3 && watcher.MissionTimeNow() >= 25.0; },
+      kStartupTimeout))
+      << "the mission never had its three vehicles";
+  const double t_kill = watcher.MissionTimeNow();
+  ::kill(std::stoi((*server_pid)[1]), SIGKILL);
+
+  const std::optional<int> launch_exit = launch.WaitExit(15s);
+  ASSERT_TRUE(launch_exit.has_value()) << "the launcher did not notice the dead server";
+  EXPECT_EQ(*launch_exit, 3);
+  const std::string said = launch.LogText();
+  EXPECT_TRUE(std::regex_search(said, std::regex(R"(the server \(pid [0-9]+\) was killed by SIGKILL)"))) << said;
+  EXPECT_NE(said.find("resume with: sage launch --resume"), std::string::npos) << said;
+
+  const Json partial = ReadJson(out / "metrics.json");
+  EXPECT_FALSE(partial.at("complete").get<bool>());
+  ASSERT_TRUE(fs::exists(out / "checkpoint.bin"));
+  const Tracks before = ReadTrajectory(out / "trajectory.csv", ReadFleetEvents(out / "fleet_events.csv"));
+  ASSERT_EQ(before.size(), 3u);
+  for (const auto& [name, poses] : before) {
+    ASSERT_FALSE(poses.empty());
+    EXPECT_GE(poses.back().t, t_kill - 1.0) << name << "'s record ends " << t_kill - poses.back().t << " s before the kill";
+    Report("record_end_before_kill_" + name + "_s", t_kill - poses.back().t, "mission-s");
+  }
+  const auto visits_before = VisitsOf(out, scenario);
+  ASSERT_GT(visits_before.size(), 3u);
+
+  ChildProcess& resume = Start("resume", {"launch", "--resume", out.string()});
+  const std::optional<int> resume_exit = WaitMissionEnd(resume, duration);
+  ASSERT_TRUE(resume_exit.has_value()) << "the resumed mission did not end";
+  EXPECT_EQ(*resume_exit, 0) << resume.LogText();
+  const Json final_metrics = ReadJson(out / "metrics.json");
+  EXPECT_TRUE(final_metrics.at("complete").get<bool>());
+  EXPECT_DOUBLE_EQ(final_metrics.at("duration_s").get<double>(), duration);
+  EXPECT_EQ(final_metrics.at("resumes").get<int>(), 1);
+  EXPECT_FALSE(fs::exists(out / "checkpoint.bin"));
+  std::multiset<std::pair<std::string, double>> kept;
+  for (const Json& valve : final_metrics.at("valves"))
+    for (const Json& t : valve.at("visit_times_s")) kept.insert({valve.at("name").get<std::string>(), t.get<double>()});
+  for (const auto& [valve, t] : visits_before) {
+    EXPECT_TRUE(kept.count({valve, t})) << "the visit of " << valve << " at t = " << t << " s was lost in the resume";
+  }
+  const auto events = ReadFleetEvents(out / "fleet_events.csv");
+  EXPECT_EQ(EventsOf(events, "outage").size(), 1u);
+  EXPECT_EQ(EventsOf(events, "resumed").size(), 1u);
+  EXPECT_TRUE(EventsOf(events, "lost").empty()) << "a vehicle restarted by the resume is not a fleet loss";
+  // The record covers the whole mission: every vehicle has rows to the end.
+  for (const auto& [name, poses] : ReadTrajectory(out / "trajectory.csv", events)) {
+    EXPECT_GE(poses.back().t, duration - 0.2) << name;
+  }
+}
+
+// 8. A server restarted by hand over a live fleet: the agent host follows the new server at once
+// (its states carry the new server's clock and are steered on its word within a second of wall
+// time), no vehicle is lost, and the mission ends on the resumed server's clock.
+TEST_F(FleetDds, RestartedServerIsFollowedAtOnce) {
+  const proto::DomainReservation domain = ReserveDomain();
+  const std::string d = std::to_string(domain.domain_id());
+  const fs::path out = run_dir_ / "out";
+  const double duration = 50;
+  MissionWatcher watcher(domain.domain_id());
+  ChildProcess& first = Start("server", {"server", Scenario("two_xt.yaml"), "--vehicles", "2", "--duration",
+                                         Num(duration), "--time-scale", Num(kTimeScale), "--out", out.string(),
+                                         "--domain", d, "--quiet"});
+  ChildProcess& agents = Start("agents", {"agents", Scenario("two_xt.yaml"), "--domain", d, "--vehicles", "2"});
+  ASSERT_TRUE(watcher.PollUntil(
+      [&] { return watcher.status() && watcher.status()->vehicles_alive == 2 && watcher.MissionTimeNow() >= 20.0; },
+      kStartupTimeout));
+  const std::uint64_t old_instance = watcher.status()->server_instance;
+  first.Signal(SIGKILL);
+  first.WaitExit(5s);
+  std::this_thread::sleep_for(1s);  // 4 mission-s without a server: the vehicles cover on
+  ChildProcess& second = Start("resumed", {"server", (out / "scenario.yaml").string(), "--resume", "--out",
+                                           out.string(), "--time-scale", Num(kTimeScale), "--domain", d, "--quiet"});
+  ASSERT_TRUE(watcher.PollUntil(
+      [&] { return watcher.status() && watcher.status()->server_instance != old_instance; }, kStartupTimeout))
+      << "the resumed server never spoke";
+  const long long new_server_ns = RealtimeNs();
+  const std::uint64_t new_instance = watcher.status()->server_instance;
+  const double first_cycle = watcher.status()->cycle;
+  // Within a second of wall time both vehicles' states are on the new clock and steered on the
+  // new server's snapshots (target cycle at or past its first).
+  const auto following = [&](unsigned id) {
+    for (const auto& s : watcher.States(id))
+      if (s.server_instance == new_instance && s.target_cycle >= first_cycle) return s.stamp_ns;
+    return 0LL;
+  };
+  ASSERT_TRUE(watcher.PollUntil([&] { return following(0) && following(1); }, 5s));
+  for (unsigned id : {0u, 1u}) {
+    const double lag_s = (following(id) - new_server_ns) * 1e-9;
+    Report(fmt::format("follow_new_server_vehicle{}_wall_s", id), lag_s, "s wall");
+    EXPECT_LT(lag_s, 1.0) << "vehicle " << id << " kept steering on the dead server";
+  }
+  const std::optional<int> second_exit = WaitMissionEnd(second, duration);
+  ASSERT_TRUE(second_exit.has_value());
+  EXPECT_EQ(*second_exit, 0) << second.LogText();
+  EXPECT_NE(agents.LogText().find("a new server runs the mission"), std::string::npos) << agents.LogText();
+  const auto events = ReadFleetEvents(out / "fleet_events.csv");
+  EXPECT_TRUE(EventsOf(events, "lost").empty()) << "a server restart is not a fleet loss";
+  EXPECT_EQ(EventsOf(events, "resumed").size(), 1u);
+  EXPECT_TRUE(ReadJson(out / "metrics.json").at("complete").get<bool>());
+}
+
+// 9. A server stopped for longer than the vehicles' lease (SIGSTOP, 1.5 s wall = 6 mission-s)
+// is not a fleet loss: no vehicle is logged lost, and the states sent meanwhile are in the
+// record when it wakes (no gap in any vehicle's trajectory beyond a few cycles).
+TEST_F(FleetDds, StalledServerLosesNobody) {
+  const proto::DomainReservation domain = ReserveDomain();
+  const std::string d = std::to_string(domain.domain_id());
+  const fs::path out = run_dir_ / "out";
+  const double duration = 30;
+  MissionWatcher watcher(domain.domain_id());
+  ChildProcess& server = Start("server", {"server", Scenario("two_xt.yaml"), "--vehicles", "2", "--duration",
+                                          Num(duration), "--time-scale", Num(kTimeScale), "--out", out.string(),
+                                          "--domain", d, "--quiet"});
+  Start("agents", {"agents", Scenario("two_xt.yaml"), "--domain", d, "--vehicles", "2"});
+  ASSERT_TRUE(watcher.PollUntil(
+      [&] { return watcher.status() && watcher.status()->vehicles_alive == 2 && watcher.MissionTimeNow() >= 10.0; },
+      kStartupTimeout));
+  ::kill(server.pid(), SIGSTOP);
+  std::this_thread::sleep_for(1500ms);
+  ::kill(server.pid(), SIGCONT);
+  const std::optional<int> server_exit = WaitMissionEnd(server, duration);
+  ASSERT_TRUE(server_exit.has_value());
+  EXPECT_EQ(*server_exit, 0);
+  const auto events = ReadFleetEvents(out / "fleet_events.csv");
+  EXPECT_TRUE(EventsOf(events, "lost").empty()) << "a stalled server declared its vehicles lost";
+  EXPECT_TRUE(EventsOf(events, "rejoined").empty());
+  for (const auto& [name, poses] : ReadTrajectory(out / "trajectory.csv", events)) {
+    double gap = 0.0;
+    for (std::size_t i = 1; i < poses.size(); ++i) gap = std::max(gap, poses[i].t - poses[i - 1].t);
+    Report("largest_record_gap_" + name + "_s", gap, "mission-s");
+    EXPECT_LE(gap, 1.0 + 1e-9) << name << ": " << gap << " mission-s missing from the record";
+  }
+}
+
+// 10. Every agent host dies and no vehicle is left: the launcher stops the mission and says so
+// instead of running on with nobody, and exits non-zero; the run directory is complete.
+TEST_F(FleetDds, LaunchEndsWhenTheFleetIsGone) {
+  const int domain_id = FreeDomainForLaunch();
+  const fs::path out = run_dir_ / "out";
+  ChildProcess& launch = StartLaunch("launch", {Scenario("two_xt.yaml"), "--vehicles", "1", "--duration", "200",
+                                                "--time-scale", Num(kTimeScale)},
+                                     out, domain_id);
+  MissionWatcher watcher(domain_id);
+  ASSERT_TRUE(watcher.PollUntil(
+      [&] { return watcher.status() && watcher.status()->vehicles_alive == 1 && watcher.MissionTimeNow() >= 5.0; },
+      kStartupTimeout));
+  std::system(fmt::format("pkill -KILL -f 'sage agents .*--domain {}( |$)'", domain_id).c_str());
+  const std::optional<int> launch_exit = launch.WaitExit(20s);
+  ASSERT_TRUE(launch_exit.has_value()) << "the launcher ran on with no vehicle";
+  EXPECT_EQ(*launch_exit, 4);
+  EXPECT_NE(launch.LogText().find("every agent host has exited and no vehicle is left"), std::string::npos)
+      << launch.LogText();
+  const Json metrics = ReadJson(out / "metrics.json");
+  EXPECT_TRUE(metrics.at("complete").get<bool>());
+  EXPECT_TRUE(metrics.at("stopped_early").get<bool>());
+  EXPECT_LT(metrics.at("duration_s").get<double>(), 100.0);
 }
 
 }  // namespace
