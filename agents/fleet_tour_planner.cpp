@@ -20,6 +20,9 @@ namespace sage::agents {
 namespace {
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
+// Grid distance (m) between valves with no path between them: finite, so that the search still
+// compares tours holding such a pair, and splits them where it has the vehicles to.
+constexpr double kUnreachable = 1e9;
 constexpr int kExactTourSize = 8;  // Held-Karp per priced tour: 2^7 x 8 x 8 steps at most
 constexpr double kTolerance = 1e-9;  // changes smaller than this (s, m) are rounding, not moves
 constexpr int kMedoidCandidates = 4;  // members nearest the centroid tried as the next medoid
@@ -52,7 +55,7 @@ int SnapCell(const maps::OccupancyGrid& grid, const Eigen::Vector2d& x_m) {
 // PlanGridPath's (8-connected, no corner cutting, octile heuristic, so the cost is exact), ties
 // in f to the deeper cell so that open water costs O(L / r) cells; cached per pair. Valves in
 // different 4-connected components of the free cells (the same connectivity: a diagonal needs
-// both orthogonal cells) are kInf apart without a search.
+// both orthogonal cells) are kUnreachable apart without a search.
 class ValveDistances {
  public:
   ValveDistances(const maps::OccupancyGrid& grid, const Points& valves)
@@ -80,7 +83,7 @@ class ValveDistances {
   }
 
   double operator()(int i, int j) {
-    if (cell_[i] < 0 || cell_[j] < 0 || component_[cell_[i]] != component_[cell_[j]]) return kInf;
+    if (cell_[i] < 0 || cell_[j] < 0 || component_[cell_[i]] != component_[cell_[j]]) return kUnreachable;
     if (cell_[i] == cell_[j]) return 0.0;
     const auto key = static_cast<std::uint64_t>(std::min(i, j)) << 32 | static_cast<std::uint32_t>(std::max(i, j));
     const auto [it, inserted] = cache_.try_emplace(key, 0.0);
@@ -139,7 +142,7 @@ class ValveDistances {
         open.push({g + h(k), g, k});
       }
     }
-    return kInf;
+    return kUnreachable;  // not reached: the component check comes first
   }
 
   int pad_rows_;
@@ -175,7 +178,7 @@ std::vector<std::vector<int>> NearestValves(const Points& p, int count) {
 }
 
 // The medoid nearest to v by grid distance: medoids in ascending straight line between cell
-// centres (a lower bound of d) until that line reaches the best d found; -1 if none is reachable.
+// centres (a lower bound of d) until that line reaches the best d found.
 int NearestMedoid(ValveDistances& dist, const std::vector<int>& medoids, int v,
                   std::vector<std::pair<double, int>>& heap) {
   heap.clear();
@@ -201,7 +204,7 @@ double ClosedLength(ValveDistances& dist, const std::vector<int>& order) {
 // Held-Karp over the m <= kExactTourSize valves of order (order[0] stays first):
 //   C({j}, j) = d(0, j),  C(S, j) = min_{i in S \ {j}} C(S \ {j}, i) + d(i, j),
 //   L = min_j C({1..m-1}, j) + d(j, 0).
-// Rewrites order optimally and returns L (kInf, order unchanged, if some valve is unreachable).
+// Rewrites order optimally and returns L.
 double ExactOrder(ValveDistances& dist, std::vector<int>& order) {
   const int m = static_cast<int>(order.size());
   if (m <= 3) return ClosedLength(dist, order);  // one cyclic order up to direction
@@ -230,7 +233,6 @@ double ExactOrder(ValveDistances& dist, std::vector<int>& order) {
     const double c = cost[(subsets - 1) * n + j] + d[(j + 1) * m];
     if (c < best) best = c, last = j;
   }
-  if (last < 0) return kInf;
   std::vector<int> optimal;
   for (int set = subsets - 1; last != -1;) {
     optimal.push_back(order[last + 1]);
@@ -310,13 +312,7 @@ std::vector<std::vector<int>> Cluster(ValveDistances& dist, const Points& p, int
   for (int round = 1;; ++round) {
     for (int c = 0; c < k; ++c) cluster_of[medoids[c]] = c;
     for (int v = 0; v < m; ++v) {
-      int medoid = is_medoid[v] ? v : NearestMedoid(dist, medoids, v, heap);
-      if (medoid < 0) {  // cut off from every medoid: the straight-line nearest
-        medoid = *std::min_element(medoids.begin(), medoids.end(), [&](int a, int b) {
-          return (p[a] - p[v]).squaredNorm() < (p[b] - p[v]).squaredNorm();
-        });
-      }
-      label[v] = cluster_of[medoid];
+      label[v] = cluster_of[is_medoid[v] ? v : NearestMedoid(dist, medoids, v, heap)];
     }
     for (auto& cluster : clusters) cluster.clear();
     for (int v = 0; v < m; ++v) clusters[label[v]].push_back(v);
@@ -460,7 +456,7 @@ class Search {
       const auto it = std::find(c.order.begin(), c.order.end(), remove);
       const int m = static_cast<int>(c.order.size()), at = static_cast<int>(it - c.order.begin());
       const int prev = c.order[(at + m - 1) % m], next = c.order[(at + 1) % m];
-      if (m > kExactTourSize + 1) c.length += dist_(prev, next) - dist_(prev, remove) - dist_(remove, next);
+      c.length += dist_(prev, next) - dist_(prev, remove) - dist_(remove, next);
       c.order.erase(it);
     }
     const int m = static_cast<int>(c.order.size());
@@ -561,7 +557,7 @@ class Search {
     };
     std::vector<std::pair<double, int>> by_merge;  // tours t whose merge keeps u below a's lap
     for (int t = 0; t < static_cast<int>(s.order.size()); ++t) {
-      if (t != a && BestMerge(s, t).lap < Lap(s, a)) by_merge.emplace_back(merges_[t].lap, t);
+      if (t != a && BestMerge(s, t).lap < Lap(s, a) && merges_[t].u != a) by_merge.emplace_back(merges_[t].lap, t);
     }
     std::sort(by_merge.begin(), by_merge.end());
     for (const auto& [lap, t] : by_merge) {
@@ -653,7 +649,7 @@ std::vector<int> Match(const Points& centroids, const std::vector<FleetVehicle>&
 std::vector<Eigen::Vector2d> LegPath(const maps::OccupancyGrid& grid, const Eigen::Vector2d& from,
                                      const Eigen::Vector2d& to, double octile_m) {
   const Eigen::Vector2i a = grid.CellOf(from), b = grid.CellOf(to);
-  if (!std::isfinite(octile_m) || grid.Occupied(a.x(), a.y()) || grid.Occupied(b.x(), b.y())) {
+  if (octile_m >= kUnreachable || grid.Occupied(a.x(), a.y()) || grid.Occupied(b.x(), b.y())) {
     return PlanGridPath(grid, from, to);
   }
   const double r = grid.resolution_m();

@@ -212,6 +212,28 @@ TEST(FleetTourPlanner, SharesDoNotCrossAWall) {
   }
 }
 
+// A valve inside a closed ring has no path to any other: its tour would have no legs, so the
+// search gives it a vehicle of its own (while it has vehicles to spare) and the plan is ok.
+TEST(FleetTourPlanner, AValveCutOffFromTheRestFliesAlone) {
+  OccupancyGrid grid(12.0, 10.0, 0.1);
+  grid.FillBox({3.0, 2.0}, {4.5, 6.0});
+  for (const auto& [lo, hi] : {std::pair{Eigen::Vector2d(8.0, 7.0), Eigen::Vector2d(10.0, 7.2)},
+                               {Eigen::Vector2d(8.0, 8.8), Eigen::Vector2d(10.0, 9.0)},
+                               {Eigen::Vector2d(8.0, 7.0), Eigen::Vector2d(8.2, 9.0)},
+                               {Eigen::Vector2d(9.8, 7.0), Eigen::Vector2d(10.0, 9.0)}}) {
+    grid.FillBox(lo, hi);
+  }
+  grid = grid.Inflated(0.2);
+  Points valves;
+  for (int i = 0; i < 30; ++i) valves.push_back(grid.CenterOf(grid.CellOf({0.6 + 0.24 * i, 0.6 + (i % 6) * 1.1})));
+  valves.push_back({9.05, 8.05});
+  const FleetTourPlan plan = PlanFleetTours(grid, valves, Eigen::VectorXd::Ones(31) / 31, Vehicles(3, 0.5), 1.0);
+  EXPECT_TRUE(plan.ok);
+  int alone = 0;
+  for (const VehicleTour& vt : plan.vehicles) alone += vt.valves == std::vector<int>{30};
+  EXPECT_EQ(alone, 1);
+}
+
 TEST(FleetTourPlanner, SameSeedSamePlan) {
   const OccupancyGrid grid = FieldGrid();
   const Points valves = RandomFreePoints(grid, 50, 8);
