@@ -323,7 +323,9 @@ std::vector<std::vector<int>> Cluster(ValveDistances& dist, const Points& p, int
       Eigen::Vector2d centroid = Eigen::Vector2d::Zero();
       for (int v : members) centroid += p[v] / static_cast<double>(members.size());
       std::vector<int> candidates = members;
-      const auto by_centroid = [&](int a, int b) { return (p[a] - centroid).norm() < (p[b] - centroid).norm(); };
+      const auto by_centroid = [&](int a, int b) {  // ties by index: the same order on every library
+        return std::pair((p[a] - centroid).squaredNorm(), a) < std::pair((p[b] - centroid).squaredNorm(), b);
+      };
       const std::size_t tried = std::min<std::size_t>(kMedoidCandidates, candidates.size());
       std::partial_sort(candidates.begin(), candidates.begin() + tried, candidates.end(), by_centroid);
       candidates.resize(tried);

@@ -55,14 +55,15 @@
 //     the window's cell indices are ordered as the grid's (ties break alike), so the leg is the
 //     full-grid one at a cost independent of the grid's size.
 //
-// Complexity, with q = M / N valves per tour and l the length of a leg in cells: seeding O(M N);
-// a k-medoids round O(M log N) plus O(M q) distances; a local-search pass O(M K) candidate
-// changes, each O(2^q q^2) (q <= 8, memoised) or O(q log q); split-merge O(N) cached merges per
-// call; legs O(M l^2 log l). Each new distance is an A* over O(l) cells in open water, O(l^2)
-// around structures. Memory O(C) for the grid plus O(pairs priced). Measured (one core of this
-// machine, Release, default options): 20 valves / 4 vehicles (fleet_field) 0.04 s, 87 / 24 and
-// 240 / 100 (fleet_large) 0.07 and 0.10 s, 2,400 / 1,000 (fleet_large tiled 5 x 2, 1.5 M cells)
-// 1.1 s.
+// Complexity, with C grid cells, q = M / N valves per tour and l the length of a leg in cells:
+// O(C) to copy and label the grid; straight-line neighbours O(M^2); seeding O(M N); a k-medoids
+// round O(M N) (a heap of the medoids per valve) plus O(M q) distances; a local-search pass
+// O(M K) candidate changes, each O(2^q q^2) (q <= 8, memoised) or O(q log q); split-merge O(N)
+// cached merges per call; matching O(N^2 log N); legs O(M l^2 log l). A new distance is an A*
+// over O(l) cells in open water, more around structures. Memory O(C + pairs priced). Measured
+// (one core of this machine, Release, default options): 20 valves / 4 vehicles (fleet_field)
+// 0.05 s, 87 / 24 and 240 / 100 (fleet_large) 0.08 and 0.11 s, 2,400 / 1,000 (fleet_large
+// tiled 5 x 2: 1.5 M cells) 1.1 s.
 //
 // More vehicles than valves (N > M): every valve gets a vehicle of its own (the nearest one,
 // greedily), and each extra vehicle gets one of the heaviest valves again (duplicates, heaviest
@@ -85,6 +86,7 @@ struct FleetVehicle {
   double speed_mps = 0.5;                                ///< transit speed (m/s), > 0
 };
 
+/// Knobs of the search; the figures above are with these defaults.
 struct FleetTourOptions {
   /// alpha >= 0: a tour's wait W is split over its valves as w_i^alpha / sum_j w_j^alpha (1 = as
   /// TourController given the raw weights; 0 = equal waits).

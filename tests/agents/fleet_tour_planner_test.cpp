@@ -115,7 +115,8 @@ TEST(FleetTourPlanner, LapTimeIsPlanGridPathLengthOverSpeedPlusWeightedWaits) {
     double length = 0.0, weight_sum = 0.0, waits = 0.0;
     for (int v : vt.valves) weight_sum += std::sqrt(weights[v]);
     for (int i = 0; i < m; ++i) {
-      const auto path = PlanGridPath(grid, valves[vt.valves[vt.tour.order[i]]], valves[vt.valves[vt.tour.order[(i + 1) % m]]]);
+      const int from = vt.valves[vt.tour.order[i]], to = vt.valves[vt.tour.order[(i + 1) % m]];
+      const auto path = PlanGridPath(grid, valves[from], valves[to]);
       ASSERT_EQ(path.size(), vt.tour.legs[i].size()) << "vehicle " << k << " leg " << i;
       for (std::size_t w = 0; w < path.size(); ++w) EXPECT_LT((path[w] - vt.tour.legs[i][w]).norm(), 1e-12);
       length += PathLength(path);
