@@ -18,6 +18,10 @@
 
 namespace sage::agents {
 namespace {
+// A named namespace inside the anonymous one: main builds each library as unity batches
+// (cmake/SageLibrary.cmake), where this file shares a translation unit with tour_planner.cpp,
+// whose anonymous namespace has a kInf of its own.
+namespace fleet_tours {
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
 // Grid distance (m) between valves with no path between them: finite, so that the search still
@@ -670,11 +674,8 @@ std::vector<Eigen::Vector2d> LegPath(const maps::OccupancyGrid& grid, const Eige
   return path;
 }
 
-}  // namespace
-
-FleetTourPlan PlanFleetTours(const maps::OccupancyGrid& grid, const std::vector<Eigen::Vector2d>& valves_m,
-                             const Eigen::VectorXd& weights, const std::vector<FleetVehicle>& vehicles,
-                             double wait_per_lap_s, const FleetTourOptions& options) {
+FleetTourPlan Plan(const maps::OccupancyGrid& grid, const Points& valves_m, const Eigen::VectorXd& weights,
+                   const std::vector<FleetVehicle>& vehicles, double wait_per_lap_s, const FleetTourOptions& options) {
   const int m = static_cast<int>(valves_m.size()), n = static_cast<int>(vehicles.size());
   if (m == 0 || n == 0) throw std::invalid_argument("PlanFleetTours: needs at least one valve and one vehicle");
   if (weights.size() != m || !weights.allFinite() || (weights.array() < 0.0).any()) {
@@ -762,6 +763,15 @@ FleetTourPlan PlanFleetTours(const maps::OccupancyGrid& grid, const std::vector<
     plan.vehicles.push_back(std::move(out));
   }
   return plan;
+}
+
+}  // namespace fleet_tours
+}  // namespace
+
+FleetTourPlan PlanFleetTours(const maps::OccupancyGrid& grid, const std::vector<Eigen::Vector2d>& valves_m,
+                             const Eigen::VectorXd& weights, const std::vector<FleetVehicle>& vehicles,
+                             double wait_per_lap_s, const FleetTourOptions& options) {
+  return fleet_tours::Plan(grid, valves_m, weights, vehicles, wait_per_lap_s, options);
 }
 
 }  // namespace sage::agents
