@@ -92,7 +92,7 @@ struct FleetTourOptions {
   /// TourController given the raw weights; 0 = equal waits).
   double weight_exponent = 1.0;
   std::uint64_t seed = 1;         ///< k-means++ draws and the kicks of step 4
-  int neighbours = 8;             ///< K: nearest valves (grid distance) whose tours a valve may join
+  int neighbours = 8;             ///< K: a valve's nearest valves (straight line) whose tours it may join
   int medoid_iterations = 20;     ///< cap on k-medoids rounds (>= 1)
   int perturbation_rounds = 200;  ///< iterated-local-search kicks (>= 0)
   /// Wall-clock cap (s) on steps 3-4; 0 = none. A plan cut short by it depends on the machine's
@@ -108,6 +108,7 @@ struct VehicleTour {
   double lap_time_s = 0.0;  ///< sum_i |legs[i]| / speed + sum_k wait_per_lap_s * weights[k] (s)
 };
 
+/// The fleet's tours and their lap figures.
 struct FleetTourPlan {
   std::vector<VehicleTour> vehicles;  ///< one per input vehicle, same order
   double max_lap_s = 0.0;             ///< max over vehicles of lap_time_s (s)
