@@ -1,0 +1,777 @@
+// Fleet inspection tours: k-medoids on grid distance, min-max local search, A* legs (see the
+// header for the method, the math and the complexity).
+#include "agents/fleet_tour_planner.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <deque>
+#include <limits>
+#include <map>
+#include <numbers>
+#include <queue>
+#include <random>
+#include <stdexcept>
+#include <tuple>
+#include <unordered_map>
+#include <utility>
+
+namespace sage::agents {
+namespace {
+// A named namespace inside the anonymous one: main builds each library as unity batches
+// (cmake/SageLibrary.cmake), where this file shares a translation unit with tour_planner.cpp,
+// whose anonymous namespace has a kInf of its own.
+namespace fleet_tours {
+
+constexpr double kInf = std::numeric_limits<double>::infinity();
+// Grid distance (m) between valves with no path between them: finite, so that the search still
+// compares tours holding such a pair, and splits them where it has the vehicles to.
+constexpr double kUnreachable = 1e9;
+constexpr int kExactTourSize = 8;  // Held-Karp per priced tour: 2^7 x 8 x 8 steps at most
+constexpr double kTolerance = 1e-9;  // changes smaller than this (s, m) are rounding, not moves
+constexpr int kMedoidCandidates = 4;  // members nearest the centroid tried as the next medoid
+
+using Points = std::vector<Eigen::Vector2d>;
+using Clock = std::chrono::steady_clock;
+
+// Cell index (i * rows + j, the grid's own order) of x_m, or of the nearest free cell: the first
+// Chebyshev ring around x_m's cell that has a free cell, its centre closest to x_m (PlanGridPath's
+// rule). -1 if the grid has no free cell.
+int SnapCell(const maps::OccupancyGrid& grid, const Eigen::Vector2d& x_m) {
+  const Eigen::Vector2i c = grid.CellOf(x_m);
+  for (int ring = 0; ring <= std::max(grid.cols(), grid.rows()); ++ring) {
+    int best = -1;
+    double best_d2 = kInf;
+    for (int i = c.x() - ring; i <= c.x() + ring; ++i) {
+      const int step = (i == c.x() - ring || i == c.x() + ring) ? 1 : 2 * ring;  // the ring only
+      for (int j = c.y() - ring; j <= c.y() + ring; j += std::max(step, 1)) {
+        if (grid.Occupied(i, j)) continue;
+        const double d2 = (grid.CenterOf({i, j}) - x_m).squaredNorm();
+        if (d2 < best_d2) best = i * grid.rows() + j, best_d2 = d2;
+      }
+    }
+    if (best >= 0) return best;
+  }
+  return -1;
+}
+
+// Valve-to-valve grid distances: A* between the valves' cells on the graph and costs of
+// PlanGridPath's (8-connected, no corner cutting, octile heuristic, so the cost is exact), ties
+// in f to the deeper cell so that open water costs O(L / r) cells; cached per pair. Valves in
+// different 4-connected components of the free cells (the same connectivity: a diagonal needs
+// both orthogonal cells) are kUnreachable apart without a search.
+class ValveDistances {
+ public:
+  ValveDistances(const maps::OccupancyGrid& grid, const Points& valves)
+      : pad_rows_(grid.rows() + 2), r_(grid.resolution_m()), cells_((grid.cols() + 2) * pad_rows_),
+        free_(cells_, 0), component_(cells_, -1), stamp_(cells_, 0), g_(cells_) {
+    // One cell of occupied padding: no bounds checks in the searches.
+    for (int i = 0; i < grid.cols(); ++i) {
+      for (int j = 0; j < grid.rows(); ++j) free_[(i + 1) * pad_rows_ + j + 1] = !grid.Occupied(i, j);
+    }
+    for (int di = -1; di <= 1; ++di) {
+      for (int dj = -1; dj <= 1; ++dj) {
+        const bool diagonal = di != 0 && dj != 0;
+        if (di != 0 || dj != 0) {
+          steps_.push_back({di * pad_rows_ + dj, diagonal ? di * pad_rows_ : 0, diagonal ? dj : 0,
+                            diagonal ? std::numbers::sqrt2 * r_ : r_});
+        }
+      }
+    }
+    for (const Eigen::Vector2d& x : valves) {
+      const int cell = SnapCell(grid, x);
+      cell_.push_back(cell < 0 ? -1 : (cell / grid.rows() + 1) * pad_rows_ + cell % grid.rows() + 1);
+      centre_.push_back(cell < 0 ? x : grid.CenterOf({cell / grid.rows(), cell % grid.rows()}));
+      if (cell_.back() >= 0 && component_[cell_.back()] < 0) Label(cell_.back(), cell_.back());
+    }
+  }
+
+  double operator()(int i, int j) {
+    if (cell_[i] < 0 || cell_[j] < 0 || component_[cell_[i]] != component_[cell_[j]]) return kUnreachable;
+    if (cell_[i] == cell_[j]) return 0.0;
+    const auto key = static_cast<std::uint64_t>(std::min(i, j)) << 32 | static_cast<std::uint32_t>(std::max(i, j));
+    const auto [it, inserted] = cache_.try_emplace(key, 0.0);
+    if (inserted) it->second = AStar(cell_[std::min(i, j)], cell_[std::max(i, j)]);
+    return it->second;
+  }
+  /// Centre of valve i's cell (m): straight lines between centres bound d from below.
+  const Eigen::Vector2d& centre(int i) const { return centre_[i]; }
+
+ private:
+  struct Step {
+    int offset, side_a, side_b;  // to the neighbour; the two cells a diagonal passes (0: none)
+    double cost;
+  };
+  bool Passable(int c, const Step& step) const {
+    return free_[c + step.offset] && free_[c + step.side_a] && free_[c + step.side_b];
+  }
+
+  void Label(int seed, int label) {  // flood fill of seed's component
+    std::vector<int> stack{seed};
+    component_[seed] = label;
+    while (!stack.empty()) {
+      const int c = stack.back();
+      stack.pop_back();
+      for (const int k : {c - 1, c + 1, c - pad_rows_, c + pad_rows_}) {
+        if (free_[k] && component_[k] < 0) component_[k] = label, stack.push_back(k);
+      }
+    }
+  }
+
+  double AStar(int start, int goal) {
+    ++generation_;
+    const int gi = goal / pad_rows_, gj = goal % pad_rows_;
+    const auto h = [&](int c) {
+      const int dx = std::abs(c / pad_rows_ - gi), dy = std::abs(c % pad_rows_ - gj);
+      return r_ * (std::max(dx, dy) + (std::numbers::sqrt2 - 1.0) * std::min(dx, dy));
+    };
+    struct Entry {
+      double f, g;
+      int cell;
+      bool operator>(const Entry& o) const { return f > o.f || (f == o.f && g < o.g); }
+    };
+    std::priority_queue<Entry, std::vector<Entry>, std::greater<>> open;
+    stamp_[start] = generation_, g_[start] = 0.0;
+    open.push({h(start), 0.0, start});
+    while (!open.empty()) {
+      const Entry e = open.top();
+      open.pop();
+      if (e.g > g_[e.cell]) continue;  // stale entry
+      if (e.cell == goal) return e.g;
+      for (const Step& step : steps_) {
+        const int k = e.cell + step.offset;
+        const double g = e.g + step.cost;
+        if (!Passable(e.cell, step) || (stamp_[k] == generation_ && g >= g_[k])) continue;
+        stamp_[k] = generation_, g_[k] = g;
+        open.push({g + h(k), g, k});
+      }
+    }
+    return kUnreachable;  // not reached: the component check comes first
+  }
+
+  int pad_rows_;
+  double r_;
+  std::size_t cells_;
+  std::vector<char> free_;  // padded grid: cell (i, j) at (i + 1) * pad_rows_ + j + 1
+  std::vector<int> component_;
+  std::vector<std::uint32_t> stamp_;  // g_[c] is valid iff stamp_[c] == generation_
+  std::vector<double> g_;
+  std::uint32_t generation_ = 0;
+  std::vector<Step> steps_;
+  std::vector<int> cell_;
+  Points centre_;
+  std::unordered_map<std::uint64_t, double> cache_;
+};
+
+// Each valve's `count` nearest other valves in straight line (the search's candidate moves; each
+// move is then priced on the grid), nearest first, ties by index.
+std::vector<std::vector<int>> NearestValves(const Points& p, int count) {
+  const int m = static_cast<int>(p.size());
+  std::vector<std::vector<int>> near(m);
+  std::vector<std::pair<double, int>> by_distance;
+  for (int v = 0; v < m; ++v) {
+    by_distance.clear();
+    for (int u = 0; u < m; ++u) {
+      if (u != v) by_distance.emplace_back((p[u] - p[v]).squaredNorm(), u);
+    }
+    const auto last = by_distance.begin() + std::min<std::size_t>(count, by_distance.size());
+    std::partial_sort(by_distance.begin(), last, by_distance.end());
+    for (auto it = by_distance.begin(); it != last; ++it) near[v].push_back(it->second);
+  }
+  return near;
+}
+
+// The medoid nearest to v by grid distance: medoids in ascending straight line between cell
+// centres (a lower bound of d) until that line reaches the best d found.
+int NearestMedoid(ValveDistances& dist, const std::vector<int>& medoids, int v,
+                  std::vector<std::pair<double, int>>& heap) {
+  heap.clear();
+  for (int c : medoids) heap.emplace_back((dist.centre(c) - dist.centre(v)).norm(), c);
+  std::make_heap(heap.begin(), heap.end(), std::greater<>{});
+  int best = -1;
+  double best_d = kInf;
+  while (!heap.empty() && heap.front().first < best_d) {
+    std::pop_heap(heap.begin(), heap.end(), std::greater<>{});
+    const double d = dist(v, heap.back().second);
+    if (d < best_d) best = heap.back().second, best_d = d;
+    heap.pop_back();
+  }
+  return best;
+}
+
+double ClosedLength(ValveDistances& dist, const std::vector<int>& order) {
+  double length = 0.0;
+  for (std::size_t i = 0; i < order.size(); ++i) length += dist(order[i], order[(i + 1) % order.size()]);
+  return length;
+}
+
+// Held-Karp over the m <= kExactTourSize valves of order (order[0] stays first):
+//   C({j}, j) = d(0, j),  C(S, j) = min_{i in S \ {j}} C(S \ {j}, i) + d(i, j),
+//   L = min_j C({1..m-1}, j) + d(j, 0).
+// Rewrites order optimally and returns L.
+double ExactOrder(ValveDistances& dist, std::vector<int>& order) {
+  const int m = static_cast<int>(order.size());
+  if (m <= 3) return ClosedLength(dist, order);  // one cyclic order up to direction
+  std::vector<double> d(m * m);
+  for (int a = 0; a < m; ++a) {
+    for (int b = 0; b < m; ++b) d[a * m + b] = dist(order[a], order[b]);
+  }
+  const int n = m - 1, subsets = 1 << n;
+  std::vector<double> cost(subsets * n, kInf);
+  std::vector<int> parent(subsets * n, -1);
+  for (int j = 0; j < n; ++j) cost[(1 << j) * n + j] = d[j + 1];
+  for (int set = 1; set < subsets; ++set) {
+    for (int j = 0; j < n; ++j) {
+      if (!(set >> j & 1) || cost[set * n + j] == kInf) continue;
+      for (int k = 0; k < n; ++k) {
+        if (set >> k & 1) continue;
+        const int grown = set | 1 << k;
+        const double c = cost[set * n + j] + d[(j + 1) * m + k + 1];
+        if (c < cost[grown * n + k]) cost[grown * n + k] = c, parent[grown * n + k] = j;
+      }
+    }
+  }
+  int last = -1;
+  double best = kInf;
+  for (int j = 0; j < n; ++j) {
+    const double c = cost[(subsets - 1) * n + j] + d[(j + 1) * m];
+    if (c < best) best = c, last = j;
+  }
+  std::vector<int> optimal;
+  for (int set = subsets - 1; last != -1;) {
+    optimal.push_back(order[last + 1]);
+    const int previous = parent[set * n + last];
+    set &= ~(1 << last);
+    last = previous;
+  }
+  optimal.push_back(order[0]);
+  order.assign(optimal.rbegin(), optimal.rend());
+  return best;
+}
+
+// 2-opt: reverse order[i..j] while delta = d(a, c) + d(b, e) - d(a, b) - d(c, e) < 0
+// (a b ... c e -> a c ... b e). Straight lines bound d(a, c) + d(b, e) from below, so a pair is
+// priced on the grid only if it could gain: far pairs are the costly searches.
+double TwoOpt(ValveDistances& dist, const Points& p, std::vector<int>& order) {
+  const int m = static_cast<int>(order.size());
+  for (bool improved = m >= 4; improved;) {
+    improved = false;
+    for (int i = 1; i + 1 < m; ++i) {
+      for (int j = i + 1; j < m; ++j) {
+        const int a = order[i - 1], b = order[i], c = order[j], e = order[(j + 1) % m];
+        if (e == a) continue;  // reversing all but a: the same tour
+        const double removed = dist(a, b) + dist(c, e);
+        if ((p[a] - p[c]).norm() + (p[b] - p[e]).norm() >= removed - kTolerance) continue;
+        if (dist(a, c) + dist(b, e) < removed - kTolerance) {
+          std::reverse(order.begin() + i, order.begin() + j + 1);
+          improved = true;
+        }
+      }
+    }
+  }
+  return ClosedLength(dist, order);
+}
+
+// A first tour through `valves`: exact if small, else straight-line nearest neighbour + 2-opt.
+double FirstOrder(ValveDistances& dist, const Points& p, std::vector<int>& valves) {
+  if (static_cast<int>(valves.size()) <= kExactTourSize) return ExactOrder(dist, valves);
+  for (std::size_t k = 1; k < valves.size(); ++k) {
+    const auto nearest = std::min_element(valves.begin() + k, valves.end(), [&](int a, int b) {
+      return (p[a] - p[valves[k - 1]]).squaredNorm() < (p[b] - p[valves[k - 1]]).squaredNorm();
+    });
+    std::iter_swap(valves.begin() + k, nearest);
+  }
+  return TwoOpt(dist, p, valves);
+}
+
+double Uniform01(std::mt19937_64& rng) { return static_cast<double>(rng() >> 11) * 0x1.0p-53; }
+
+// k-medoids on grid distance with k-means++ seeding (header, step 1). Returns the clusters.
+std::vector<std::vector<int>> Cluster(ValveDistances& dist, const Points& p, int k, int iterations,
+                                      std::mt19937_64& rng) {
+  const int m = static_cast<int>(p.size());
+  std::vector<int> medoids;
+  std::vector<char> is_medoid(m, 0);
+  std::vector<double> d2(m, kInf);
+  for (int next = static_cast<int>(rng() % m);;) {
+    medoids.push_back(next);
+    is_medoid[next] = 1;
+    if (static_cast<int>(medoids.size()) == k) break;
+    double total = 0.0;
+    for (int v = 0; v < m; ++v) {
+      d2[v] = is_medoid[v] ? 0.0 : std::min(d2[v], (p[v] - p[next]).squaredNorm());
+      total += d2[v];
+    }
+    double draw = Uniform01(rng) * total;
+    next = -1;
+    for (int v = 0; v < m && (next < 0 || draw >= 0.0); ++v) {
+      if (is_medoid[v]) continue;
+      if (next < 0 || d2[v] > 0.0) next = v;  // total == 0 (coincident valves): the first free one
+      draw -= d2[v];
+    }
+  }
+  std::vector<int> label(m), cluster_of(m, -1);
+  std::vector<std::pair<double, int>> heap;
+  std::vector<std::vector<int>> clusters(k);
+  for (int round = 1;; ++round) {
+    for (int c = 0; c < k; ++c) cluster_of[medoids[c]] = c;
+    for (int v = 0; v < m; ++v) {
+      label[v] = cluster_of[is_medoid[v] ? v : NearestMedoid(dist, medoids, v, heap)];
+    }
+    for (auto& cluster : clusters) cluster.clear();
+    for (int v = 0; v < m; ++v) clusters[label[v]].push_back(v);
+    if (round >= iterations) break;
+    bool moved = false;
+    for (int c = 0; c < k; ++c) {
+      const std::vector<int>& members = clusters[c];
+      Eigen::Vector2d centroid = Eigen::Vector2d::Zero();
+      for (int v : members) centroid += p[v] / static_cast<double>(members.size());
+      std::vector<int> candidates = members;
+      const auto by_centroid = [&](int a, int b) {  // ties by index: the same order on every library
+        return std::pair((p[a] - centroid).squaredNorm(), a) < std::pair((p[b] - centroid).squaredNorm(), b);
+      };
+      const std::size_t tried = std::min<std::size_t>(kMedoidCandidates, candidates.size());
+      std::partial_sort(candidates.begin(), candidates.begin() + tried, candidates.end(), by_centroid);
+      candidates.resize(tried);
+      candidates.push_back(medoids[c]);
+      int best = medoids[c];
+      double best_cost = kInf;
+      for (int candidate : candidates) {
+        double cost = 0.0;
+        for (int v : members) cost += dist(candidate, v);
+        if (cost < best_cost - kTolerance || (cost <= best_cost + kTolerance && candidate == medoids[c])) {
+          best = candidate, best_cost = cost;
+        }
+      }
+      if (best != medoids[c]) {
+        is_medoid[medoids[c]] = 0, is_medoid[best] = 1, medoids[c] = best;
+        moved = true;
+      }
+    }
+    if (!moved) break;
+  }
+  return clusters;
+}
+
+// The min-max acceptance rule on the laps of the tours a change touches (header, step 3).
+bool Better(double new_max, double new_sum, double old_max, double old_sum) {
+  return new_max < old_max - kTolerance || (new_max <= old_max && new_sum < old_sum - kTolerance);
+}
+
+// The search state: per vehicle its valves in visiting order and that tour's grid length (m).
+struct Tours {
+  std::vector<std::vector<int>> order;
+  std::vector<double> length;
+  std::vector<int> owner;             // valve -> vehicle
+  std::vector<std::uint64_t> version;  // a new number whenever the tour changes
+};
+
+// Min-max local search, split-merge and kicks (header, steps 3 and 4).
+class Search {
+ public:
+  Search(ValveDistances& dist, const Points& p, const std::vector<FleetVehicle>& vehicles, double wait_s,
+         const FleetTourOptions& options, std::mt19937_64& rng)
+      : dist_(dist), p_(p), near_(NearestValves(p, std::max(1, options.neighbours))), vehicles_(vehicles),
+        wait_s_(wait_s), rng_(rng),
+        deadline_(options.time_budget_s > 0.0
+                      ? Clock::now() + std::chrono::duration_cast<Clock::duration>(
+                                           std::chrono::duration<double>(options.time_budget_s))
+                      : Clock::time_point::max()),
+        merges_(vehicles.size()) {}
+
+  void Run(Tours& s, int rounds) {
+    std::vector<int> all(s.order.size());
+    for (std::size_t k = 0; k < all.size(); ++k) all[k] = static_cast<int>(k);
+    std::stable_sort(all.begin(), all.end(), [&](int a, int b) { return Lap(s, a) > Lap(s, b); });
+    Settle(s, {all.begin(), all.end()});
+    Tours best = s;
+    auto [best_max, best_sum] = Key(best);
+    for (int round = 0; round < rounds && !OutOfTime(); ++round) {
+      int from = Longest(s);
+      std::deque<int> touched{from};
+      for (int step = 0; step < 2 && s.order[from].size() > 1; ++step) {  // a chain of two moves
+        const int v = s.order[from][rng_() % s.order[from].size()];
+        const auto near = Neighbours(s, v);
+        if (near.empty()) break;
+        const int to = near[rng_() % near.size()].second;
+        Apply(s, from, Edit(Of(s, from), v, -1));
+        Apply(s, to, Edit(Of(s, to), -1, v));
+        touched.push_back(to);
+        from = to;
+      }
+      Settle(s, touched);
+      const auto [max, sum] = Key(s);
+      if (Better(max, sum, best_max, best_sum)) {
+        best = s, best_max = max, best_sum = sum;
+      } else {
+        s = best;
+      }
+    }
+    s = std::move(best);
+  }
+
+ private:
+  struct Candidate {
+    std::vector<int> order;
+    double length = 0.0;
+  };
+  struct Merge {
+    double lap = kInf;  // of u after the merge
+    int u = -1;
+    std::uint64_t t_version = 0, u_version = 0;
+  };
+  double Lap(int k, double length_m) const { return length_m / vehicles_[k].speed_mps + wait_s_; }
+  double Lap(const Tours& s, int k) const { return Lap(k, s.length[k]); }
+  bool OutOfTime() const { return Clock::now() > deadline_; }
+  static Candidate Of(const Tours& s, int k) { return {s.order[k], s.length[k]}; }
+  int Longest(const Tours& s) const {
+    int longest = 0;
+    for (int k = 1; k < static_cast<int>(s.order.size()); ++k) longest = Lap(s, k) > Lap(s, longest) ? k : longest;
+    return longest;
+  }
+  std::pair<double, double> Key(const Tours& s) const {
+    double max = 0.0, sum = 0.0;
+    for (std::size_t k = 0; k < s.order.size(); ++k) max = std::max(max, Lap(s, k)), sum += Lap(s, k);
+    return {max, sum};
+  }
+
+  // (valve u, its tour) for each of v's K nearest valves held by another tour.
+  std::vector<std::pair<int, int>> Neighbours(const Tours& s, int v) const {
+    std::vector<std::pair<int, int>> out;
+    for (int u : near_[v]) {
+      if (s.owner[u] != s.owner[v]) out.emplace_back(u, s.owner[u]);
+    }
+    return out;
+  }
+
+  // The shortest closed tour through a set of at most kExactTourSize valves, memoised by the set:
+  // the search prices the same few sets again and again.
+  Candidate Exact(std::vector<int> order) {
+    std::vector<int> key = order;
+    std::sort(key.begin(), key.end());
+    const auto [it, inserted] = exact_.try_emplace(std::move(key));
+    if (inserted) it->second.length = ExactOrder(dist_, order), it->second.order = std::move(order);
+    return it->second;
+  }
+
+  // c without `remove` and with `add` (-1: none), priced exactly if it has at most
+  // kExactTourSize valves, else by the removal gain d(p, n) - d(p, v) - d(v, n) and the cheapest
+  // insertion d(x, u) + d(u, y) - d(x, y) over its edges (x, y).
+  Candidate Edit(Candidate c, int remove, int add) {
+    if (remove >= 0) {
+      const auto it = std::find(c.order.begin(), c.order.end(), remove);
+      const int m = static_cast<int>(c.order.size()), at = static_cast<int>(it - c.order.begin());
+      const int prev = c.order[(at + m - 1) % m], next = c.order[(at + 1) % m];
+      c.length += dist_(prev, next) - dist_(prev, remove) - dist_(remove, next);
+      c.order.erase(it);
+    }
+    const int m = static_cast<int>(c.order.size());
+    if (add >= 0 && m >= kExactTourSize) {
+      // Positions by the straight-line lower bound of their cost, priced on the grid until the
+      // bound passes the best: a far edge is never searched.
+      std::vector<std::pair<double, int>> bounds;
+      for (int q = 0; q < m; ++q) {
+        const int x = c.order[q], y = c.order[(q + 1) % m];
+        bounds.emplace_back((p_[x] - p_[add]).norm() + (p_[add] - p_[y]).norm() - dist_(x, y), q);
+      }
+      std::sort(bounds.begin(), bounds.end());
+      double best = kInf;
+      int at = 0;
+      for (const auto& [bound, q] : bounds) {
+        if (bound >= best) break;
+        const int x = c.order[q], y = c.order[(q + 1) % m];
+        const double cost = dist_(x, add) + dist_(add, y) - dist_(x, y);
+        if (cost < best) best = cost, at = q + 1;
+      }
+      c.order.insert(c.order.begin() + at, add);
+      c.length += best;
+    } else if (add >= 0) {
+      c.order.push_back(add);
+    }
+    return static_cast<int>(c.order.size()) <= kExactTourSize ? Exact(std::move(c.order)) : c;
+  }
+
+  void Apply(Tours& s, int k, Candidate c) {
+    if (static_cast<int>(c.order.size()) > kExactTourSize) c.length = TwoOpt(dist_, p_, c.order);
+    s.version[k] = ++versions_;
+    for (int v : c.order) s.owner[v] = k;
+    s.order[k] = std::move(c.order);
+    s.length[k] = c.length;
+  }
+
+  // Applies the change of tours ks to cs if it passes the rule; 2-opt only shortens, so a change
+  // that passed on its price stays an improvement.
+  bool Try(Tours& s, std::initializer_list<int> ks, std::initializer_list<Candidate> cs) {
+    double old_max = 0.0, old_sum = 0.0, new_max = 0.0, new_sum = 0.0;
+    auto c = cs.begin();
+    for (auto k = ks.begin(); k != ks.end(); ++k, ++c) {
+      old_max = std::max(old_max, Lap(s, *k)), old_sum += Lap(s, *k);
+      new_max = std::max(new_max, Lap(*k, c->length)), new_sum += Lap(*k, c->length);
+    }
+    if (!Better(new_max, new_sum, old_max, old_sum)) return false;
+    c = cs.begin();
+    for (auto k = ks.begin(); k != ks.end(); ++k, ++c) Apply(s, *k, *c);
+    return true;
+  }
+
+  // Takes the first improving move or swap of one of tour a's valves; returns the other tour
+  // changed, -1 if none improves. A tour is never emptied.
+  int Improve(Tours& s, int a) {
+    const std::vector<int> members = s.order[a];
+    for (int v : members) {
+      std::vector<int> tried;
+      for (const auto& [u, b] : Neighbours(s, v)) {
+        if (s.order[a].size() > 1 && std::find(tried.begin(), tried.end(), b) == tried.end()) {
+          tried.push_back(b);
+          if (Try(s, {a, b}, {Edit(Of(s, a), v, -1), Edit(Of(s, b), -1, v)})) return b;
+        }
+        if (Try(s, {a, b}, {Edit(Of(s, a), v, u), Edit(Of(s, b), u, v)})) return b;
+      }
+    }
+    return -1;
+  }
+
+  // Split-merge: moves and swaps cannot change how many vehicles share a group of valves (a
+  // tour is never emptied). Tour t merges into a neighbouring tour u, and its vehicle takes part
+  // of the longest tour a (the best of every bipartition if a is small, else of 8 cuts of its
+  // order into halves); taken by the rule on {a, t, u}. The t are tried cheapest merge first.
+  bool SplitMerge(Tours& s, std::deque<int>& touched) {
+    const int a = Longest(s), m = static_cast<int>(s.order[a].size());
+    if (m < 2) return false;
+    std::vector<std::pair<Candidate, Candidate>> splits;  // (stays with a, goes to t), on first need
+    const auto add_split = [&](const std::vector<int>& x, const std::vector<int>& y) {
+      const auto price = [&](std::vector<int> part) {
+        if (static_cast<int>(part.size()) <= kExactTourSize) return Exact(std::move(part));
+        const double length = TwoOpt(dist_, p_, part);
+        return Candidate{std::move(part), length};
+      };
+      splits.emplace_back(price(x), price(y));
+      splits.emplace_back(splits.back().second, splits.back().first);
+    };
+    const auto make_splits = [&] {
+      const std::vector<int>& order = s.order[a];
+      for (int mask = 1; m <= kExactTourSize && mask < 1 << (m - 1); ++mask) {  // order[m - 1] in y: each once
+        std::vector<int> x, y;
+        for (int q = 0; q < m; ++q) (mask >> q & 1 ? x : y).push_back(order[q]);
+        add_split(x, y);
+      }
+      for (int cut = 0; m > kExactTourSize && cut < 8; ++cut) {
+        std::vector<int> rotated(order.begin() + cut * m / 8, order.end());
+        rotated.insert(rotated.end(), order.begin(), order.begin() + cut * m / 8);
+        add_split({rotated.begin(), rotated.begin() + m / 2}, {rotated.begin() + m / 2, rotated.end()});
+      }
+    };
+    std::vector<std::pair<double, int>> by_merge;  // tours t whose merge keeps u below a's lap
+    for (int t = 0; t < static_cast<int>(s.order.size()); ++t) {
+      if (t != a && BestMerge(s, t).lap < Lap(s, a) && merges_[t].u != a) by_merge.emplace_back(merges_[t].lap, t);
+    }
+    std::sort(by_merge.begin(), by_merge.end());
+    for (const auto& [lap, t] : by_merge) {
+      const int u = merges_[t].u;
+      Candidate merged = Of(s, u);
+      for (int v : s.order[t]) merged = Edit(std::move(merged), -1, v);
+      if (splits.empty()) make_splits();
+      const auto best = std::min_element(splits.begin(), splits.end(), [&](const auto& x, const auto& y) {
+        return std::max(Lap(a, x.first.length), Lap(t, x.second.length)) <
+               std::max(Lap(a, y.first.length), Lap(t, y.second.length));
+      });
+      if (Try(s, {a, t, u}, {best->first, best->second, merged})) {
+        touched = {a, t, u};
+        return true;
+      }
+    }
+    return false;
+  }
+
+  // Tour t's cheapest merge into a neighbouring tour u (lowest lap of u after it), cached until
+  // either tour changes. Only small tours merge: two large ones would make a far longer one.
+  const Merge& BestMerge(const Tours& s, int t) {
+    Merge& e = merges_[t];
+    if (e.u >= 0 && e.t_version == s.version[t] && e.u_version == s.version[e.u]) return e;
+    e = Merge{};
+    for (int v : s.order[t]) {
+      for (const auto& [w, u] : Neighbours(s, v)) {
+        if (u == e.u || std::max(s.order[t].size(), s.order[u].size()) > kExactTourSize) continue;
+        Candidate merged = Of(s, u);
+        for (int x : s.order[t]) merged = Edit(std::move(merged), -1, x);
+        if (Lap(u, merged.length) < e.lap) e = {Lap(u, merged.length), u, s.version[t], s.version[u]};
+      }
+    }
+    return e;
+  }
+
+  // Local search from the queued tours, then split-merge on the longest tour while it helps.
+  void Settle(Tours& s, std::deque<int> queue) {
+    do {
+      std::vector<char> queued(s.order.size(), 0);
+      for (int k : queue) queued[k] = 1;
+      while (!queue.empty() && !OutOfTime()) {
+        const int a = queue.front();
+        queue.pop_front();
+        queued[a] = 0;
+        const int b = Improve(s, a);
+        if (b < 0) continue;
+        for (int k : {a, b}) {
+          if (!queued[k]) queued[k] = 1, queue.push_back(k);
+        }
+      }
+    } while (!OutOfTime() && SplitMerge(s, queue));
+  }
+
+  ValveDistances& dist_;
+  const Points& p_;
+  std::vector<std::vector<int>> near_;
+  const std::vector<FleetVehicle>& vehicles_;
+  double wait_s_;
+  std::mt19937_64& rng_;
+  Clock::time_point deadline_;
+  std::map<std::vector<int>, Candidate> exact_;
+  std::vector<Merge> merges_;
+  std::uint64_t versions_ = 0;
+};
+
+// Cluster c -> vehicle: greedily on the straight line from vehicle to centroid, shortest first.
+std::vector<int> Match(const Points& centroids, const std::vector<FleetVehicle>& vehicles) {
+  std::vector<std::tuple<double, int, int>> pairs;
+  pairs.reserve(centroids.size() * vehicles.size());
+  for (int c = 0; c < static_cast<int>(centroids.size()); ++c) {
+    for (int k = 0; k < static_cast<int>(vehicles.size()); ++k) {
+      pairs.emplace_back((centroids[c] - vehicles[k].position_m).norm(), c, k);
+    }
+  }
+  std::sort(pairs.begin(), pairs.end());
+  std::vector<int> vehicle_of(centroids.size(), -1);
+  std::vector<char> taken(vehicles.size(), 0);
+  for (const auto& [d, c, k] : pairs) {
+    if (vehicle_of[c] < 0 && !taken[k]) vehicle_of[c] = k, taken[k] = 1;
+  }
+  return vehicle_of;
+}
+
+// PlanGridPath(grid, from, to) on the window of the grid that holds every cell its A* can pop or
+// test (header, step 5), mapped back to the grid's cell centres. octile_m: the leg's grid
+// distance. Falls back to the whole grid when an end is not free (the snap could leave the
+// window) or the window would not be much smaller.
+std::vector<Eigen::Vector2d> LegPath(const maps::OccupancyGrid& grid, const Eigen::Vector2d& from,
+                                     const Eigen::Vector2d& to, double octile_m) {
+  const Eigen::Vector2i a = grid.CellOf(from), b = grid.CellOf(to);
+  if (octile_m >= kUnreachable || grid.Occupied(a.x(), a.y()) || grid.Occupied(b.x(), b.y())) {
+    return PlanGridPath(grid, from, to);
+  }
+  const double r = grid.resolution_m();
+  const Eigen::Vector2i mid = grid.CellOf(0.5 * (grid.CenterOf(a) + grid.CenterOf(b)));
+  const int reach = static_cast<int>(std::ceil(0.5 * octile_m / r)) + 4;
+  const Eigen::Vector2i lo(std::max(0, mid.x() - reach), std::max(0, mid.y() - reach));
+  const Eigen::Vector2i hi(std::min(grid.cols() - 1, mid.x() + reach), std::min(grid.rows() - 1, mid.y() + reach));
+  const Eigen::Vector2i size = hi - lo + Eigen::Vector2i::Ones();
+  if (2.0 * size.x() * size.y() > static_cast<double>(grid.cols()) * grid.rows()) return PlanGridPath(grid, from, to);
+  maps::OccupancyGrid window(size.x() * r, size.y() * r, r);
+  for (int i = 0; i < size.x(); ++i) {
+    for (int j = 0; j < size.y(); ++j) window.SetOccupied(i, j, grid.Occupied(lo.x() + i, lo.y() + j));
+  }
+  std::vector<Eigen::Vector2d> path = PlanGridPath(window, window.CenterOf(a - lo), window.CenterOf(b - lo));
+  for (Eigen::Vector2d& x : path) x = grid.CenterOf(window.CellOf(x) + lo);
+  return path;
+}
+
+FleetTourPlan Plan(const maps::OccupancyGrid& grid, const Points& valves_m, const Eigen::VectorXd& weights,
+                   const std::vector<FleetVehicle>& vehicles, double wait_per_lap_s, const FleetTourOptions& options) {
+  const int m = static_cast<int>(valves_m.size()), n = static_cast<int>(vehicles.size());
+  if (m == 0 || n == 0) throw std::invalid_argument("PlanFleetTours: needs at least one valve and one vehicle");
+  if (weights.size() != m || !weights.allFinite() || (weights.array() < 0.0).any()) {
+    throw std::invalid_argument("PlanFleetTours: one finite weight >= 0 per valve");
+  }
+  for (const FleetVehicle& vehicle : vehicles) {
+    if (!(vehicle.speed_mps > 0.0) || !std::isfinite(vehicle.speed_mps)) {
+      throw std::invalid_argument("PlanFleetTours: vehicle speeds must be finite and > 0");
+    }
+  }
+  if (!(wait_per_lap_s >= 0.0) || !std::isfinite(wait_per_lap_s)) {
+    throw std::invalid_argument("PlanFleetTours: wait_per_lap_s must be finite and >= 0");
+  }
+  if (!(options.weight_exponent >= 0.0) || !std::isfinite(options.weight_exponent)) {
+    throw std::invalid_argument("PlanFleetTours: weight_exponent must be finite and >= 0");
+  }
+  ValveDistances dist(grid, valves_m);
+  Points centres;  // the search works on the cells' centres, where d is measured
+  for (int v = 0; v < m; ++v) centres.push_back(dist.centre(v));
+  std::mt19937_64 rng(options.seed);
+  std::vector<std::vector<int>> clusters;
+  if (n < m) {
+    clusters = Cluster(dist, centres, n, std::max(1, options.medoid_iterations), rng);
+  } else {
+    for (int v = 0; v < m; ++v) clusters.push_back({v});
+  }
+  Points centroids;
+  for (const auto& cluster : clusters) {
+    Eigen::Vector2d sum = Eigen::Vector2d::Zero();
+    for (int v : cluster) sum += valves_m[v];
+    centroids.push_back(sum / static_cast<double>(cluster.size()));
+  }
+  const std::vector<int> vehicle_of = Match(centroids, vehicles);
+  Tours s{std::vector<std::vector<int>>(n), std::vector<double>(n, 0.0), std::vector<int>(m, -1),
+          std::vector<std::uint64_t>(n, 0)};
+  for (std::size_t c = 0; c < clusters.size(); ++c) {
+    const int k = vehicle_of[c];
+    s.order[k] = clusters[c];
+    s.length[k] = FirstOrder(dist, centres, s.order[k]);
+    for (int v : s.order[k]) s.owner[v] = k;
+  }
+  if (n < m) {
+    Search(dist, centres, vehicles, wait_per_lap_s, options, rng).Run(s, std::max(0, options.perturbation_rounds));
+  } else {  // spares: the heaviest valves again, heaviest first
+    std::vector<int> heaviest(m);
+    for (int v = 0; v < m; ++v) heaviest[v] = v;
+    std::stable_sort(heaviest.begin(), heaviest.end(), [&](int a, int b) { return weights[a] > weights[b]; });
+    int next = 0;
+    for (auto& order : s.order) {
+      if (order.empty()) order = {heaviest[next++ % m]};
+    }
+  }
+
+  FleetTourPlan plan;
+  plan.ok = true;
+  for (int k = 0; k < n; ++k) {
+    std::vector<int> order = s.order[k];
+    std::rotate(order.begin(), std::min_element(order.begin(), order.end()), order.end());
+    VehicleTour out;
+    out.valves = order;
+    std::sort(out.valves.begin(), out.valves.end());
+    const int size = static_cast<int>(order.size());
+    out.tour.ok = true;
+    for (int q = 0; q < size; ++q) {
+      const int from = order[q], to = order[(q + 1) % size];
+      out.tour.order.push_back(static_cast<int>(std::lower_bound(out.valves.begin(), out.valves.end(), from) -
+                                                out.valves.begin()));
+      out.tour.legs.push_back(LegPath(grid, valves_m[from], valves_m[to], dist(from, to)));
+      out.tour.ok = out.tour.ok && !out.tour.legs.back().empty();
+      out.tour.length_m += PathLength(out.tour.legs.back());
+    }
+    // (w_i / max w)^alpha: the same ratios as w_i^alpha, without overflow for raw weights.
+    out.weights.resize(size);
+    double heaviest = 0.0;
+    for (int v : out.valves) heaviest = std::max(heaviest, weights[v]);
+    for (int i = 0; i < size; ++i) {
+      out.weights[i] = heaviest > 0.0 ? std::pow(weights[out.valves[i]] / heaviest, options.weight_exponent) : 1.0;
+    }
+    out.weights /= out.weights.sum();  // the sum is >= 1: the heaviest valve's term is 1, as is 0^0
+    out.lap_time_s = out.tour.length_m / vehicles[k].speed_mps;
+    for (int i = 0; i < size; ++i) out.lap_time_s += wait_per_lap_s * out.weights[i];
+    plan.ok = plan.ok && out.tour.ok;
+    plan.max_lap_s = std::max(plan.max_lap_s, out.lap_time_s);
+    plan.mean_lap_s += out.lap_time_s / n;
+    plan.vehicles.push_back(std::move(out));
+  }
+  return plan;
+}
+
+}  // namespace fleet_tours
+}  // namespace
+
+FleetTourPlan PlanFleetTours(const maps::OccupancyGrid& grid, const std::vector<Eigen::Vector2d>& valves_m,
+                             const Eigen::VectorXd& weights, const std::vector<FleetVehicle>& vehicles,
+                             double wait_per_lap_s, const FleetTourOptions& options) {
+  return fleet_tours::Plan(grid, valves_m, weights, vehicles, wait_per_lap_s, options);
+}
+
+}  // namespace sage::agents
