@@ -21,6 +21,10 @@ constexpr double kStartEdgeMargin_m = 0.5;       // from the workspace edges
 constexpr double kStartFootprintMargin_m = 0.5;  // added to each side of every footprint
 constexpr double kStartSeparation_m = 1.0;       // from every other start, joiners' included
 constexpr double kDenseStartSeparation_m = 0.8;  // large fleets, when 1.0 m does not fit
+// single_integrator vehicles are the paper's points (kinematic bodies that pass through each
+// other): they need no hull's room, only to start apart.
+constexpr double kPointStartSeparation_m = 0.3;
+constexpr double kDensePointStartSeparation_m = 0.2;
 constexpr std::size_t kLineStartsMax = 50;       // more added vehicles than this fill a lattice
 constexpr double kStartSearchStep_m = 0.05;      // grid step of the search for a free start
 
@@ -33,13 +37,14 @@ std::uint64_t Fnv1a(const std::string& text) {
   return hash;
 }
 
-bool IsFreeStart(const Scenario& s, const std::vector<Eigen::Vector2d>& taken, const Eigen::Vector2d& p) {
+bool IsFreeStart(const Scenario& s, const std::vector<Eigen::Vector2d>& taken, const Eigen::Vector2d& p,
+                 double separation_m) {
   for (const ChristmasTree& tree : s.structures) {
     const Eigen::Vector2d half = tree.size_m / 2 + Eigen::Vector2d::Constant(kStartFootprintMargin_m);
     if (((p - tree.center_m).array().abs() < half.array()).all()) return false;
   }
   for (const Eigen::Vector2d& other : taken) {
-    if ((p - other).norm() < kStartSeparation_m) return false;
+    if ((p - other).norm() < separation_m) return false;
   }
   return true;
 }
@@ -48,7 +53,7 @@ bool IsFreeStart(const Scenario& s, const std::vector<Eigen::Vector2d>& taken, c
 // margin, the free one nearest to `wanted` (ties: the first found). Rings of growing Chebyshev
 // radius are searched until no point of a further ring can be nearer than the best so far.
 std::optional<Eigen::Vector2d> NearestFreeStart(const Scenario& s, const std::vector<Eigen::Vector2d>& taken,
-                                                const Eigen::Vector2d& wanted) {
+                                                const Eigen::Vector2d& wanted, double separation_m) {
   const Eigen::Vector2d size(s.workspace.width_m, s.workspace.height_m);
   const Eigen::Vector2d margin = (size / 2).cwiseMin(Eigen::Vector2d::Constant(kStartEdgeMargin_m));
   // A hair of tolerance so that the wanted point on the margin line itself counts as inside.
@@ -62,7 +67,7 @@ std::optional<Eigen::Vector2d> NearestFreeStart(const Scenario& s, const std::ve
         ((wanted + kStartSearchStep_m * Eigen::Vector2d(i, j)) * 1000.0).array().round().matrix() / 1000.0;
     const double distance = (p - wanted).norm();
     if (distance >= best_distance || !InsideBox(p, low, high)) return;
-    if (!IsFreeStart(s, taken, p)) return;
+    if (!IsFreeStart(s, taken, p, separation_m)) return;
     best = p;
     best_distance = distance;
   };
@@ -99,6 +104,9 @@ Scenario WithVehicleCount(const Scenario& scenario, int count) {
     });
   } else {
     const VehicleSpec first = s.vehicles.empty() ? VehicleSpec() : s.vehicles.front();
+    const bool points = first.model == MotionModel::kSingleIntegrator;
+    const double separation = points ? kPointStartSeparation_m : kStartSeparation_m;
+    const double dense_separation = points ? kDensePointStartSeparation_m : kDenseStartSeparation_m;
     std::set<std::string> used;
     std::vector<Eigen::Vector2d> taken;
     for (const VehicleSpec& vehicle : s.vehicles) {
@@ -130,7 +138,7 @@ Scenario WithVehicleCount(const Scenario& scenario, int count) {
       // A large fleet (scale runs): fill a lattice row by row from the bottom edge, 1.0 m apart,
       // or 0.8 m (still clear of a 0.73 m hull diagonal) if that is the only way to fit them.
       const std::size_t existing = taken.size();
-      for (double spacing : {kStartSeparation_m, kDenseStartSeparation_m}) {
+      for (double spacing : {separation, dense_separation}) {
         std::vector<Eigen::Vector2d> lattice;
         for (double y = kStartEdgeMargin_m; y <= s.workspace.height_m - kStartEdgeMargin_m && lattice.size() < added;
              y += spacing) {
@@ -151,7 +159,7 @@ Scenario WithVehicleCount(const Scenario& scenario, int count) {
       }
       if (s.vehicles.size() < wanted) {
         throw ScenarioError(option + ": the workspace has room for fewer vehicles (" +
-                            FormatNumber(kDenseStartSeparation_m) + " m apart, " +
+                            FormatNumber(dense_separation) + " m apart, " +
                             FormatNumber(kStartFootprintMargin_m) + " m from structures)");
       }
     }
@@ -161,10 +169,10 @@ Scenario WithVehicleCount(const Scenario& scenario, int count) {
                            ? width / 2
                            : kStartEdgeMargin_m + (width - 2 * kStartEdgeMargin_m) * static_cast<double>(k) /
                                                       static_cast<double>(added - 1);
-      const std::optional<Eigen::Vector2d> start = NearestFreeStart(s, taken, Eigen::Vector2d(x, y));
+      const std::optional<Eigen::Vector2d> start = NearestFreeStart(s, taken, Eigen::Vector2d(x, y), separation);
       if (!start) {
         throw ScenarioError(option + ": no free start for rov" + std::to_string(number) + " in the workspace (" +
-                            FormatNumber(kStartSeparation_m) + " m from other vehicles, " +
+                            FormatNumber(separation) + " m from other vehicles, " +
                             FormatNumber(kStartFootprintMargin_m) + " m from structures)");
       }
       make_vehicle(*start);

@@ -3,6 +3,7 @@
 // themselves take plain option structs (server/app/options.h).
 #include "server/app/cli.h"
 
+#include <algorithm>
 #include <iostream>
 #include <string>
 
@@ -86,16 +87,17 @@ void AddMissionDir(CLI::App& cmd, OperatorCommand& o) {
   cmd.add_option("--mission", o.mission_dir, "Run directory of the mission (default: $SAGE_MISSION or runs/latest)");
 }
 
-// One line for a mistyped command word, at any depth: "unknown command 'frobnicate' of sage
-// vehicle (commands: add, remove)".
-bool ReportUnknownCommand(const CLI::App& app, int argc, char** argv) {
+// One line for a mistyped or missing command word, at any depth: "unknown command 'frobnicate'
+// of sage vehicle (commands: add, remove)", "sage risk needs a command (commands: set)"; any
+// other error names the command it is about ("sage vehicle remove: id is required").
+bool ReportUnknownCommand(const CLI::App& app, int argc, char** argv, std::string& path) {
   const CLI::App* level = &app;
-  std::string path = "sage";
+  path = "sage";
   for (int i = 1; i < argc; ++i) {
     const std::string word = argv[i];
-    if (word.empty() || word[0] == '-') return false;
+    if (word.empty() || word[0] == '-') break;
     const auto subs = level->get_subcommands([](const CLI::App*) { return true; });
-    if (subs.empty()) return false;
+    if (subs.empty()) break;
     const CLI::App* next = nullptr;
     std::string commands;
     for (const CLI::App* sub : subs) {
@@ -110,7 +112,15 @@ bool ReportUnknownCommand(const CLI::App& app, int argc, char** argv) {
     level = next;
     path += " " + word;
   }
-  return false;
+  // A command word with commands of its own, given none.
+  const auto subs = level->get_subcommands([](const CLI::App*) { return true; });
+  if (subs.empty() || std::any_of(subs.begin(), subs.end(), [](const CLI::App* sub) { return sub->parsed(); })) {
+    return false;
+  }
+  std::string commands;
+  for (const CLI::App* sub : subs) commands += (commands.empty() ? "" : ", ") + sub->get_name();
+  std::cerr << "sage: error: " << path << " needs a command (commands: " << commands << "; see " << path << " --help)\n";
+  return true;
 }
 
 }  // namespace
@@ -233,8 +243,10 @@ int RunCli(int argc, char** argv) {
     return app.exit(e);
   } catch (const CLI::ParseError& e) {
     // Bad arguments: one line, like every other input error.
-    if (ReportUnknownCommand(app, argc, argv)) return 2;
-    std::cerr << "sage: error: " << e.what() << " (see sage --help)\n";
+    std::string path;
+    if (ReportUnknownCommand(app, argc, argv, path)) return 2;
+    std::cerr << "sage: error: " << (path == "sage" ? "" : path.substr(5) + ": ") << e.what() << " (see " << path
+              << " --help)\n";
     return 2;
   }
 

@@ -189,6 +189,20 @@ Trajectory ReadTrajectoryCsv(const std::string& path) {
     }
     trajectory.samples.push_back(row.sample);
   }
+  // A vehicle's samples must go forward in time: a log shuffled or joined out of order would be
+  // scored as a different path.
+  std::map<int, std::pair<double, int>> last;  // vehicle -> (time, line) of its previous sample
+  for (std::size_t i = 0; i < rows.size(); ++i) {
+    const TrajectorySample& s = trajectory.samples[i];
+    const auto [it, first] = last.try_emplace(s.vehicle, s.time_s, rows[i].line);
+    if (first) continue;
+    if (!(s.time_s > it->second.first)) {
+      throw ScenarioError(fmt::format("{}:{}: t = {} for vehicle {} is not after its previous sample (t = {} on line {})",
+                                      path, rows[i].line, s.time_s, rows[i].vehicle, it->second.first,
+                                      it->second.second));
+    }
+    it->second = {s.time_s, rows[i].line};
+  }
   std::stable_sort(trajectory.samples.begin(), trajectory.samples.end(), [](const auto& a, const auto& b) {
     return a.time_s != b.time_s ? a.time_s < b.time_s : a.vehicle < b.vehicle;
   });

@@ -18,6 +18,8 @@
 #include <thread>
 #include <vector>
 
+#include <CLI/CLI.hpp>
+
 #include "proto/dds_config.h"
 #include "proto/dds_endpoints.h"
 #include "proto/messages.h"
@@ -31,10 +33,6 @@ using Clock = std::chrono::steady_clock;
 int64_t NowNs() {  // CLOCK_MONOTONIC: shared by all processes of this machine
   return std::chrono::duration_cast<std::chrono::nanoseconds>(Clock::now().time_since_epoch())
       .count();
-}
-
-int Arg(int argc, char** argv, int index, int fallback) {
-  return argc > index ? std::atoi(argv[index]) : fallback;
 }
 
 // Child: publishes `instances` vehicles at `rate_hz` for `seconds`; reports the count sent.
@@ -57,11 +55,8 @@ void Publish(int domain, const std::string& config, int instances, int rate_hz, 
   if (write(report_fd, &sent, sizeof sent) != sizeof sent) _exit(2);
 }
 
-int Throughput(int argc, char** argv) {
-  const int instances = Arg(argc, argv, 2, 1000);
-  const int rate_hz = Arg(argc, argv, 3, 10);
-  const int seconds = Arg(argc, argv, 4, 5);
-  const std::string config = LocalhostConfigXml(Arg(argc, argv, 5, 8));
+int Throughput(int instances, int rate_hz, int seconds, int max_participants) {
+  const std::string config = LocalhostConfigXml(max_participants);
   const DomainReservation domain = DomainReservation::Acquire(1 + getpid() % kMaxDomainId);
   int report[2];
   if (pipe(report) != 0) return 1;
@@ -115,10 +110,7 @@ struct ParticipantReport {
   double seen_s;  // time until it saw them all, or the deadline
 };
 
-int Participants(int argc, char** argv) {
-  const int processes = Arg(argc, argv, 2, 20);
-  const int max_participants = Arg(argc, argv, 3, 20);
-  const bool multicast = argc > 4 && std::string(argv[4]) == "multicast";
+int Participants(int processes, int max_participants, bool multicast) {
   const std::string config =
       LocalhostConfigXml(max_participants, multicast ? LoopbackDiscovery::kMulticast
                                                      : LoopbackDiscovery::kUnicastPeers);
@@ -187,14 +179,29 @@ int Participants(int argc, char** argv) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  const std::string mode = argc > 1 ? argv[1] : "throughput";
+  CLI::App app{"Cyclone DDS on this machine: keyed-sample throughput between two processes, and how many "
+               "participants one machine fits",
+               "sage_bench_dds"};
+  app.require_subcommand(1);
+  int instances = 1000, rate_hz = 10, seconds = 5, max_participants = 8, processes = 20, participant_slots = 20;
+  bool multicast = false;
+  CLI::App* throughput = app.add_subcommand("throughput", "One process publishes keyed VehicleState samples, another takes them");
+  throughput->add_option("--instances", instances, "Vehicles (instances)")->capture_default_str()->check(CLI::PositiveNumber);
+  throughput->add_option("--rate", rate_hz, "Samples per vehicle per second")->capture_default_str()->check(CLI::PositiveNumber);
+  throughput->add_option("--seconds", seconds, "How long")->capture_default_str()->check(CLI::PositiveNumber);
+  throughput->add_option("--max-participants", max_participants, "Participant indices the config allows")
+      ->capture_default_str()->check(CLI::PositiveNumber);
+  CLI::App* participants = app.add_subcommand("participants", "Start many participant processes; how many see each other");
+  participants->add_option("--processes", processes, "Participant processes")->capture_default_str()->check(CLI::PositiveNumber);
+  participants->add_option("--max-participants", participant_slots, "Participant indices the config allows")
+      ->capture_default_str()->check(CLI::PositiveNumber);
+  participants->add_flag("--multicast", multicast, "Discovery by multicast on lo instead of unicast peers");
+  CLI11_PARSE(app, argc, argv);
   try {
-    if (mode == "throughput") return Throughput(argc, argv);
-    if (mode == "participants") return Participants(argc, argv);
+    if (*throughput) return Throughput(instances, rate_hz, seconds, max_participants);
+    return Participants(processes, participant_slots, multicast);
   } catch (const std::exception& e) {
-    std::fprintf(stderr, "dds_bench: %s\n", e.what());
+    std::fprintf(stderr, "sage_bench_dds: %s\n", e.what());
     return 1;
   }
-  std::fprintf(stderr, "usage: dds_bench throughput|participants [...]\n");
-  return 2;
 }

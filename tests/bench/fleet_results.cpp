@@ -14,6 +14,7 @@
 #include <numeric>
 #include <sstream>
 
+#include <CLI/CLI.hpp>
 #include <fmt/format.h>
 
 #include "server/mission.h"
@@ -67,7 +68,12 @@ Row Measure(const Scenario& s) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  const std::string out_path = argc > 1 ? argv[1] : "fleet_results.md";
+  std::string out_path = "fleet_results.md";
+  CLI::App app{"Fleet figures of the README, in-process: 1-4 vehicles, shared vs partition, turning radius, "
+               "takeover, cost (Markdown)",
+               "sage_bench_fleet"};
+  app.add_option("--out,-o", out_path, "Markdown file to write (also printed)")->capture_default_str();
+  CLI11_PARSE(app, argc, argv);
   std::ostringstream md;
   Scenario field = sage::maps::LoadScenario(kField);
   field.fleet_events.clear();

@@ -14,6 +14,7 @@
 #include <string>
 #include <vector>
 
+#include <CLI/CLI.hpp>
 #include <fmt/format.h>
 
 #include "server/mission.h"
@@ -60,8 +61,13 @@ std::string Fmt(double v, const char* unit = " s") { return std::isnan(v) ? "---
 }  // namespace
 
 int main(int argc, char** argv) {
-  const std::string out_path = argc > 1 ? argv[1] : "two_xt_results.md";
-  const std::string scenario_path = argc > 2 ? argv[2] : std::string(SAGE_SOURCE_DIR) + "/scenarios/two_xt.yaml";
+  std::string out_path = "two_xt_results.md";
+  std::string scenario_path = std::string(SAGE_SOURCE_DIR) + "/scenarios/two_xt.yaml";
+  CLI::App app{"The SAGE paper's Table 1 and the other two-XT figures of the README, as measured (Markdown)",
+               "sage_bench_two_xt"};
+  app.add_option("--out,-o", out_path, "Markdown file to write (also printed)")->capture_default_str();
+  app.add_option("--scenario", scenario_path, "The paper's scenario")->capture_default_str();
+  CLI11_PARSE(app, argc, argv);
   const Scenario base = sage::maps::LoadScenario(scenario_path);
   std::ostringstream md;
   auto section = [&](const std::string& title) {

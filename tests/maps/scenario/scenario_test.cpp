@@ -638,6 +638,22 @@ TEST(Scenario, WithVehicleCountAddsVehiclesAlongTheSouthEdge) {
   EXPECT_EQ(five.vehicles.back().name, "rov6");
 }
 
+// The paper's point vehicles (single_integrator) need no hull's room: added ones start 0.3 m
+// apart, so a fleet that cannot fit as BlueROV2s (1 m apart) fits as points.
+TEST(Scenario, WithVehicleCountPacksPointVehiclesCloser) {
+  Scenario points = LoadScenario(kTwoXtPath);
+  points.vehicles[0].model = MotionModel::kSingleIntegrator;
+  const Scenario rovs = LoadScenario(kTwoXtPath);
+  EXPECT_THROW(WithVehicleCount(rovs, 40), ScenarioError);
+  const Scenario s = WithVehicleCount(points, 40);
+  double closest = std::numeric_limits<double>::infinity();
+  for (std::size_t i = 0; i < s.vehicles.size(); ++i)
+    for (std::size_t j = i + 1; j < s.vehicles.size(); ++j)
+      closest = std::min(closest, (s.vehicles[i].start_m - s.vehicles[j].start_m).norm());
+  EXPECT_GE(closest, 0.2 - 1e-9);
+  EXPECT_LT(closest, 1.0);
+}
+
 // A server and an agent host compare VehicleFingerprint before the host joins: it ignores what
 // only the server uses, and changes with anything that shapes the vehicles' world or control.
 TEST(Scenario, VehicleFingerprintSeesWhatShapesTheVehiclesOnly) {

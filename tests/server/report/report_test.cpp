@@ -99,23 +99,25 @@ TEST_F(ReportTest, CsvRoundTrip) {
 }
 
 // Columns in any order, extra columns ignored, optional ones default to 0, names numbered in
-// order of first appearance, samples sorted by (time, vehicle); CRLF, a BOM and blank lines pass.
+// order of first appearance, vehicles interleaved and sorted by (time, vehicle); CRLF, a BOM and
+// blank lines pass.
 TEST_F(ReportTest, CsvColumnsInAnyOrderAndVehicleNames) {
   const std::string path = WriteText("log.csv",
                                      "\xEF\xBB\xBF" "depth,y,x,vehicle,t\r\n"
-                                     "7,2.5,1.5,rov_b,0.2\r\n"
-                                     "7,3.5,4.5,rov_a,0.1\r\n"
+                                     "7,2.5,1.5,rov_b,0.1\r\n"
+                                     "whatever,5,6,rov_b,0.2\r\n"
                                      "\r\n"
-                                     "whatever,5,6,rov_b,0.1\r\n");
+                                     "7,3.5,4.5,rov_a,0.1\r\n");
   const Trajectory t = ReadTrajectoryCsv(path);
   ASSERT_EQ(t.samples.size(), 3u);
   EXPECT_EQ(t.vehicle_names, (std::vector<std::string>{"rov_b", "rov_a"}));
   EXPECT_EQ(t.samples[0].time_s, 0.1);
   EXPECT_EQ(t.samples[0].vehicle, 0);
-  EXPECT_EQ(t.samples[0].position_m, Eigen::Vector2d(6, 5));
+  EXPECT_EQ(t.samples[0].position_m, Eigen::Vector2d(1.5, 2.5));
   EXPECT_EQ(t.samples[1].vehicle, 1);
   EXPECT_EQ(t.samples[1].position_m, Eigen::Vector2d(4.5, 3.5));
   EXPECT_EQ(t.samples[2].time_s, 0.2);
+  EXPECT_EQ(t.samples[2].position_m, Eigen::Vector2d(6, 5));
   EXPECT_EQ(t.samples[2].heading_rad, 0.0);
   EXPECT_EQ(t.samples[2].command_mps, Eigen::Vector2d::Zero());
 }
@@ -137,6 +139,12 @@ TEST_F(ReportTest, CsvErrorsAreOneLineNamingFileAndLine) {
   EXPECT_EQ(ReadError("t,x,x,y,vehicle\n"), file + ":1: duplicate column 'x'");
   EXPECT_EQ(ReadError(header + "0,0,1,2\n"), "");
   EXPECT_EQ(ReadError(header + "+0.5,0,1e-400,5e-324\n"), "");  // a sign, an underflow, a subnormal
+  // A vehicle's samples go forward in time; vehicles may interleave.
+  EXPECT_EQ(ReadError(header + "0,0,1,2\n0.2,1,1,2\n0.1,1,1,2\n"),
+            file + ":4: t = 0.1 for vehicle 1 is not after its previous sample (t = 0.2 on line 3)");
+  EXPECT_EQ(ReadError(header + "0.5,rov1,1,2\n0.5,rov1,1,2\n"),
+            file + ":3: t = 0.5 for vehicle rov1 is not after its previous sample (t = 0.5 on line 2)");
+  EXPECT_EQ(ReadError(header + "0.1,a,1,2\n0,b,1,2\n0.2,a,1,2\n"), "");
   try {
     ReadTrajectoryCsv(Path("missing.csv"));
     FAIL() << "no error for a missing file";
