@@ -18,6 +18,8 @@ struct AgentHost::Impl {
     VehicleId body = 0;  // PhysicsWorld's id
     std::unique_ptr<ErgodicController> ergodic;
     std::unique_ptr<TourController> tour;
+    std::vector<int> tour_valves;  // A*: its tour's valves in visiting order (indices into the scenario's)
+    double speed_mps = 0.0;
     std::unique_ptr<ObstacleFilter> keep_clear;  // BlueROV2s under SMC
     Eigen::Vector2d command = Eigen::Vector2d::Zero();
   };
@@ -28,7 +30,7 @@ struct AgentHost::Impl {
   const maps::DistanceField& clearance;  // distance to the nearest structure, for the obstacle filter
   const maps::OccupancyGrid& grid;       // obstacles inflated by the A* clearance
   PhysicsWorld world;
-  Tour tour;                      // shared by every A* vehicle (same valves, same grid)
+  std::vector<Eigen::Vector2d> valves;  // the scenario's valve positions (A* tours)
   std::vector<Vehicle> vehicles;
   std::vector<Eigen::Vector2d> others;  // vehicles of other hosts
   int physics_substeps = 1;
@@ -43,13 +45,7 @@ struct AgentHost::Impl {
         world(s.workspace, s.structures) {
     control_dt = 1.0 / s.control_rate_hz;
     physics_substeps = std::max(1, static_cast<int>(std::lround(s.physics_rate_hz / s.control_rate_hz)));
-    if (guidance == Guidance::kAstar) {
-      tour = PlanTour(grid, s.ValvePositions());
-      if (!tour.ok) {
-        throw maps::ScenarioError(s.source_path + ": structures: some valve cannot be reached on the A* grid (clearance " +
-                                  std::to_string(s.astar.clearance_m) + " m)");
-      }
-    }
+    valves = s.ValvePositions();
   }
 
   // Vehicles (this host's and the others') within the filter's reach of vehicle i.
@@ -77,11 +73,12 @@ AgentHost::AgentHost(const maps::World& world, const maps::Scenario& scenario, G
     : impl_(std::make_unique<Impl>(world, scenario, guidance)) {}
 AgentHost::~AgentHost() = default;
 
-void AgentHost::AddVehicle(VehicleId id, const maps::VehicleSpec& spec, const Eigen::VectorXd& tour_weights) {
+void AgentHost::AddVehicle(VehicleId id, const maps::VehicleSpec& spec) {
   if (Contains(id)) throw std::invalid_argument("AgentHost: vehicle id " + std::to_string(id) + " already in use");
   Impl::Vehicle v;
   v.id = id;
   v.body = impl_->world.AddVehicle(spec);
+  v.speed_mps = spec.transit_speed_mps;
   if (impl_->guidance == Guidance::kErgodic) {
     v.ergodic = std::make_unique<ErgodicController>(impl_->basis, spec.transit_speed_mps,
                                                     impl_->scenario.ergodic.forgetting_time_s,
@@ -89,14 +86,37 @@ void AgentHost::AddVehicle(VehicleId id, const maps::VehicleSpec& spec, const Ei
     if (spec.model == maps::MotionModel::kBlueRov2) {
       v.keep_clear = std::make_unique<ObstacleFilter>(impl_->clearance, impl_->scenario.workspace);
     }
-  } else {
-    const Eigen::VectorXd weights =
-        tour_weights.size() > 0 ? tour_weights
-                                : Eigen::VectorXd::Constant(impl_->tour.order.size(), 1.0 / impl_->tour.order.size());
-    v.tour = std::make_unique<TourController>(impl_->tour, impl_->grid, spec.transit_speed_mps,
-                                              impl_->scenario.astar.wait_per_lap_s, weights);
   }
   impl_->vehicles.push_back(std::move(v));
+}
+
+void AgentHost::SetTour(VehicleId id, const std::vector<int>& valves, const Eigen::VectorXd& weights) {
+  Impl::Vehicle& v = impl_->Find(id);
+  if (impl_->guidance != Guidance::kAstar) return;  // an SMC vehicle steers on its target
+  const int count = static_cast<int>(impl_->valves.size());
+  if (valves.empty() || weights.size() != static_cast<Eigen::Index>(valves.size()) ||
+      std::any_of(valves.begin(), valves.end(), [&](int i) { return i < 0 || i >= count; })) {
+    throw std::invalid_argument("AgentHost::SetTour: " + std::to_string(valves.size()) + " valves, " +
+                                std::to_string(weights.size()) + " weights, of " + std::to_string(count));
+  }
+  if (v.tour && valves == v.tour_valves) {  // the same tour: new waits from the next lap
+    v.tour->SetWeights(weights);
+    return;
+  }
+  // The closed tour through its valves in the order given, on the same grid paths the planner
+  // priced it on (PlanGridPath is deterministic), flown from wherever the vehicle is.
+  Tour tour;
+  tour.ok = true;
+  for (std::size_t i = 0; i < valves.size(); ++i) {
+    tour.order.push_back(static_cast<int>(i));
+    tour.legs.push_back(PlanGridPath(impl_->grid, impl_->valves[valves[i]], impl_->valves[valves[(i + 1) % valves.size()]]));
+    tour.ok = tour.ok && !tour.legs.back().empty();
+    tour.length_m += PathLength(tour.legs.back());
+  }
+  if (!tour.ok) throw std::invalid_argument("AgentHost::SetTour: a leg of the tour has no path on the A* grid");
+  v.tour = std::make_unique<TourController>(std::move(tour), impl_->grid, v.speed_mps,
+                                            impl_->scenario.astar.wait_per_lap_s, weights);
+  v.tour_valves = valves;
 }
 
 void AgentHost::RemoveVehicle(VehicleId id) {
@@ -133,8 +153,14 @@ void AgentHost::SetTarget(VehicleId id, const VehicleTarget& target) {
 void AgentHost::SetOtherVehicles(std::vector<Eigen::Vector2d> positions_m) { impl_->others = std::move(positions_m); }
 
 void AgentHost::SetTourWeights(const Eigen::VectorXd& weights) {
-  for (Impl::Vehicle& v : impl_->vehicles)
-    if (v.tour) v.tour->SetWeights(weights);
+  for (Impl::Vehicle& v : impl_->vehicles) {
+    if (!v.tour) continue;
+    // A risk change reaches a tour's waits at its next lap (the paper's A*); a new partition
+    // comes with the fleet's next re-plan.
+    Eigen::VectorXd own(v.tour_valves.size());
+    for (std::size_t k = 0; k < v.tour_valves.size(); ++k) own[k] = weights[v.tour_valves[k]];
+    if (own.sum() > 0.0) v.tour->SetWeights(own);
+  }
 }
 
 void AgentHost::Step(double time_s) {
@@ -144,7 +170,9 @@ void AgentHost::Step(double time_s) {
   for (std::size_t i = 0; i < impl_->vehicles.size(); ++i) {
     Impl::Vehicle& v = impl_->vehicles[i];
     const VehicleState state = impl_->world.State(v.body);
-    Eigen::Vector2d command = v.ergodic ? v.ergodic->Command(state, time_s) : v.tour->Command(state, time_s);
+    // An A* vehicle holds station until it has a tour.
+    Eigen::Vector2d command = v.ergodic ? v.ergodic->Command(state, time_s)
+                                        : (v.tour ? v.tour->Command(state, time_s) : Eigen::Vector2d::Zero());
     if (v.keep_clear) command = v.keep_clear->Apply(state.position_m, command, impl_->Neighbours(i, positions));
     v.command = command;
     impl_->world.SetVelocityCommand(v.body, command);

@@ -34,9 +34,8 @@ class AgentHost {
   AgentHost& operator=(const AgentHost&) = delete;
 
   /// Adds a vehicle under a fleet-wide id chosen by the caller (unique across hosts) at
-  /// spec.start_m and spec.start_heading_rad. An A* vehicle starts its tour with `tour_weights`
-  /// (normalised per valve; empty: equal).
-  void AddVehicle(VehicleId id, const maps::VehicleSpec& spec, const Eigen::VectorXd& tour_weights = {});
+  /// spec.start_m and spec.start_heading_rad. An A* vehicle holds station until SetTour.
+  void AddVehicle(VehicleId id, const maps::VehicleSpec& spec);
   Guidance guidance() const;
   void RemoveVehicle(VehicleId id);
   bool Contains(VehicleId id) const;
@@ -48,7 +47,13 @@ class AgentHost {
   /// Positions (m) of the fleet's vehicles simulated elsewhere (other hosts), as last heard;
   /// this host's vehicles keep apart from them and from each other.
   void SetOtherVehicles(std::vector<Eigen::Vector2d> positions_m);
-  /// New valve weights for every A* tour, taken at the start of its next lap.
+  /// An A* vehicle's closed tour: the scenario's valves `valves` in visiting order, its wait per
+  /// lap split over them by `weights` (same order). The same tour again only changes the waits
+  /// (from the next lap); another one is flown from where the vehicle is. Throws
+  /// std::invalid_argument for a bad valve index or a leg with no path.
+  void SetTour(VehicleId id, const std::vector<int>& valves, const Eigen::VectorXd& weights);
+  /// New valve weights (one per scenario valve, as the waits are to be split) for every A* tour,
+  /// taken at each tour's next lap.
   void SetTourWeights(const Eigen::VectorXd& weights);
 
   /// One control cycle at mission time t: every vehicle's guidance turns its state into a

@@ -23,7 +23,7 @@ void AgentMission::AddVehicle(VehicleId id, const maps::VehicleSpec& spec, const
   } else {
     placed.start_m = maps::JitteredStart(spec, scenario_.seed, id, scenario_.start_jitter_m);
   }
-  host_.AddVehicle(id, placed, tour_weights_);
+  host_.AddVehicle(id, placed);
   Member& member = members_[id];
   member.name = spec.name;
   if (resume != nullptr && resume->coverage.seq > 0) {
@@ -52,6 +52,7 @@ bool AgentMission::OnAssignment(const Assignment& assignment) {
   m.shared = assignment.shared;
   m.own_phi = assignment.phi;
   m.own_cycle = assignment.cycle;
+  if (!assignment.tour.empty()) host_.SetTour(assignment.id, assignment.tour, assignment.tour_weights);
   return true;
 }
 

@@ -4,6 +4,7 @@
 // proto/sage_msgs.idl field by field. Times are mission seconds.
 #include <cstdint>
 #include <string>
+#include <vector>
 
 #include <Eigen/Core>
 
@@ -44,7 +45,7 @@ struct FleetSnapshot {
   std::uint64_t cycle = 0;     ///< the server cycle (>= 1)
   Eigen::VectorXd phi;         ///< the field's phi_k (guard applied), flat-indexed as the basis
   maps::FleetCoverage coverage;  ///< every vehicle's latest report, aged to coverage.time_s
-  Eigen::VectorXd valve_weights;  ///< normalised risk weights (no guard): what A* tours wait by
+  Eigen::VectorXd valve_weights;  ///< what A* tours split their waits by: w^alpha of the risk (no guard)
 };
 
 /// One vehicle's assignment (rt/sage/ergodic_target), sent when it joins and when it changes.
@@ -53,6 +54,10 @@ struct Assignment {
   std::uint64_t cycle = 0;     ///< the server cycle it was made in
   bool shared = true;          ///< true: steer on the fleet snapshot; false: alone on phi
   Eigen::VectorXd phi;         ///< partition: the vehicle's share of the valves (empty if shared)
+  /// A* fleets: the valves of the vehicle's closed tour in visiting order (indices into the
+  /// scenario's valves), and how its wait per lap is split over them (sums to 1, same order).
+  std::vector<int> tour;
+  Eigen::VectorXd tour_weights;
 };
 
 }  // namespace sage::agents

@@ -62,7 +62,14 @@ inline dds_sequence_double BorrowSequence(std::span<const double> values) {
   return sequence;
 }
 
-/// The same for sequence<uint32> and sequence<uint64>.
+/// The same for sequence<int32>, sequence<uint32> and sequence<uint64>.
+inline dds_sequence_int32 BorrowSequence(std::span<const int32_t> values) {
+  dds_sequence_int32 sequence{};
+  sequence._maximum = sequence._length = static_cast<uint32_t>(values.size());
+  sequence._buffer = const_cast<int32_t*>(values.data());
+  sequence._release = false;
+  return sequence;
+}
 inline dds_sequence_uint32 BorrowSequence(std::span<const uint32_t> values) {
   dds_sequence_uint32 sequence{};
   sequence._maximum = sequence._length = static_cast<uint32_t>(values.size());
@@ -77,6 +84,7 @@ inline dds_sequence_uint64 BorrowSequence(std::span<const uint64_t> values) {
   sequence._release = false;
   return sequence;
 }
+inline std::span<const int32_t> AsSpan(const dds_sequence_int32& sequence) { return {sequence._buffer, sequence._length}; }
 inline std::span<const uint32_t> AsSpan(const dds_sequence_uint32& sequence) { return {sequence._buffer, sequence._length}; }
 inline std::span<const uint64_t> AsSpan(const dds_sequence_uint64& sequence) { return {sequence._buffer, sequence._length}; }
 

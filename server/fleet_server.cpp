@@ -97,7 +97,12 @@ double FleetServer::LastVisit(int valve) const {
 // The no-starving-valve guard: a floor under every weight, and a valve no vehicle has visited
 // for longer than the revisit bound weighs, for the controllers, as much as the heaviest valve.
 void FleetServer::UpdateEffectiveWeights(double time_s) {
+  // Target shaping: the controllers see w^alpha (alpha = 1, the paper: w itself).
   Eigen::VectorXd w = raw_weights_ / raw_weights_.sum();
+  if (scenario_.ergodic.weight_exponent != 1.0) {
+    w = w.array().pow(scenario_.ergodic.weight_exponent);
+    w /= w.sum();
+  }
   const maps::StarvationGuard& guard = scenario_.guard;
   if (guard.enabled) {
     const double heaviest = w.maxCoeff();

@@ -329,7 +329,43 @@ MissionMetrics MetricsAccumulator::Result(double end_s) const {
     out.valves.push_back(std::move(m));
   }
   out.visit_weight_correlation = PearsonCorrelation(visit_counts, weight_values);
+  SummariseGaps(out);
   return out;
+}
+
+void SummariseGaps(MissionMetrics& m) {
+  const double T = m.duration_s;
+  std::vector<double> longest;
+  double weight_sum = 0.0;
+  m.expected_detection_delay_s = m.risk_weighted_interval_s = 0.0;
+  m.unvisited_valves = 0;
+  const ValveMetrics* dominant = nullptr;
+  for (const ValveMetrics& v : m.valves) {
+    double previous = 0.0, squares = 0.0;
+    for (double t : v.visit_times_s) {
+      squares += (t - previous) * (t - previous);
+      previous = t;
+    }
+    squares += (T - previous) * (T - previous);
+    m.expected_detection_delay_s += v.weight * squares / (2.0 * T);
+    m.risk_weighted_interval_s += v.weight * T / std::max(v.visits, 1);
+    weight_sum += v.weight;
+    m.unvisited_valves += v.visits == 0 ? 1 : 0;
+    longest.push_back(v.max_gap_s);
+    if (dominant == nullptr || v.weight > dominant->weight) dominant = &v;
+  }
+  if (weight_sum > 0.0) {
+    m.expected_detection_delay_s /= weight_sum;
+    m.risk_weighted_interval_s /= weight_sum;
+  }
+  m.dominant_interval_s = dominant != nullptr ? T / std::max(dominant->visits, 1) : 0.0;
+  std::sort(longest.begin(), longest.end());
+  const auto at = [&](double q) {
+    return longest.empty() ? 0.0 : longest[std::min(longest.size() - 1, static_cast<std::size_t>(q * longest.size()))];
+  };
+  m.longest_gap_median_s = at(0.5);
+  m.longest_gap_p90_s = at(0.9);
+  m.longest_gap_max_s = longest.empty() ? 0.0 : longest.back();
 }
 
 MissionMetrics ComputeMetrics(const Trajectory& trajectory, const maps::Scenario& scenario,

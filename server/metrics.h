@@ -83,6 +83,20 @@ struct MissionMetrics {
   double time_pinned_s = 0.0;        ///< vehicle-seconds within boundary_margin of its edge (inside)
   double boundary_margin_m = 0.2;
   std::vector<EventResponse> events;  ///< filled by a mission run; empty for a recorded log
+
+  // What a fleet is judged by (issue: fleets that scale). With gaps g_ij of valve i (start to
+  // first visit, between visits, last visit to end; they sum to T) and weights w_i:
+  /// Expected time a leak goes unnoticed if it starts at a uniformly random moment at valve i
+  /// with probability w_i: sum_i w_i sum_j g_ij^2 / (2 T) (s). For regular visits every I this is
+  /// I / 2; irregular ones wait longer (the inspection paradox).
+  double expected_detection_delay_s = 0.0;
+  /// sum_i w_i T / max(n_i, 1): the risk-weighted mean revisit interval (s), n_i visits.
+  double risk_weighted_interval_s = 0.0;
+  double dominant_interval_s = 0.0;   ///< T / max(n, 1) of the valve with the highest weight (s)
+  int unvisited_valves = 0;
+  double longest_gap_median_s = 0.0;  ///< over valves, of each valve's longest gap (s)
+  double longest_gap_p90_s = 0.0;
+  double longest_gap_max_s = 0.0;
 };
 
 struct MetricsOptions {
@@ -164,6 +178,10 @@ class MetricsAccumulator {
   std::vector<Eigen::VectorXd> phi_;  // phi_k of each schedule entry
   mutable Eigen::VectorXd f_;         // scratch
 };
+
+/// Fills the fleet figures of `metrics` (expected detection delay, risk-weighted interval,
+/// dominant interval, unvisited valves, longest-gap quantiles) from its valves.
+void SummariseGaps(MissionMetrics& metrics);
 
 /// Evaluates a trajectory against the scenario's valves and the weight schedule. The mission
 /// runs from 0 to duration_s (samples outside are ignored). The ergodic metric uses the

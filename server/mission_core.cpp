@@ -7,6 +7,8 @@
 
 #include <fmt/format.h>
 
+#include "agents/fleet_tour_planner.h"
+
 namespace sage::server {
 namespace {
 
@@ -76,9 +78,20 @@ int JoinVehicleId(const maps::Scenario& scenario, const std::string& name) {
   return -1;
 }
 
+maps::VehicleSpec SpecForVehicle(const maps::Scenario& scenario, int id, const std::string& name) {
+  if (id >= 0 && id < static_cast<int>(scenario.vehicles.size())) return scenario.vehicles[id];
+  for (const maps::FleetEvent& e : scenario.fleet_events) {
+    if (e.kind == maps::FleetEvent::Kind::kJoin && JoinVehicleId(scenario, e.vehicle.name) == id) return e.vehicle;
+  }
+  maps::VehicleSpec spec = scenario.vehicles.front();
+  spec.name = name;
+  return spec;
+}
+
 MissionCore::MissionCore(maps::World& world, const maps::Scenario& scenario, const std::string& profile,
                          ControllerKind controller, MissionRecorder* recorder)
-    : scenario_(scenario),
+    : world_(world),
+      scenario_(scenario),
       controller_(controller),
       recorder_(recorder),
       fleet_(world, scenario, profile),
@@ -263,12 +276,26 @@ CycleOutput MissionCore::Cycle(std::int64_t cycle) {
   out.snapshot.cycle = snapshot_cycle;
   out.snapshot.phi = fleet_.phi();
   out.snapshot.coverage = fleet_.coverage();
-  out.snapshot.valve_weights = fleet_.schedule().back().weights;
+  out.snapshot.valve_weights = fleet_.schedule().back().weights.array().pow(scenario_.astar.weight_exponent);
 
-  // A partition target is the vehicle's share weighted by the current risk: sent again when the
-  // shares change and when the risk does (an update, a profile event, the guard), and after any
-  // risk event (its heading change waits for a command steered on this cycle's target or later).
-  // In shared coverage a vehicle's assignment is sent once, when it joins.
+  if (controller_ == ControllerKind::kAstar) {
+    AssignTours(alive, risk_changed, out);
+  } else {
+    AssignTargets(alive, risk_changed, out);
+  }
+  out.fleet_empty = alive.empty();
+  if (out.fleet_empty && !empty_noted_ && !roster_.members().empty()) {
+    Note("empty", "no vehicle is alive in the mission");
+  }
+  empty_noted_ = out.fleet_empty;
+  return out;
+}
+
+// A partition target is the vehicle's share weighted by the current risk: sent again when the
+// shares change and when the risk does (an update, a profile event, the guard), and after any
+// risk event (its heading change waits for a command steered on this cycle's target or later).
+// In shared coverage a vehicle's assignment is sent once, when it joins.
+void MissionCore::AssignTargets(const std::vector<int>& alive, bool risk_changed, CycleOutput& out) {
   const bool partition = scenario_.fleet.assignment == maps::FleetAssignment::kPartition;
   const Eigen::VectorXd& weights = fleet_.effective_weights();
   const bool reweighted = weights.size() != last_weights_.size() ||
@@ -283,18 +310,67 @@ CycleOutput MissionCore::Cycle(std::int64_t cycle) {
     if (m.target_sent && !reassigned) continue;
     agents::Assignment a;
     a.id = id;
-    a.cycle = snapshot_cycle;
+    a.cycle = out.snapshot.cycle;
     a.phi = partition ? fleet_.ShareOf(id) : Eigen::VectorXd();
     a.shared = a.phi.size() == 0;
     out.assignments.push_back(std::move(a));
     m.target_sent = true;
   }
-  out.fleet_empty = alive.empty();
-  if (out.fleet_empty && !empty_noted_ && !roster_.members().empty()) {
-    Note("empty", "no vehicle is alive in the mission");
+}
+
+// The fleet's tours, as an operator flies them: planned once every starting vehicle is in (or
+// 2 s after the first), and planned again replan_delay_s after a vehicle joins, is lost or
+// leaves, or a risk changes; meanwhile the old tours are flown (a lost vehicle's valves wait for
+// the re-plan, a new vehicle holds station). Waits within a tour follow risk changes at once,
+// from each tour's next lap (the snapshot's weights).
+void MissionCore::AssignTours(const std::vector<int>& alive, bool risk_changed, CycleOutput& out) {
+  constexpr double kFirstPlanWait_s = 2.0;
+  if (alive.empty()) return;
+  TourPlan& plan = tour_plan_;
+  if (plan.first_join_s < 0.0) plan.first_join_s = time_s_;
+  if (plan.planned && (alive != plan.planned_for || risk_changed) && plan.change_s < 0.0) plan.change_s = time_s_;
+  const bool due = plan.planned ? plan.change_s >= 0.0 && time_s_ - plan.change_s >= scenario_.astar.replan_delay_s - 1e-9
+                                : alive.size() >= scenario_.vehicles.size() || time_s_ - plan.first_join_s >= kFirstPlanWait_s;
+  if (due) {
+    std::vector<agents::FleetVehicle> vehicles;
+    for (int id : alive) {
+      const Roster::Member& m = *roster_.Find(id);
+      const maps::VehicleSpec spec = SpecForVehicle(scenario_, id, m.name);
+      vehicles.push_back({m.has_state ? m.last.state.position_m : spec.start_m, spec.transit_speed_mps});
+    }
+    agents::FleetTourOptions options;
+    options.seed = scenario_.seed;
+    options.weight_exponent = scenario_.astar.weight_exponent;
+    const agents::FleetTourPlan tours =
+        agents::PlanFleetTours(world_.astar_grid(), scenario_.ValvePositions(), fleet_.schedule().back().weights,
+                               vehicles, scenario_.astar.wait_per_lap_s, options);
+    plan.planned = true;
+    plan.planned_for = alive;
+    plan.change_s = -1.0;
+    plan.tours.clear();
+    for (std::size_t k = 0; k < alive.size(); ++k) {
+      const agents::VehicleTour& v = tours.vehicles[k];
+      agents::Assignment a;
+      a.id = alive[k];
+      a.cycle = out.snapshot.cycle;
+      a.shared = false;
+      for (int i : v.tour.order) a.tour.push_back(v.valves[i]);
+      a.tour_weights.resize(static_cast<Eigen::Index>(v.tour.order.size()));
+      for (std::size_t i = 0; i < v.tour.order.size(); ++i) a.tour_weights[static_cast<Eigen::Index>(i)] = v.weights[v.tour.order[i]];
+      plan.tours[a.id] = std::move(a);
+      roster_.Find(alive[k])->target_sent = false;
+    }
+    Note("tours", fmt::format("{} tours planned for {} vehicles: laps {:.1f} s at most, {:.1f} s on average{}",
+                              tours.vehicles.size(), alive.size(), tours.max_lap_s, tours.mean_lap_s,
+                              tours.ok ? "" : " (some leg has no path)"));
   }
-  empty_noted_ = out.fleet_empty;
-  return out;
+  for (int id : alive) {
+    Roster::Member& m = *roster_.Find(id);
+    const auto tour = plan.tours.find(id);
+    if (m.target_sent || tour == plan.tours.end()) continue;
+    out.assignments.push_back(tour->second);
+    m.target_sent = true;
+  }
 }
 
 MissionMetrics MissionCore::Metrics(double end_s) const {

@@ -148,8 +148,11 @@ class MissionCore {
 
   void RecordSamples();
   void Record(const FleetEventRecord* event);
+  void AssignTargets(const std::vector<int>& alive, bool risk_changed, CycleOutput& out);
+  void AssignTours(const std::vector<int>& alive, bool risk_changed, CycleOutput& out);
   double next_time_s() const;  // the mission time of the coming cycle, when input takes effect
 
+  const maps::World& world_;
   const maps::Scenario& scenario_;
   ControllerKind controller_;
   MissionRecorder* recorder_;
@@ -168,6 +171,16 @@ class MissionCore {
   double time_s_ = 0.0;
   double clock_s_ = 0.0;
   bool empty_noted_ = false;
+  // A* fleets: the tours flown, and when the fleet or the risk last changed since they were
+  // planned (-1: not since).
+  struct TourPlan {
+    bool planned = false;
+    std::vector<int> planned_for;               // the live vehicles it was planned for
+    std::map<int, agents::Assignment> tours;    // vehicle id -> its tour
+    double first_join_s = -1.0;
+    double change_s = -1.0;
+  };
+  TourPlan tour_plan_;
 };
 
 /// Angle (rad, 0..pi) between two commanded velocities; 0 if either is (near) zero. The
@@ -184,5 +197,8 @@ int FirstFreeVehicleId(const maps::Scenario& scenario);
 /// The fleet id of the scenario's join event for vehicle `name` (N + its place among the joins),
 /// or -1 if it has none.
 int JoinVehicleId(const maps::Scenario& scenario, const std::string& name);
+/// The spec of fleet vehicle `id` named `name`: the scenario's vehicle, its join, or (added at
+/// runtime) the first vehicle's model and speed under that name.
+maps::VehicleSpec SpecForVehicle(const maps::Scenario& scenario, int id, const std::string& name);
 
 }  // namespace sage::server

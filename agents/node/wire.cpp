@@ -48,6 +48,9 @@ Assignment FromWire(const proto::ErgodicTarget& m) {
   a.cycle = m.cycle;
   a.shared = m.shared;
   a.phi = Copy(proto::AsSpan(m.phi));
+  const auto tour = proto::AsSpan(m.tour);
+  a.tour.assign(tour.begin(), tour.end());
+  a.tour_weights = Copy(proto::AsSpan(m.tour_weights));
   return a;
 }
 
@@ -113,6 +116,8 @@ proto::ErgodicTarget ToWire(const Assignment& a, std::uint64_t server_instance, 
   m.basis_order = basis_order;
   m.shared = a.shared;
   m.phi = proto::BorrowSequence(View(a.phi));
+  m.tour = proto::BorrowSequence(std::span<const std::int32_t>(a.tour.data(), a.tour.size()));
+  m.tour_weights = proto::BorrowSequence(View(a.tour_weights));
   return m;
 }
 

@@ -35,7 +35,7 @@ constexpr double kBasisHalfWave_m = 1.25;   // SMC detail aimed at (fleet_large:
 constexpr int kMinBasisOrder = 20, kMaxBasisOrder = 64;
 constexpr std::array<double, 4> kGridSteps_m = {0.05, 0.1, 0.2, 0.25};
 constexpr double kGridCellBudget = 200000;  // fleet_field (0.05 m) and fleet_large (0.1 m) fit it
-constexpr double kOctomapVoxels = 32767;    // 2^15 - 1: an OcTreeKey's reach from the origin
+
 constexpr int kPlacementRounds = 4, kClusterTries = 3000, kCellTries = 40, kFieldTries = 20000;
 // Cluster sizes: satellite wells, 2-4 slot templates, 6- and 8-slot manifolds (relative odds).
 constexpr std::array<int, 6> kClusterSizes = {1, 2, 3, 4, 6, 8};
@@ -281,7 +281,7 @@ void CheckOptions(const FieldOptions& o) {
 
 // Refuses a field an OctoMap at its A* grid cannot span, naming the option that sized it.
 void CheckSpan(const FieldOptions& o, const Workspace& field) {
-  const double step = GridStepFor(field), span = kOctomapVoxels * step;
+  const double step = GridStepFor(field), span = kMaxOctoMapVoxels * step;
   if (std::max(field.width_m, field.height_m) <= span) return;
   const bool by_xts = o.xts * o.area_per_xt_m2 >= o.vehicles * kFieldAreaPerVehicle_m2;
   throw ScenarioError((by_xts ? "--xts = " + std::to_string(o.xts) : "--vehicles = " + std::to_string(o.vehicles)) +

@@ -66,6 +66,10 @@ enum class MotionModel {
   kBlueRov2,          ///< Box2D dynamic body with BlueROV2 Heavy added mass, drag, thrust limits
 };
 
+/// Voxels the seabed OctoMap spans along an axis (its keys are 16 bits, centred): the workspace
+/// fits within this many A* grid cells.
+inline constexpr double kMaxOctoMapVoxels = 32767.0;
+
 /// Largest start jitter (m): a vehicle's start stays near the start_m the scenario names.
 inline constexpr double kMaxStartJitter_m = 0.5;
 
@@ -92,6 +96,10 @@ struct ErgodicSettings {
   /// vehicle passes through a hot valve and loops back instead of hovering on it. 0 = turn at
   /// once, the paper's law.
   double min_turn_radius_m = 0.0;
+  /// alpha >= 0: the target phi is the mixture of the valves with weights w^alpha (renormalised)
+  /// instead of w. 1 = the paper (time at a valve in proportion to its risk); 0.5 = search
+  /// theory's square-root law, which minimises the expected time a leak goes unnoticed.
+  double weight_exponent = 1.0;
 };
 
 /// The "no starving valve" guard (the paper's named limitation): a floor on each valve's
@@ -102,11 +110,17 @@ struct StarvationGuard {
   double revisit_bound_s = 60.0; ///< a valve not visited for this long (s) is boosted, > 0
 };
 
-/// The A* inspection-tour baseline.
+/// The A* inspection-tour baseline: with one vehicle the paper's tour through every valve; with
+/// a fleet the valves partitioned among the vehicles, one closed tour each (agents/fleet_tour_planner).
 struct AstarSettings {
   double grid_resolution_m = 0.1;  ///< cell size of the 8-connected grid (m), > 0
   double clearance_m = 0.35;       ///< obstacles inflated by this (m), >= 0
   double wait_per_lap_s = 2.0;     ///< total wait per lap (s), split over valves by weight, >= 0
+  /// alpha >= 0: a lap's wait is split over the tour's valves as w^alpha (1 = by weight).
+  double weight_exponent = 1.0;
+  /// A fleet's tours are planned again this long (s) after a vehicle joins, is lost or leaves,
+  /// or a risk changes, as an operator would re-plan by hand; >= 0.
+  double replan_delay_s = 10.0;
 };
 
 /// How the server divides the risk among the vehicles of a fleet.

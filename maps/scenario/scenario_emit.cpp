@@ -49,6 +49,7 @@ std::string EmitScenario(const Scenario& s) {
   key("basis_order") << std::to_string(s.ergodic.basis_order);
   number("forgetting_time_s", s.ergodic.forgetting_time_s);
   number("min_turn_radius_m", s.ergodic.min_turn_radius_m);
+  number("weight_exponent", s.ergodic.weight_exponent);
   out << YAML::EndMap;
   key("guard") << YAML::Flow << YAML::BeginMap;
   key("enabled") << s.guard.enabled;
@@ -59,6 +60,8 @@ std::string EmitScenario(const Scenario& s) {
   number("grid_resolution_m", s.astar.grid_resolution_m);
   number("clearance_m", s.astar.clearance_m);
   number("wait_per_lap_s", s.astar.wait_per_lap_s);
+  number("weight_exponent", s.astar.weight_exponent);
+  number("replan_delay_s", s.astar.replan_delay_s);
   out << YAML::EndMap;
   key("structures") << YAML::BeginSeq;
   for (const ChristmasTree& tree : s.structures) {

@@ -270,12 +270,13 @@ Scenario ReadScenario(const Reader& r, const YAML::Node& root, const std::string
   });
   r.OptionalNumber(root, "start_jitter_m", "", s.start_jitter_m);
   r.Optional(root, "ergodic", "", [&](const YAML::Node& n, const std::string& p) {
-    r.ExpectMap(n, p, {"basis_order", "forgetting_time_s", "min_turn_radius_m"});
+    r.ExpectMap(n, p, {"basis_order", "forgetting_time_s", "min_turn_radius_m", "weight_exponent"});
     r.Optional(n, "basis_order", p, [&](const YAML::Node& v, const std::string& q) {
       s.ergodic.basis_order = r.WholeNumber<int>(v, q, "must be a whole number");
     });
     r.OptionalNumber(n, "forgetting_time_s", p, s.ergodic.forgetting_time_s);
     r.OptionalNumber(n, "min_turn_radius_m", p, s.ergodic.min_turn_radius_m);
+    r.OptionalNumber(n, "weight_exponent", p, s.ergodic.weight_exponent);
   });
   r.Optional(root, "guard", "", [&](const YAML::Node& n, const std::string& p) {
     r.ExpectMap(n, p, {"enabled", "weight_floor", "revisit_bound_s"});
@@ -284,10 +285,12 @@ Scenario ReadScenario(const Reader& r, const YAML::Node& root, const std::string
     r.OptionalNumber(n, "revisit_bound_s", p, s.guard.revisit_bound_s);
   });
   r.Optional(root, "astar", "", [&](const YAML::Node& n, const std::string& p) {
-    r.ExpectMap(n, p, {"grid_resolution_m", "clearance_m", "wait_per_lap_s"});
+    r.ExpectMap(n, p, {"grid_resolution_m", "clearance_m", "wait_per_lap_s", "weight_exponent", "replan_delay_s"});
     r.OptionalNumber(n, "grid_resolution_m", p, s.astar.grid_resolution_m);
     r.OptionalNumber(n, "clearance_m", p, s.astar.clearance_m);
     r.OptionalNumber(n, "wait_per_lap_s", p, s.astar.wait_per_lap_s);
+    r.OptionalNumber(n, "weight_exponent", p, s.astar.weight_exponent);
+    r.OptionalNumber(n, "replan_delay_s", p, s.astar.replan_delay_s);
   });
   const YAML::Node structures = r.Require(root, "structures", "");
   r.ExpectList(structures, "structures");

@@ -153,9 +153,20 @@ void Scenario::Validate() const {
   }
   c.Positive("ergodic.forgetting_time_s", ergodic.forgetting_time_s, /*infinity_ok=*/true);
   c.NonNegative("ergodic.min_turn_radius_m", ergodic.min_turn_radius_m);
+  c.NonNegative("ergodic.weight_exponent", ergodic.weight_exponent);
   c.Positive("astar.grid_resolution_m", astar.grid_resolution_m);
+  // The seabed OctoMap is voxelised at the grid resolution and its keys span +-2^15 voxels: a
+  // wider workspace cannot be mapped (it overflowed the keys and crashed).
+  const double span_m = kMaxOctoMapVoxels * astar.grid_resolution_m;
+  if (std::max(workspace.width_m, workspace.height_m) > span_m) {
+    c.Fail("workspace", FormatNumber(workspace.width_m) + " x " + FormatNumber(workspace.height_m),
+           "wider than the seabed map spans at astar.grid_resolution_m = " + FormatNumber(astar.grid_resolution_m) +
+               " (" + FormatNumber(std::floor(span_m * 100.0) / 100.0) + " m): use a coarser grid or a smaller field");
+  }
   c.NonNegative("astar.clearance_m", astar.clearance_m);
   c.NonNegative("astar.wait_per_lap_s", astar.wait_per_lap_s);
+  c.NonNegative("astar.weight_exponent", astar.weight_exponent);
+  c.NonNegative("astar.replan_delay_s", astar.replan_delay_s);
 
   if (structures.empty()) c.Fail("structures", "must list at least one structure");
   std::map<std::string, std::string> structure_names, valve_names, vehicle_names, profile_names;

@@ -10,6 +10,7 @@
 #include <CLI/CLI.hpp>
 #include <spdlog/spdlog.h>
 
+#include "server/app/field_command.h"
 #include "server/app/fleet_commands.h"
 #include "server/app/launch.h"
 #include "server/app/operators.h"
@@ -47,6 +48,10 @@ void AddScenarioOverrides(CLI::App& cmd, ScenarioOverrides& o, OverrideSet set, 
     cmd.add_option("--assignment", o.assignment,
                    "Fleet coverage: shared (Mathew-Mezic) or partition (valves split among vehicles)")
         ->check(CLI::IsMember({"shared", "partition"}));
+    cmd.add_option("--weight-exponent", o.weight_exponent,
+                   "Target shaping alpha: vehicles aim for visit rates by w^alpha (1 = by risk, the paper; 0.5 = the "
+                   "square-root law, least expected time a leak goes unnoticed); sets ergodic and A* alike")
+        ->check(CLI::Range(0.0, 4.0));
     cmd.add_option("--guard", o.guard,
                    "No-starving-valve guard (weight floor + revisit bound): on|off (default: the scenario's; off "
                    "reproduces the paper)")
@@ -233,6 +238,23 @@ int RunCli(int argc, char** argv) {
   CLI::App* stop = app.add_subcommand("stop", "End the running mission now; its server writes the run directory");
   AddMissionDir(*stop, op);
 
+  maps::FieldOptions field_options;
+  std::string field_out;
+  CLI::App* field = app.add_subcommand("field", "Synthetic subsea fields for scale runs");
+  field->require_subcommand(1);
+  CLI::App* generate = field->add_subcommand(
+      "generate", "Write a realistic scenario of any size: XTs in manifold clusters, valves at the inspection "
+                  "standoff, graded risk with leaks, a fleet of BlueROV2s, settings sized for the field; the same "
+                  "seed gives the same field (the field grows with the counts: about 80 m^2 of seabed per XT)");
+  generate->add_option("--xts", field_options.xts, "Christmas trees (>= 1)")->capture_default_str();
+  generate->add_option("--valves", field_options.valves, "Valves in all, 2 to 5 per XT")->capture_default_str();
+  generate->add_option("--vehicles", field_options.vehicles, "BlueROV2s (>= 1)")->capture_default_str();
+  generate->add_option("--seed", field_options.seed, "Same seed, same field; also the mission's seed")->capture_default_str();
+  generate->add_option("--area-per-xt", field_options.area_per_xt_m2, "Seabed per XT (m^2), 50..10000")
+      ->capture_default_str();
+  generate->add_option("--name", field_options.name, "The scenario's name (default: field_<xts>xt_<valves>v_<vehicles>rov_s<seed>)");
+  generate->add_option("--out,-o", field_out, "Scenario file to write")->required();
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {
@@ -281,6 +303,7 @@ int RunCli(int argc, char** argv) {
     if (*vehicle_remove) return RemoveVehicle(FindMission(op.mission_dir), op.remove_id);
     if (*risk_set) return SetRisk(FindMission(op.mission_dir), op.valve, op.weight, op.source);
     if (*stop) return StopMission(FindMission(op.mission_dir));
+    if (*generate) return CmdFieldGenerate(field_options, field_out);
   } catch (const maps::ScenarioError& e) {
     std::cerr << "sage: error: " << e.what() << "\n";
     return 2;

@@ -24,6 +24,10 @@ void CheckOverrides(const ScenarioOverrides& o) {
   if (o.forgetting_time_s && !(*o.forgetting_time_s > 0.0)) {
     throw maps::ScenarioError(fmt::format("--forgetting = {}: must be > 0 (inf = never forget)", *o.forgetting_time_s));
   }
+  if (o.weight_exponent && !(*o.weight_exponent >= 0.0 && *o.weight_exponent <= 4.0)) {
+    throw maps::ScenarioError(fmt::format("--weight-exponent = {}: must be in [0, 4] (1 = by risk, 0.5 = square-root law)",
+                                          *o.weight_exponent));
+  }
   if (o.start_jitter_m && !(*o.start_jitter_m >= 0.0 && *o.start_jitter_m <= maps::kMaxStartJitter_m)) {
     throw maps::ScenarioError(fmt::format("--start-jitter = {}: must be in [0, {}] m (0 = start exactly at start_m)",
                                           *o.start_jitter_m, maps::kMaxStartJitter_m));
@@ -57,6 +61,7 @@ maps::Scenario LoadWithOverrides(const ScenarioOverrides& o) {
   if (o.assignment) scenario.fleet.assignment = maps::ParseFleetAssignment(*o.assignment, "--assignment");
   if (o.duration_s) scenario = maps::WithDuration(scenario, *o.duration_s);
   if (o.seed) scenario.seed = *o.seed;
+  if (o.weight_exponent) scenario.ergodic.weight_exponent = scenario.astar.weight_exponent = *o.weight_exponent;
   if (o.start_jitter_m) scenario.start_jitter_m = *o.start_jitter_m;
   if (o.guard) scenario.guard.enabled = (*o.guard == "on");
   if (o.forgetting_time_s) scenario.ergodic.forgetting_time_s = *o.forgetting_time_s;

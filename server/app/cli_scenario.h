@@ -24,6 +24,7 @@ struct ScenarioOverrides {
   std::optional<int> vehicles;            // fleet size
   std::optional<std::string> assignment;  // shared | partition
   std::optional<double> start_jitter_m;
+  std::optional<double> weight_exponent;  // both the SMC target's and the A* waits
 };
 
 /// Loads the scenario and applies the overrides; each bad value is a maps::ScenarioError naming

@@ -8,16 +8,6 @@
 
 namespace sage::server {
 
-maps::VehicleSpec SpecForVehicle(const maps::Scenario& scenario, int id, const std::string& name) {
-  if (id >= 0 && id < static_cast<int>(scenario.vehicles.size())) return scenario.vehicles[id];
-  for (const maps::FleetEvent& e : scenario.fleet_events) {
-    if (e.kind == maps::FleetEvent::Kind::kJoin && JoinVehicleId(scenario, e.vehicle.name) == id) return e.vehicle;
-  }
-  maps::VehicleSpec spec = scenario.vehicles.front();
-  spec.name = name;
-  return spec;
-}
-
 std::vector<ResumedVehicle> VehiclesToResume(const maps::Scenario& scenario, const std::string& dir) {
   const MissionCheckpoint checkpoint = ReadCheckpoint(dir);
   const RecordTail tail = ReadRecordTail(dir, checkpoint.time_s);

@@ -7,6 +7,7 @@
 
 #include "agents/agent_mission.h"
 #include "maps/scenario/scenario.h"
+#include "server/mission_core.h"
 
 namespace sage::server {
 
@@ -18,9 +19,5 @@ struct ResumedVehicle {
 
 /// Reads DIR's checkpoint and record tail. Throws maps::ScenarioError if there is none.
 std::vector<ResumedVehicle> VehiclesToResume(const maps::Scenario& scenario, const std::string& dir);
-
-/// The spec of fleet vehicle `id` named `name`: the scenario's vehicle, its join, or (added at
-/// runtime) the first vehicle's model and speed under that name.
-maps::VehicleSpec SpecForVehicle(const maps::Scenario& scenario, int id, const std::string& name);
 
 }  // namespace sage::server

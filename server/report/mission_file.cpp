@@ -68,7 +68,11 @@ MissionFile ReadMissionFile(const std::string& dir) {
 }
 
 void WriteScenarioFile(const std::string& dir, const maps::Scenario& scenario) {
-  detail::WriteAtomically((fs::path(dir) / "scenario.yaml").string(), maps::EmitScenario(scenario));
+  WriteScenarioTo((fs::path(dir) / "scenario.yaml").string(), scenario);
+}
+
+void WriteScenarioTo(const std::string& path, const maps::Scenario& scenario) {
+  detail::WriteAtomically(path, maps::EmitScenario(scenario));
 }
 
 RecordSummary ReadRecordSummary(const std::string& dir) {

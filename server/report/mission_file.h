@@ -28,6 +28,9 @@ MissionFile ReadMissionFile(const std::string& dir);
 /// atomically. Throws std::runtime_error naming the file.
 void WriteScenarioFile(const std::string& dir, const maps::Scenario& scenario);
 
+/// Writes a scenario file at `path` atomically. Throws std::runtime_error naming the file.
+void WriteScenarioTo(const std::string& path, const maps::Scenario& scenario);
+
 /// How far a run directory's record goes.
 struct RecordSummary {
   bool exists = false;              ///< a mission was recorded here (trajectory.csv or metrics.json)

@@ -244,7 +244,14 @@ std::string MetricsJson(const MissionMetrics& metrics, const RunInfo* info) {
                      {"time_pinned_s", number(metrics.time_pinned_s)},
                      {"metric_over_time", over_time},
                      {"valves", valves},
-                     {"events", events}};
+                     {"events", events},
+                     {"expected_detection_delay_s", number(metrics.expected_detection_delay_s)},
+                     {"risk_weighted_interval_s", number(metrics.risk_weighted_interval_s)},
+                     {"dominant_interval_s", number(metrics.dominant_interval_s)},
+                     {"unvisited_valves", metrics.unvisited_valves},
+                     {"longest_gap_s", {{"median", number(metrics.longest_gap_median_s)},
+                                        {"p90", number(metrics.longest_gap_p90_s)},
+                                        {"max", number(metrics.longest_gap_max_s)}}}};
   if (info != nullptr) {
     json["complete"] = info->complete;
     json["planned_duration_s"] = number(info->planned_duration_s);

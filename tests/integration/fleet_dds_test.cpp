@@ -439,6 +439,26 @@ class FleetDds : public ::testing::Test {
                           kStartupTimeout + 10s);
   }
 
+  // A two_xt mission started by hand: `sage server` and one `sage agents` host with two vehicles.
+  struct ByHand {
+    ChildProcess& server;
+    ChildProcess& agents;
+  };
+  ByHand StartTwoXtByHand(const std::string& domain, double duration_s, const fs::path& out) {
+    ChildProcess& server = Start("server", {"server", Scenario("two_xt.yaml"), "--vehicles", "2", "--duration",
+                                            Num(duration_s), "--time-scale", Num(kTimeScale), "--out", out.string(),
+                                            "--domain", domain, "--quiet"});
+    ChildProcess& agents = Start("agents", {"agents", Scenario("two_xt.yaml"), "--domain", domain, "--vehicles", "2"});
+    return {server, agents};
+  }
+
+  // Waits until `fleet` vehicles are alive and the mission clock has reached t_s.
+  static bool WaitForFleet(MissionWatcher& watcher, std::uint32_t fleet, double t_s) {
+    return watcher.PollUntil(
+        [&] { return watcher.status() && watcher.status()->vehicles_alive == fleet && watcher.MissionTimeNow() >= t_s; },
+        kStartupTimeout);
+  }
+
   void Report(const std::string& key, double value, const std::string& unit) {
     RecordProperty(key, fmt::format("{:.3f}", value));
     std::cout << "[ MEASURED ] " << key << " = " << fmt::format("{:.3f}", value) << " " << unit << std::endl;
@@ -982,10 +1002,7 @@ TEST_F(FleetDds, KilledServerResumesFromItsCheckpoint) {
   const auto server_pid = WaitForLog(launch, R"(server pid ([0-9]+))", kStartupTimeout);
   ASSERT_TRUE(server_pid.has_value()) << "the launcher never said which process is the server";
   MissionWatcher watcher(domain_id);
-  ASSERT_TRUE(watcher.PollUntil(
-      [&] { return watcher.status() && watcher.status()->vehicles_alive == 3 && watcher.MissionTimeNow() >= 25.0; },
-      kStartupTimeout))
-      << "the mission never had its three vehicles";
+  ASSERT_TRUE(WaitForFleet(watcher, 3, 25.0)) << "the mission never had its three vehicles";
   const double t_kill = watcher.MissionTimeNow();
   ::kill(std::stoi((*server_pid)[1]), SIGKILL);
 
@@ -1008,6 +1025,10 @@ TEST_F(FleetDds, KilledServerResumesFromItsCheckpoint) {
   }
   const auto visits_before = VisitsOf(out, scenario);
   ASSERT_GT(visits_before.size(), 3u);
+  // A new mission may not overwrite the one that can still be resumed.
+  ChildProcess& over = Start("over", {"launch", Scenario("fleet_field.yaml"), "--out", out.string()});
+  EXPECT_EQ(over.WaitExit(15s), std::optional<int>(2)) << over.LogText();
+  EXPECT_NE(over.LogText().find("holds a mission that did not finish"), std::string::npos) << over.LogText();
 
   ChildProcess& resume = Start("resume", {"launch", "--resume", out.string()});
   const std::optional<int> resume_exit = WaitMissionEnd(resume, duration);
@@ -1043,13 +1064,8 @@ TEST_F(FleetDds, RestartedServerIsFollowedAtOnce) {
   const fs::path out = run_dir_ / "out";
   const double duration = 50;
   MissionWatcher watcher(domain.domain_id());
-  ChildProcess& first = Start("server", {"server", Scenario("two_xt.yaml"), "--vehicles", "2", "--duration",
-                                         Num(duration), "--time-scale", Num(kTimeScale), "--out", out.string(),
-                                         "--domain", d, "--quiet"});
-  ChildProcess& agents = Start("agents", {"agents", Scenario("two_xt.yaml"), "--domain", d, "--vehicles", "2"});
-  ASSERT_TRUE(watcher.PollUntil(
-      [&] { return watcher.status() && watcher.status()->vehicles_alive == 2 && watcher.MissionTimeNow() >= 20.0; },
-      kStartupTimeout));
+  const auto [first, agents] = StartTwoXtByHand(d, duration, out);
+  ASSERT_TRUE(WaitForFleet(watcher, 2, 20.0));
   const std::uint64_t old_instance = watcher.status()->server_instance;
   first.Signal(SIGKILL);
   first.WaitExit(5s);
@@ -1094,13 +1110,8 @@ TEST_F(FleetDds, StalledServerLosesNobody) {
   const fs::path out = run_dir_ / "out";
   const double duration = 30;
   MissionWatcher watcher(domain.domain_id());
-  ChildProcess& server = Start("server", {"server", Scenario("two_xt.yaml"), "--vehicles", "2", "--duration",
-                                          Num(duration), "--time-scale", Num(kTimeScale), "--out", out.string(),
-                                          "--domain", d, "--quiet"});
-  Start("agents", {"agents", Scenario("two_xt.yaml"), "--domain", d, "--vehicles", "2"});
-  ASSERT_TRUE(watcher.PollUntil(
-      [&] { return watcher.status() && watcher.status()->vehicles_alive == 2 && watcher.MissionTimeNow() >= 10.0; },
-      kStartupTimeout));
+  ChildProcess& server = StartTwoXtByHand(d, duration, out).server;
+  ASSERT_TRUE(WaitForFleet(watcher, 2, 10.0));
   ::kill(server.pid(), SIGSTOP);
   std::this_thread::sleep_for(1500ms);
   ::kill(server.pid(), SIGCONT);
@@ -1127,9 +1138,7 @@ TEST_F(FleetDds, LaunchEndsWhenTheFleetIsGone) {
                                                 "--time-scale", Num(kTimeScale)},
                                      out, domain_id);
   MissionWatcher watcher(domain_id);
-  ASSERT_TRUE(watcher.PollUntil(
-      [&] { return watcher.status() && watcher.status()->vehicles_alive == 1 && watcher.MissionTimeNow() >= 5.0; },
-      kStartupTimeout));
+  ASSERT_TRUE(WaitForFleet(watcher, 1, 5.0));
   std::system(fmt::format("pkill -KILL -f 'sage agents .*--domain {}( |$)'", domain_id).c_str());
   const std::optional<int> launch_exit = launch.WaitExit(20s);
   ASSERT_TRUE(launch_exit.has_value()) << "the launcher ran on with no vehicle";

@@ -244,5 +244,43 @@ TEST(ComputeMetrics, WeightsTimeAverageAcrossScheduleChange) {
   EXPECT_THROW(ComputeMetrics(at_p2, scenario, {{0.0, Eigen::Vector3d(1, 1, 1)}}, 300.0), std::invalid_argument);
 }
 
+// The fleet figures from visit times, against a hand computation: valve A (w 0.75) visited at
+// 2, 7, 15 s of 20 s has gaps 2, 5, 8, 5, so a leak starting at a random moment waits
+// (4 + 25 + 64 + 25) / 40 = 2.95 s; valve B (w 0.25) unvisited waits 400 / 40 = 10 s. Risk-weighted:
+// 0.75 * 2.95 + 0.25 * 10 = 4.7125 s. Intervals T / n: 20/3 and 20/1 -> 0.75 * 20/3 + 0.25 * 20 = 10 s.
+// Regular visits every I wait I / 2: visits at 0, 5, 10, 15 of 20 s (gaps 0, 5, 5, 5, 5) wait
+// 100 / 40 = 2.5 s.
+TEST(SummariseGaps, DetectionDelayAndIntervalsByHand) {
+  MissionMetrics m;
+  m.duration_s = 20.0;
+  ValveMetrics a, b;
+  a.name = "A";
+  a.weight = 0.75;
+  a.visit_times_s = {2.0, 7.0, 15.0};
+  a.visits = 3;
+  a.max_gap_s = 8.0;
+  b.name = "B";
+  b.weight = 0.25;
+  b.max_gap_s = 20.0;
+  m.valves = {a, b};
+  SummariseGaps(m);
+  EXPECT_NEAR(m.expected_detection_delay_s, 0.75 * 2.95 + 0.25 * 10.0, 1e-12);
+  EXPECT_NEAR(m.risk_weighted_interval_s, 0.75 * 20.0 / 3.0 + 0.25 * 20.0, 1e-12);
+  EXPECT_NEAR(m.dominant_interval_s, 20.0 / 3.0, 1e-12);
+  EXPECT_EQ(m.unvisited_valves, 1);
+  EXPECT_EQ(m.longest_gap_max_s, 20.0);
+  EXPECT_EQ(m.longest_gap_median_s, 20.0);  // nearest rank of two: the upper one
+
+  MissionMetrics regular;
+  regular.duration_s = 20.0;
+  ValveMetrics r;
+  r.weight = 1.0;
+  r.visit_times_s = {0.0, 5.0, 10.0, 15.0};
+  r.visits = 4;
+  regular.valves = {r};
+  SummariseGaps(regular);
+  EXPECT_NEAR(regular.expected_detection_delay_s, 2.5, 1e-12);  // I / 2 with I = 5 s
+}
+
 }  // namespace
 }  // namespace sage::server

@@ -1,7 +1,9 @@
 #include "server/mission.h"
 
 #include <cmath>
+#include <algorithm>
 #include <numbers>
+#include <string>
 
 #include <gtest/gtest.h>
 
@@ -77,6 +79,66 @@ TEST(Mission, AstarVisitsEveryValveEachLap) {
   }
   EXPECT_GE(lowest, 5);
   EXPECT_LE(highest - lowest, 1);
+}
+
+// An A* fleet flies what an operator would: the valves split among the vehicles, one closed tour
+// each (the plan's laps are in fleet_events' "tours" note). Every valve is then revisited at
+// least once a lap of its tour: with 4 vehicles on fleet_field's 20 valves the longest gap of
+// any valve after the first 40 s stays under twice the longest planned lap (approach, slowing
+// into the stops and waits included).
+TEST(Mission, AstarFleetSplitsTheValves) {
+  maps::Scenario s = maps::LoadScenario(std::string(SAGE_SOURCE_DIR) + "/scenarios/fleet_field.yaml");
+  s.fleet_events.clear();
+  s = maps::WithDuration(s, 240.0);
+  TrajectoryRecorder record;
+  MissionOptions options{"", ControllerKind::kAstar, &record, true};
+  const MissionResult r = Mission(s, options).Run();
+  const auto tours = std::find_if(record.fleet_events.begin(), record.fleet_events.end(),
+                                  [](const FleetEventRecord& e) { return e.what == "tours"; });
+  ASSERT_NE(tours, record.fleet_events.end());
+  EXPECT_EQ(tours->time_s, 0.0);
+  const double max_lap = std::stod(tours->detail.substr(tours->detail.find("laps ") + 5));
+  EXPECT_GT(max_lap, 5.0);
+  EXPECT_LT(max_lap, 30.0);
+  for (const ValveMetrics& v : r.metrics.valves) {
+    ASSERT_GE(v.visits, 3) << v.name;
+    double gap = 0.0;
+    for (std::size_t i = 1; i < v.visit_times_s.size(); ++i) {
+      if (v.visit_times_s[i - 1] >= 40.0) gap = std::max(gap, v.visit_times_s[i] - v.visit_times_s[i - 1]);
+    }
+    EXPECT_LT(gap, 2.0 * max_lap) << v.name;
+  }
+}
+
+// Losing a vehicle re-plans the tours after the scenario's re-plan delay: the lost vehicle's
+// valves are flown by the others again, each revisited within two laps of the new plan.
+TEST(Mission, AstarFleetReplansAfterALoss) {
+  maps::Scenario s = maps::LoadScenario(std::string(SAGE_SOURCE_DIR) + "/scenarios/fleet_field.yaml");
+  s.fleet_events.clear();
+  maps::FleetEvent lose;
+  lose.time_s = 60.0;
+  lose.kind = maps::FleetEvent::Kind::kLose;
+  lose.vehicle.name = s.vehicles[1].name;
+  s.fleet_events = {lose};
+  s = maps::WithDuration(s, 240.0);
+  s.astar.replan_delay_s = 10.0;
+  TrajectoryRecorder record;
+  const MissionResult r = Mission(s, MissionOptions{"", ControllerKind::kAstar, &record, true}).Run();
+  std::vector<const FleetEventRecord*> plans;
+  for (const FleetEventRecord& e : record.fleet_events)
+    if (e.what == "tours") plans.push_back(&e);
+  ASSERT_EQ(plans.size(), 2u);
+  EXPECT_NEAR(plans[1]->time_s, 70.0, 0.11);  // the loss at 60 s, plus the delay
+  EXPECT_NE(plans[1]->detail.find("for 3 vehicles"), std::string::npos) << plans[1]->detail;
+  const double max_lap = std::stod(plans[1]->detail.substr(plans[1]->detail.find("laps ") + 5));
+  for (const ValveMetrics& v : r.metrics.valves) {
+    double gap = 0.0;
+    for (std::size_t i = 1; i < v.visit_times_s.size(); ++i) {
+      if (v.visit_times_s[i - 1] >= 100.0) gap = std::max(gap, v.visit_times_s[i] - v.visit_times_s[i - 1]);
+    }
+    EXPECT_LT(gap, 2.0 * max_lap) << v.name;
+    EXPECT_GT(v.visit_times_s.back(), 200.0) << v.name << " was left unvisited after the re-plan";
+  }
 }
 
 // The guard: a valve not visited within the revisit bound weighs, for the controllers, as much

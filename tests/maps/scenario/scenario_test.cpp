@@ -198,6 +198,25 @@ profiles: {only: {weights: {V: 1}}}
   EXPECT_TRUE(s.fleet_events.empty());
 }
 
+// A workspace wider than the seabed OctoMap spans at the A* grid resolution (+-2^15 voxels) is
+// refused with the rule, not mapped into a crash: 1,700 m at 0.05 m is too wide, at 0.1 m fits.
+TEST(Scenario, WorkspaceMustFitTheSeabedMap) {
+  Scenario s = LoadScenario(kTwoXtPath);
+  s.workspace.width_m = 1700.0;
+  s.astar.grid_resolution_m = 0.05;
+  try {
+    s.Validate();
+    ADD_FAILURE() << "a 1,700 m workspace at 0.05 m was accepted";
+  } catch (const ScenarioError& e) {
+    EXPECT_NE(std::string(e.what()).find("workspace = 1700 x 4.3: wider than the seabed map spans at "
+                                         "astar.grid_resolution_m = 0.05 (1638.35 m)"),
+              std::string::npos)
+        << e.what();
+  }
+  s.astar.grid_resolution_m = 0.1;
+  EXPECT_NO_THROW(s.Validate());
+}
+
 // The workspace is required, and both of its sides: a mission silently flown in a default box
 // would cover the wrong water.
 TEST(Scenario, WorkspaceIsRequired) {

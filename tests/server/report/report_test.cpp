@@ -183,8 +183,13 @@ TEST_F(ReportTest, MetricsJsonHasEveryKey) {
   WriteMetricsJson(Path("metrics.json"), SampleMetrics());
   EXPECT_FALSE(fs::exists(Path("metrics.json.tmp")));
   const nlohmann::json j = nlohmann::json::parse(ReadText(Path("metrics.json")));
-  EXPECT_EQ(j.size(), 11u);
+  EXPECT_EQ(j.size(), 16u);
   EXPECT_EQ(j.at("controller"), "ergodic");
+  for (const char* key : {"expected_detection_delay_s", "risk_weighted_interval_s", "dominant_interval_s"}) {
+    EXPECT_TRUE(j.at(key).is_number()) << key;
+  }
+  EXPECT_EQ(j.at("unvisited_valves"), 0);
+  EXPECT_EQ(j.at("longest_gap_s").size(), 3u);
   EXPECT_EQ(j.at("profile"), "one_extreme");
   EXPECT_EQ(j.at("duration_s"), 300.0);
   EXPECT_EQ(j.at("vehicle_count"), 2);

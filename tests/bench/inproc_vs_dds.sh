@@ -1,0 +1,39 @@
+#!/usr/bin/env bash
+# In-process against over DDS: the same scenario and seeds run by `sage run` (the mission core and
+# agent objects in lockstep) and by `sage launch` (the same objects as processes on Cyclone DDS),
+# compared on what an inspection engineer reads: corr(visits, weight), the dominant valve's
+# revisit interval, the fewest visits of any valve and the final ergodic metric. Prints and
+# writes inproc_vs_dds.md. Usage: tests/bench/inproc_vs_dds.sh [BUILD_DIR] [SCENARIO] [SEEDS...]
+# (default: build scenarios/fleet_field.yaml 1 2 3; launches run at 4x real time).
+set -euo pipefail
+cd "$(dirname "$0")/../.."
+build=${1:-build}
+scenario=${2:-scenarios/fleet_field.yaml}
+shift 2 || true
+seeds=("${@:-1 2 3}")
+out=inproc_vs_dds.md
+work=$(mktemp -d)
+summary() {  # metrics.json -> "corr interval fewest metric"
+  python3 - "$1" <<'PY'
+import json, sys
+m = json.load(open(sys.argv[1]))
+v = m["valves"]
+top = max(v, key=lambda x: x["weight"])
+print(m["visit_weight_correlation"], top["mean_interval_s"], min(x["visits"] for x in v), m["ergodic_metric"])
+PY
+}
+{
+  echo "| seed | transport | corr(visits, weight) | dominant valve interval | fewest visits | ergodic metric |"
+  echo "|---|---|---|---|---|---|"
+} | tee "$out"
+for seed in ${seeds[@]}; do
+  echo "inproc_vs_dds: seed $seed" >&2
+  "$build/bin/sage" run "$scenario" --seed "$seed" --out "$work/run$seed" >/dev/null 2>&1
+  "$build/bin/sage" launch "$scenario" --seed "$seed" --time-scale 4 --out "$work/launch$seed" >"$work/launch$seed.log" 2>&1
+  for kind in run launch; do
+    read -r corr interval fewest metric <<<"$(summary "$work/$kind$seed/metrics.json")"
+    transport=$([ "$kind" = run ] && echo in-process || echo DDS)
+    printf "| %s | %s | %+.3f | %.1f s | %s | %.2e |\n" "$seed" "$transport" "$corr" "$interval" "$fewest" "$metric" | tee -a "$out"
+  done
+done
+rm -rf "$work"
