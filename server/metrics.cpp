@@ -300,6 +300,10 @@ MissionMetrics MetricsAccumulator::Result(double end_s) const {
   out.time_outside_s = done.state_.time_outside_s;
   out.time_pinned_s = done.state_.time_pinned_s;
   out.metric_over_time = done.state_.metric_over_time;
+  // Checkpoints strictly before the end (an online one taken at the end itself is the end's).
+  while (!out.metric_over_time.empty() && out.metric_over_time.back().time_s >= end_s * (1.0 - 1e-12)) {
+    out.metric_over_time.pop_back();
+  }
   out.ergodic_metric = done.MetricAt(end_s);
   if (!std::isnan(out.ergodic_metric)) out.metric_over_time.push_back({end_s, out.ergodic_metric});
 
