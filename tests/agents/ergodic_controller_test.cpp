@@ -64,6 +64,34 @@ TEST(CoverageAccumulator, MatchesBruteForceDiscountedSum) {
   EXPECT_NEAR(acc.time_s(), expected_time, 1e-12);
 }
 
+// AddOuterProduct(x, y, dt) is Add(f, dt) with f_{i n + j} = x_i y_j, with and without
+// forgetting, over steps that include dt = 0 and dt < 0 (no-ops, as for Add). The sums agree to
+// 1e-14 relative to their largest magnitude (dt f_k is rounded differently), the kernel time
+// bit for bit; a size mismatch is refused.
+TEST(CoverageAccumulator, OuterProductMatchesAddOfFormedProduct) {
+  const int rows = 3, cols = 5;
+  for (const double forgetting : {5.0, std::numeric_limits<double>::infinity()}) {
+    CoverageAccumulator fused(rows * cols, forgetting), reference(rows * cols, forgetting);
+    for (int step = 0; step < 300; ++step) {
+      std::vector<double> x(rows), y(cols);
+      for (int i = 0; i < rows; ++i) x[i] = std::cos(0.37 * step + i);
+      for (int j = 0; j < cols; ++j) y[j] = std::sin(0.11 * step * (j + 1)) - 0.2;
+      Eigen::VectorXd f(rows * cols);
+      for (int i = 0; i < rows; ++i)
+        for (int j = 0; j < cols; ++j) f[i * cols + j] = x[i] * y[j];
+      const double dt = step % 17 == 0 ? 0.0 : step % 23 == 0 ? -0.1 : 0.05 + 0.001 * (step % 7);
+      fused.AddOuterProduct(x, y, dt);
+      reference.Add(f, dt);
+    }
+    const double scale = reference.sums().cwiseAbs().maxCoeff();
+    EXPECT_LT((fused.sums() - reference.sums()).cwiseAbs().maxCoeff(), 1e-14 * scale) << "T = " << forgetting;
+    EXPECT_EQ(fused.time_s(), reference.time_s()) << "T = " << forgetting;
+  }
+  CoverageAccumulator acc(6);
+  const std::vector<double> two(2, 1.0), four(4, 1.0);
+  EXPECT_THROW(acc.AddOuterProduct(two, four, 0.1), std::invalid_argument);
+}
+
 // Commands always have the transit speed, and the metric falls under SMC on a fixed target.
 TEST(ErgodicController, MetricFallsOnFixedTarget) {
   const maps::SpectralBasis basis(7.0, 5.0, 10);
