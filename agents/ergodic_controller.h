@@ -10,6 +10,9 @@
 // valve gets one long visit instead of many. With it the vehicle flies through and loops back.
 // In a fleet the coverage of the other vehicles (their sums and time) is added to this
 // vehicle's own before forming c_k, which is Mathew & Mezic's multi-agent law.
+// One step is one set of cos/sin tables (shared by F_k and grad F_k), one pass over the K^2
+// coefficients for the coverage (an outer product: F_k is separable) and one for B, with no
+// allocation (0.3 us at K = 20; tests/bench/spectral_bench.cpp).
 #include <limits>
 
 #include <Eigen/Core>
@@ -54,6 +57,10 @@ class ErgodicController final : public VehicleController {
   void RestoreCoverage(const Eigen::VectorXd& sums, double time_s) { coverage_.Restore(sums, time_s); }
 
  private:
+  // B = sum_k Lambda_k (c_k - phi_k) grad F_k(x) at the tables' position from the current
+  // coverage, in one pass over k (1/m^3: c_k and F_k are in 1/m, grad F_k in 1/m^2).
+  Eigen::Vector2d DeficitGradient(const maps::SpectralBasis::Trigonometry& t) const;
+
   const maps::SpectralBasis& basis_;
   double speed_mps_;
   double max_turn_rate_radps_;  // speed / min turning radius; infinity = the paper's law
@@ -61,8 +68,7 @@ class ErgodicController final : public VehicleController {
   Eigen::VectorXd target_;
   Eigen::VectorXd fleet_sums_;
   double fleet_time_s_ = 0.0;
-  Eigen::VectorXd f_;           // scratch: F_k(x)
-  Eigen::VectorXd weighted_;    // scratch: Lambda_k (c_k - phi_k)
+  Eigen::VectorXd lambda_over_h_;  // Lambda_k / h_k (1/m), fixed by the basis
   Eigen::Vector2d last_direction_ = Eigen::Vector2d::UnitX();
   bool has_direction_ = false;  // false until the first command: a vehicle at rest may head anywhere
   double last_time_s_ = std::numeric_limits<double>::quiet_NaN();

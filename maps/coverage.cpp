@@ -28,6 +28,27 @@ void CoverageAccumulator::Add(const Eigen::VectorXd& f, double dt_s) {
   time_s_ += dt_s;
 }
 
+void CoverageAccumulator::AddOuterProduct(std::span<const double> x, std::span<const double> y, double dt_s) {
+  const auto rows = static_cast<Eigen::Index>(x.size()), cols = static_cast<Eigen::Index>(y.size());
+  if (rows * cols != sums_.size()) throw std::invalid_argument("CoverageAccumulator::AddOuterProduct: wrong size");
+  if (dt_s <= 0.0) return;
+  // S_{ij} <- decay S_{ij} + (dt x_i) y_j; the decay multiply is skipped without forgetting, as
+  // in Add. Plain loops over contiguous rows: the compiler vectorises them.
+  const bool forgets = std::isfinite(forgetting_time_s_);
+  const double decay = forgets ? std::exp(-dt_s / forgetting_time_s_) : 1.0;
+  double* s = sums_.data();
+  for (Eigen::Index i = 0; i < rows; ++i) {
+    const double dt_x = dt_s * x[i];
+    double* row = s + i * cols;
+    if (forgets) {
+      for (Eigen::Index j = 0; j < cols; ++j) row[j] = decay * row[j] + dt_x * y[j];
+    } else {
+      for (Eigen::Index j = 0; j < cols; ++j) row[j] += dt_x * y[j];
+    }
+  }
+  time_s_ = time_s_ * decay + dt_s;
+}
+
 void CoverageAccumulator::Reset() {
   sums_.setZero();
   time_s_ = 0.0;

@@ -9,6 +9,7 @@
 #include <cstdint>
 #include <limits>
 #include <map>
+#include <span>
 
 #include <Eigen/Core>
 
@@ -25,6 +26,11 @@ class CoverageAccumulator {
 
   /// Decays the history by exp(-dt/T) and adds f * dt (f = F_k at the current position).
   void Add(const Eigen::VectorXd& f, double dt_s);
+  /// Add(f, dt) for a separable f, without forming it: f_{i n + j} = x_i y_j with n = y.size()
+  /// and x.size() * n = size(). For the cosine basis x_i = cos(k1 pi x / L1) / h_x[k1] and
+  /// y_j = cos(k2 pi y / L2) / h_y[k2] (SpectralBasis::inverse_normalizers_x/y). One pass and one
+  /// multiply per coefficient; agrees with Add to rounding (dt f_k is formed as (dt x_i) y_j).
+  void AddOuterProduct(std::span<const double> x, std::span<const double> y, double dt_s);
   const Eigen::VectorXd& sums() const { return sums_; }
   double time_s() const { return time_s_; }  ///< W(t): integral of the kernel (s)
   double forgetting_time_s() const { return forgetting_time_s_; }

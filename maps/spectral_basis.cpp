@@ -9,22 +9,31 @@
 namespace sage::maps {
 namespace {
 
-constexpr int kMaxOrder = 64;
-
-// cos(k a) and sin(k a) for k = 0..K-1 by the Chebyshev recurrences
+// cos(k a) and sin(k a), k = 0..K-1, for a = a_x and a = a_y, by the Chebyshev recurrences
 //   cos((k+1)a) = 2 cos a cos(ka) - cos((k-1)a),  sin likewise,
-// which cost two multiply-adds per k instead of a libm call.
-void CosSinTable(double a, int order, double* c, double* s) {
-  c[0] = 1.0;
-  s[0] = 0.0;
+// which cost a multiply and a subtract per k instead of a libm call. Each recurrence is one
+// dependent chain, so its latency, not its arithmetic, sets the cost: the four run side by side
+// on locals (no reload through the tables, which the compiler must assume may alias).
+void CosSinTables(double a_x, double a_y, int order, SpectralBasis::Trigonometry& t) {
+  t.cos_x[0] = t.cos_y[0] = 1.0;
+  t.sin_x[0] = t.sin_y[0] = 0.0;
   if (order == 1) return;
-  const double ca = std::cos(a);
-  c[1] = ca;
-  s[1] = std::sin(a);
-  const double two_ca = 2.0 * ca;
+  double cx0 = 1.0, sx0 = 0.0, cx1 = std::cos(a_x), sx1 = std::sin(a_x);
+  double cy0 = 1.0, sy0 = 0.0, cy1 = std::cos(a_y), sy1 = std::sin(a_y);
+  t.cos_x[1] = cx1;
+  t.sin_x[1] = sx1;
+  t.cos_y[1] = cy1;
+  t.sin_y[1] = sy1;
+  const double two_cx = 2.0 * cx1, two_cy = 2.0 * cy1;
   for (int k = 2; k < order; ++k) {
-    c[k] = two_ca * c[k - 1] - c[k - 2];
-    s[k] = two_ca * s[k - 1] - s[k - 2];
+    const double cx2 = two_cx * cx1 - cx0, sx2 = two_cx * sx1 - sx0;
+    const double cy2 = two_cy * cy1 - cy0, sy2 = two_cy * sy1 - sy0;
+    t.cos_x[k] = cx2;
+    t.sin_x[k] = sx2;
+    t.cos_y[k] = cy2;
+    t.sin_y[k] = sy2;
+    cx0 = cx1, cx1 = cx2, sx0 = sx1, sx1 = sx2;
+    cy0 = cy1, cy1 = cy2, sy0 = sy1, sy1 = sy2;
   }
 }
 
@@ -44,9 +53,14 @@ SpectralBasis::SpectralBasis(double width_m, double height_m, int order)
   lambda_.resize(n);
   kappa_x_.resize(order);
   kappa_y_.resize(order);
+  inv_h_x_.resize(order);
+  inv_h_y_.resize(order);
   for (int k = 0; k < order; ++k) {
     kappa_x_[k] = k * std::numbers::pi / width_m;
     kappa_y_[k] = k * std::numbers::pi / height_m;
+    // h_k = h_x[k1] h_y[k2], h_x[k1]^2 = integral_0^L1 cos^2(k1 pi x / L1) dx = L1 (1/2 if k1 != 0).
+    inv_h_x_[k] = 1.0 / std::sqrt(k == 0 ? width_m : 0.5 * width_m);
+    inv_h_y_[k] = 1.0 / std::sqrt(k == 0 ? height_m : 0.5 * height_m);
   }
   const double area = width_m * height_m;
   for (int k1 = 0; k1 < order; ++k1) {
@@ -64,10 +78,15 @@ SpectralBasis::SpectralBasis(double width_m, double height_m, int order)
   }
 }
 
+void SpectralBasis::EvaluateTrigonometry(const Eigen::Vector2d& x, Trigonometry& t) const {
+  CosSinTables(std::numbers::pi * x.x() / width_m_, std::numbers::pi * x.y() / height_m_, order_, t);
+}
+
 void SpectralBasis::Evaluate(const Eigen::Vector2d& x, Eigen::VectorXd& f) const {
-  std::array<double, kMaxOrder> cx, sx, cy, sy;
-  CosSinTable(std::numbers::pi * x.x() / width_m_, order_, cx.data(), sx.data());
-  CosSinTable(std::numbers::pi * x.y() / height_m_, order_, cy.data(), sy.data());
+  Trigonometry t;
+  EvaluateTrigonometry(x, t);
+  const auto& cx = t.cos_x;
+  const auto& cy = t.cos_y;
   f.resize(size());
   for (int k1 = 0; k1 < order_; ++k1) {
     const int row = k1 * order_;
@@ -76,9 +95,12 @@ void SpectralBasis::Evaluate(const Eigen::Vector2d& x, Eigen::VectorXd& f) const
 }
 
 Eigen::Vector2d SpectralBasis::GradientOfSum(const Eigen::Vector2d& x, const Eigen::VectorXd& a) const {
-  std::array<double, kMaxOrder> cx, sx, cy, sy;
-  CosSinTable(std::numbers::pi * x.x() / width_m_, order_, cx.data(), sx.data());
-  CosSinTable(std::numbers::pi * x.y() / height_m_, order_, cy.data(), sy.data());
+  Trigonometry t;
+  EvaluateTrigonometry(x, t);
+  const auto& cx = t.cos_x;
+  const auto& sx = t.sin_x;
+  const auto& cy = t.cos_y;
+  const auto& sy = t.sin_y;
   // d/dx1 F_k = -(kappa1 / h_k) sin(kappa1 x1) cos(kappa2 x2), d/dx2 likewise; summed row by row
   // so each k1 costs one pass over k2.
   double gx = 0.0;

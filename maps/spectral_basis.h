@@ -4,12 +4,23 @@
 //   h_k = sqrt(L1 L2 prod_{j: k_j != 0} 1/2)   so that the F_k are orthonormal on the box,
 //   Lambda_k = (1 + |k|^2)^(-(n+1)/2), n = 2   (Sobolev weight of the ergodic metric).
 // Coefficient k = (k1, k2), 0 <= k1, k2 < K, is stored at flat index k1 * K + k2.
+#include <array>
+
 #include <Eigen/Core>
 
 namespace sage::maps {
 
 class SpectralBasis {
  public:
+  /// Largest order K accepted (per-position tables live on the stack at this length).
+  static constexpr int kMaxOrder = 64;
+
+  /// cos(kappa_k x_j) and sin(kappa_k x_j) for k = 0..K-1 at one position: the factors of F_k and
+  /// of its gradient. Only the first order() entries of each table are set.
+  struct Trigonometry {
+    std::array<double, kMaxOrder> cos_x, sin_x, cos_y, sin_y;
+  };
+
   /// width_m, height_m: workspace extent in metres (> 0); order: K, the number of
   /// wave numbers per dimension (>= 1), giving K^2 coefficients.
   SpectralBasis(double width_m, double height_m, int order);
@@ -23,9 +34,21 @@ class SpectralBasis {
   /// Normalisers h_k (metres) and metric weights Lambda_k, flat-indexed.
   const Eigen::VectorXd& normalizers() const { return h_; }
   const Eigen::VectorXd& weights() const { return lambda_; }
+  /// 1 / h_k (1/m), flat-indexed: F_k(x) = cos_x[k1] cos_y[k2] / h_k.
+  const Eigen::VectorXd& inverse_normalizers() const { return inv_h_; }
+  /// The per-dimension factors of 1 / h_k (1/sqrt(m)), indexed by k1 and k2:
+  /// 1 / h_k = inverse_normalizers_x()[k1] * inverse_normalizers_y()[k2] (to rounding), so F_k is
+  /// the product of one normalised cosine per dimension.
+  const Eigen::VectorXd& inverse_normalizers_x() const { return inv_h_x_; }
+  const Eigen::VectorXd& inverse_normalizers_y() const { return inv_h_y_; }
   /// Wave numbers kappa_j = k_j pi / L_j (rad/m) for dimension 0 (x) and 1 (y).
   const Eigen::VectorXd& kappa_x() const { return kappa_x_; }
   const Eigen::VectorXd& kappa_y() const { return kappa_y_; }
+
+  /// The cosine and sine tables at x (metres, workspace frame), by Chebyshev recurrences: one
+  /// sin/cos pair per dimension whatever K. For callers that fuse F_k or its gradient into their
+  /// own pass over k (the SMC step).
+  void EvaluateTrigonometry(const Eigen::Vector2d& x, Trigonometry& t) const;
 
   /// F_k(x) for all k into f (resized to size()). x in metres, workspace frame.
   void Evaluate(const Eigen::Vector2d& x, Eigen::VectorXd& f) const;
@@ -46,6 +69,8 @@ class SpectralBasis {
   Eigen::VectorXd lambda_;
   Eigen::VectorXd kappa_x_;
   Eigen::VectorXd kappa_y_;
+  Eigen::VectorXd inv_h_x_;
+  Eigen::VectorXd inv_h_y_;
 };
 
 }  // namespace sage::maps

@@ -60,6 +60,39 @@ TEST(SpectralBasis, RecurrenceMatchesDirectCosines) {
   }
 }
 
+// The shared cos/sin tables match direct libm calls (absolute 1e-12 even at K = 64, where the
+// recurrences have run longest), at the box's corners and inside, for order 1 and 2 too.
+TEST(SpectralBasis, TrigonometryTablesMatchDirectCalls) {
+  for (int order : {1, 2, 64}) {
+    const SpectralBasis basis(9.0, 4.0, order);
+    for (const Eigen::Vector2d& x : {Eigen::Vector2d(0, 0), Eigen::Vector2d(3.3, 1.7), Eigen::Vector2d(9, 4)}) {
+      SpectralBasis::Trigonometry t;
+      basis.EvaluateTrigonometry(x, t);
+      for (int k = 0; k < order; ++k) {
+        const double ax = k * M_PI * x.x() / 9.0, ay = k * M_PI * x.y() / 4.0;
+        ASSERT_NEAR(t.cos_x[k], std::cos(ax), 1e-12) << "order " << order << " k " << k;
+        ASSERT_NEAR(t.sin_x[k], std::sin(ax), 1e-12) << "order " << order << " k " << k;
+        ASSERT_NEAR(t.cos_y[k], std::cos(ay), 1e-12) << "order " << order << " k " << k;
+        ASSERT_NEAR(t.sin_y[k], std::sin(ay), 1e-12) << "order " << order << " k " << k;
+      }
+    }
+  }
+}
+
+// 1 / h_k factors into one normaliser per dimension (to a few ulp), which the SMC step uses to
+// form F_k as an outer product.
+TEST(SpectralBasis, InverseNormalizersFactorPerDimension) {
+  const SpectralBasis basis(7.0, 5.0, 20);
+  for (int k1 = 0; k1 < 20; ++k1) {
+    for (int k2 = 0; k2 < 20; ++k2) {
+      const double product = basis.inverse_normalizers_x()[k1] * basis.inverse_normalizers_y()[k2];
+      const int i = SpectralBasis::Index(k1, k2, 20);
+      ASSERT_NEAR(product, basis.inverse_normalizers()[i], 1e-15 * basis.inverse_normalizers()[i]);
+      ASSERT_NEAR(basis.inverse_normalizers()[i] * basis.normalizers()[i], 1.0, 1e-15);
+    }
+  }
+}
+
 // grad sum_k a_k F_k against central finite differences (step 1e-6 m: error ~1e-8 relative).
 TEST(SpectralBasis, GradientMatchesFiniteDifferences) {
   const SpectralBasis basis(7.0, 5.0, 20);
