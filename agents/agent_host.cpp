@@ -20,7 +20,7 @@ struct AgentHost::Impl {
     std::unique_ptr<TourController> tour;
     std::vector<int> tour_valves;  // A*: its tour's valves in visiting order (indices into the scenario's)
     double speed_mps = 0.0;
-    std::unique_ptr<ObstacleFilter> keep_clear;  // BlueROV2s under SMC
+    std::unique_ptr<ObstacleFilter> keep_clear;  // BlueROV2s: structures and edges (SMC), neighbours
     Eigen::Vector2d command = Eigen::Vector2d::Zero();
   };
 
@@ -86,6 +86,15 @@ void AgentHost::AddVehicle(VehicleId id, const maps::VehicleSpec& spec) {
     if (spec.model == maps::MotionModel::kBlueRov2) {
       v.keep_clear = std::make_unique<ObstacleFilter>(impl_->clearance, impl_->scenario.workspace);
     }
+  } else if (spec.model == maps::MotionModel::kBlueRov2) {
+    // A tour's paths already keep clear of the structures; what a fleet of tours needs is not to
+    // fly into each other: only a close neighbour turns the command (a hull and a half).
+    ObstacleFilterSettings tours;
+    tours.influence_m = tours.clearance_m = 0.0;
+    tours.boundary_influence_m = tours.boundary_clearance_m = 0.0;
+    tours.neighbour_influence_m = 1.2;
+    tours.neighbour_clearance_m = 0.7;
+    v.keep_clear = std::make_unique<ObstacleFilter>(impl_->clearance, impl_->scenario.workspace, tours);
   }
   impl_->vehicles.push_back(std::move(v));
 }

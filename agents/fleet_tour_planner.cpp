@@ -630,7 +630,10 @@ class Search {
   std::uint64_t versions_ = 0;
 };
 
-// Cluster c -> vehicle: greedily on the straight line from vehicle to centroid, shortest first.
+// Cluster c -> vehicle: greedily on the straight line from vehicle to centroid, shortest first;
+// then pairwise swaps that shorten the longer of two approaches, longest approach first (a few
+// passes): greedy alone leaves the last vehicles the farthest clusters, and a vehicle sent across
+// a crowded field meets every other tour on its way.
 std::vector<int> Match(const Points& centroids, const std::vector<FleetVehicle>& vehicles) {
   std::vector<std::tuple<double, int, int>> pairs;
   pairs.reserve(centroids.size() * vehicles.size());
@@ -644,6 +647,34 @@ std::vector<int> Match(const Points& centroids, const std::vector<FleetVehicle>&
   std::vector<char> taken(vehicles.size(), 0);
   for (const auto& [d, c, k] : pairs) {
     if (vehicle_of[c] < 0 && !taken[k]) vehicle_of[c] = k, taken[k] = 1;
+  }
+  const int clusters = static_cast<int>(centroids.size());
+  const auto approach = [&](int c, int k) { return (centroids[c] - vehicles[k].position_m).norm(); };
+  for (int pass = 0; pass < 3; ++pass) {
+    std::vector<int> by_length(clusters);
+    for (int c = 0; c < clusters; ++c) by_length[c] = c;
+    std::sort(by_length.begin(), by_length.end(),
+              [&](int a, int b) { return approach(a, vehicle_of[a]) > approach(b, vehicle_of[b]); });
+    bool improved = false;
+    for (const int a : by_length) {
+      // The swap partner that makes the longer of the two approaches shortest, if it is shorter.
+      int best = -1;
+      double best_longer = std::numeric_limits<double>::infinity();
+      for (int b = 0; b < clusters; ++b) {
+        if (b == a) continue;
+        const double before = std::max(approach(a, vehicle_of[a]), approach(b, vehicle_of[b]));
+        const double after = std::max(approach(a, vehicle_of[b]), approach(b, vehicle_of[a]));
+        if (after < before - 1e-9 && after < best_longer) {
+          best = b;
+          best_longer = after;
+        }
+      }
+      if (best >= 0) {
+        std::swap(vehicle_of[a], vehicle_of[best]);
+        improved = true;
+      }
+    }
+    if (!improved) break;
   }
   return vehicle_of;
 }

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 #include <string>
 #include <utility>
@@ -16,6 +17,9 @@ namespace {
 constexpr double kSlowdownDistanceM = 0.3;
 // Floor of the ramp (m/s): without it v ~ d would only approach the valve asymptotically.
 constexpr double kMinApproachSpeedMps = 0.1;
+// Under way (not waiting) but within this distance (m) of where it was this long ago (s): pinned.
+constexpr double kPinnedAfter_s = 3.0;
+constexpr double kPinnedWithin_m = 0.1;
 
 Eigen::VectorXd Normalised(const Eigen::VectorXd& weights, std::size_t valve_count) {
   if (static_cast<std::size_t>(weights.size()) != valve_count) {
@@ -58,8 +62,11 @@ void TourController::SetWeights(const Eigen::VectorXd& weights) {
 bool TourController::Follow(const std::vector<Eigen::Vector2d>& path, std::size_t& index,
                             const Eigen::Vector2d& position_m, Eigen::Vector2d& command_mps) const {
   // path[0] is where the vehicle already is (its snapped start cell, or the valve it waited at):
-  // pursue path[1] directly rather than step back to a cell centre.
-  if (index == 0 && path.size() > 1) index = 1;
+  // pursue path[1] directly rather than step back to a cell centre; unless the vehicle is not
+  // there (a start inside the inflated zone of a structure snaps to the free cell beyond it), as
+  // the straight line to path[1] could then cut the structure's corner and pin the vehicle on it.
+  const double at_start_m = std::max(arrive_radius_m_, 2.0 * grid_->resolution_m());
+  if (index == 0 && path.size() > 1 && (path[0] - position_m).norm() <= at_start_m) index = 1;
   // A waypoint is reached within the arrive radius; an intermediate one also once the vehicle
   // has crossed the line through it perpendicular to the incoming segment, so a step longer
   // than twice the radius cannot make it oscillate about the waypoint.
@@ -84,6 +91,19 @@ bool TourController::Follow(const std::vector<Eigen::Vector2d>& path, std::size_
   return false;
 }
 
+bool TourController::Pinned(const VehicleState& state, double time_s) {
+  if (std::isnan(anchor_time_s_) || waiting_) {
+    anchor_m_ = state.position_m;
+    anchor_time_s_ = time_s;
+    return false;
+  }
+  if (time_s - anchor_time_s_ < kPinnedAfter_s) return false;
+  const bool pinned = (state.position_m - anchor_m_).norm() < kPinnedWithin_m;
+  anchor_m_ = state.position_m;
+  anchor_time_s_ = time_s;
+  return pinned;
+}
+
 void TourController::ArriveAt(int position_in_order, double time_s) {
   if (position_in_order == 0) {
     // Back at the tour's first valve: a lap ends (except on the first arrival) and the weights
@@ -94,6 +114,7 @@ void TourController::ArriveAt(int position_in_order, double time_s) {
   }
   const int valve = tour_.order[position_in_order];
   waiting_ = true;
+  anchor_time_s_ = std::numeric_limits<double>::quiet_NaN();
   wait_until_s_ = time_s + wait_per_lap_s_ * weights_[valve];
   leg_ = position_in_order;  // the leg to follow once the wait is over
   waypoint_ = 0;
@@ -101,6 +122,20 @@ void TourController::ArriveAt(int position_in_order, double time_s) {
 
 Eigen::Vector2d TourController::Command(const VehicleState& state, double time_s) {
   Eigen::Vector2d command = Eigen::Vector2d::Zero();
+  // Pinned (a neighbour pushed it into a structure's corner, or a collision): fly a fresh grid
+  // path from here to the waypoint it was after, then carry on.
+  if (!detour_.empty()) {
+    if (!Follow(detour_, detour_index_, state.position_m, command)) return command;
+    detour_.clear();
+  }
+  if (!waiting_ && Pinned(state, time_s)) {
+    const Eigen::Vector2d& target = on_tour_ ? tour_.legs[leg_][std::min(waypoint_, tour_.legs[leg_].size() - 1)]
+                                             : approach_[std::min(approach_index_, approach_.size() - 1)];
+    detour_ = PlanGridPath(*grid_, state.position_m, target);
+    detour_index_ = 0;
+    if (!detour_.empty() && !Follow(detour_, detour_index_, state.position_m, command)) return command;
+    detour_.clear();
+  }
   if (!on_tour_) {
     if (!approach_planned_) {
       const Eigen::Vector2d first_valve = tour_.legs[0].front();

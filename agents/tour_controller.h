@@ -2,6 +2,7 @@
 // Follows an A* tour lap after lap: travels each leg at transit speed, waits at each valve for
 // wait_per_lap_s * w_i (its normalised weight), and picks up new weights at the start of the
 // next lap (the discrete re-route a fixed tour needs after a risk change).
+#include <limits>
 #include <vector>
 
 #include <Eigen/Core>
@@ -31,6 +32,8 @@ class TourController final : public VehicleController {
               Eigen::Vector2d& command_mps) const;
   // Arrival at tour_.order[position_in_order]: lap bookkeeping, then the weighted wait.
   void ArriveAt(int position_in_order, double time_s);
+  // True if, under way, the vehicle has hardly moved for a few seconds.
+  bool Pinned(const VehicleState& state, double time_s);
 
   // implementation-defined state
   Tour tour_;
@@ -49,6 +52,10 @@ class TourController final : public VehicleController {
   double wait_until_s_ = -1.0;
   bool waiting_ = false;
   int laps_completed_ = 0;
+  std::vector<Eigen::Vector2d> detour_;  // a fresh path to the waypoint it was after, when pinned
+  std::size_t detour_index_ = 0;
+  Eigen::Vector2d anchor_m_ = Eigen::Vector2d::Zero();  // where it was at anchor_time_s_
+  double anchor_time_s_ = std::numeric_limits<double>::quiet_NaN();
 };
 
 }  // namespace sage::agents

@@ -138,6 +138,9 @@ MetricsAccumulator::MetricsAccumulator(const maps::Scenario& scenario, const map
   if (valves_.empty()) throw std::invalid_argument("MetricsAccumulator: the scenario has no valves");
   if (!(options.metric_sample_period_s > 0.0)) throw std::invalid_argument("MetricsAccumulator: period must be > 0");
   state_.time_near_s.assign(valves_.size(), 0.0);
+  state_.watched_until_s.assign(valves_.size(), 0.0);
+  state_.longest_unwatched_s.assign(valves_.size(), 0.0);
+  state_.unwatched_squares_s2.assign(valves_.size(), 0.0);
   state_.sum_f = Eigen::VectorXd::Zero(basis.size());
 }
 
@@ -201,7 +204,15 @@ void MetricsAccumulator::Restore(State state, VisitTracker visits) {
 void MetricsAccumulator::Hold(const TrajectorySample& sample, double dt_s) {
   const Eigen::Vector2d& p = sample.position_m;
   for (std::size_t v = 0; v < valves_.size(); ++v) {
-    if ((p - valves_[v]).norm() <= scenario_.visit_radius_m) state_.time_near_s[v] += dt_s;
+    if ((p - valves_[v]).norm() > scenario_.visit_radius_m) continue;
+    state_.time_near_s[v] += dt_s;
+    // Watched over [t, t + dt): the stretch since it was last watched closes here.
+    const double unwatched = sample.time_s - state_.watched_until_s[v];
+    if (unwatched > 0.0) {
+      state_.longest_unwatched_s[v] = std::max(state_.longest_unwatched_s[v], unwatched);
+      state_.unwatched_squares_s2[v] += unwatched * unwatched;
+    }
+    state_.watched_until_s[v] = std::max(state_.watched_until_s[v], sample.time_s + dt_s);
   }
   const double to_edge =
       std::min({p.x(), scenario_.workspace.width_m - p.x(), p.y(), scenario_.workspace.height_m - p.y()});
@@ -318,6 +329,9 @@ MissionMetrics MetricsAccumulator::Result(double end_s) const {
       if (t <= end_s) m.visit_times_s.push_back(t);
     m.visits = static_cast<int>(m.visit_times_s.size());
     m.time_near_s = done.state_.time_near_s[v];
+    const double open = std::max(0.0, end_s - std::min(end_s, done.state_.watched_until_s[v]));  // to the end
+    m.longest_unwatched_s = std::max(done.state_.longest_unwatched_s[v], open);
+    m.unwatched_squares_s2 = done.state_.unwatched_squares_s2[v] + open * open;
     m.max_gap_s = end_s;
     if (!m.visit_times_s.empty()) {
       m.max_gap_s = std::max(m.visit_times_s.front(), end_s - m.visit_times_s.back());
@@ -345,17 +359,11 @@ void SummariseGaps(MissionMetrics& m) {
   m.unvisited_valves = 0;
   const ValveMetrics* dominant = nullptr;
   for (const ValveMetrics& v : m.valves) {
-    double previous = 0.0, squares = 0.0;
-    for (double t : v.visit_times_s) {
-      squares += (t - previous) * (t - previous);
-      previous = t;
-    }
-    squares += (T - previous) * (T - previous);
-    m.expected_detection_delay_s += v.weight * squares / (2.0 * T);
+    m.expected_detection_delay_s += v.weight * v.unwatched_squares_s2 / (2.0 * T);
     m.risk_weighted_interval_s += v.weight * T / std::max(v.visits, 1);
     weight_sum += v.weight;
     m.unvisited_valves += v.visits == 0 ? 1 : 0;
-    longest.push_back(v.max_gap_s);
+    longest.push_back(v.longest_unwatched_s);
     if (dominant == nullptr || v.weight > dominant->weight) dominant = &v;
   }
   if (weight_sum > 0.0) {

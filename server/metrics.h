@@ -49,6 +49,12 @@ struct ValveMetrics {
   double max_gap_s = 0.0;            ///< longest of start->first, between visits, last->end
   double time_near_s = 0.0;          ///< time within the visit radius (any vehicle)
   std::vector<double> visit_times_s;
+  /// Longest time (s) with no vehicle within the visit radius (start and end included): a
+  /// vehicle holding station at a valve watches it, though it makes one visit.
+  double longest_unwatched_s = 0.0;
+  /// Sum over the unwatched stretches g of g^2 (s^2): a leak starting at a random moment waits
+  /// sum g^2 / (2 T) for a vehicle to be there.
+  double unwatched_squares_s2 = 0.0;
 };
 
 struct MetricSample {
@@ -84,17 +90,17 @@ struct MissionMetrics {
   double boundary_margin_m = 0.2;
   std::vector<EventResponse> events;  ///< filled by a mission run; empty for a recorded log
 
-  // What a fleet is judged by (issue: fleets that scale). With gaps g_ij of valve i (start to
-  // first visit, between visits, last visit to end; they sum to T) and weights w_i:
+  // What a fleet is judged by. With g_ij the stretches of valve i with no vehicle within the
+  // visit radius (from the start, between, to the end) and weights w_i:
   /// Expected time a leak goes unnoticed if it starts at a uniformly random moment at valve i
   /// with probability w_i: sum_i w_i sum_j g_ij^2 / (2 T) (s). For regular visits every I this is
-  /// I / 2; irregular ones wait longer (the inspection paradox).
+  /// about I / 2; irregular ones wait longer (the inspection paradox).
   double expected_detection_delay_s = 0.0;
   /// sum_i w_i T / max(n_i, 1): the risk-weighted mean revisit interval (s), n_i visits.
   double risk_weighted_interval_s = 0.0;
   double dominant_interval_s = 0.0;   ///< T / max(n, 1) of the valve with the highest weight (s)
   int unvisited_valves = 0;
-  double longest_gap_median_s = 0.0;  ///< over valves, of each valve's longest gap (s)
+  double longest_gap_median_s = 0.0;  ///< over valves, of each valve's longest unwatched stretch (s)
   double longest_gap_p90_s = 0.0;
   double longest_gap_max_s = 0.0;
 };
@@ -150,6 +156,9 @@ class MetricsAccumulator {
     std::map<int, LastHeld> last_held;      ///< per vehicle, the latest sample with a known hold
     std::map<double, std::size_t> spacings; ///< positive spacings seen, with counts (for the median)
     std::vector<double> time_near_s;        ///< per valve
+    std::vector<double> watched_until_s;    ///< per valve, when a vehicle was last within the visit radius
+    std::vector<double> longest_unwatched_s;  ///< per valve, of the stretches closed so far
+    std::vector<double> unwatched_squares_s2; ///< per valve, sum of g^2 of the stretches closed so far
     double time_outside_s = 0.0, time_pinned_s = 0.0;
     Eigen::VectorXd sum_f;                  ///< sum of F_k(x) dt of held samples
     double sum_dt = 0.0;

@@ -160,6 +160,8 @@ Json MetricsStateJson(const MetricsAccumulator::State& m) {
   Json over_time = Json::array();
   for (const MetricSample& s : m.metric_over_time) over_time.push_back({s.time_s, s.ergodic_metric});
   return {{"pending", pending}, {"held", held}, {"spacings", spacings}, {"near", Doubles(m.time_near_s)},
+          {"watched", Doubles(m.watched_until_s)}, {"unwatched_max", Doubles(m.longest_unwatched_s)},
+          {"unwatched_sq", Doubles(m.unwatched_squares_s2)},
           {"outside", m.time_outside_s}, {"pinned", m.time_pinned_s}, {"sum_f", Doubles(m.sum_f)},
           {"sum_dt", m.sum_dt}, {"over_time", over_time}, {"next_checkpoint", m.next_checkpoint},
           {"schedule", Schedule(m.schedule)}, {"refused", m.refused}};
@@ -175,6 +177,9 @@ MetricsAccumulator::State ToMetrics(const Json& j) {
   }
   for (const Json& s : j.at("spacings")) m.spacings[s.at(0).get<double>()] = s.at(1).get<std::size_t>();
   m.time_near_s = ToDoubles(j.at("near"));
+  m.watched_until_s = ToDoubles(j.at("watched"));
+  m.longest_unwatched_s = ToDoubles(j.at("unwatched_max"));
+  m.unwatched_squares_s2 = ToDoubles(j.at("unwatched_sq"));
   m.time_outside_s = j.at("outside").get<double>();
   m.time_pinned_s = j.at("pinned").get<double>();
   m.sum_f = ToVector(j.at("sum_f"));

@@ -222,6 +222,7 @@ std::string MetricsJson(const MissionMetrics& metrics, const RunInfo* info) {
                       {"mean_interval_s", number(v.mean_interval_s)},
                       {"max_gap_s", number(v.max_gap_s)},
                       {"time_near_s", number(v.time_near_s)},
+                      {"longest_unwatched_s", number(v.longest_unwatched_s)},
                       {"visit_times_s", times}});
   }
   Json events = Json::array();

@@ -244,12 +244,11 @@ TEST(ComputeMetrics, WeightsTimeAverageAcrossScheduleChange) {
   EXPECT_THROW(ComputeMetrics(at_p2, scenario, {{0.0, Eigen::Vector3d(1, 1, 1)}}, 300.0), std::invalid_argument);
 }
 
-// The fleet figures from visit times, against a hand computation: valve A (w 0.75) visited at
-// 2, 7, 15 s of 20 s has gaps 2, 5, 8, 5, so a leak starting at a random moment waits
-// (4 + 25 + 64 + 25) / 40 = 2.95 s; valve B (w 0.25) unvisited waits 400 / 40 = 10 s. Risk-weighted:
-// 0.75 * 2.95 + 0.25 * 10 = 4.7125 s. Intervals T / n: 20/3 and 20/1 -> 0.75 * 20/3 + 0.25 * 20 = 10 s.
-// Regular visits every I wait I / 2: visits at 0, 5, 10, 15 of 20 s (gaps 0, 5, 5, 5, 5) wait
-// 100 / 40 = 2.5 s.
+// The fleet figures against a hand computation: valve A (w 0.75) unwatched for stretches of 2, 5,
+// 8 and 5 s of 20 s, so a leak starting at a random moment waits (4 + 25 + 64 + 25) / 40 = 2.95 s;
+// valve B (w 0.25) never watched waits 400 / 40 = 10 s. Risk-weighted: 0.75 * 2.95 + 0.25 * 10 s.
+// Intervals T / n: 20/3 and 20/1 -> 0.75 * 20/3 + 0.25 * 20 = 10 s. Regular stretches of 5 s
+// (four of them in 20 s) wait 100 / 40 = 2.5 s: half the interval.
 TEST(SummariseGaps, DetectionDelayAndIntervalsByHand) {
   MissionMetrics m;
   m.duration_s = 20.0;
@@ -259,9 +258,13 @@ TEST(SummariseGaps, DetectionDelayAndIntervalsByHand) {
   a.visit_times_s = {2.0, 7.0, 15.0};
   a.visits = 3;
   a.max_gap_s = 8.0;
+  a.longest_unwatched_s = 8.0;
+  a.unwatched_squares_s2 = 4 + 25 + 64 + 25;
   b.name = "B";
   b.weight = 0.25;
   b.max_gap_s = 20.0;
+  b.longest_unwatched_s = 20.0;
+  b.unwatched_squares_s2 = 400.0;
   m.valves = {a, b};
   SummariseGaps(m);
   EXPECT_NEAR(m.expected_detection_delay_s, 0.75 * 2.95 + 0.25 * 10.0, 1e-12);
@@ -277,9 +280,34 @@ TEST(SummariseGaps, DetectionDelayAndIntervalsByHand) {
   r.weight = 1.0;
   r.visit_times_s = {0.0, 5.0, 10.0, 15.0};
   r.visits = 4;
+  r.unwatched_squares_s2 = 4 * 25.0;
   regular.valves = {r};
   SummariseGaps(regular);
   EXPECT_NEAR(regular.expected_detection_delay_s, 2.5, 1e-12);  // I / 2 with I = 5 s
+}
+
+// Unwatched stretches come from the trajectory: a vehicle holding station on the valve from
+// t = 2 s watches it to the end (one visit, a visit gap of 18 s, but unwatched only the first
+// 2 s); one that passes through the disc at 0.5 m/s from t = 10 s (inside over [12, 14] s, at
+// 0.1 s samples) leaves it unwatched for 12 s and 6 s of a 20 s mission.
+TEST(ComputeMetrics, UnwatchedStretchesFromPresence) {
+  const maps::Scenario scenario = MakeScenario({Eigen::Vector2d(3.0, 3.0)});
+  const Trajectory holding = SampledPath(0, 20.0, 0.1, [](double t) {
+    return t < 2.0 - 1e-9 ? Eigen::Vector2d(6.0, 3.0) : Eigen::Vector2d(3.1, 3.0);
+  });
+  const MissionMetrics h = ComputeMetrics(holding, scenario, Constant(Eigen::VectorXd::Ones(1)), 20.0);
+  ASSERT_EQ(h.valves[0].visits, 1);
+  EXPECT_NEAR(h.valves[0].max_gap_s, 18.0, 1e-9);
+  EXPECT_NEAR(h.valves[0].longest_unwatched_s, 2.0, 1e-9);
+  EXPECT_NEAR(h.expected_detection_delay_s, 4.0 / 40.0, 1e-9);
+
+  const Trajectory pass = SampledPath(0, 20.0, 0.1, [](double t) {
+    return Eigen::Vector2d(1.5 + 0.5 * std::max(0.0, t - 10.0), 3.0);  // within 0.5 m for t in [12, 14]
+  });
+  const MissionMetrics p = ComputeMetrics(pass, scenario, Constant(Eigen::VectorXd::Ones(1)), 20.0);
+  // Presence is sampled: each stretch is known to a sample (0.1 s).
+  EXPECT_NEAR(p.valves[0].longest_unwatched_s, 12.0, 0.1 + 1e-9);
+  EXPECT_NEAR(p.valves[0].unwatched_squares_s2, 12.0 * 12.0 + 6.0 * 6.0, 2 * 0.1 * 18.0);
 }
 
 }  // namespace

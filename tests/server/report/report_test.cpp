@@ -202,7 +202,8 @@ TEST_F(ReportTest, MetricsJsonHasEveryKey) {
   EXPECT_EQ(j.at("metric_over_time")[1].at("ergodic_metric"), 0.25);
   ASSERT_EQ(j.at("valves").size(), 2u);
   const nlohmann::json& p1 = j.at("valves")[0];
-  EXPECT_EQ(p1.size(), 7u);
+  EXPECT_EQ(p1.size(), 8u);
+  EXPECT_TRUE(p1.at("longest_unwatched_s").is_number());
   EXPECT_EQ(p1.at("name"), "P1");
   EXPECT_EQ(p1.at("weight"), 0.55);
   EXPECT_EQ(p1.at("visits"), 3);
