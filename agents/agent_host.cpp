@@ -5,6 +5,8 @@
 #include <stdexcept>
 #include <string>
 
+#include <optional>
+
 #include "agents/obstacle_filter.h"
 #include "agents/physics_world.h"
 #include "agents/tour_controller.h"
@@ -20,6 +22,11 @@ struct AgentHost::Impl {
     std::unique_ptr<TourController> tour;
     std::vector<int> tour_valves;  // A*: its tour's valves in visiting order (indices into the scenario's)
     double speed_mps = 0.0;
+    // Regions: the vehicle's box and basis (its controller steers on them), and the grid path it
+    // flies to reach the box from outside.
+    std::optional<maps::RegionBox> region;
+    std::unique_ptr<maps::SpectralBasis> region_basis;
+    std::unique_ptr<GridFlight> transit;
     std::unique_ptr<ObstacleFilter> keep_clear;  // BlueROV2s: structures and edges (SMC), neighbours
     Eigen::Vector2d command = Eigen::Vector2d::Zero();
   };
@@ -57,6 +64,27 @@ struct AgentHost::Impl {
     for (const Eigen::Vector2d& p : others)
       if ((p - positions[i]).squaredNorm() < reach2) near.push_back(p);
     return near;
+  }
+
+  // SMC on the field's basis, or on the vehicle's region's: there the controller sees positions
+  // relative to the box, and a vehicle outside it first flies a grid path to the box's centre.
+  Eigen::Vector2d ErgodicCommand(Vehicle& v, const VehicleState& state, double time_s) {
+    if (!v.region) return v.ergodic->Command(state, time_s);
+    constexpr double kInside_m = 0.3;  // within this of the box counts as in it
+    // In its box the filter keeps it there; on the way the workspace's edges are the bounds (the
+    // box's would push it straight at the box, through whatever stands between).
+    const Eigen::Vector2d field(scenario.workspace.width_m, scenario.workspace.height_m);
+    if (!v.region->Contains(state.position_m, kInside_m)) {
+      if (v.keep_clear) v.keep_clear->SetBounds(Eigen::Vector2d::Zero(), field);
+      if (!v.transit->active()) v.transit->Start(v.region->Centre());
+      Eigen::Vector2d command = Eigen::Vector2d::Zero();
+      if (!v.transit->Command(state, time_s, command)) return command;
+    }
+    v.transit->Stop();
+    if (v.keep_clear) v.keep_clear->SetBounds(v.region->origin_m, v.region->origin_m + v.region->size_m);
+    VehicleState local = state;
+    local.position_m -= v.region->origin_m;
+    return v.ergodic->Command(local, time_s);
   }
 
   Vehicle& Find(VehicleId id) {
@@ -128,6 +156,28 @@ void AgentHost::SetTour(VehicleId id, const std::vector<int>& valves, const Eige
   v.tour_valves = valves;
 }
 
+void AgentHost::SetRegion(VehicleId id, const maps::RegionBox& box) {
+  Impl::Vehicle& v = impl_->Find(id);
+  if (!v.ergodic) return;
+  if (v.region && v.region->origin_m == box.origin_m && v.region->size_m == box.size_m && v.region->order == box.order) {
+    return;  // the same region: the controller keeps its coverage
+  }
+  if (!(box.size_m.array() > 0.0).all() || box.order < 1 || box.order > maps::SpectralBasis::kMaxOrder) {
+    throw std::invalid_argument("AgentHost::SetRegion: a region needs a positive size and an order in 1..64");
+  }
+  // A new basis, and a controller on it (coverage on another basis means nothing here).
+  v.region = box;
+  v.region_basis = std::make_unique<maps::SpectralBasis>(box.size_m.x(), box.size_m.y(), box.order);
+  v.ergodic = std::make_unique<ErgodicController>(*v.region_basis, v.speed_mps, impl_->scenario.ergodic.forgetting_time_s,
+                                                  impl_->scenario.ergodic.min_turn_radius_m);
+  v.transit = std::make_unique<GridFlight>(impl_->grid, v.speed_mps);
+}
+
+int AgentHost::BasisSize(VehicleId id) const {
+  const Impl::Vehicle& v = impl_->Find(id);
+  return v.region_basis ? v.region_basis->size() : impl_->basis.size();
+}
+
 void AgentHost::RemoveVehicle(VehicleId id) {
   const Impl::Vehicle& v = impl_->Find(id);
   impl_->world.RemoveVehicle(v.body);
@@ -151,11 +201,12 @@ int AgentHost::vehicle_count() const { return static_cast<int>(impl_->vehicles.s
 void AgentHost::SetTarget(VehicleId id, const VehicleTarget& target) {
   Impl::Vehicle& v = impl_->Find(id);
   if (!v.ergodic) return;  // an A* vehicle follows its tour
+  const int size = v.region_basis ? v.region_basis->size() : impl_->basis.size();
   v.ergodic->SetTarget(target.phi);
-  if (target.fleet_sums.size() == impl_->basis.size()) {
+  if (target.fleet_sums.size() == size) {
     v.ergodic->SetFleetCoverage(target.fleet_sums, target.fleet_time_s);
   } else {
-    v.ergodic->SetFleetCoverage(Eigen::VectorXd::Zero(impl_->basis.size()), 0.0);
+    v.ergodic->SetFleetCoverage(Eigen::VectorXd::Zero(size), 0.0);
   }
 }
 
@@ -179,10 +230,13 @@ void AgentHost::Step(double time_s) {
   for (std::size_t i = 0; i < impl_->vehicles.size(); ++i) {
     Impl::Vehicle& v = impl_->vehicles[i];
     const VehicleState state = impl_->world.State(v.body);
+    std::vector<Eigen::Vector2d> nearby = impl_->Neighbours(i, positions);
+    if (v.tour) v.tour->SetNearby(nearby);
+    if (v.transit) v.transit->SetNearby(nearby);
     // An A* vehicle holds station until it has a tour.
-    Eigen::Vector2d command = v.ergodic ? v.ergodic->Command(state, time_s)
+    Eigen::Vector2d command = v.ergodic ? impl_->ErgodicCommand(v, state, time_s)
                                         : (v.tour ? v.tour->Command(state, time_s) : Eigen::Vector2d::Zero());
-    if (v.keep_clear) command = v.keep_clear->Apply(state.position_m, command, impl_->Neighbours(i, positions));
+    if (v.keep_clear) command = v.keep_clear->Apply(state.position_m, command, nearby);
     v.command = command;
     impl_->world.SetVelocityCommand(v.body, command);
   }
@@ -202,22 +256,6 @@ const CoverageAccumulator* AgentHost::Coverage(VehicleId id) const {
 void AgentHost::RestoreCoverage(VehicleId id, const Eigen::VectorXd& sums, double kernel_time_s) {
   Impl::Vehicle& v = impl_->Find(id);
   if (v.ergodic) v.ergodic->RestoreCoverage(sums, kernel_time_s);
-}
-
-Eigen::Vector2d AgentHost::PreviewCommand(VehicleId id, const Eigen::VectorXd& phi, double time_s) const {
-  const Impl::Vehicle& v = impl_->Find(id);
-  if (!v.ergodic) return v.command;
-  ErgodicController copy = *v.ergodic;
-  copy.SetTarget(phi);
-  const VehicleState state = impl_->world.State(v.body);
-  Eigen::Vector2d command = copy.Command(state, time_s);
-  if (v.keep_clear) {
-    std::vector<Eigen::Vector2d> positions;
-    for (const Impl::Vehicle& other : impl_->vehicles) positions.push_back(impl_->world.State(other.body).position_m);
-    ObstacleFilter filter = *v.keep_clear;
-    command = filter.Apply(state.position_m, command, impl_->Neighbours(&v - impl_->vehicles.data(), positions));
-  }
-  return command;
 }
 
 const maps::SpectralBasis& AgentHost::basis() const { return impl_->basis; }

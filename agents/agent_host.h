@@ -13,6 +13,7 @@
 #include "agents/ergodic_controller.h"
 #include "agents/fleet_messages.h"
 #include "agents/vehicle_controller.h"
+#include "maps/region.h"
 #include "maps/scenario/scenario.h"
 #include "maps/spectral_basis.h"
 #include "maps/world.h"
@@ -42,8 +43,15 @@ class AgentHost {
   std::vector<VehicleId> ids() const;  ///< in the order they were added
   int vehicle_count() const;
 
-  /// The server's latest target for a vehicle; held until the next one.
+  /// The server's latest target for a vehicle; held until the next one. Its phi is on the
+  /// vehicle's basis: the field's, or its region's (SetRegion).
   void SetTarget(VehicleId id, const VehicleTarget& target);
+  /// Gives an SMC vehicle a region: it flies there (a grid path) if outside, then steers on the
+  /// region's own basis and stays in the box. The same region again changes nothing; another
+  /// one starts a new controller. Throws std::invalid_argument for an empty box or bad order.
+  void SetRegion(VehicleId id, const maps::RegionBox& box);
+  /// The size of the basis the vehicle's targets are on.
+  int BasisSize(VehicleId id) const;
   /// Positions (m) of the fleet's vehicles simulated elsewhere (other hosts), as last heard;
   /// this host's vehicles keep apart from them and from each other.
   void SetOtherVehicles(std::vector<Eigen::Vector2d> positions_m);
@@ -67,10 +75,6 @@ class AgentHost {
   /// Starts the vehicle's coverage from given sums and kernel time (a resumed mission). No-op
   /// under A*.
   void RestoreCoverage(VehicleId id, const Eigen::VectorXd& sums, double kernel_time_s);
-  /// The command vehicle `id` would give now at its current state with target phi instead of its
-  /// own (no state changes). For measuring how a risk change redirects a vehicle.
-  Eigen::Vector2d PreviewCommand(VehicleId id, const Eigen::VectorXd& phi, double time_s) const;
-
   const maps::SpectralBasis& basis() const;
   double control_period_s() const;
 

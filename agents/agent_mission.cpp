@@ -1,6 +1,13 @@
 #include "agents/agent_mission.h"
 
+#include <algorithm>
+#include <cmath>
 #include <stdexcept>
+#include <utility>
+
+#include <fmt/format.h>
+
+#include "maps/spectral_basis.h"
 
 namespace sage::agents {
 namespace {
@@ -43,20 +50,88 @@ std::vector<VehicleId> AgentMission::ids() const {
   return out;
 }
 
+bool AgentMission::Refuse(std::string why) {
+  ++rejected_;
+  last_rejection_ = std::move(why);
+  return false;
+}
+
+std::string AgentMission::Refusal(const Assignment& a) const {
+  const std::string who = fmt::format("assignment for vehicle {} (cycle {})", a.id, a.cycle);
+  if (!a.phi.allFinite()) return who + ": phi is not finite";
+  if (a.region_order != 0) {
+    const maps::Workspace& w = scenario_.workspace;
+    const Eigen::Vector2d hi = a.region_origin_m + a.region_size_m;
+    constexpr double kSlack_m = 1e-6;
+    if (!a.region_origin_m.allFinite() || !a.region_size_m.allFinite() || (a.region_size_m.array() <= 0.0).any() ||
+        (a.region_origin_m.array() < -kSlack_m).any() || hi.x() > w.width_m + kSlack_m || hi.y() > w.height_m + kSlack_m) {
+      return who + fmt::format(": region at ({}, {}) of {} x {} m is not inside the {} x {} m workspace",
+                               a.region_origin_m.x(), a.region_origin_m.y(), a.region_size_m.x(), a.region_size_m.y(),
+                               w.width_m, w.height_m);
+    }
+    if (a.region_order < 1 || a.region_order > maps::SpectralBasis::kMaxOrder) {
+      return who + fmt::format(": region basis order {} is outside 1..{}", a.region_order, maps::SpectralBasis::kMaxOrder);
+    }
+    if (a.phi.size() != 0 && a.phi.size() != a.region_order * a.region_order) {
+      return who + fmt::format(": phi has {} coefficients, its region's basis {}", a.phi.size(),
+                               a.region_order * a.region_order);
+    }
+  } else if (a.phi.size() != 0 && a.phi.size() != host_.basis().size()) {
+    return who + fmt::format(": phi has {} coefficients, the field's basis {}", a.phi.size(), host_.basis().size());
+  }
+  if (!a.tour.empty()) {
+    const int valves = static_cast<int>(scenario_.ValvePositions().size());
+    if (std::any_of(a.tour.begin(), a.tour.end(), [&](int i) { return i < 0 || i >= valves; })) {
+      return who + fmt::format(": the tour names a valve outside 0..{}", valves - 1);
+    }
+    if (a.tour_weights.size() != static_cast<Eigen::Index>(a.tour.size()) || !a.tour_weights.allFinite() ||
+        (a.tour_weights.array() < 0.0).any() || !(a.tour_weights.sum() > 0.0)) {
+      return who + ": the tour's weights must be one per valve, finite, >= 0 and not all zero";
+    }
+  }
+  return {};
+}
+
+std::string AgentMission::Refusal(const FleetSnapshot& s) const {
+  const std::string what = fmt::format("fleet snapshot of cycle {}", s.cycle);
+  const Eigen::Index basis = host_.basis().size();
+  if (s.phi.size() != 0 && (s.phi.size() != basis || !s.phi.allFinite())) {
+    return what + fmt::format(": phi must be {} finite coefficients", basis);
+  }
+  if (s.coverage.sums.size() != 0 && (s.coverage.sums.size() != basis || !s.coverage.sums.allFinite())) {
+    return what + fmt::format(": the fleet's sums must be {} finite numbers", basis);
+  }
+  if (!std::isfinite(s.coverage.time_s) || !std::isfinite(s.coverage.kernel_time_s)) {
+    return what + ": its times are not finite";
+  }
+  const Eigen::Index valves = static_cast<Eigen::Index>(scenario_.ValvePositions().size());
+  if (s.valve_weights.size() != 0 &&
+      (s.valve_weights.size() != valves || !s.valve_weights.allFinite() || (s.valve_weights.array() < 0.0).any())) {
+    return what + fmt::format(": valve weights must be {} finite numbers >= 0", valves);
+  }
+  return {};
+}
+
 bool AgentMission::OnAssignment(const Assignment& assignment) {
   auto it = members_.find(assignment.id);
   if (it == members_.end()) return false;
+  if (std::string why = Refusal(assignment); !why.empty()) return Refuse(std::move(why));
   Member& m = it->second;
   if (m.has_assignment && assignment.cycle < m.own_cycle && !new_server_) return false;
   m.has_assignment = true;
   m.shared = assignment.shared;
   m.own_phi = assignment.phi;
   m.own_cycle = assignment.cycle;
+  m.in_region = assignment.region_order > 0;
+  if (m.in_region) {
+    host_.SetRegion(assignment.id, {assignment.region_origin_m, assignment.region_size_m, assignment.region_order});
+  }
   if (!assignment.tour.empty()) host_.SetTour(assignment.id, assignment.tour, assignment.tour_weights);
   return true;
 }
 
 bool AgentMission::OnFleetSnapshot(const FleetSnapshot& snapshot) {
+  if (std::string why = Refusal(snapshot); !why.empty()) return Refuse(std::move(why));
   if (snapshot_ && snapshot.cycle <= snapshot_->cycle && !new_server_) return false;
   new_server_ = false;
   snapshot_ = snapshot;
@@ -73,14 +148,15 @@ void AgentMission::OnNewServer() {
   for (auto& [id, member] : members_) member.own_cycle = 0;
 }
 
-VehicleTarget AgentMission::TargetOf(VehicleId id, Member& member, double time_s) const {
+std::optional<VehicleTarget> AgentMission::TargetOf(VehicleId id, Member& member, double time_s) const {
   VehicleTarget target;
-  const int size = host_.basis().size();
-  if (member.has_assignment && !member.shared && member.own_phi.size() == size) {
-    target.phi = member.own_phi;  // partition: its share, alone
+  if (member.has_assignment && !member.shared && member.own_phi.size() == host_.BasisSize(id)) {
+    target.phi = member.own_phi;  // partition or a region: its share, alone
     member.steered_cycle = member.own_cycle;
     return target;
   }
+  // A region's vehicle steers on nothing else (until its region's phi comes, on its last target).
+  if (member.in_region || snapshot_->phi.size() != host_.BasisSize(id)) return std::nullopt;
   // Shared coverage (Mathew & Mezic): the field, and the fleet's coverage less this vehicle's
   // own report that the snapshot holds, aged to now.
   target.phi = snapshot_->phi;
@@ -110,7 +186,9 @@ AgentMission::CycleOutput AgentMission::Step(std::int64_t cycle) {
   // Vehicles hold still until the server's first word.
   const bool steer = snapshot_.has_value() && snapshot_->phi.size() == host_.basis().size();
   if (!steer) return out;
-  for (auto& [id, member] : members_) host_.SetTarget(id, TargetOf(id, member, t));
+  for (auto& [id, member] : members_) {
+    if (const std::optional<VehicleTarget> target = TargetOf(id, member, t)) host_.SetTarget(id, *target);
+  }
   host_.Step(t);
   for (StateReport& s : out.states) {
     s.command_mps = host_.LastCommand(s.id);
@@ -120,7 +198,8 @@ AgentMission::CycleOutput AgentMission::Step(std::int64_t cycle) {
     next_report_s_ = t + scenario_.fleet.coverage_period_s;
     for (auto& [id, member] : members_) {
       const CoverageAccumulator* acc = host_.Coverage(id);
-      if (acc == nullptr || acc->time_s() <= 0.0) continue;
+      // Only the field's coverage is shared; a region's vehicle covers alone on its own basis.
+      if (acc == nullptr || acc->time_s() <= 0.0 || member.in_region) continue;
       maps::CoverageReport report{++member.seq, t, acc->time_s(), acc->sums()};
       member.reports.push_back(report);
       if (member.reports.size() > kReportsKept) member.reports.pop_front();

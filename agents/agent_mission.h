@@ -45,11 +45,18 @@ class AgentMission {
   int vehicle_count() const { return static_cast<int>(members_.size()); }
   const std::string& Name(VehicleId id) const { return members_.at(id).name; }
 
-  /// The server's assignment for one of this host's vehicles (others' are ignored: false).
+  /// The server's assignment for one of this host's vehicles (others' are ignored: false). One
+  /// that does not fit the mission (phi not finite or not of its basis' size, a region off the
+  /// workspace or of an order outside 1..64, a tour through valves the scenario has not, weights
+  /// not finite, negative or all zero) is refused at the door: false, counted in rejected().
   bool OnAssignment(const Assignment& assignment);
   /// The server's snapshot of the field and the fleet's coverage. An older one than held is
-  /// ignored (false), unless a new server has taken over since (OnNewServer).
+  /// ignored (false), unless a new server has taken over since (OnNewServer); one whose phi,
+  /// sums or valve weights are not finite or not of the field's sizes is refused (counted).
   bool OnFleetSnapshot(const FleetSnapshot& snapshot);
+  /// Messages from the server refused at the door, and why the last one was.
+  std::uint64_t rejected() const { return rejected_; }
+  const std::string& last_rejection() const { return last_rejection_; }
   /// Another server now runs the mission (restarted or resumed): its first snapshot and
   /// assignments replace what the last one said, whatever their cycle numbers.
   void OnNewServer();
@@ -77,10 +84,15 @@ class AgentMission {
     std::uint64_t own_cycle = 0;
     std::uint64_t steered_cycle = 0;
     std::uint64_t seq = 0;
+    bool in_region = false;  // steers on a region's own basis
     std::deque<maps::CoverageReport> reports;  // the latest few, newest last
   };
 
-  VehicleTarget TargetOf(VehicleId id, Member& member, double time_s) const;
+  std::optional<VehicleTarget> TargetOf(VehicleId id, Member& member, double time_s) const;
+  // Empty if the message fits the mission, else what is wrong with it (one line).
+  std::string Refusal(const Assignment& assignment) const;
+  std::string Refusal(const FleetSnapshot& snapshot) const;
+  bool Refuse(std::string why);  // counts it; false
 
   const maps::Scenario& scenario_;
   AgentHost host_;
@@ -89,6 +101,8 @@ class AgentMission {
   bool new_server_ = false;
   Eigen::VectorXd tour_weights_;
   double next_report_s_ = 0.0;
+  std::uint64_t rejected_ = 0;
+  std::string last_rejection_;
 };
 
 }  // namespace sage::agents

@@ -58,6 +58,11 @@ struct Assignment {
   /// scenario's valves), and how its wait per lap is split over them (sums to 1, same order).
   std::vector<int> tour;
   Eigen::VectorXd tour_weights;
+  /// Regions: the vehicle's box (origin and size, m, workspace frame) and the order of the
+  /// region's own cosine basis, on which phi is given; order 0 = the field's basis.
+  Eigen::Vector2d region_origin_m = Eigen::Vector2d::Zero();
+  Eigen::Vector2d region_size_m = Eigen::Vector2d::Zero();
+  int region_order = 0;
 };
 
 }  // namespace sage::agents

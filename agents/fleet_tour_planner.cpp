@@ -630,52 +630,65 @@ class Search {
   std::uint64_t versions_ = 0;
 };
 
-// Cluster c -> vehicle: greedily on the straight line from vehicle to centroid, shortest first;
-// then pairwise swaps that shorten the longer of two approaches, longest approach first (a few
-// passes): greedy alone leaves the last vehicles the farthest clusters, and a vehicle sent across
-// a crowded field meets every other tour on its way.
+// Cluster c -> vehicle, minimising the sum of straight-line approaches (the Hungarian method,
+// O(n^3), the potentials form of Kuhn-Munkres): a vehicle sent across a crowded field meets every
+// other tour on its way, and greedy matching leaves the last vehicles the farthest clusters.
+// Beyond kHungarianMax clusters (1,000 vehicles: ~1e9 steps) greedily, shortest pair first.
+constexpr int kHungarianMax = 1200;
 std::vector<int> Match(const Points& centroids, const std::vector<FleetVehicle>& vehicles) {
-  std::vector<std::tuple<double, int, int>> pairs;
-  pairs.reserve(centroids.size() * vehicles.size());
-  for (int c = 0; c < static_cast<int>(centroids.size()); ++c) {
-    for (int k = 0; k < static_cast<int>(vehicles.size()); ++k) {
-      pairs.emplace_back((centroids[c] - vehicles[k].position_m).norm(), c, k);
+  const int n = static_cast<int>(centroids.size()), m = static_cast<int>(vehicles.size());  // n <= m
+  const auto cost = [&](int c, int k) { return (centroids[c] - vehicles[k].position_m).norm(); };
+  std::vector<int> vehicle_of(n, -1);
+  if (n > kHungarianMax) {
+    std::vector<std::tuple<double, int, int>> pairs;
+    pairs.reserve(static_cast<std::size_t>(n) * m);
+    for (int c = 0; c < n; ++c)
+      for (int k = 0; k < m; ++k) pairs.emplace_back(cost(c, k), c, k);
+    std::sort(pairs.begin(), pairs.end());
+    std::vector<char> taken(m, 0);
+    for (const auto& [d, c, k] : pairs) {
+      if (vehicle_of[c] < 0 && !taken[k]) vehicle_of[c] = k, taken[k] = 1;
     }
+    return vehicle_of;
   }
-  std::sort(pairs.begin(), pairs.end());
-  std::vector<int> vehicle_of(centroids.size(), -1);
-  std::vector<char> taken(vehicles.size(), 0);
-  for (const auto& [d, c, k] : pairs) {
-    if (vehicle_of[c] < 0 && !taken[k]) vehicle_of[c] = k, taken[k] = 1;
-  }
-  const int clusters = static_cast<int>(centroids.size());
-  const auto approach = [&](int c, int k) { return (centroids[c] - vehicles[k].position_m).norm(); };
-  for (int pass = 0; pass < 3; ++pass) {
-    std::vector<int> by_length(clusters);
-    for (int c = 0; c < clusters; ++c) by_length[c] = c;
-    std::sort(by_length.begin(), by_length.end(),
-              [&](int a, int b) { return approach(a, vehicle_of[a]) > approach(b, vehicle_of[b]); });
-    bool improved = false;
-    for (const int a : by_length) {
-      // The swap partner that makes the longer of the two approaches shortest, if it is shorter.
-      int best = -1;
-      double best_longer = std::numeric_limits<double>::infinity();
-      for (int b = 0; b < clusters; ++b) {
-        if (b == a) continue;
-        const double before = std::max(approach(a, vehicle_of[a]), approach(b, vehicle_of[b]));
-        const double after = std::max(approach(a, vehicle_of[b]), approach(b, vehicle_of[a]));
-        if (after < before - 1e-9 && after < best_longer) {
-          best = b;
-          best_longer = after;
+  // Rows are clusters (1..n), columns vehicles (1..m); u, v the potentials, p[j] the row matched
+  // to column j, way[] the alternating path.
+  std::vector<double> u(n + 1, 0.0), v(m + 1, 0.0);
+  std::vector<int> p(m + 1, 0), way(m + 1, 0);
+  for (int i = 1; i <= n; ++i) {
+    p[0] = i;
+    int j0 = 0;
+    std::vector<double> minv(m + 1, std::numeric_limits<double>::infinity());
+    std::vector<char> used(m + 1, 0);
+    do {
+      used[j0] = 1;
+      const int i0 = p[j0];
+      double delta = std::numeric_limits<double>::infinity();
+      int j1 = 0;
+      for (int j = 1; j <= m; ++j) {
+        if (used[j]) continue;
+        const double cur = cost(i0 - 1, j - 1) - u[i0] - v[j];
+        if (cur < minv[j]) minv[j] = cur, way[j] = j0;
+        if (minv[j] < delta) delta = minv[j], j1 = j;
+      }
+      for (int j = 0; j <= m; ++j) {
+        if (used[j]) {
+          u[p[j]] += delta;
+          v[j] -= delta;
+        } else {
+          minv[j] -= delta;
         }
       }
-      if (best >= 0) {
-        std::swap(vehicle_of[a], vehicle_of[best]);
-        improved = true;
-      }
-    }
-    if (!improved) break;
+      j0 = j1;
+    } while (p[j0] != 0);
+    do {
+      const int j1 = way[j0];
+      p[j0] = p[j1];
+      j0 = j1;
+    } while (j0 != 0);
   }
+  for (int j = 1; j <= m; ++j)
+    if (p[j] > 0) vehicle_of[p[j] - 1] = j - 1;
   return vehicle_of;
 }
 

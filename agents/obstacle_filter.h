@@ -37,19 +37,22 @@ class ObstacleFilter {
   /// to the full speed at the clearance, and a command heading into it slides past it.
   Eigen::Vector2d Apply(const Eigen::Vector2d& x_m, const Eigen::Vector2d& velocity_mps,
                         const std::vector<Eigen::Vector2d>& neighbours = {});
+  /// The box the vehicle is kept in (workspace frame, m): the workspace, or a region of it.
+  void SetBounds(const Eigen::Vector2d& lo_m, const Eigen::Vector2d& hi_m);
 
  private:
   // Turns the part of u heading against `away` into a slide, by the share s in [0, 1] that
   // grows from the influence distance to the clearance, and pushes out inside the clearance.
+  // tangent_sign: the way round (+1 turns to starboard of a head-on obstacle), kept from the
+  // last clear choice; null slides to starboard always.
   Eigen::Vector2d Slide(const Eigen::Vector2d& u, double speed, const Eigen::Vector2d& away, double distance,
-                        double influence, double clearance, double& tangent_sign) const;
+                        double influence, double clearance, double* tangent_sign) const;
 
   const maps::DistanceField& field_;
-  maps::Workspace workspace_;
+  Eigen::Vector2d lo_, hi_;  // the box the vehicle is kept in
   ObstacleFilterSettings settings_;
   double tangent_sign_ = 1.0;           // keeps sliding the same way round a structure when head-on
   double boundary_tangent_sign_ = 1.0;  // the same along the workspace edge
-  double neighbour_tangent_sign_ = 1.0;  // the same round another vehicle
 };
 
 }  // namespace sage::agents

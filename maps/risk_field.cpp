@@ -40,14 +40,18 @@ RiskField RiskField::ForScenario(const Scenario& scenario, const SpectralBasis& 
 }
 
 RiskField RiskField::ForScenario(const Scenario& scenario, const SpectralBasis& basis, const OccupancyGrid& obstacles) {
+  return ForValves(scenario, basis, obstacles.Inflated(kVehicleClearance_m));
+}
+
+RiskField RiskField::ForValves(const Scenario& scenario, const SpectralBasis& basis, const OccupancyGrid& blocked) {
   std::vector<GaussianComponent> components;
   for (const Valve& valve : scenario.AllValves()) components.push_back({valve.position_m, valve.covariance_m2});
   RiskField field(basis, std::move(components));
-  field.ExcludeBlocked(basis, obstacles.Inflated(kVehicleClearance_m));
+  field.ExcludeBlocked(basis, blocked);
   return field;
 }
 
-void RiskField::ExcludeBlocked(const SpectralBasis& basis, const OccupancyGrid& blocked) {
+void RiskField::ExcludeBlocked(const SpectralBasis& basis, const OccupancyGrid& blocked, const Eigen::Vector2d& origin_m) {
   const double r = blocked.resolution_m();
   const double area = r * r;
   Eigen::VectorXd f;
@@ -56,14 +60,15 @@ void RiskField::ExcludeBlocked(const SpectralBasis& basis, const OccupancyGrid& 
     const Eigen::Matrix2d inverse = Inverse(g.covariance_m2);
     const double norm = 1.0 / (2.0 * std::numbers::pi * std::sqrt(Determinant(g.covariance_m2)));
     const double reach = 5.0 * std::sqrt(LargestEigenvalue(g.covariance_m2));
-    const Eigen::Vector2i lo = blocked.CellOf(g.mean_m - Eigen::Vector2d::Constant(reach));
-    const Eigen::Vector2i hi = blocked.CellOf(g.mean_m + Eigen::Vector2d::Constant(reach));
+    // The components and the basis are in the box's frame; the grid is in the workspace's.
+    const Eigen::Vector2i lo = blocked.CellOf(origin_m + g.mean_m - Eigen::Vector2d::Constant(reach));
+    const Eigen::Vector2i hi = blocked.CellOf(origin_m + g.mean_m + Eigen::Vector2d::Constant(reach));
     double mass = 0.0;
     Eigen::VectorXd removed = Eigen::VectorXd::Zero(basis.size());
     for (int a = lo.x(); a <= hi.x(); ++a) {
       for (int b = lo.y(); b <= hi.y(); ++b) {
         if (!blocked.Occupied(a, b)) continue;
-        const Eigen::Vector2d x = blocked.CenterOf({a, b});
+        const Eigen::Vector2d x = blocked.CenterOf({a, b}) - origin_m;
         const Eigen::Vector2d d = x - g.mean_m;
         const double p = norm * std::exp(-0.5 * d.dot(inverse * d)) * area;
         if (p == 0.0) continue;

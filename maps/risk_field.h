@@ -48,8 +48,10 @@ class RiskField {
   /// The scenario's risk field: one component per valve (file order), with the water no
   /// vehicle can reach (structures grown by kVehicleClearance_m, from the seabed map) excluded.
   static RiskField ForScenario(const Scenario& scenario, const SpectralBasis& basis);
-  /// The same, given the seabed's obstacle grid at the operating depth (World builds it once).
+  /// The same, given the seabed's obstacle grid at the operating depth.
   static RiskField ForScenario(const Scenario& scenario, const SpectralBasis& basis, const OccupancyGrid& obstacles);
+  /// The same, given where no hull can be (the obstacles grown by kVehicleClearance_m; World keeps it).
+  static RiskField ForValves(const Scenario& scenario, const SpectralBasis& basis, const OccupancyGrid& blocked);
   /// phi_k of the mixture with other (raw, >= 0, not all zero) weights, leaving this field as it is.
   Eigen::VectorXd CoefficientsFor(const Eigen::VectorXd& weights) const;
 
@@ -58,7 +60,10 @@ class RiskField {
   /// by quadrature over the blocked cells within 5 sigma of the valve. Without it SMC keeps
   /// pushing into the structure for the mass behind the valve, and vehicles orbit the XT
   /// instead of looping over the valve. Weights are kept.
-  void ExcludeBlocked(const SpectralBasis& basis, const OccupancyGrid& blocked);
+  /// origin_m: where the basis's box (and the components' frame) starts in the grid's workspace
+  /// frame (a region's box; zero for the field).
+  void ExcludeBlocked(const SpectralBasis& basis, const OccupancyGrid& blocked,
+                      const Eigen::Vector2d& origin_m = Eigen::Vector2d::Zero());
   /// Fraction of each component's mass that ExcludeBlocked removed.
   const Eigen::VectorXd& blocked_mass() const { return blocked_mass_; }
 

@@ -30,6 +30,9 @@ class World {
   const DistanceField& clearance() const { return clearance_; }
   /// The obstacles inflated by the A* clearance: what tours plan on.
   const OccupancyGrid& astar_grid() const { return astar_grid_; }
+  /// The obstacles inflated by a hull's clearance (kVehicleClearance_m): where no vehicle can be,
+  /// so where no risk is to be covered.
+  const OccupancyGrid& blocked() const { return blocked_; }
   const SpectralBasis& basis() const { return basis_; }
   const RiskField& risk() const { return risk_; }
   /// The live risk field, for its one writer (the server's mission core).
@@ -40,6 +43,7 @@ class World {
   OccupancyGrid obstacles_;
   DistanceField clearance_;
   OccupancyGrid astar_grid_;
+  OccupancyGrid blocked_;
   SpectralBasis basis_;
   RiskField risk_;
 };

@@ -107,7 +107,8 @@ void FleetServer::UpdateEffectiveWeights(double time_s) {
   if (guard.enabled) {
     const double heaviest = w.maxCoeff();
     for (int i = 0; i < w.size(); ++i) {
-      if (time_s - std::max(0.0, LastVisit(i)) > guard.revisit_bound_s) w[i] = heaviest;
+      const double bound = revisit_bounds_.size() == w.size() ? revisit_bounds_[i] : guard.revisit_bound_s;
+      if (time_s - std::max(0.0, LastVisit(i)) > bound) w[i] = heaviest;
     }
     w /= w.sum();
     // The floor holds after normalising: valves under it are pinned to it and the rest share

@@ -40,6 +40,9 @@ class FleetServer {
 
   /// The visits the guard reads (the mission's metrics own them); without, no valve is overdue.
   void UseVisits(const VisitTracker* visits) { visits_ = visits; }
+  /// Per valve, how long (s) it may go unvisited before the guard boosts it (empty: the
+  /// scenario's revisit_bound_s for every valve).
+  void SetRevisitBounds(Eigen::VectorXd bounds_s) { revisit_bounds_ = std::move(bounds_s); }
 
   /// A vehicle joined (or was first heard of). Idempotent.
   void AddVehicle(int id, const std::string& name);
@@ -129,6 +132,7 @@ class FleetServer {
   const maps::RiskProfile* profile_ = nullptr;
   std::vector<Eigen::Vector2d> valve_positions_;
   const VisitTracker* visits_ = nullptr;
+  Eigen::VectorXd revisit_bounds_;
   std::map<int, VehicleRecord> vehicles_;
   Eigen::VectorXd raw_weights_;
   Eigen::VectorXd effective_;

@@ -35,6 +35,10 @@ struct Mission::Impl {
       if (a_) a_->OnRiskEvent(e);
       if (b_) b_->OnRiskEvent(e);
     }
+    void OnRegions(double t, const std::vector<RegionRecord>& r) override {
+      if (a_) a_->OnRegions(t, r);
+      if (b_) b_->OnRegions(t, r);
+    }
 
    private:
     MissionRecorder* a_;

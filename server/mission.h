@@ -41,9 +41,11 @@ class TrajectoryRecorder final : public MissionRecorder {
   void OnSample(const TrajectorySample& sample, const std::string& vehicle_name) override;
   void OnFleetEvent(const FleetEventRecord& event) override { fleet_events.push_back(event); }
   void OnRiskEvent(const RiskEventRecord& event) override { risk_events.push_back(event); }
+  void OnRegions(double time_s, const std::vector<RegionRecord>& split) override { regions.emplace_back(time_s, split); }
   Trajectory trajectory;
   std::vector<FleetEventRecord> fleet_events;
   std::vector<RiskEventRecord> risk_events;
+  std::vector<std::pair<double, std::vector<RegionRecord>>> regions;
 };
 
 class Mission {

@@ -7,8 +7,6 @@
 
 #include <fmt/format.h>
 
-#include "agents/fleet_tour_planner.h"
-
 namespace sage::server {
 namespace {
 
@@ -280,6 +278,8 @@ CycleOutput MissionCore::Cycle(std::int64_t cycle) {
 
   if (controller_ == ControllerKind::kAstar) {
     AssignTours(alive, risk_changed, out);
+  } else if (scenario_.fleet.assignment == maps::FleetAssignment::kRegions) {
+    AssignRegions(alive, out);
   } else {
     AssignTargets(alive, risk_changed, out);
   }
@@ -332,18 +332,7 @@ void MissionCore::AssignTours(const std::vector<int>& alive, bool risk_changed, 
   const bool due = plan.planned ? plan.change_s >= 0.0 && time_s_ - plan.change_s >= scenario_.astar.replan_delay_s - 1e-9
                                 : alive.size() >= scenario_.vehicles.size() || time_s_ - plan.first_join_s >= kFirstPlanWait_s;
   if (due) {
-    std::vector<agents::FleetVehicle> vehicles;
-    for (int id : alive) {
-      const Roster::Member& m = *roster_.Find(id);
-      const maps::VehicleSpec spec = SpecForVehicle(scenario_, id, m.name);
-      vehicles.push_back({m.has_state ? m.last.state.position_m : spec.start_m, spec.transit_speed_mps});
-    }
-    agents::FleetTourOptions options;
-    options.seed = scenario_.seed;
-    options.weight_exponent = scenario_.astar.weight_exponent;
-    const agents::FleetTourPlan tours =
-        agents::PlanFleetTours(world_.astar_grid(), scenario_.ValvePositions(), fleet_.schedule().back().weights,
-                               vehicles, scenario_.astar.wait_per_lap_s, options);
+    const agents::FleetTourPlan tours = PlanShares(alive, scenario_.astar.weight_exponent);
     plan.planned = true;
     plan.planned_for = alive;
     plan.change_s = -1.0;
@@ -369,6 +358,117 @@ void MissionCore::AssignTours(const std::vector<int>& alive, bool risk_changed, 
     const auto tour = plan.tours.find(id);
     if (m.target_sent || tour == plan.tours.end()) continue;
     out.assignments.push_back(tour->second);
+    m.target_sent = true;
+  }
+}
+
+agents::FleetTourPlan MissionCore::PlanShares(const std::vector<int>& alive, double weight_exponent) const {
+  std::vector<agents::FleetVehicle> vehicles;
+  for (int id : alive) {
+    const Roster::Member& m = *roster_.Find(id);
+    const maps::VehicleSpec spec = SpecForVehicle(scenario_, id, m.name);
+    vehicles.push_back({m.has_state ? m.last.state.position_m : spec.start_m, spec.transit_speed_mps});
+  }
+  agents::FleetTourOptions options;
+  options.seed = scenario_.seed;
+  options.weight_exponent = weight_exponent;
+  return agents::PlanFleetTours(world_.astar_grid(), scenario_.ValvePositions(), fleet_.schedule().back().weights,
+                                vehicles, scenario_.astar.wait_per_lap_s, options);
+}
+
+// Regions: the live vehicles split the valves as the fleet's tours would (balanced on travel),
+// each share a box of its own with its own basis; a vehicle steers alone on its share's risk
+// there. The first split waits for the fleet to be in (every starting vehicle, or 2 s); then a
+// vehicle joining, lost or leaving re-apportions the field as soon as the fleet has held still
+// for half a second (a host's vehicles join over a few cycles); a risk change (or the guard)
+// re-sends the shares' phi, the boxes stay.
+void MissionCore::AssignRegions(const std::vector<int>& alive, CycleOutput& out) {
+  constexpr double kMargin_m = 1.0, kMinSide_m = 3.0, kResolution_m = 0.3;
+  constexpr double kGuardLaps = 2.0;  // measured against 2.5: shorter worst gaps, the same revisit intervals
+  constexpr int kMinOrder = 8, kMaxOrder = 20;
+  constexpr double kFirstPlanWait_s = 2.0, kSettle_s = 0.5;
+  RegionPlan& plan = region_plan_;
+  if (alive.empty()) return;
+  if (plan.first_join_s < 0.0) plan.first_join_s = time_s_;
+  if (alive != plan.last_seen) {
+    plan.last_seen = alive;
+    plan.changed_s = time_s_;
+  }
+  const bool replan =
+      alive != plan.planned_for &&
+      (plan.planned_for.empty() ? alive.size() >= scenario_.vehicles.size() || time_s_ - plan.first_join_s >= kFirstPlanWait_s
+                                : time_s_ - plan.changed_s >= kSettle_s - 1e-9);
+  if (replan) {
+    const agents::FleetTourPlan shares = PlanShares(alive, 1.0);
+    const std::vector<maps::Valve> valves = scenario_.AllValves();
+    plan.shares.clear();
+    std::vector<RegionRecord> records;
+    std::size_t most = 0;
+    double largest = 0.0;
+    for (std::size_t k = 0; k < alive.size(); ++k) {
+      RegionShare share;
+      share.valves = shares.vehicles[k].valves;
+      std::vector<Eigen::Vector2d> points;
+      std::vector<maps::GaussianComponent> components;
+      for (int i : share.valves) {
+        points.push_back(valves[i].position_m);
+        components.push_back({valves[i].position_m, valves[i].covariance_m2});
+      }
+      const maps::RegionBox box =
+          maps::RegionAround(points, scenario_.workspace, kMargin_m, kMinSide_m, kResolution_m, kMinOrder, kMaxOrder);
+      share.field = std::make_unique<maps::RegionField>(box, components, world_.blocked());
+      RegionRecord record{alive[k], roster_.Find(alive[k])->name, box, {}};
+      for (int i : share.valves) record.valves.push_back(valves[i].name);
+      records.push_back(std::move(record));
+      most = std::max(most, share.valves.size());
+      largest = std::max(largest, box.size_m.maxCoeff());
+      plan.shares[alive[k]] = std::move(share);
+    }
+    plan.planned_for = alive;
+    // The guard watches each valve against its share's tour lap: no valve waits longer than
+    // kGuardLaps laps of the tour its vehicle could fly instead (nor the scenario's bound).
+    Eigen::VectorXd bounds = Eigen::VectorXd::Constant(static_cast<Eigen::Index>(valves.size()),
+                                                       scenario_.guard.revisit_bound_s);
+    for (const agents::VehicleTour& share : shares.vehicles) {
+      for (int i : share.valves) bounds[i] = std::min(bounds[i], kGuardLaps * share.lap_time_s);
+    }
+    fleet_.SetRevisitBounds(bounds);
+    if (recorder_ != nullptr) recorder_->OnRegions(time_s_, records);
+    Note("regions", fmt::format("{} regions for {} vehicles: up to {} valves and {:.1f} m a side each; the guard "
+                                "boosts a valve after {:.0f}-{:.0f} s",
+                                plan.shares.size(), alive.size(), most, largest, bounds.minCoeff(), bounds.maxCoeff()));
+  }
+  const Eigen::VectorXd& weights = fleet_.effective_weights();
+  const bool reweighted = plan.sent_weights.size() != weights.size() ||
+                          (weights.size() > 0 && (weights - plan.sent_weights).cwiseAbs().maxCoeff() > 0.0);
+  plan.sent_weights = weights;
+  for (int id : alive) {
+    Roster::Member& m = *roster_.Find(id);
+    const auto found = plan.shares.find(id);
+    if (found == plan.shares.end()) {
+      // Not in the split yet (it is coming): the field's shared target meanwhile.
+      if (m.target_sent) continue;
+      agents::Assignment a;
+      a.id = id;
+      a.cycle = out.snapshot.cycle;
+      out.assignments.push_back(std::move(a));
+      m.target_sent = true;
+      continue;
+    }
+    if (m.target_sent && !replan && !reweighted) continue;
+    const RegionShare& share = found->second;
+    Eigen::VectorXd own(static_cast<Eigen::Index>(share.valves.size()));
+    for (std::size_t k = 0; k < share.valves.size(); ++k) own[static_cast<Eigen::Index>(k)] = weights[share.valves[k]];
+    if (!(own.sum() > 0.0)) own.setOnes();  // a share whose valves all weigh zero is still watched, evenly
+    agents::Assignment a;
+    a.id = id;
+    a.cycle = out.snapshot.cycle;
+    a.shared = false;
+    a.phi = share.field->Coefficients(own);
+    a.region_origin_m = share.field->box().origin_m;
+    a.region_size_m = share.field->box().size_m;
+    a.region_order = share.field->box().order;
+    out.assignments.push_back(std::move(a));
     m.target_sent = true;
   }
 }

@@ -6,12 +6,16 @@
 // server node only translates messages to and from it; the in-process mission hands it the
 // agents' reports directly. Its whole state is a checkpoint a new server resumes from.
 #include <cstdint>
+#include <map>
+#include <memory>
 #include <string>
 #include <vector>
 
 #include <Eigen/Core>
 
 #include "agents/fleet_messages.h"
+#include "agents/fleet_tour_planner.h"
+#include "maps/region.h"
 #include "maps/scenario/scenario.h"
 #include "maps/world.h"
 #include "server/fleet_server.h"
@@ -35,6 +39,14 @@ struct RiskEventRecord {
   std::string source;      ///< "scenario" for a profile event, else who sent it
 };
 
+/// One vehicle's region, as regions.csv records each split of the field.
+struct RegionRecord {
+  int vehicle_id = 0;
+  std::string name;
+  maps::RegionBox box;
+  std::vector<std::string> valves;
+};
+
 /// Where the mission's record goes as it happens (the run directory, or memory in tests and
 /// benchmarks). Calls come in mission-time order; samples of a cycle in vehicle index order.
 class MissionRecorder {
@@ -43,6 +55,8 @@ class MissionRecorder {
   virtual void OnSample(const TrajectorySample& sample, const std::string& vehicle_name) = 0;
   virtual void OnFleetEvent(const FleetEventRecord& event) = 0;
   virtual void OnRiskEvent(const RiskEventRecord& event) = 0;
+  /// A new split of the field into regions (the regions assignment), at time_s.
+  virtual void OnRegions(double /*time_s*/, const std::vector<RegionRecord>& /*regions*/) {}
 };
 
 /// The answer to an operator's request (a risk update, a vehicle's removal, new ids).
@@ -150,6 +164,9 @@ class MissionCore {
   void Record(const FleetEventRecord* event);
   void AssignTargets(const std::vector<int>& alive, bool risk_changed, CycleOutput& out);
   void AssignTours(const std::vector<int>& alive, bool risk_changed, CycleOutput& out);
+  void AssignRegions(const std::vector<int>& alive, CycleOutput& out);
+  // The valves split among the live vehicles, balanced on travel (the fleet's tours).
+  agents::FleetTourPlan PlanShares(const std::vector<int>& alive, double weight_exponent) const;
   double next_time_s() const;  // the mission time of the coming cycle, when input takes effect
 
   const maps::World& world_;
@@ -181,6 +198,21 @@ class MissionCore {
     double change_s = -1.0;
   };
   TourPlan tour_plan_;
+  // Regions: each live vehicle's share of the valves, its box, basis and risk field there, and
+  // the weights its phi was last sent with.
+  struct RegionShare {
+    std::vector<int> valves;
+    std::unique_ptr<maps::RegionField> field;
+  };
+  struct RegionPlan {
+    std::vector<int> planned_for;
+    std::vector<int> last_seen;  // the live vehicles as of changed_s
+    double changed_s = -1.0;
+    double first_join_s = -1.0;
+    std::map<int, RegionShare> shares;
+    Eigen::VectorXd sent_weights;
+  };
+  RegionPlan region_plan_;
 };
 
 /// Angle (rad, 0..pi) between two commanded velocities; 0 if either is (near) zero. The

@@ -52,6 +52,8 @@ int RunAgentNode(const maps::Scenario& scenario, const AgentNodeOptions& options
   // The other hosts' vehicles, so this host's keep apart from them too.
   proto::Reader<proto::VehicleState> neighbours(participant, proto::VehicleStateReaderQos());
   std::map<std::uint32_t, Eigen::Vector2d> others;
+  std::uint64_t bad_neighbours = 0, reported_rejections = 0;  // refused at the door (logged)
+  std::int64_t next_rejection_report = 0;
 
   const std::uint64_t fingerprint =
       maps::VehicleFingerprint(scenario) ^ (options.guidance == Guidance::kAstar ? 0x5A5Aull : 0ull);
@@ -153,11 +155,23 @@ int RunAgentNode(const maps::Scenario& scenario, const AgentNodeOptions& options
     while (neighbours.TakeEach([&](const proto::VehicleState& m, const dds_sample_info_t& info) {
       if (mission.Contains(static_cast<VehicleId>(m.vehicle_id))) return;
       if (info.valid_data && info.instance_state == DDS_ALIVE_INSTANCE_STATE) {
-        others[m.vehicle_id] = Eigen::Vector2d(m.x_m, m.y_m);
+        const Eigen::Vector2d p(m.x_m, m.y_m);
+        if (p.allFinite()) {
+          others[m.vehicle_id] = p;
+        } else {
+          ++bad_neighbours;  // not a place to keep clear of
+          others.erase(m.vehicle_id);
+        }
       } else {
         others.erase(m.vehicle_id);  // lost or left
       }
     }, 1024) == 1024) {
+    }
+    if (mission.rejected() != reported_rejections && k >= next_rejection_report) {
+      spdlog::warn("agents: refused {} message(s) from the server so far; the last: {}", mission.rejected(),
+                   mission.last_rejection());
+      reported_rejections = mission.rejected();
+      next_rejection_report = k + static_cast<std::int64_t>(rate);  // at most one warning a second
     }
     std::vector<Eigen::Vector2d> other_positions;
     other_positions.reserve(others.size());
@@ -170,6 +184,10 @@ int RunAgentNode(const maps::Scenario& scenario, const AgentNodeOptions& options
     for (const CoverageMessage& c : out.coverage) coverage.Write(wire::ToWire(c, stamp));
   }
   for (const VehicleId id : mission.ids()) leave(id);
+  if (mission.rejected() > 0 || bad_neighbours > 0) {
+    spdlog::warn("agents: refused {} message(s) from the server and {} neighbour state(s) with no finite position",
+                 mission.rejected(), bad_neighbours);
+  }
   std::this_thread::sleep_for(std::chrono::milliseconds(100));  // let the disposes go out
   return 0;
 }

@@ -51,6 +51,9 @@ Assignment FromWire(const proto::ErgodicTarget& m) {
   const auto tour = proto::AsSpan(m.tour);
   a.tour.assign(tour.begin(), tour.end());
   a.tour_weights = Copy(proto::AsSpan(m.tour_weights));
+  a.region_origin_m = {m.region_x_m, m.region_y_m};
+  a.region_size_m = {m.region_width_m, m.region_height_m};
+  a.region_order = static_cast<int>(m.region_order);
   return a;
 }
 
@@ -118,6 +121,11 @@ proto::ErgodicTarget ToWire(const Assignment& a, std::uint64_t server_instance, 
   m.phi = proto::BorrowSequence(View(a.phi));
   m.tour = proto::BorrowSequence(std::span<const std::int32_t>(a.tour.data(), a.tour.size()));
   m.tour_weights = proto::BorrowSequence(View(a.tour_weights));
+  m.region_x_m = a.region_origin_m.x();
+  m.region_y_m = a.region_origin_m.y();
+  m.region_width_m = a.region_size_m.x();
+  m.region_height_m = a.region_size_m.y();
+  m.region_order = static_cast<std::uint32_t>(a.region_order);
   return m;
 }
 

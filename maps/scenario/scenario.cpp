@@ -101,6 +101,7 @@ const char* ToString(FleetAssignment assignment) {
   switch (assignment) {
     case FleetAssignment::kShared: return "shared";
     case FleetAssignment::kPartition: return "partition";
+    case FleetAssignment::kRegions: return "regions";
   }
   return "unknown";
 }
@@ -108,8 +109,9 @@ const char* ToString(FleetAssignment assignment) {
 FleetAssignment ParseFleetAssignment(const std::string& text, const std::string& where) {
   if (text == "shared") return FleetAssignment::kShared;
   if (text == "partition") return FleetAssignment::kPartition;
+  if (text == "regions") return FleetAssignment::kRegions;
   throw ScenarioError(OneLine((where.empty() ? "assignment" : where) + " = " + (text.empty() ? "\"\"" : text) +
-                              ": must be shared or partition"));
+                              ": must be shared, partition or regions"));
 }
 
 }  // namespace sage::maps

@@ -127,6 +127,10 @@ struct AstarSettings {
 enum class FleetAssignment {
   kShared,     ///< Mathew & Mezic: every vehicle steers on the whole fleet's coverage of the whole field
   kPartition,  ///< the valves are partitioned among the vehicles; each covers its own share alone
+  /// Each vehicle's share (balanced on travel, as the fleet's tours are) is a region of its own:
+  /// a box around its valves with its own cosine basis, so a vehicle's step costs the same on any
+  /// field and its detail is a region's, not the whole field's.
+  kRegions,
 };
 
 /// Fleet settings (a single-vehicle mission ignores them).

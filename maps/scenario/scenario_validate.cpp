@@ -243,8 +243,9 @@ void Scenario::Validate() const {
   if (vehicles.empty()) c.Fail("vehicles", "must list at least one vehicle");
   for (std::size_t i = 0; i < vehicles.size(); ++i) check_vehicle("vehicles[" + std::to_string(i) + "]", vehicles[i]);
 
-  if (fleet.assignment != FleetAssignment::kShared && fleet.assignment != FleetAssignment::kPartition) {
-    c.Fail("fleet.assignment", std::to_string(static_cast<int>(fleet.assignment)), "must be shared or partition");
+  if (fleet.assignment != FleetAssignment::kShared && fleet.assignment != FleetAssignment::kPartition &&
+      fleet.assignment != FleetAssignment::kRegions) {
+    c.Fail("fleet.assignment", std::to_string(static_cast<int>(fleet.assignment)), "must be shared, partition or regions");
   }
   c.Positive("fleet.coverage_period_s", fleet.coverage_period_s);
   c.Positive("fleet.liveliness_lease_s", fleet.liveliness_lease_s);

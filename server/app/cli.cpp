@@ -46,8 +46,9 @@ void AddScenarioOverrides(CLI::App& cmd, ScenarioOverrides& o, OverrideSet set, 
     cmd.add_option("--profile,-p", o.profile, "Risk profile named in the scenario (default: its default_profile)");
     cmd.add_option("--duration", o.duration_s, "Mission length in seconds (default: the scenario's)");
     cmd.add_option("--assignment", o.assignment,
-                   "Fleet coverage: shared (Mathew-Mezic) or partition (valves split among vehicles)")
-        ->check(CLI::IsMember({"shared", "partition"}));
+                   "Fleet coverage: shared (Mathew-Mezic, one basis over the field), partition (valves split among "
+                   "vehicles) or regions (each vehicle's share of the valves in a box with a basis of its own)")
+        ->check(CLI::IsMember({"shared", "partition", "regions"}));
     cmd.add_option("--weight-exponent", o.weight_exponent,
                    "Target shaping alpha: vehicles aim for visit rates by w^alpha (1 = by risk, the paper; 0.5 = the "
                    "square-root law, least expected time a leak goes unnoticed); sets ergodic and A* alike")

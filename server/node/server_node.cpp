@@ -51,6 +51,7 @@ class LoggedRecord final : public MissionRecorder {
       spdlog::warn("server: t = {:.1f} s: {}: {}", e.time_s, e.what, e.detail);
     }
   }
+  void OnRegions(double t, const std::vector<RegionRecord>& r) override { run_.OnRegions(t, r); }
   void OnRiskEvent(const RiskEventRecord& e) override {
     run_.OnRiskEvent(e);
     spdlog::info("server: risk of {} set to {} by {} at t = {:.1f} s ({:.1f} % of the field's risk)", e.valve,

@@ -27,6 +27,7 @@ namespace fs = std::filesystem;
 constexpr const char* kTrajectoryHeader = "t,vehicle,x,y,heading,vx,vy,cmd_x,cmd_y\n";
 constexpr const char* kFleetEventsHeader = "t,event,vehicle_id,name,detail\n";
 constexpr const char* kRiskEventsHeader = "t,valve,weight,share,source\n";
+constexpr const char* kRegionsHeader = "t,vehicle_id,name,x_m,y_m,width_m,height_m,order,valves\n";
 // The final set; metrics.json last, since "complete": true says the others are in place.
 constexpr const char* kFinalFiles[] = {"plot.svg", "seabed.bt", "scenario.yaml", "metrics.json"};
 
@@ -120,6 +121,7 @@ RunDirectory::RunDirectory(std::string dir, const maps::Scenario& scenario, RunD
     Open(trajectory_, "trajectory.csv", kTrajectoryHeader);
     Open(fleet_events_, "fleet_events.csv", kFleetEventsHeader);
     Open(risk_events_, "risk_events.csv", kRiskEventsHeader);
+    Open(regions_, "regions.csv", kRegionsHeader);
     if (!options_.resume) detail::WriteAtomically((fs::path(dir_) / "scenario.yaml").string(), maps::EmitScenario(scenario_));
   } catch (const std::runtime_error& e) {
     throw maps::ScenarioError(fmt::format("--out = {}: cannot write there: {}", dir_, e.what()));
@@ -133,7 +135,7 @@ RunDirectory::~RunDirectory() {
     Flush();
   } catch (const std::exception&) {  // a destructor cannot report; Finish and Tick do
   }
-  for (Appender* f : {&trajectory_, &fleet_events_, &risk_events_})
+  for (Appender* f : {&trajectory_, &fleet_events_, &risk_events_, &regions_})
     if (f->fd >= 0) ::close(f->fd);
 }
 
@@ -163,6 +165,16 @@ void RunDirectory::OnFleetEvent(const FleetEventRecord& e) {
   // characters); the detail is free text.
   fmt::format_to(std::back_inserter(fleet_events_.buffer), "{},{},{},{},{}\n", e.time_s, e.what, e.vehicle_id, e.name,
                  e.detail.empty() ? std::string() : Quoted(e.detail));
+}
+
+void RunDirectory::OnRegions(double time_s, const std::vector<RegionRecord>& regions) {
+  for (const RegionRecord& r : regions) {
+    std::string valves;
+    for (const std::string& v : r.valves) valves += (valves.empty() ? "" : " ") + v;
+    fmt::format_to(std::back_inserter(regions_.buffer), "{},{},{},{},{},{},{},{},{}\n", time_s, r.vehicle_id, r.name,
+                   r.box.origin_m.x(), r.box.origin_m.y(), r.box.size_m.x(), r.box.size_m.y(), r.box.order,
+                   Quoted(valves));
+  }
 }
 
 void RunDirectory::OnRiskEvent(const RiskEventRecord& e) {
@@ -198,7 +210,7 @@ void RunDirectory::FlushOne(Appender& file) {
 }
 
 void RunDirectory::Flush() {
-  for (Appender* f : {&trajectory_, &fleet_events_, &risk_events_}) FlushOne(*f);
+  for (Appender* f : {&trajectory_, &fleet_events_, &risk_events_, &regions_}) FlushOne(*f);
   flushed_until_s_ = pending_until_s_;
   last_flush_ = std::chrono::steady_clock::now();
 }

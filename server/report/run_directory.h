@@ -43,6 +43,7 @@ class RunDirectory final : public MissionRecorder {
   void OnSample(const TrajectorySample& sample, const std::string& vehicle_name) override;
   void OnFleetEvent(const FleetEventRecord& event) override;
   void OnRiskEvent(const RiskEventRecord& event) override;
+  void OnRegions(double time_s, const std::vector<RegionRecord>& regions) override;
 
   /// Once a cycle: flushes the appended files when the flush period is due, and writes the
   /// checkpoint and partial metrics when the checkpoint period is.
@@ -76,7 +77,7 @@ class RunDirectory final : public MissionRecorder {
   std::string dir_;
   const maps::Scenario& scenario_;
   RunDirectoryOptions options_;
-  Appender trajectory_, fleet_events_, risk_events_;
+  Appender trajectory_, fleet_events_, risk_events_, regions_;
   std::chrono::steady_clock::time_point last_flush_, last_checkpoint_;
   double pending_until_s_ = -1.0, flushed_until_s_ = -1.0, checkpoint_time_s_ = -1.0;
   std::future<void> checkpoint_write_;  // the checkpoint is encoded and written off the cycle

@@ -218,7 +218,7 @@ def main():
     w("")
     w("# Coverage reports every 2 s: at K = 40 one report is 12.8 kB, and a 1,000-vehicle fleet at 0.5 s")
     w("# would put 26 MB/s on the loopback for little gain.")
-    w("fleet: {assignment: shared, coverage_period_s: 2.0, liveliness_lease_s: 0.5}")
+    w("fleet: {assignment: regions, coverage_period_s: 2.0, liveliness_lease_s: 0.5}")
     w("")
     w("structures:")
     for tree in trees:

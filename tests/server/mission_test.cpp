@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <algorithm>
+#include <map>
 #include <numbers>
 #include <string>
 
@@ -138,6 +139,75 @@ TEST(Mission, AstarFleetReplansAfterALoss) {
     }
     EXPECT_LT(gap, 2.0 * max_lap) << v.name;
     EXPECT_GT(v.visit_times_s.back(), 200.0) << v.name << " was left unvisited after the re-plan";
+  }
+}
+
+// Regions: the fleet's vehicles split fleet_field's valves (each valve in exactly one region,
+// the region's box holding its valves) and each vehicle flies its own; every valve is then seen
+// again well before the guard's bound, and the splits are in the record (regions.csv).
+TEST(Mission, RegionsSplitTheValvesAndCoverEach) {
+  maps::Scenario s = maps::LoadScenario(std::string(SAGE_SOURCE_DIR) + "/scenarios/fleet_field.yaml");
+  s.fleet_events.clear();
+  s.fleet.assignment = maps::FleetAssignment::kRegions;
+  s = maps::WithDuration(s, 240.0);
+  TrajectoryRecorder record;
+  const MissionResult r = Mission(s, MissionOptions{"", ControllerKind::kErgodic, &record, true}).Run();
+  ASSERT_EQ(record.regions.size(), 1u);  // one split: the fleet never changed
+  const auto& [time_s, split] = record.regions.front();
+  EXPECT_LE(time_s, 0.2);
+  ASSERT_EQ(split.size(), s.vehicles.size());
+  std::map<std::string, int> owners;
+  const std::vector<maps::Valve> valves = s.AllValves();
+  for (const RegionRecord& region : split) {
+    EXPECT_FALSE(region.valves.empty()) << region.name;
+    EXPECT_GE(region.box.order, 8);
+    for (const std::string& name : region.valves) {
+      ++owners[name];
+      const auto v = std::find_if(valves.begin(), valves.end(), [&](const maps::Valve& x) { return x.name == name; });
+      ASSERT_NE(v, valves.end());
+      const Eigen::Vector2d rel = v->position_m - region.box.origin_m;
+      EXPECT_TRUE(rel.minCoeff() > 0.0 && (region.box.size_m - rel).minCoeff() > 0.0) << name << " outside " << region.name;
+    }
+  }
+  EXPECT_EQ(owners.size(), valves.size());
+  for (const auto& [name, count] : owners) EXPECT_EQ(count, 1) << name;
+  for (const ValveMetrics& v : r.metrics.valves) {
+    ASSERT_GE(v.visits, 3) << v.name;
+    double gap = 0.0;
+    for (std::size_t i = 1; i < v.visit_times_s.size(); ++i) {
+      if (v.visit_times_s[i - 1] >= 40.0) gap = std::max(gap, v.visit_times_s[i] - v.visit_times_s[i - 1]);
+    }
+    EXPECT_LT(gap, s.guard.revisit_bound_s) << v.name;
+  }
+}
+
+// A lost vehicle's region is re-apportioned once the fleet has held still for half a second:
+// three regions then, the lost vehicle's valves among them, and those valves seen again.
+TEST(Mission, RegionsReapportionAfterALoss) {
+  maps::Scenario s = maps::LoadScenario(std::string(SAGE_SOURCE_DIR) + "/scenarios/fleet_field.yaml");
+  s.fleet_events.clear();
+  s.fleet.assignment = maps::FleetAssignment::kRegions;
+  maps::FleetEvent lose;
+  lose.time_s = 60.0;
+  lose.kind = maps::FleetEvent::Kind::kLose;
+  lose.vehicle.name = s.vehicles[1].name;
+  s.fleet_events = {lose};
+  s = maps::WithDuration(s, 200.0);
+  TrajectoryRecorder record;
+  const MissionResult r = Mission(s, MissionOptions{"", ControllerKind::kErgodic, &record, true}).Run();
+  ASSERT_EQ(record.regions.size(), 2u);
+  const auto& [time_s, split] = record.regions.back();
+  EXPECT_GT(time_s, 60.0);
+  EXPECT_LT(time_s, 60.0 + s.fleet.liveliness_lease_s + 0.5 + 0.2);  // detection, settling, a cycle
+  ASSERT_EQ(split.size(), s.vehicles.size() - 1);
+  std::size_t owned = 0;
+  for (const RegionRecord& region : split) {
+    EXPECT_NE(region.name, s.vehicles[1].name);
+    owned += region.valves.size();
+  }
+  EXPECT_EQ(owned, s.AllValves().size());
+  for (const ValveMetrics& v : r.metrics.valves) {
+    EXPECT_GT(v.visit_times_s.back(), 140.0) << v.name << " was left unwatched after the loss";
   }
 }
 

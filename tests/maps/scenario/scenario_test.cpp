@@ -456,7 +456,7 @@ TEST(Scenario, BadInputsGiveOneLineNamingFieldAndValue) {
       {"vehicles:", "vehicle:", {"vehicle", "unknown key"}},
       // Fleet settings and events.
       {"assignment: partition", "assignment: split",
-       {"base.yaml: fleet.assignment = split: must be shared or partition"}},
+       {"base.yaml: fleet.assignment = split: must be shared, partition or regions"}},
       {"coverage_period_s: 0.25", "coverage_period_s: 0", {"base.yaml: fleet.coverage_period_s = 0: must be > 0"}},
       {"liveliness_lease_s: 1.5", "liveliness_lease_s: -1", {"fleet.liveliness_lease_s = -1: must be > 0"}},
       {"liveliness_lease_s: 1.5", "lease_s: 1.5", {"fleet.lease_s", "unknown key", "liveliness_lease_s"}},
@@ -559,7 +559,7 @@ TEST(Scenario, FleetAssignmentNames) {
     ParseFleetAssignment("voronoi", "command line: --assignment");
     ADD_FAILURE() << "no error";
   } catch (const ScenarioError& e) {
-    EXPECT_STREQ(e.what(), "command line: --assignment = voronoi: must be shared or partition");
+    EXPECT_STREQ(e.what(), "command line: --assignment = voronoi: must be shared, partition or regions");
   }
 }
 

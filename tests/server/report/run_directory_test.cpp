@@ -10,6 +10,7 @@
 #include <sstream>
 #include <string>
 
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
@@ -150,6 +151,40 @@ TEST_F(RunDirectoryTest, EventTextStaysInItsField) {
   ASSERT_EQ(tail.risk_events.size(), 1u);
   EXPECT_EQ(tail.risk_events[0].source, "sonar, \"port\"");
   EXPECT_EQ(tail.risk_events[0].new_share, 0.5);
+}
+
+// regions.csv: one row per region of each split, its box, basis order and valves as the split
+// made them (a regions mission on fleet_field: four vehicles, one split; the same mission kept in
+// memory, a fixed seed, makes the same split).
+TEST_F(RunDirectoryTest, RegionsAreRecordedAsSplit) {
+  maps::Scenario s = maps::LoadScenario(std::string(SAGE_SOURCE_DIR) + "/scenarios/fleet_field.yaml");
+  s.fleet_events.clear();
+  s.fleet.assignment = maps::FleetAssignment::kRegions;
+  s = maps::WithDuration(s, 3.0);
+  {
+    RunDirectory run(dir_.string(), s);
+    Mission mission(s, MissionOptions{"", ControllerKind::kErgodic, &run, false});
+    while (mission.Step()) run.Tick(mission.core());
+    run.Finish(mission.core(), mission.world(), 3.0, false);
+  }
+  TrajectoryRecorder kept;
+  Mission(s, MissionOptions{"", ControllerKind::kErgodic, &kept, false}).Run();
+  ASSERT_EQ(kept.regions.size(), 1u);
+  std::istringstream csv(Read(dir_ / "regions.csv"));
+  std::string line;
+  std::getline(csv, line);
+  EXPECT_EQ(line, "t,vehicle_id,name,x_m,y_m,width_m,height_m,order,valves");
+  std::size_t rows = 0;
+  for (; std::getline(csv, line); ++rows) {
+    ASSERT_LT(rows, kept.regions[0].second.size());
+    const RegionRecord& r = kept.regions[0].second[rows];
+    std::string valves;
+    for (const std::string& v : r.valves) valves += (valves.empty() ? "" : " ") + v;
+    EXPECT_EQ(line, fmt::format("{},{},{},{},{},{},{},{},\"{}\"", kept.regions[0].first, r.vehicle_id, r.name,
+                                r.box.origin_m.x(), r.box.origin_m.y(), r.box.size_m.x(), r.box.size_m.y(),
+                                r.box.order, valves));
+  }
+  EXPECT_EQ(rows, s.vehicles.size());
 }
 
 }  // namespace

@@ -1,0 +1,122 @@
+// AgentMission at the door: what the server sends is checked before a vehicle steers on it. A
+// good assignment or snapshot is taken; each malformed one is refused, counted, with a one-line
+// reason, and the vehicle keeps what it had.
+#include "agents/agent_mission.h"
+
+#include <gtest/gtest.h>
+
+#include <limits>
+#include <string>
+
+#include "maps/world.h"
+
+namespace sage::agents {
+namespace {
+
+const std::string kTwoXt = std::string(SAGE_SOURCE_DIR) + "/scenarios/two_xt.yaml";
+
+class AgentMissionDoor : public ::testing::Test {
+ protected:
+  AgentMissionDoor()
+      : scenario_(maps::LoadScenario(kTwoXt)), world_(scenario_), mission_(world_, scenario_, Guidance::kErgodic) {
+    mission_.AddVehicle(3, scenario_.vehicles.front());
+  }
+  Assignment Good() const {
+    Assignment a;
+    a.id = 3;
+    a.cycle = 1;
+    a.shared = false;
+    a.phi = Eigen::VectorXd::Zero(mission_.host().basis().size());
+    a.phi[0] = 1.0;
+    return a;
+  }
+  maps::Scenario scenario_;
+  maps::World world_;
+  AgentMission mission_;
+};
+
+TEST_F(AgentMissionDoor, RefusesMalformedAssignments) {
+  struct Case {
+    const char* what;
+    void (*spoil)(Assignment&);
+    const char* reason;
+  };
+  const Case cases[] = {
+      {"phi NaN", [](Assignment& a) { a.phi[2] = std::numeric_limits<double>::quiet_NaN(); }, "not finite"},
+      {"phi size", [](Assignment& a) { a.phi.resize(7); }, "coefficients"},
+      {"region off the field",
+       [](Assignment& a) {
+         a.region_order = 8, a.region_origin_m = {4.0, 1.0}, a.region_size_m = {3.0, 3.0}, a.phi.resize(0);
+       },
+       "not inside"},
+      {"region NaN",
+       [](Assignment& a) {
+         a.region_order = 8, a.region_origin_m = {std::numeric_limits<double>::quiet_NaN(), 0.0},
+         a.region_size_m = {1.0, 1.0}, a.phi.resize(0);
+       },
+       "not inside"},
+      {"region order",
+       [](Assignment& a) {
+         a.region_order = 65, a.region_size_m = {2.0, 2.0}, a.phi.resize(0);
+       },
+       "outside 1..64"},
+      {"region phi size",
+       [](Assignment& a) {
+         a.region_order = 8, a.region_size_m = {2.0, 2.0}, a.phi = Eigen::VectorXd::Ones(63);
+       },
+       "its region's basis 64"},
+      {"tour valve",
+       [](Assignment& a) {
+         a.tour = {0, 9}, a.tour_weights = Eigen::VectorXd::Ones(2);
+       },
+       "outside 0..4"},
+      {"tour weights",
+       [](Assignment& a) {
+         a.tour = {0, 1}, a.tour_weights = Eigen::VectorXd::Zero(2);
+       },
+       "weights"},
+  };
+  std::uint64_t refused = 0;
+  for (const Case& c : cases) {
+    Assignment a = Good();
+    c.spoil(a);
+    EXPECT_FALSE(mission_.OnAssignment(a)) << c.what;
+    EXPECT_EQ(mission_.rejected(), ++refused) << c.what;
+    EXPECT_NE(mission_.last_rejection().find(c.reason), std::string::npos)
+        << c.what << ": " << mission_.last_rejection();
+    EXPECT_EQ(mission_.last_rejection().find('\n'), std::string::npos);
+  }
+  // A good one is taken and counts nothing; one for a vehicle of another host is ignored, not refused.
+  EXPECT_TRUE(mission_.OnAssignment(Good()));
+  Assignment region = Good();
+  region.region_order = 8;
+  region.region_origin_m = {1.0, 1.0};
+  region.region_size_m = {2.0, 2.0};
+  region.phi = Eigen::VectorXd::Ones(64);
+  EXPECT_TRUE(mission_.OnAssignment(region));
+  Assignment other = Good();
+  other.id = 4;
+  EXPECT_FALSE(mission_.OnAssignment(other));
+  EXPECT_EQ(mission_.rejected(), refused);
+}
+
+TEST_F(AgentMissionDoor, RefusesMalformedSnapshots) {
+  FleetSnapshot s;
+  s.cycle = 2;
+  s.phi = Eigen::VectorXd::Zero(mission_.host().basis().size());
+  s.valve_weights = Eigen::VectorXd::Ones(5);
+  FleetSnapshot bad_phi = s, bad_sums = s, bad_weights = s, bad_time = s;
+  bad_phi.phi[1] = std::numeric_limits<double>::infinity();
+  bad_sums.coverage.sums = Eigen::VectorXd::Ones(3);
+  bad_weights.valve_weights[0] = -1.0;
+  bad_time.coverage.time_s = std::numeric_limits<double>::quiet_NaN();
+  for (const FleetSnapshot* bad : {&bad_phi, &bad_sums, &bad_weights, &bad_time})
+    EXPECT_FALSE(mission_.OnFleetSnapshot(*bad));
+  EXPECT_EQ(mission_.rejected(), 4u);
+  EXPECT_FALSE(mission_.has_snapshot());  // nothing of them was kept
+  EXPECT_TRUE(mission_.OnFleetSnapshot(s));
+  EXPECT_TRUE(mission_.has_snapshot());
+}
+
+}  // namespace
+}  // namespace sage::agents
