@@ -630,14 +630,19 @@ class Search {
   std::uint64_t versions_ = 0;
 };
 
-// Cluster c -> vehicle, minimising the sum of straight-line approaches (the Hungarian method,
-// O(n^3), the potentials form of Kuhn-Munkres): a vehicle sent across a crowded field meets every
-// other tour on its way, and greedy matching leaves the last vehicles the farthest clusters.
-// Beyond kHungarianMax clusters (1,000 vehicles: ~1e9 steps) greedily, shortest pair first.
+// Cluster c -> vehicle, minimising the sum of squared straight-line approach times (the
+// Hungarian method, O(n^3), the potentials form of Kuhn-Munkres): a vehicle sent across a crowded
+// field meets every other tour on its way, and greedy matching leaves the last vehicles the
+// farthest clusters. Squared, because where vehicles and valves are spread unevenly the plain sum
+// is as happy to send one vehicle 330 m (a tour unvisited for 8 minutes, measured on a generated
+// 1,000-vehicle field) as a chain of vehicles a few metres each. Beyond kHungarianMax clusters
+// (1,000 vehicles: ~1e9 steps) greedily, shortest pair first.
 constexpr int kHungarianMax = 1200;
 std::vector<int> Match(const Points& centroids, const std::vector<FleetVehicle>& vehicles) {
   const int n = static_cast<int>(centroids.size()), m = static_cast<int>(vehicles.size());  // n <= m
-  const auto cost = [&](int c, int k) { return (centroids[c] - vehicles[k].position_m).norm(); };
+  const auto cost = [&](int c, int k) {
+    return (centroids[c] - vehicles[k].position_m).squaredNorm() / (vehicles[k].speed_mps * vehicles[k].speed_mps);
+  };
   std::vector<int> vehicle_of(n, -1);
   if (n > kHungarianMax) {
     std::vector<std::tuple<double, int, int>> pairs;
