@@ -3,7 +3,7 @@
 # agent objects in lockstep) and by `sage launch` (the same objects as processes on Cyclone DDS),
 # compared on what an inspection engineer reads: corr(visits, weight), the dominant valve's
 # revisit interval, the fewest visits of any valve and the final ergodic metric. Prints and
-# writes inproc_vs_dds.md. Usage: tests/bench/inproc_vs_dds.sh [BUILD_DIR] [SCENARIO] [SEEDS...]
+# writes BUILD_DIR/inproc_vs_dds.md. Usage: tests/bench/inproc_vs_dds.sh [BUILD_DIR] [SCENARIO] [SEEDS...]
 # (default: build scenarios/fleet_field.yaml 1 2 3; launches run at 4x real time).
 set -euo pipefail
 cd "$(dirname "$0")/../.."
@@ -11,7 +11,7 @@ build=${1:-build}
 scenario=${2:-scenarios/fleet_field.yaml}
 shift 2 || true
 seeds=("${@:-1 2 3}")
-out=inproc_vs_dds.md
+out="$build/inproc_vs_dds.md"   # beside the build, never in the source tree
 work=$(mktemp -d)
 summary() {  # metrics.json -> "corr interval fewest metric"
   python3 - "$1" <<'PY'

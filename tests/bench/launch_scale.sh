@@ -1,14 +1,14 @@
 #!/usr/bin/env bash
 # Fleet missions over Cyclone DDS at scale: `sage launch` on scenarios/fleet_large.yaml with N
 # vehicles (agent hosts of up to 250 vehicles each), at real time. Prints and appends to
-# launch_scale.md: the real-time factor the server kept, its cycle time, and the DDS message
+# BUILD_DIR/launch_scale.md: the real-time factor the server kept, its cycle time, and the DDS message
 # rate it saw. Usage: tests/bench/launch_scale.sh [BUILD_DIR] [N ...]   (default: build 100 1000)
 set -euo pipefail
 cd "$(dirname "$0")/../.."   # the repository root: scenarios/ and build/ are relative to it
 build=${1:-build}
 shift || true
 counts=("${@:-100 1000}")
-out=launch_scale.md
+out="$build/launch_scale.md"   # beside the build, never in the source tree
 echo "| vehicles | agent hosts | mission | wall | real-time factor | server cycle | DDS messages/s at the server |" | tee -a "$out"
 echo "|---|---|---|---|---|---|---|" | tee -a "$out"
 for n in ${counts[@]}; do
