@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 #include <string>
 
@@ -27,6 +28,9 @@ struct AgentHost::Impl {
     std::optional<maps::RegionBox> region;
     std::unique_ptr<maps::SpectralBasis> region_basis;
     std::unique_ptr<GridFlight> transit;
+    bool escaping = false;  // pinned in its box: flying a grid path out of it (transit)
+    Eigen::Vector2d anchor_m = Eigen::Vector2d::Zero();  // where it was at anchor_time_s
+    double anchor_time_s = std::numeric_limits<double>::quiet_NaN();
     std::unique_ptr<ObstacleFilter> keep_clear;  // BlueROV2s: structures and edges (SMC), neighbours
     Eigen::Vector2d command = Eigen::Vector2d::Zero();
   };
@@ -76,15 +80,54 @@ struct AgentHost::Impl {
     const Eigen::Vector2d field(scenario.workspace.width_m, scenario.workspace.height_m);
     if (!v.region->Contains(state.position_m, kInside_m)) {
       if (v.keep_clear) v.keep_clear->SetBounds(Eigen::Vector2d::Zero(), field);
+      v.anchor_time_s = std::numeric_limits<double>::quiet_NaN();  // pinned is judged in the box
+      if (v.escaping) v.transit->Stop(), v.escaping = false;     // out of it: on to its centre
       if (!v.transit->active()) v.transit->Start(v.region->Centre());
       Eigen::Vector2d command = Eigen::Vector2d::Zero();
       if (!v.transit->Command(state, time_s, command)) return command;
     }
-    v.transit->Stop();
+    // Escaping, the workspace's edges bound it, as in transit: the box's edge is what, with a
+    // structure and a neighbour, turned every way out into the structure.
+    if (v.escaping) {
+      Eigen::Vector2d command = Eigen::Vector2d::Zero();
+      if (!v.transit->Command(state, time_s, command)) return command;
+      v.escaping = false;
+    }
     if (v.keep_clear) v.keep_clear->SetBounds(v.region->origin_m, v.region->origin_m + v.region->size_m);
+    v.transit->Stop();
+    // Pinned in its box (held on a structure's corner, or by a vehicle in a narrow passage, the
+    // deficit's gradient pushing it on against it): fly a grid path round the vehicles nearby to
+    // the free point of the box farthest from here, then steer on again.
+    constexpr double kPinnedAfter_s = 4.0, kPinnedWithin_m = 0.3;
+    if (std::isnan(v.anchor_time_s) || time_s - v.anchor_time_s >= kPinnedAfter_s) {
+      const bool pinned = !std::isnan(v.anchor_time_s) && (state.position_m - v.anchor_m).norm() < kPinnedWithin_m;
+      v.anchor_m = state.position_m;
+      v.anchor_time_s = time_s;
+      if (pinned) {
+        v.escaping = true;
+        if (v.keep_clear) v.keep_clear->SetBounds(Eigen::Vector2d::Zero(), field);
+        v.transit->Start(EscapePoint(*v.region, state.position_m));
+        Eigen::Vector2d command = Eigen::Vector2d::Zero();
+        if (!v.transit->Command(state, time_s, command)) return command;
+        v.escaping = false;
+      }
+    }
     VehicleState local = state;
     local.position_m -= v.region->origin_m;
     return v.ergodic->Command(local, time_s);
+  }
+
+  // The free point of the box, of its centre and the centres of its quarters, farthest from x.
+  Eigen::Vector2d EscapePoint(const maps::RegionBox& box, const Eigen::Vector2d& x_m) const {
+    Eigen::Vector2d best = box.Centre();
+    double farthest = -1.0;
+    for (const Eigen::Vector2d f : {Eigen::Vector2d(0.5, 0.5), {0.25, 0.25}, {0.75, 0.25}, {0.25, 0.75}, {0.75, 0.75}}) {
+      const Eigen::Vector2d p = box.origin_m + f.cwiseProduct(box.size_m);
+      const Eigen::Vector2i cell = grid.CellOf(p);
+      if (grid.Occupied(cell.x(), cell.y())) continue;
+      if ((p - x_m).norm() > farthest) farthest = (p - x_m).norm(), best = p;
+    }
+    return best;
   }
 
   Vehicle& Find(VehicleId id) {
@@ -171,6 +214,8 @@ void AgentHost::SetRegion(VehicleId id, const maps::RegionBox& box) {
   v.ergodic = std::make_unique<ErgodicController>(*v.region_basis, v.speed_mps, impl_->scenario.ergodic.forgetting_time_s,
                                                   impl_->scenario.ergodic.min_turn_radius_m);
   v.transit = std::make_unique<GridFlight>(impl_->grid, v.speed_mps);
+  v.escaping = false;
+  v.anchor_time_s = std::numeric_limits<double>::quiet_NaN();
 }
 
 int AgentHost::BasisSize(VehicleId id) const {

@@ -211,6 +211,20 @@ TEST(Mission, RegionsReapportionAfterALoss) {
   }
 }
 
+// Regions at scale: fleet_large's 240 valves, 100 vehicles, 300 s. No valve waits two minutes
+// (the vehicles start on the south edge: the far valves' first wait is ~45 s). A region's vehicle
+// once stayed pressed on XT-01's west face the whole mission (its box's edge, the XT and a
+// neighbour turned every way out into the XT); pinned, it now flies out on a grid path.
+TEST(Mission, RegionsAtScaleLeaveNoValveUnwatched) {
+  maps::Scenario s = maps::WithVehicleCount(
+      maps::LoadScenario(std::string(SAGE_SOURCE_DIR) + "/scenarios/fleet_large.yaml"), 100);
+  s.fleet.assignment = maps::FleetAssignment::kRegions;
+  s = maps::WithDuration(s, 300.0);
+  const MissionResult r = Mission(s, MissionOptions{"", ControllerKind::kErgodic, nullptr, false}).Run();
+  EXPECT_EQ(r.metrics.unvisited_valves, 0);
+  for (const ValveMetrics& v : r.metrics.valves) EXPECT_LT(v.longest_unwatched_s, 120.0) << v.name;
+}
+
 // The guard: a valve not visited within the revisit bound weighs, for the controllers, as much
 // as the heaviest one; with the guard off the weights are the profile's.
 TEST(Mission, GuardBoostsAnOverdueValve) {
