@@ -36,12 +36,8 @@ std::vector<GaussianComponent> RandomValves(int count, double width, double heig
   return valves;
 }
 
-void BM_SmcStep(benchmark::State& state) {
-  const int order = static_cast<int>(state.range(0));
-  const SpectralBasis basis(7.0, 5.0, order);
-  const RiskField field(basis, RandomValves(5, 7.0, 5.0));
-  ErgodicController controller(basis, 0.7);
-  controller.SetTarget(field.coefficients());
+// Steps a single integrator along the controller's commands, one SMC step per iteration.
+void StepAlong(benchmark::State& state, ErgodicController& controller, const SpectralBasis& basis) {
   VehicleState vehicle;
   vehicle.position_m = {0.6, 0.6};
   double t = 0.0;
@@ -51,8 +47,17 @@ void BM_SmcStep(benchmark::State& state) {
     t += 0.1;
     benchmark::DoNotOptimize(vehicle.position_m.data());
   }
-  state.counters["K"] = order;
+  state.counters["K"] = basis.order();
   state.counters["coefficients"] = basis.size();
+}
+
+void BM_SmcStep(benchmark::State& state) {
+  const int order = static_cast<int>(state.range(0));
+  const SpectralBasis basis(7.0, 5.0, order);
+  const RiskField field(basis, RandomValves(5, 7.0, 5.0));
+  ErgodicController controller(basis, 0.7);
+  controller.SetTarget(field.coefficients());
+  StepAlong(state, controller, basis);
 }
 BENCHMARK(BM_SmcStep)->Arg(10)->Arg(20)->Arg(40);
 
@@ -70,17 +75,7 @@ void BM_SmcStepFleet(benchmark::State& state) {
     fleet_sums += 0.1 * f;
   }
   controller.SetFleetCoverage(fleet_sums, 3.0);
-  VehicleState vehicle;
-  vehicle.position_m = {0.6, 0.6};
-  double t = 0.0;
-  for (auto _ : state) {
-    const Eigen::Vector2d u = controller.Command(vehicle, t);
-    vehicle.position_m += 0.1 * u;
-    t += 0.1;
-    benchmark::DoNotOptimize(vehicle.position_m.data());
-  }
-  state.counters["K"] = order;
-  state.counters["coefficients"] = basis.size();
+  StepAlong(state, controller, basis);
 }
 BENCHMARK(BM_SmcStepFleet)->Arg(10)->Arg(20)->Arg(40);
 

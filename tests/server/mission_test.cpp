@@ -19,6 +19,17 @@ maps::Scenario TwoXt(double duration_s) {
   return s;
 }
 
+// fleet_field without its own events, losing its second vehicle at 60 s.
+maps::Scenario FleetFieldLosingOneAt60s(double duration_s) {
+  maps::Scenario s = maps::LoadScenario(std::string(SAGE_SOURCE_DIR) + "/scenarios/fleet_field.yaml");
+  maps::FleetEvent lose;
+  lose.time_s = 60.0;
+  lose.kind = maps::FleetEvent::Kind::kLose;
+  lose.vehicle.name = s.vehicles[1].name;
+  s.fleet_events = {lose};
+  return maps::WithDuration(s, duration_s);
+}
+
 // A fixed seed gives the same mission, sample for sample; another seed a different one.
 TEST(Mission, SameSeedSameMission) {
   auto run = [](std::uint64_t seed) {
@@ -114,14 +125,7 @@ TEST(Mission, AstarFleetSplitsTheValves) {
 // Losing a vehicle re-plans the tours after the scenario's re-plan delay: the lost vehicle's
 // valves are flown by the others again, each revisited within two laps of the new plan.
 TEST(Mission, AstarFleetReplansAfterALoss) {
-  maps::Scenario s = maps::LoadScenario(std::string(SAGE_SOURCE_DIR) + "/scenarios/fleet_field.yaml");
-  s.fleet_events.clear();
-  maps::FleetEvent lose;
-  lose.time_s = 60.0;
-  lose.kind = maps::FleetEvent::Kind::kLose;
-  lose.vehicle.name = s.vehicles[1].name;
-  s.fleet_events = {lose};
-  s = maps::WithDuration(s, 240.0);
+  maps::Scenario s = FleetFieldLosingOneAt60s(240.0);
   s.astar.replan_delay_s = 10.0;
   TrajectoryRecorder record;
   const MissionResult r = Mission(s, MissionOptions{"", ControllerKind::kAstar, &record, true}).Run();
@@ -184,15 +188,8 @@ TEST(Mission, RegionsSplitTheValvesAndCoverEach) {
 // A lost vehicle's region is re-apportioned once the fleet has held still for half a second:
 // three regions then, the lost vehicle's valves among them, and those valves seen again.
 TEST(Mission, RegionsReapportionAfterALoss) {
-  maps::Scenario s = maps::LoadScenario(std::string(SAGE_SOURCE_DIR) + "/scenarios/fleet_field.yaml");
-  s.fleet_events.clear();
+  maps::Scenario s = FleetFieldLosingOneAt60s(200.0);
   s.fleet.assignment = maps::FleetAssignment::kRegions;
-  maps::FleetEvent lose;
-  lose.time_s = 60.0;
-  lose.kind = maps::FleetEvent::Kind::kLose;
-  lose.vehicle.name = s.vehicles[1].name;
-  s.fleet_events = {lose};
-  s = maps::WithDuration(s, 200.0);
   TrajectoryRecorder record;
   const MissionResult r = Mission(s, MissionOptions{"", ControllerKind::kErgodic, &record, true}).Run();
   ASSERT_EQ(record.regions.size(), 2u);
