@@ -44,6 +44,7 @@ struct AgentHost::Impl {
   std::vector<Eigen::Vector2d> valves;  // the scenario's valve positions (A* tours)
   std::vector<Vehicle> vehicles;
   std::vector<Eigen::Vector2d> others;  // vehicles of other hosts
+  std::optional<std::vector<std::pair<VehicleId, Eigen::Vector2d>>> own_reported;  // this host's, as last reported
   int physics_substeps = 1;
   double control_dt = 0.1;
 
@@ -59,14 +60,25 @@ struct AgentHost::Impl {
     valves = s.ValvePositions();
   }
 
-  // Vehicles (this host's and the others') within the filter's reach of vehicle i.
+  // Vehicles (this host's and the others') within the filter's reach of vehicle i: this host's
+  // as they last reported if told (SetOwnReported), else where they are now.
   std::vector<Eigen::Vector2d> Neighbours(std::size_t i, const std::vector<Eigen::Vector2d>& positions) const {
     const double reach2 = std::pow(ObstacleFilterSettings{}.neighbour_influence_m, 2);
     std::vector<Eigen::Vector2d> near;
-    for (std::size_t j = 0; j < positions.size(); ++j)
-      if (j != i && (positions[j] - positions[i]).squaredNorm() < reach2) near.push_back(positions[j]);
+    if (own_reported) {
+      for (const auto& [id, p] : *own_reported)
+        if (id != vehicles[i].id && (p - positions[i]).squaredNorm() < reach2) near.push_back(p);
+    } else {
+      for (std::size_t j = 0; j < positions.size(); ++j)
+        if (j != i && (positions[j] - positions[i]).squaredNorm() < reach2) near.push_back(positions[j]);
+    }
     for (const Eigen::Vector2d& p : others)
       if ((p - positions[i]).squaredNorm() < reach2) near.push_back(p);
+    // The filter takes neighbours one after another: in an order of their own (by position),
+    // not of which host simulates them.
+    std::sort(near.begin(), near.end(), [](const Eigen::Vector2d& a, const Eigen::Vector2d& b) {
+      return a.x() < b.x() || (a.x() == b.x() && a.y() < b.y());
+    });
     return near;
   }
 
@@ -256,6 +268,10 @@ void AgentHost::SetTarget(VehicleId id, const VehicleTarget& target) {
 }
 
 void AgentHost::SetOtherVehicles(std::vector<Eigen::Vector2d> positions_m) { impl_->others = std::move(positions_m); }
+
+void AgentHost::SetOwnReported(std::vector<std::pair<VehicleId, Eigen::Vector2d>> positions_m) {
+  impl_->own_reported = std::move(positions_m);
+}
 
 void AgentHost::SetTourWeights(const Eigen::VectorXd& weights) {
   for (Impl::Vehicle& v : impl_->vehicles) {

@@ -6,6 +6,7 @@
 // object.
 #include <cstdint>
 #include <memory>
+#include <utility>
 #include <vector>
 
 #include <Eigen/Core>
@@ -55,6 +56,11 @@ class AgentHost {
   /// Positions (m) of the fleet's vehicles simulated elsewhere (other hosts), as last heard;
   /// this host's vehicles keep apart from them and from each other.
   void SetOtherVehicles(std::vector<Eigen::Vector2d> positions_m);
+  /// Where this host's own vehicles were as they last reported (the previous cycle's states):
+  /// from then on they keep apart from each other on these, as they do from other hosts'
+  /// vehicles on those hosts' last states, so that a fleet steers the same however it is split
+  /// into hosts (one in-process, several over DDS). Until it is called, on where they are now.
+  void SetOwnReported(std::vector<std::pair<VehicleId, Eigen::Vector2d>> positions_m);
   /// An A* vehicle's closed tour: the scenario's valves `valves` in visiting order, its wait per
   /// lap split over them by `weights` (same order). The same tour again only changes the waits
   /// (from the next lap); another one is flown from where the vehicle is. Throws

@@ -172,6 +172,9 @@ std::optional<VehicleTarget> AgentMission::TargetOf(VehicleId id, Member& member
 
 AgentMission::CycleOutput AgentMission::Step(std::int64_t cycle) {
   const double t = static_cast<double>(cycle) / scenario_.control_rate_hz;
+  // The vehicles keep apart on where each reported being last cycle, this host's as the others'.
+  host_.SetOwnReported(std::move(reported_));
+  reported_.clear();
   CycleOutput out;
   out.states.reserve(members_.size());
   for (const auto& [id, member] : members_) {
@@ -181,6 +184,7 @@ AgentMission::CycleOutput AgentMission::Step(std::int64_t cycle) {
     s.cycle = cycle;
     s.time_s = t;
     s.state = host_.State(id);
+    reported_.emplace_back(id, s.state.position_m);
     out.states.push_back(std::move(s));
   }
   // Vehicles hold still until the server's first word.
@@ -194,8 +198,12 @@ AgentMission::CycleOutput AgentMission::Step(std::int64_t cycle) {
     s.command_mps = host_.LastCommand(s.id);
     s.target_cycle = members_.at(s.id).steered_cycle;
   }
-  if (t + 1e-9 >= next_report_s_) {
-    next_report_s_ = t + scenario_.fleet.coverage_period_s;
+  // Every coverage period on the mission clock (cycles 1, 1 + P, 1 + 2P, ...: the first cycle
+  // that steers is 1), the same cycles for every host however late it joined, so that a fleet
+  // reports the same whether one host simulates it or several.
+  const std::int64_t period =
+      std::max<std::int64_t>(1, std::llround(scenario_.fleet.coverage_period_s * scenario_.control_rate_hz));
+  if (cycle >= 1 && (cycle - 1) % period == 0) {
     for (auto& [id, member] : members_) {
       const CoverageAccumulator* acc = host_.Coverage(id);
       // Only the field's coverage is shared; a region's vehicle covers alone on its own basis.

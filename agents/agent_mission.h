@@ -12,6 +12,7 @@
 #include <map>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <Eigen/Core>
@@ -62,6 +63,8 @@ class AgentMission {
   void OnNewServer();
   /// True once a snapshot has arrived: until then vehicles hold still.
   bool has_snapshot() const { return snapshot_.has_value(); }
+  /// The server cycle of the snapshot held (0 if none).
+  std::uint64_t snapshot_cycle() const { return snapshot_ ? snapshot_->cycle : 0; }
   /// Positions of the fleet's vehicles simulated elsewhere, for keeping apart.
   void SetOtherVehicles(std::vector<Eigen::Vector2d> positions_m) { host_.SetOtherVehicles(std::move(positions_m)); }
 
@@ -100,7 +103,7 @@ class AgentMission {
   std::optional<FleetSnapshot> snapshot_;
   bool new_server_ = false;
   Eigen::VectorXd tour_weights_;
-  double next_report_s_ = 0.0;
+  std::vector<std::pair<VehicleId, Eigen::Vector2d>> reported_;  // this cycle's own states, for the next
   std::uint64_t rejected_ = 0;
   std::string last_rejection_;
 };

@@ -1,7 +1,11 @@
 #include "agents/node/agent_node.h"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <deque>
+#include <csignal>
+#include <limits>
 #include <map>
 #include <thread>
 
@@ -50,9 +54,14 @@ int RunAgentNode(const maps::Scenario& scenario, const AgentNodeOptions& options
   proto::Reader<proto::MissionStatus> status(participant, proto::MissionStatusQos());
   proto::Reader<proto::FleetCommand> commands(participant, proto::FleetCommandQos());
   // The other hosts' vehicles, so this host's keep apart from them too.
-  proto::Reader<proto::VehicleState> neighbours(participant, proto::VehicleStateReaderQos());
-  std::map<std::uint32_t, Eigen::Vector2d> others;
+  // Three deep: a host that runs ahead sends its next state before this one takes the last, and
+  // the vehicles keep apart on the last cycle's.
+  proto::Reader<proto::VehicleState> neighbours(participant, proto::VehicleStateRecordQos(3));
+  // The other hosts' vehicles: each one's last few states (cycle, position), newest last.
+  std::map<std::uint32_t, std::deque<std::pair<std::int64_t, Eigen::Vector2d>>> others;
   std::uint64_t bad_neighbours = 0, reported_rejections = 0;  // refused at the door (logged)
+  long cycles_not_in_step = 0, cycles_run = 0;  // cycles that went on without the server's last word
+  double first_not_in_step_s = -1.0;
   std::int64_t next_rejection_report = 0;
 
   const std::uint64_t fingerprint =
@@ -113,12 +122,30 @@ int RunAgentNode(const maps::Scenario& scenario, const AgentNodeOptions& options
   };
   const double rate = scenario.control_rate_hz;
   auto last_heard = std::chrono::steady_clock::now();
-  std::int64_t k = static_cast<std::int64_t>(std::ceil(clock.MissionTime(proto::NowRealtimeNs()) * rate));
+  // The server's readers matched before the first report: a state or coverage report written
+  // before discovery is done is lost (a join started ahead has seconds for it).
+  states.WaitForReaders(1, std::chrono::milliseconds(2000));
+  coverage.WaitForReaders(1, std::chrono::milliseconds(2000));
+  const std::int64_t first_cycle = static_cast<std::int64_t>(std::ceil(options.start_at_s * rate - 1e-9));
+  const std::int64_t end_cycle = std::isfinite(options.end_at_s)
+                                     ? static_cast<std::int64_t>(std::ceil(options.end_at_s * rate - 1e-9))
+                                     : std::numeric_limits<std::int64_t>::max();
+  std::int64_t k = std::max(first_cycle,
+                            static_cast<std::int64_t>(std::ceil(clock.MissionTime(proto::NowRealtimeNs()) * rate)));
   spdlog::info("agents: found the server on DDS domain {}; {} vehicle(s) joining the mission at t = {:.1f} s",
                options.domain_id, mission.vehicle_count(), static_cast<double>(k) / rate);
   for (;; ++k) {
     std::this_thread::sleep_until(clock.WallOf(static_cast<double>(k) / rate));
     if (options.stop && options.stop->load()) break;
+    if (k >= end_cycle) {  // the scenario's loss or leave, at its cycle
+      if (options.end_by_sigkill) {
+        spdlog::warn("agents: the scenario loses this host's vehicles at t = {:.1f} s: SIGKILL", static_cast<double>(k) / rate);
+        spdlog::default_logger()->flush();
+        std::raise(SIGKILL);
+      }
+      spdlog::info("agents: the scenario's vehicles leave at t = {:.1f} s", static_cast<double>(k) / rate);
+      break;
+    }
     const std::uint64_t instance = clock.instance;
     if (take_status()) last_heard = std::chrono::steady_clock::now();
     if (finished) break;
@@ -138,34 +165,80 @@ int RunAgentNode(const maps::Scenario& scenario, const AgentNodeOptions& options
       std::this_thread::sleep_for(std::chrono::milliseconds(100));  // let the disposes go out
       return 0;
     }
-    // Every host sees every vehicle's assignment (one topic); each takes its own.
-    while (targets.TakeEach([&](const proto::ErgodicTarget& m, const dds_sample_info_t& info) {
-      if (info.valid_data && m.server_instance == clock.instance) mission.OnAssignment(wire::FromWire(m));
-    }, 1024) == 1024) {
+    const auto take_server_words = [&] {
+      // Every host sees every vehicle's assignment (one topic); each takes its own.
+      while (targets.TakeEach([&](const proto::ErgodicTarget& m, const dds_sample_info_t& info) {
+        if (info.valid_data && m.server_instance == clock.instance) mission.OnAssignment(wire::FromWire(m));
+      }, 1024) == 1024) {
+      }
+      fleet.TakeEach([&](const proto::FleetCoverage& m, const dds_sample_info_t& info) {
+        if (!info.valid_data || m.server_instance != clock.instance) return;
+        if (mission.OnFleetSnapshot(wire::FromWire(m))) last_heard = std::chrono::steady_clock::now();
+      });
+    };
+    take_server_words();
+    // Lockstep where it can be: cycle k steers on the server's word of cycle k - 1, as in the
+    // in-process mission; it waits up to 0.45 of a period for it, then goes on (counted).
+    if (mission.has_snapshot() && mission.snapshot_cycle() + 1 < static_cast<std::uint64_t>(std::max<std::int64_t>(k, 1))) {
+      const auto deadline = clock.WallOf((static_cast<double>(k) + 0.45) / rate);
+      while (mission.snapshot_cycle() + 1 < static_cast<std::uint64_t>(k)) {
+        if (std::chrono::system_clock::now() >= deadline) {
+          if (cycles_not_in_step++ == 0) first_not_in_step_s = static_cast<double>(k) / rate;
+          break;
+        }
+        fleet.WaitForData(std::chrono::milliseconds(1));
+        take_server_words();
+      }
     }
-    fleet.TakeEach([&](const proto::FleetCoverage& m, const dds_sample_info_t& info) {
-      if (!info.valid_data || m.server_instance != clock.instance) return;
-      if (mission.OnFleetSnapshot(wire::FromWire(m))) last_heard = std::chrono::steady_clock::now();
-    });
     const double silent_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - last_heard).count();
     if (silent_s > options.server_timeout_s) {
       spdlog::warn("agents: no word from the server for {:.0f} s; stopping", silent_s);
       break;
     }
-    while (neighbours.TakeEach([&](const proto::VehicleState& m, const dds_sample_info_t& info) {
-      if (mission.Contains(static_cast<VehicleId>(m.vehicle_id))) return;
-      if (info.valid_data && info.instance_state == DDS_ALIVE_INSTANCE_STATE) {
-        const Eigen::Vector2d p(m.x_m, m.y_m);
-        if (p.allFinite()) {
-          others[m.vehicle_id] = p;
-        } else {
-          ++bad_neighbours;  // not a place to keep clear of
-          others.erase(m.vehicle_id);
-        }
-      } else {
-        others.erase(m.vehicle_id);  // lost or left
+    const auto take_neighbours = [&] {
+      while (neighbours.TakeEach(
+                 [&](const proto::VehicleState& m, const dds_sample_info_t& info) {
+                   if (mission.Contains(static_cast<VehicleId>(m.vehicle_id))) return;
+                   if (info.valid_data && info.instance_state == DDS_ALIVE_INSTANCE_STATE) {
+                     const Eigen::Vector2d p(m.x_m, m.y_m);
+                     if (p.allFinite()) {
+                       if (m.server_instance == clock.instance) {
+                         auto& seen = others[m.vehicle_id];
+                         seen.emplace_back(static_cast<std::int64_t>(m.cycle), p);
+                         if (seen.size() > 3) seen.pop_front();
+                       }
+                     } else {
+                       ++bad_neighbours;  // not a place to keep clear of
+                       others.erase(m.vehicle_id);
+                     }
+                   } else {
+                     others.erase(m.vehicle_id);  // lost or left
+                   }
+                 },
+                 1024) == 1024) {
       }
-    }, 1024) == 1024) {
+    };
+    take_neighbours();
+    // Lockstep for the neighbours too: a vehicle of another host near one of this host's whose
+    // state of the last cycle is not in yet is waited for (within the same budget).
+    const auto near_ones_in = [&] {
+      for (const auto& [other, seen] : others) {
+        if (seen.empty() || seen.back().first >= k - 1 || seen.back().first < k - 3) continue;  // in, or gone
+        for (const VehicleId id : mission.ids())
+          if ((mission.host().State(id).position_m - seen.back().second).squaredNorm() < 3.0 * 3.0) return false;
+      }
+      return true;
+    };
+    if (!near_ones_in()) {
+      const auto deadline = clock.WallOf((static_cast<double>(k) + 0.45) / rate);
+      while (!near_ones_in()) {
+        if (std::chrono::system_clock::now() >= deadline) {
+          if (cycles_not_in_step++ == 0) first_not_in_step_s = static_cast<double>(k) / rate;
+          break;
+        }
+        neighbours.WaitForData(std::chrono::milliseconds(1));
+        take_neighbours();
+      }
     }
     if (mission.rejected() != reported_rejections && k >= next_rejection_report) {
       spdlog::warn("agents: refused {} message(s) from the server so far; the last: {}", mission.rejected(),
@@ -173,17 +246,31 @@ int RunAgentNode(const maps::Scenario& scenario, const AgentNodeOptions& options
       reported_rejections = mission.rejected();
       next_rejection_report = k + static_cast<std::int64_t>(rate);  // at most one warning a second
     }
+    // The others as of last cycle, as this host's own vehicles see each other (AgentMission):
+    // a host that is ahead may have sent this cycle's state already, and a state older than the
+    // last cycle's is a vehicle that stopped reporting (lost, or late), not a place.
     std::vector<Eigen::Vector2d> other_positions;
     other_positions.reserve(others.size());
-    for (const auto& [id, p] : others) other_positions.push_back(p);
+    for (const auto& [id, seen] : others) {
+      for (const auto& [cycle, position] : seen)
+        if (cycle == k - 1) other_positions.push_back(position);
+    }
     mission.SetOtherVehicles(std::move(other_positions));
 
     const AgentMission::CycleOutput out = mission.Step(k);
+    ++cycles_run;
     const long long stamp = proto::NowRealtimeNs();
-    for (const StateReport& s : out.states) states.Write(wire::ToWire(s, clock.instance, stamp));
+    // Coverage first: the server waits for the states of the cycle, and by then a report sent
+    // before them is in as well.
     for (const CoverageMessage& c : out.coverage) coverage.Write(wire::ToWire(c, stamp));
+    for (const StateReport& s : out.states) states.Write(wire::ToWire(s, clock.instance, stamp));
   }
   for (const VehicleId id : mission.ids()) leave(id);
+  if (cycles_not_in_step > 0) {
+    spdlog::warn("agents: {} of {} cycles went on without the last cycle's word of the server or a neighbour (not in "
+                 "lockstep), the first at t = {:.1f} s",
+                 cycles_not_in_step, cycles_run, first_not_in_step_s);
+  }
   if (mission.rejected() > 0 || bad_neighbours > 0) {
     spdlog::warn("agents: refused {} message(s) from the server and {} neighbour state(s) with no finite position",
                  mission.rejected(), bad_neighbours);

@@ -6,6 +6,7 @@
 // restarted or resumed server (another instance) replaces the last one's clock and word at once.
 #include <atomic>
 #include <cstdint>
+#include <limits>
 #include <optional>
 #include <string>
 #include <vector>
@@ -24,6 +25,13 @@ struct AgentNodeOptions {
   std::vector<std::optional<VehicleResume>> resume;  ///< per vehicle: where a resumed one picks up (or empty)
   double server_timeout_s = 60.0;            ///< wall seconds without the server before giving up
   double wait_for_server_s = 30.0;           ///< wall seconds to wait for the mission to start
+  /// The scenario's fleet events at their exact cycle, as the in-process mission has them: the
+  /// host's first cycle is at start_at_s of mission time at the earliest (a join started ahead);
+  /// at end_at_s, before stepping, its vehicles die (end_by_sigkill: the host SIGKILLs itself, a
+  /// loss) or leave cleanly.
+  double start_at_s = 0.0;
+  double end_at_s = std::numeric_limits<double>::infinity();
+  bool end_by_sigkill = false;
   const std::atomic<bool>* stop = nullptr;   ///< set (SIGINT/SIGTERM): the vehicles leave cleanly
 };
 

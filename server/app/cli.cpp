@@ -213,6 +213,18 @@ int RunCli(int argc, char** argv) {
   agents->add_option("--resume", agents_cmd.resume_dir,
                      "Pick the --ids vehicles up where the crashed mission recorded in this run directory left them");
   agents->add_option("--ids", agents_cmd.ids, "With --resume: the fleet ids to simulate")->delimiter(',');
+  agents->add_option("--start-at", agents_cmd.start_at_s,
+                     "Mission time (s) of this host's first cycle at the earliest: a joining vehicle started ahead "
+                     "joins at exactly that cycle, as in sage run (sage launch does this for fleet_events joins)")
+      ->check(CLI::NonNegativeNumber);
+  CLI::Option* lose_at = agents->add_option("--lose-at", agents_cmd.lose_at_s,
+                                            "Mission time (s) at which the host SIGKILLs itself, at that exact cycle: "
+                                            "the scenario's loss of its vehicles (sage launch does this)")
+                             ->check(CLI::NonNegativeNumber);
+  agents->add_option("--leave-at", agents_cmd.leave_at_s,
+                     "Mission time (s) at which its vehicles leave cleanly, at that exact cycle")
+      ->check(CLI::NonNegativeNumber)
+      ->excludes(lose_at);
 
   OperatorCommand op;
   CLI::App* vehicle = app.add_subcommand("vehicle", "Add vehicles to, or remove one from, the running mission");

@@ -58,6 +58,15 @@ int CmdAgents(const AgentsCommand& c) {
   options.domain_id = c.domain;
   options.guidance = GuidanceOf(c.controller);
   options.stop = stop;
+  for (const auto& [flag, value] : {std::pair{"--start-at", std::optional<double>(c.start_at_s)},
+                                     std::pair{"--lose-at", c.lose_at_s}, std::pair{"--leave-at", c.leave_at_s}}) {
+    if (value && !std::isfinite(*value)) throw maps::ScenarioError(fmt::format("{} = {}: must be a finite time", flag, *value));
+  }
+  options.start_at_s = c.start_at_s;
+  if (c.lose_at_s || c.leave_at_s) {
+    options.end_at_s = c.lose_at_s ? *c.lose_at_s : *c.leave_at_s;
+    options.end_by_sigkill = c.lose_at_s.has_value();
+  }
   auto add = [&](const maps::VehicleSpec& spec, int id) {
     options.vehicles.push_back(spec);
     options.ids.push_back(static_cast<std::uint32_t>(id));

@@ -41,7 +41,15 @@ struct Host {
   pid_t pid = -1;
   std::vector<std::string> vehicle_names;
   bool running = true;
+  bool ends_itself = false;  // started with --lose-at / --leave-at: it ends at the event's cycle
 };
+
+// A joining vehicle's host is started this long (wall seconds) before its join, so that it is up
+// and matched when the join's cycle comes and the vehicle joins at exactly that cycle.
+constexpr double kJoinLead_s = 2.0;
+// A host that should have ended itself at a loss or leave and still runs this long (mission
+// seconds) after it is stopped from here, as it would have been.
+constexpr double kSelfEndGrace_s = 2.0;
 
 // A run directory may take a new mission unless one still runs there, or one died there that
 // could be resumed (its record would be overwritten).
@@ -188,7 +196,9 @@ int Launch(const LaunchCommand& c) {
     const std::string log = (fs::path(out_dir) / fmt::format("agents-{}{}.log", resume ? fmt::format("r{}-", mission.resumes) : "",
                                                              hosts.size()))
                                 .string();
-    hosts.push_back({Spawn(args, log), std::move(names), true});
+    const bool ends_itself = std::find(args.begin(), args.end(), "--lose-at") != args.end() ||
+                             std::find(args.begin(), args.end(), "--leave-at") != args.end();
+    hosts.push_back({Spawn(args, log), std::move(names), true, ends_itself});
   };
   // Runs of consecutive entries share a host, up to per_host each.
   auto start_shared_hosts = [&](const std::vector<std::pair<int, std::string>>& vehicles, auto make_args) {
@@ -211,7 +221,15 @@ int Launch(const LaunchCommand& c) {
     for (int i = 0; i < static_cast<int>(scenario.vehicles.size()); ++i) {
       const std::string& name = scenario.vehicles[i].name;
       if (solo.count(name)) {
-        start_host({"agents", scenario_file, "--offset", std::to_string(i), "--count", "1"}, {name});
+        std::vector<std::string> args{"agents", scenario_file, "--offset", std::to_string(i), "--count", "1"};
+        // Its first loss or leave happens in the host, at the event's exact cycle (as in sage run).
+        const auto end = std::find_if(scenario.fleet_events.begin(), scenario.fleet_events.end(),
+                                      [&](const maps::FleetEvent& e) { return e.vehicle.name == name; });
+        if (end != scenario.fleet_events.end()) {
+          args.push_back(end->kind == maps::FleetEvent::Kind::kLose ? "--lose-at" : "--leave-at");
+          args.push_back(fmt::format("{}", end->time_s));
+        }
+        start_host(args, {name});
       } else {
         shared.emplace_back(i, name);
       }
@@ -285,6 +303,14 @@ int Launch(const LaunchCommand& c) {
 
   std::size_t next_event = 0;
   while (next_event < scenario.fleet_events.size() && scenario.fleet_events[next_event].time_s <= resumed_at) ++next_event;
+  const std::size_t next_join = next_event;
+  std::vector<bool> join_started(scenario.fleet_events.size(), false);
+  struct Overdue {
+    double at_s;
+    pid_t pid;
+    bool lose;
+  };
+  std::vector<Overdue> overdue;
   bool stop_sent = false;
   int server_wait_status = 0;
   bool server_exited = false;
@@ -315,21 +341,47 @@ int Launch(const LaunchCommand& c) {
       if (!info.valid_data) return;
       const double t = mission_time = s.mission_time_s;
       vehicles_alive = s.vehicles_alive;
+      // A join's host starts ahead and joins at the event's cycle; a loss or leave is the
+      // host's own at its cycle (see start-up), stopped from here only if it has not ended by then.
+      for (std::size_t i = next_join; i < scenario.fleet_events.size(); ++i) {
+        const maps::FleetEvent& e = scenario.fleet_events[i];
+        if (e.kind != maps::FleetEvent::Kind::kJoin || join_started[i]) continue;
+        if (e.time_s - kJoinLead_s * s.time_scale > t) continue;
+        join_started[i] = true;
+        start_host({"agents", scenario_file, "--join", e.vehicle.name, "--start-at", fmt::format("{}", e.time_s)},
+                   {e.vehicle.name});
+        terminal.Log(fmt::format("launch: t = {:.1f} s: {} joins at t = {:.1f} s (its host starts now)", t,
+                                 e.vehicle.name, e.time_s));
+      }
       while (next_event < scenario.fleet_events.size() && scenario.fleet_events[next_event].time_s <= t) {
         const maps::FleetEvent& e = scenario.fleet_events[next_event++];
-        if (e.kind == maps::FleetEvent::Kind::kJoin) {
-          start_host({"agents", scenario_file, "--join", e.vehicle.name}, {e.vehicle.name});
-          terminal.Log(fmt::format("launch: t = {:.1f} s: {} joins", t, e.vehicle.name));
-          continue;
-        }
+        if (e.kind == maps::FleetEvent::Kind::kJoin) continue;
+        const bool lose = e.kind == maps::FleetEvent::Kind::kLose;
         for (Host& h : hosts) {
           if (!h.running || h.vehicle_names.size() != 1 || h.vehicle_names[0] != e.vehicle.name) continue;
-          const bool lose = e.kind == maps::FleetEvent::Kind::kLose;
+          if (h.ends_itself) {
+            terminal.Log(fmt::format("launch: t = {:.1f} s: {} {} (pid {})", e.time_s, e.vehicle.name,
+                                     lose ? "lost: its host SIGKILLs itself" : "leaves", h.pid));
+            overdue.push_back({e.time_s + kSelfEndGrace_s, h.pid, lose});
+            continue;
+          }
           kill(h.pid, lose ? SIGKILL : SIGTERM);
           terminal.Log(fmt::format("launch: t = {:.1f} s: {} {} (pid {})", t, e.vehicle.name,
                                    lose ? "killed (SIGKILL)" : "leaves", h.pid));
         }
       }
+      for (const Overdue& o : overdue) {
+        if (o.at_s > t) continue;
+        for (Host& h : hosts) {
+          if (h.pid != o.pid || !h.running) continue;
+          kill(h.pid, o.lose ? SIGKILL : SIGTERM);
+          terminal.Log(fmt::format("launch: t = {:.1f} s: host pid {} had not ended itself; {}", t, h.pid,
+                                   o.lose ? "killed (SIGKILL)" : "stopped (SIGTERM)"),
+                       /*warning=*/true);
+        }
+      }
+      overdue.erase(std::remove_if(overdue.begin(), overdue.end(), [&](const Overdue& o) { return o.at_s <= t; }),
+                    overdue.end());
       // On a terminal the line is redrawn with every status; in a log, once per tenth.
       if (t > last_print && (tty || t - last_print >= s.duration_s / 10.0 - 1e-9 || s.finished)) {
         last_print = t;

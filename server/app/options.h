@@ -64,6 +64,9 @@ struct AgentsCommand {
   std::optional<int> first_id;   ///< fleet id of the first vehicle
   std::string resume_dir;        ///< pick these vehicles up where the crashed mission left them
   std::vector<int> ids;          ///< with resume_dir: the fleet ids to simulate
+  double start_at_s = 0.0;       ///< mission time of the host's first cycle, at the earliest (a join)
+  std::optional<double> lose_at_s;   ///< the host SIGKILLs itself at this mission time (a loss)
+  std::optional<double> leave_at_s;  ///< its vehicles leave cleanly at this mission time
 };
 
 /// The operators' commands on a running mission.

@@ -4,6 +4,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <deque>
 #include <filesystem>
 #include <iostream>
 #include <map>
@@ -34,6 +35,17 @@ using SteadyClock = std::chrono::steady_clock;
 
 // Up to this many joins of one cycle are logged by name; more are summed up in one line.
 constexpr std::size_t kJoinsNamed = 5;
+
+// An operator's command the server executed, kept to answer its repeats (an operator sends a
+// command again, same stamp, until it is answered). Far more than a few seconds of commands.
+struct AnsweredCommand {
+  std::int64_t stamp_ns = 0;
+  std::string verb;
+  std::uint32_t count = 0;
+  std::uint32_t vehicle_id = 0;
+  OperatorAnswer answer;
+};
+constexpr std::size_t kAnsweredKept = 256;
 
 // The record, and the log lines an operator reads: joins, losses and risk changes as they
 // happen (joins of one cycle summed up when many).
@@ -136,6 +148,7 @@ int RunServerNode(const maps::Scenario& scenario, const ServerNodeOptions& optio
   proto::Reader<proto::FleetCommand> commands(participant, proto::FleetCommandQos());
   proto::Writer<proto::FleetCommand> retire(participant, proto::FleetCommandQos());
   proto::Writer<proto::FleetCommandResult> command_results(participant, proto::FleetCommandResultQos());
+  std::deque<AnsweredCommand> answered;
   proto::Writer<proto::ErgodicTarget> targets(participant, proto::ErgodicTargetQos());
   proto::Writer<proto::FleetCoverage> fleet_coverage(participant, proto::FleetCoverageQos());
   proto::Writer<proto::MissionStatus> status(participant, proto::MissionStatusQos());
@@ -213,12 +226,43 @@ int RunServerNode(const maps::Scenario& scenario, const ServerNodeOptions& optio
   std::int64_t cycle = first_cycle;
   std::vector<std::uint32_t> ids_scratch;
   std::vector<std::uint64_t> seqs_scratch;
+  std::map<int, std::int64_t> heard_cycle;  // each vehicle's newest state's cycle (lockstep)
+  std::vector<std::pair<std::int64_t, int>> scenario_joins;  // (cycle, vehicle id) of each fleet_events join
+  for (const maps::FleetEvent& e : scenario.fleet_events) {
+    if (e.kind != maps::FleetEvent::Kind::kJoin) continue;
+    scenario_joins.emplace_back(static_cast<std::int64_t>(std::ceil(e.time_s * rate - 1e-9)),
+                                JoinVehicleId(scenario, e.vehicle.name));
+  }
+  long cycles_not_in_step = 0;
+  double first_not_in_step_s = -1.0;
+  SteadyClock::time_point compute_start;
+  auto on_state = [&](const proto::VehicleState& m, const dds_sample_info_t& info) {
+      ++messages_in;
+      const int id = static_cast<int>(m.vehicle_id);
+      if (info.valid_data) {
+        suspect.erase(id);  // heard: alive
+        // A state on another server's clock (sent before its host heard of this one) is not a
+        // sample of this mission's time line; the host follows this server within a cycle.
+        if (m.server_instance != instance) return;
+        heard_cycle[id] = m.cycle;
+        core.OnState(agents::wire::FromWire(m, rate));
+        // A dispose or a lapsed lease that arrives while the vehicle's last state is still
+        // unread comes as that (valid) sample with a not-alive instance state.
+        if (info.instance_state == DDS_ALIVE_INSTANCE_STATE) return;
+      }
+      const bool lost = info.instance_state == DDS_NOT_ALIVE_NO_WRITERS_INSTANCE_STATE;
+      if (lost && compute_start < stalled_until) {
+        suspect.emplace(id, stalled_until);
+      } else {
+        core.OnVehicleGone(id, lost);
+      }
+    };
   for (; cycle <= cycles_total; ++cycle) {
     const double t = static_cast<double>(cycle) / rate;
     const auto due = wall_of(t + 0.5 / rate);
     std::this_thread::sleep_until(due);
     if ((options.stop && options.stop->load()) || stop_requested) break;
-    const auto compute_start = SteadyClock::now();
+    compute_start = SteadyClock::now();
     if (std::chrono::system_clock::now() - due > std::chrono::duration<double>(lease_s)) {
       stalled_until = compute_start + std::chrono::duration_cast<SteadyClock::duration>(
                                           std::chrono::duration<double>(2 * lease_s));
@@ -231,26 +275,36 @@ int RunServerNode(const maps::Scenario& scenario, const ServerNodeOptions& optio
       while (reader.TakeEach(visit, 1024) == 1024) {
       }
     };
-    take_all(states, [&](const proto::VehicleState& m, const dds_sample_info_t& info) {
-      ++messages_in;
-      const int id = static_cast<int>(m.vehicle_id);
-      if (info.valid_data) {
-        suspect.erase(id);  // heard: alive
-        // A state on another server's clock (sent before its host heard of this one) is not a
-        // sample of this mission's time line; the host follows this server within a cycle.
-        if (m.server_instance != instance) return;
-        core.OnState(agents::wire::FromWire(m, rate));
-        // A dispose or a lapsed lease that arrives while the vehicle's last state is still
-        // unread comes as that (valid) sample with a not-alive instance state.
-        if (info.instance_state == DDS_ALIVE_INSTANCE_STATE) return;
+    take_all(states, on_state);
+    // Lockstep where it can be: the cycle waits (up to 0.45 of a period) for every live vehicle's
+    // state of this cycle, so that it accounts what the in-process mission would (a vehicle that
+    // died is waited for until its lease runs out); a cycle that
+    // has to go on without one is counted (the mission is then no longer the in-process one).
+    const auto lockstep_deadline = due + std::chrono::duration_cast<std::chrono::system_clock::duration>(
+                                             std::chrono::duration<double>(0.45 / rate / options.time_scale));
+    const auto all_in = [&] {
+      for (const int id : core.roster().alive()) {
+        const auto heard = heard_cycle.find(id);
+        if (heard == heard_cycle.end() || heard->second < cycle) return false;
       }
-      const bool lost = info.instance_state == DDS_NOT_ALIVE_NO_WRITERS_INSTANCE_STATE;
-      if (lost && compute_start < stalled_until) {
-        suspect.emplace(id, stalled_until);
-      } else {
-        core.OnVehicleGone(id, lost);
+      // The scenario's joins are waited for from their cycle on (for a second at most: a host
+      // that does not come is not waited for all mission).
+      for (const auto& [join_cycle, id] : scenario_joins) {
+        if (cycle < join_cycle || cycle > join_cycle + static_cast<std::int64_t>(rate)) continue;
+        const auto heard = heard_cycle.find(id);
+        if (heard == heard_cycle.end() || heard->second < cycle) return false;
       }
-    });
+      return true;
+    };
+    while (!all_in()) {
+      if (std::chrono::system_clock::now() >= lockstep_deadline) {
+        if (cycles_not_in_step++ == 0) first_not_in_step_s = t;
+        break;
+      }
+      states.WaitForData(std::chrono::milliseconds(1));
+      take_all(states, on_state);
+    }
+    const auto cycle_start = SteadyClock::now();  // the cycle's own work starts here
     for (auto it = suspect.begin(); it != suspect.end();) {
       if (compute_start < it->second) {
         ++it;
@@ -283,11 +337,27 @@ int RunServerNode(const maps::Scenario& scenario, const ServerNodeOptions& optio
       ++messages_in;
       if (!info.valid_data) return;
       const std::string_view verb = AsStringView(c.verb);
+      // An operator sends a command again until answered: a repeat is answered, not executed.
+      const auto repeat = std::find_if(answered.begin(), answered.end(), [&](const AnsweredCommand& done) {
+        return done.stamp_ns == c.stamp_ns && done.verb == verb && done.count == c.count &&
+               done.vehicle_id == c.vehicle_id;
+      });
+      if (repeat != answered.end()) {
+        answer_command(c, repeat->answer);
+        return;
+      }
+      const auto remember = [&](const OperatorAnswer& a) {
+        answered.push_back({c.stamp_ns, std::string(verb), c.count, c.vehicle_id, a});
+        if (answered.size() > kAnsweredKept) answered.pop_front();
+      };
       if (verb == "stop") {
+        const OperatorAnswer a{true, "", 0.0, -1};
+        remember(a);
         stop_requested = true;
-        answer_command(c, {true, "", 0.0, -1});
+        answer_command(c, a);
       } else if (verb == "remove") {
         const OperatorAnswer a = core.RemoveRequest(static_cast<int>(c.vehicle_id));
+        remember(a);
         if (a.accepted) {
           proto::FleetCommand order{};
           order.stamp_ns = NowRealtimeNs();
@@ -300,7 +370,9 @@ int RunServerNode(const maps::Scenario& scenario, const ServerNodeOptions& optio
         }
         answer_command(c, a);
       } else if (verb == "reserve") {
-        answer_command(c, core.ReserveIds(static_cast<int>(c.count)));
+        const OperatorAnswer a = core.ReserveIds(static_cast<int>(c.count));
+        remember(a);
+        answer_command(c, a);
       }
     });
 
@@ -318,7 +390,7 @@ int RunServerNode(const maps::Scenario& scenario, const ServerNodeOptions& optio
     }
     empty_warned = out.fleet_empty;
     run.Tick(core);
-    last_cycle_ms = std::chrono::duration<double, std::milli>(SteadyClock::now() - compute_start).count();
+    last_cycle_ms = std::chrono::duration<double, std::milli>(SteadyClock::now() - cycle_start).count();
     total_cycle_ms += last_cycle_ms;
     max_cycle_ms = std::max(max_cycle_ms, last_cycle_ms);
     ++cycles_run;
@@ -345,6 +417,13 @@ int RunServerNode(const maps::Scenario& scenario, const ServerNodeOptions& optio
                mission_s, wall_s, mission_s / std::max(1e-9, wall_s), messages_in, messages_out,
                (messages_in + messages_out) / std::max(1e-9, wall_s), total_cycle_ms / std::max(1L, cycles_run),
                max_cycle_ms, options.out_dir, finish_s);
+  // In lockstep the mission is the one sage run flies with the same scenario and seed.
+  spdlog::info("server: {} of {} cycles in lockstep with the vehicles{}", cycles_run - cycles_not_in_step, cycles_run,
+               cycles_not_in_step == 0
+                   ? std::string()
+                   : fmt::format(" (the others went on without a state, the first at t = {:.1f} s: a late one, or a "
+                                 "vehicle that died, until its lease ran out)",
+                                 first_not_in_step_s));
   return 0;
 }
 

@@ -774,6 +774,41 @@ TEST_F(FleetDds, OperatorRiskUpdateReachesServer) {
   ChildProcess& last = Start("last", {"vehicle", "remove", "1", "--mission", out.string()});
   EXPECT_EQ(last.WaitExit(15s), std::optional<int>(2)) << last.LogText();
   EXPECT_NE(last.LogText().find("is the mission's last vehicle"), std::string::npos) << last.LogText();
+  // An operator sends a command again until it is answered; the server executes a stamp once.
+  // Two sends of "reserve 2" with one stamp are answered with the same ids, a new stamp with
+  // the next two.
+  {
+    proto::Participant operator_side(static_cast<uint32_t>(domain_id),
+                                     proto::LocalhostConfigXml(proto::kMaxLocalParticipants));
+    proto::Reader<proto::FleetCommandResult> results(operator_side, proto::FleetCommandResultQos());
+    proto::Writer<proto::FleetCommand> commands(operator_side, proto::FleetCommandQos());
+    ASSERT_TRUE(results.WaitForWriters(1, 3s));
+    ASSERT_TRUE(commands.WaitForReaders(1, 3s));
+    std::this_thread::sleep_for(500ms);  // every reader of the topic matched (hosts and server)
+    std::string verb = "reserve";
+    const auto ask = [&](long long stamp, int answers) {
+      proto::FleetCommand c{};
+      c.stamp_ns = stamp;
+      c.verb = proto::BorrowString(verb);
+      c.count = 2;
+      for (int i = 0; i < answers; ++i) commands.Write(c);
+      std::vector<int> first_ids;
+      const auto deadline = SteadyClock::now() + 5s;
+      while (static_cast<int>(first_ids.size()) < answers && SteadyClock::now() < deadline) {
+        results.WaitForData(100ms);
+        results.TakeEach([&](const proto::FleetCommandResult& r, const dds_sample_info_t& info) {
+          if (info.valid_data && r.command_stamp_ns == stamp && r.accepted) first_ids.push_back(r.first_id);
+        });
+      }
+      return first_ids;
+    };
+    const long long stamp = RealtimeNs();
+    const std::vector<int> twice = ask(stamp, 2), next = ask(stamp + 1, 1);
+    ASSERT_EQ(twice.size(), 2u);
+    ASSERT_EQ(next.size(), 1u);
+    EXPECT_EQ(twice[0], twice[1]) << "a repeated command was executed twice";
+    EXPECT_EQ(next[0], twice[0] + 2);
+  }
 
   const std::optional<int> launch_exit = WaitMissionEnd(launch, duration);
   ASSERT_TRUE(launch_exit.has_value()) << "sage launch did not end";
@@ -1149,6 +1184,56 @@ TEST_F(FleetDds, LaunchEndsWhenTheFleetIsGone) {
   EXPECT_TRUE(metrics.at("complete").get<bool>());
   EXPECT_TRUE(metrics.at("stopped_early").get<bool>());
   EXPECT_LT(metrics.at("duration_s").get<double>(), 100.0);
+}
+
+// 12. The same scenario and seed fly the same mission in-process and over DDS: fleet_field with
+// a vehicle joining at 10 s and one lost at 20 s, four agent hosts (the lost vehicle alone, the
+// joining one started ahead of its join) against sage run's one. Every sample of trajectory.csv
+// after t = 0 is the same text, visits and corr(visits, weight) the same. (Over DDS the vehicles
+// keep apart on each other's last reported states and every host reports coverage on the same
+// cycles, as in-process; the server and the hosts wait, briefly, for the cycle's word.)
+TEST_F(FleetDds, LaunchFliesTheInProcessMission) {
+  std::string text = ReadFile(Scenario("fleet_field.yaml"));
+  for (const auto& [from, to] : {std::pair{"time_s: 200, join", "time_s: 10, join"}, {"time_s: 400, lose", "time_s: 20, lose"}}) {
+    const auto at = text.find(from);
+    ASSERT_NE(at, std::string::npos) << from;
+    text.replace(at, std::strlen(from), to);
+  }
+  const fs::path scenario = run_dir_ / "fleet_field_soon.yaml";
+  std::ofstream(scenario) << text;
+  const fs::path in_process = run_dir_ / "run", over_dds = run_dir_ / "launch";
+  ChildProcess& run = Start("run", {"run", scenario.string(), "--duration", "30", "--seed", "3", "--out", in_process.string()});
+  ASSERT_EQ(run.WaitExit(60s), std::optional<int>(0));
+  ChildProcess& launch = StartLaunch("launch", {scenario.string(), "--duration", "30", "--seed", "3", "--time-scale",
+                                                Num(kTimeScale)},
+                                     over_dds, FreeDomainForLaunch());
+  ASSERT_EQ(WaitMissionEnd(launch, 30.0), std::optional<int>(0));
+  const auto samples = [](const fs::path& csv) {
+    std::istringstream in(ReadFile(csv));
+    std::vector<std::string> rows;
+    for (std::string line; std::getline(in, line);)
+      if (line.rfind("t,", 0) != 0 && line.rfind("0,", 0) != 0) rows.push_back(line);  // t = 0: only in-process
+    std::sort(rows.begin(), rows.end());
+    return rows;
+  };
+  const std::vector<std::string> a = samples(in_process / "trajectory.csv"), b = samples(over_dds / "trajectory.csv");
+  ASSERT_GT(a.size(), 4u * 290u);
+  EXPECT_EQ(a.size(), b.size());
+  std::size_t differ = 0;
+  for (std::size_t i = 0; i < std::min(a.size(), b.size()); ++i) {
+    if (a[i] == b[i]) continue;
+    if (differ++ == 0) ADD_FAILURE() << "first differing sample:\n in-process " << a[i] << "\n over DDS   " << b[i];
+  }
+  EXPECT_EQ(differ, 0u);
+  EXPECT_NE(text.find("rov5"), std::string::npos);
+  const Json ma = ReadJson(in_process / "metrics.json"), mb = ReadJson(over_dds / "metrics.json");
+  EXPECT_EQ(ma.at("visit_weight_correlation"), mb.at("visit_weight_correlation"));
+  for (std::size_t v = 0; v < ma.at("valves").size(); ++v) {
+    EXPECT_EQ(ma.at("valves")[v].at("visits"), mb.at("valves")[v].at("visits")) << ma.at("valves")[v].at("name");
+  }
+  const std::string log = launch.LogText();
+  EXPECT_NE(log.find("rov2 lost"), std::string::npos) << log;
+  EXPECT_NE(log.find("rov5 joins at t = 10.0 s"), std::string::npos) << log;
 }
 
 }  // namespace
