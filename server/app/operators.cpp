@@ -19,6 +19,7 @@ namespace {
 
 namespace fs = std::filesystem;
 constexpr auto kAnswerTimeout = std::chrono::seconds(5);
+constexpr auto kResendEvery = std::chrono::seconds(1);
 
 int NoMission(const MissionFile& mission) {
   std::fprintf(stderr, "sage: error: no mission is listening on DDS domain %d (is it still running?)\n", mission.domain_id);
@@ -45,10 +46,20 @@ std::optional<CommandAnswer> AskServer(proto::Participant& participant, const st
   c.verb = proto::BorrowString(verb);
   c.count = count;
   c.vehicle_id = vehicle_id;
+  // The command topic is also read by the agent hosts (for the server's retire orders), so the
+  // writer matching "a reader" does not prove the server's reader has matched it yet, and a
+  // volatile command written before that match never reaches the server. The command is sent
+  // again every second with the same stamp; the server executes a stamp once and answers a
+  // repeat with the first answer.
   writer.Write(c);
+  auto next_send = std::chrono::steady_clock::now() + kResendEvery;
   std::optional<CommandAnswer> answer;
   const auto deadline = std::chrono::steady_clock::now() + kAnswerTimeout;
   while (!answer && std::chrono::steady_clock::now() < deadline) {
+    if (std::chrono::steady_clock::now() >= next_send) {
+      writer.Write(c);
+      next_send += kResendEvery;
+    }
     results.WaitForData(std::chrono::milliseconds(100));
     results.TakeEach([&](const proto::FleetCommandResult& r, const dds_sample_info_t& info) {
       if (!info.valid_data || r.command_stamp_ns != c.stamp_ns) return;
