@@ -369,7 +369,7 @@ int RunServerNode(const maps::Scenario& scenario, const ServerNodeOptions& optio
   const double p99_ms = cycle_ms.empty() ? 0.0 : NearestRankPercentile(std::move(cycle_ms), 0.99);
   // One line that scripts and `sage bench scale` parse (tests/bench/launch_scale.sh): keep its order.
   spdlog::info("server: {:.0f} s of mission in {:.1f} s wall ({:.2f}x real time); {} messages in, {} out ({:.0f}/s); "
-               "{:.2f} MB in, {:.2f} MB out at {:.3f} MB/s; server cycle {:.2f} ms mean, {:.2f} ms p99, {:.2f} ms max; "
+               "{:.3f} MB in, {:.3f} MB out at {:.3f} MB/s; server cycle {:.2f} ms mean, {:.2f} ms p99, {:.2f} ms max; "
                "peak RSS {:.1f} MB; wrote {} in {:.1f} s",
                mission_s, wall_s, mission_s / std::max(1e-9, wall_s), messages_in, messages_out,
                (messages_in + messages_out) / std::max(1e-9, wall_s), bytes_in / 1e6, bytes_out / 1e6,
