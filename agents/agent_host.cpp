@@ -133,7 +133,7 @@ struct AgentHost::Impl {
   Eigen::Vector2d EscapePoint(const maps::RegionBox& box, const Eigen::Vector2d& x_m) const {
     Eigen::Vector2d best = box.Centre();
     double farthest = -1.0;
-    for (const Eigen::Vector2d f : {Eigen::Vector2d(0.5, 0.5), {0.25, 0.25}, {0.75, 0.25}, {0.25, 0.75}, {0.75, 0.75}}) {
+    for (const Eigen::Vector2d& f : {Eigen::Vector2d(0.5, 0.5), {0.25, 0.25}, {0.75, 0.25}, {0.25, 0.75}, {0.75, 0.75}}) {
       const Eigen::Vector2d p = box.origin_m + f.cwiseProduct(box.size_m);
       const Eigen::Vector2i cell = grid.CellOf(p);
       if (grid.Occupied(cell.x(), cell.y())) continue;

@@ -351,6 +351,14 @@ MissionMetrics MetricsAccumulator::Result(double end_s) const {
   return out;
 }
 
+double NearestRankPercentile(std::vector<double> values, double q) {
+  if (values.empty()) return std::numeric_limits<double>::quiet_NaN();
+  const double rank = std::ceil(std::clamp(q, 0.0, 1.0) * static_cast<double>(values.size()) - 1e-9);
+  const std::size_t index = static_cast<std::size_t>(std::clamp(rank, 1.0, static_cast<double>(values.size()))) - 1;
+  std::nth_element(values.begin(), values.begin() + static_cast<std::ptrdiff_t>(index), values.end());
+  return values[index];
+}
+
 void SummariseGaps(MissionMetrics& m) {
   const double T = m.duration_s;
   std::vector<double> longest;

@@ -115,6 +115,11 @@ struct MetricsOptions {
 /// Pearson correlation; NaN if either side has zero variance or fewer than 2 entries.
 double PearsonCorrelation(const std::vector<double>& a, const std::vector<double>& b);
 
+/// The nearest-rank percentile: the smallest value v of `values` such that at least a fraction q
+/// of them are <= v (the ceil(q n)-th smallest; q in (0, 1], q = 1 the maximum). NaN if empty.
+/// The p99 of 600 server cycles is the 594th smallest: six cycles took longer.
+double NearestRankPercentile(std::vector<double> values, double q);
+
 /// The metrics of a mission computed online, sample by sample, so a running mission can report
 /// them at any time (metrics.json every few seconds) and nothing needs the whole trajectory in
 /// memory. Each sample stands for the time to the same vehicle's next sample (its hold time);

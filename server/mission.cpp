@@ -92,7 +92,12 @@ struct Mission::Impl {
     const agents::AgentMission::CycleOutput reports = agents.Step(cycle);
     for (const agents::StateReport& s : reports.states) core.OnState(s);
     for (const agents::CoverageMessage& c : reports.coverage) core.OnCoverage(c);
+    using Clock = std::chrono::steady_clock;
+    const Clock::time_point cycle_start = options.server_cycle_s ? Clock::now() : Clock::time_point();
     const CycleOutput answer = core.Cycle(cycle);
+    if (options.server_cycle_s) {
+      options.server_cycle_s->push_back(std::chrono::duration<double>(Clock::now() - cycle_start).count());
+    }
     agents.OnFleetSnapshot(answer.snapshot);
     for (const agents::Assignment& a : answer.assignments) agents.OnAssignment(a);
     ++cycle;

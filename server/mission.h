@@ -33,6 +33,9 @@ struct MissionOptions {
   ControllerKind controller = ControllerKind::kErgodic;
   MissionRecorder* recorder = nullptr; ///< where the record streams (e.g. a run directory); may be null
   bool keep_trajectory = true;         ///< also keep the trajectory in memory for the result
+  /// If set, the wall time (s) of each server cycle (MissionCore::Cycle) is appended here: what
+  /// `sage bench scale` reports as the in-process server cycle. Off by default (no clock reads).
+  std::vector<double>* server_cycle_s = nullptr;
 };
 
 /// A recorder that keeps the trajectory in memory (tests, benchmarks, the result of Run).

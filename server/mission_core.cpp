@@ -67,13 +67,8 @@ int FirstFreeVehicleId(const maps::Scenario& scenario) {
 }
 
 int JoinVehicleId(const maps::Scenario& scenario, const std::string& name) {
-  int joins = 0;
-  for (const maps::FleetEvent& e : scenario.fleet_events) {
-    if (e.kind != maps::FleetEvent::Kind::kJoin) continue;
-    if (e.vehicle.name == name) return static_cast<int>(scenario.vehicles.size()) + joins;
-    ++joins;
-  }
-  return -1;
+  const int id = scenario.VehicleId(name);
+  return id >= static_cast<int>(scenario.vehicles.size()) ? id : -1;
 }
 
 maps::VehicleSpec SpecForVehicle(const maps::Scenario& scenario, int id, const std::string& name) {

@@ -121,6 +121,14 @@ int RunAgentNode(const maps::Scenario& scenario, const AgentNodeOptions& options
     states.Dispose(key);
   };
   const double rate = scenario.control_rate_hz;
+  // Vehicles the scenario loses or takes out send no state from their event's cycle on: not
+  // waited for as neighbours from there (their lease tells this host a few cycles later).
+  const std::vector<std::pair<double, int>> scenario_ends = scenario.VehicleEnds();
+  const auto ended_by_scenario = [&](int id, std::int64_t at_cycle) {
+    return std::any_of(scenario_ends.begin(), scenario_ends.end(), [&](const auto& end) {
+      return end.second == id && static_cast<double>(at_cycle) >= std::ceil(end.first * rate - 1e-9);
+    });
+  };
   auto last_heard = std::chrono::steady_clock::now();
   // The server's readers matched before the first report: a state or coverage report written
   // before discovery is done is lost (a join started ahead has seconds for it).
@@ -224,6 +232,7 @@ int RunAgentNode(const maps::Scenario& scenario, const AgentNodeOptions& options
     const auto near_ones_in = [&] {
       for (const auto& [other, seen] : others) {
         if (seen.empty() || seen.back().first >= k - 1 || seen.back().first < k - 3) continue;  // in, or gone
+        if (ended_by_scenario(static_cast<int>(other), k - 1)) continue;  // lost or left at its cycle
         for (const VehicleId id : mission.ids())
           if ((mission.host().State(id).position_m - seen.back().second).squaredNorm() < 3.0 * 3.0) return false;
       }

@@ -27,6 +27,29 @@ std::vector<Eigen::Vector2d> Scenario::ValvePositions() const {
   return points;
 }
 
+int Scenario::VehicleId(const std::string& vehicle_name) const {
+  for (std::size_t i = 0; i < vehicles.size(); ++i) {
+    if (vehicles[i].name == vehicle_name) return static_cast<int>(i);
+  }
+  int joins = 0;
+  for (const FleetEvent& e : fleet_events) {
+    if (e.kind != FleetEvent::Kind::kJoin) continue;
+    if (e.vehicle.name == vehicle_name) return static_cast<int>(vehicles.size()) + joins;
+    ++joins;
+  }
+  return -1;
+}
+
+std::vector<std::pair<double, int>> Scenario::VehicleEnds() const {
+  std::vector<std::pair<double, int>> ends;
+  for (const FleetEvent& e : fleet_events) {
+    if (e.kind == FleetEvent::Kind::kJoin) continue;
+    const int id = VehicleId(e.vehicle.name);
+    if (id >= 0) ends.emplace_back(e.time_s, id);
+  }
+  return ends;
+}
+
 int Scenario::ValveIndex(const std::string& valve_name) const {
   int index = 0;
   for (const ChristmasTree& tree : structures) {

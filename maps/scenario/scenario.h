@@ -8,6 +8,7 @@
 #include <map>
 #include <stdexcept>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <Eigen/Core>
@@ -176,6 +177,11 @@ struct Scenario {
   std::vector<Valve> AllValves() const;
   int ValveIndex(const std::string& name) const;  ///< index into AllValves(); -1 if none
   std::vector<Eigen::Vector2d> ValvePositions() const;  ///< AllValves()' positions, same order
+  /// A vehicle's mission id by name: its index among `vehicles`, or for a fleet_events join
+  /// vehicles.size() plus the join's rank among the joins; -1 if no vehicle has the name.
+  int VehicleId(const std::string& name) const;
+  /// (mission time, vehicle id) of every fleet_events loss and leave, in time order.
+  std::vector<std::pair<double, int>> VehicleEnds() const;
   const RiskProfile* FindProfile(const std::string& name) const;  ///< nullptr if none
   /// The named profile (empty: default_profile); throws ScenarioError listing the profiles.
   const RiskProfile& ProfileOrThrow(const std::string& name) const;

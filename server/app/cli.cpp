@@ -10,6 +10,7 @@
 #include <CLI/CLI.hpp>
 #include <spdlog/spdlog.h>
 
+#include "server/app/bench_scale.h"
 #include "server/app/field_command.h"
 #include "server/app/fleet_commands.h"
 #include "server/app/launch.h"
@@ -33,6 +34,12 @@ std::string MustBePositive(const std::string& text) {
   } catch (const std::exception&) {
     return "must be a number > 0";
   }
+}
+
+// CLI11 reads "-3" into an unsigned option as 2^64 - 3; a seed is a whole number as typed.
+std::string MustBeWholeNumber(const std::string& text) {
+  return text.find_first_not_of("0123456789") == std::string::npos && !text.empty() ? std::string()
+                                                                                    : std::string("must be a whole number >= 0");
 }
 
 void AddScenarioOverrides(CLI::App& cmd, ScenarioOverrides& o, OverrideSet set, const std::string& example_scenario,
@@ -59,11 +66,7 @@ void AddScenarioOverrides(CLI::App& cmd, ScenarioOverrides& o, OverrideSet set, 
         ->check(CLI::IsMember({"on", "off"}));
   }
   cmd.add_option("--seed", o.seed, "Seed of the start-pose jitter; the same seed gives the same mission")
-      ->check([](const std::string& text) {
-        return text.find_first_not_of("0123456789") == std::string::npos && !text.empty()
-                   ? std::string()
-                   : std::string("must be a whole number >= 0");
-      });
+      ->check(MustBeWholeNumber);
   cmd.add_option("--start-jitter", o.start_jitter_m,
                  "Radius (m) within which each vehicle starts around its start_m, drawn from the seed (default: the "
                  "scenario's, 0.2; 0 = exactly at start_m)");
@@ -268,6 +271,40 @@ int RunCli(int argc, char** argv) {
   generate->add_option("--name", field_options.name, "The scenario's name (default: field_<xts>xt_<valves>v_<vehicles>rov_s<seed>)");
   generate->add_option("--out,-o", field_out, "Scenario file to write")->required();
 
+  BenchScaleCommand bench_cmd;
+  CLI::App* bench = app.add_subcommand("bench", "Benchmarks of the whole system");
+  bench->require_subcommand(1);
+  CLI::App* bench_scale = bench->add_subcommand(
+      "scale", "How the fleet scales: for each fleet size N a field that grows with it (N XTs, 3.5 N valves, N "
+               "BlueROV2s; written to DIR/fields), flown by the ergodic fleet and by the A* tours, in-process and over "
+               "DDS (sage launch); writes DIR/scale.md, scale.json and scale.svg and prints the table. Runs one "
+               "mission at a time (real time over DDS: about 2 x duration per N), progress on stderr");
+  bench_scale
+      ->add_option("--vehicles", bench_cmd.vehicles,
+                   "Fleet sizes, comma-separated, each 1..10000 (e.g. 1,10,100,1000,10000)")
+      ->check([](const std::string& text) {
+        try {
+          ParseVehicleCounts(text);
+          return std::string();
+        } catch (const maps::ScenarioError& e) {
+          return std::string(e.what());
+        }
+      })
+      ->capture_default_str();
+  bench_scale
+      ->add_option("--transport", bench_cmd.transport,
+                   "inproc (the mission in one process, as fast as it runs), dds (sage launch: server and agent hosts "
+                   "as processes on Cyclone DDS, at real time) or both")
+      ->check(CLI::IsMember({"inproc", "dds", "both"}))
+      ->capture_default_str();
+  bench_scale->add_option("--out,-o", bench_cmd.out_dir, "Output directory")->capture_default_str();
+  bench_scale->add_option("--duration", bench_cmd.duration_s, "Mission seconds of each run")
+      ->check(MustBePositive)
+      ->capture_default_str();
+  bench_scale->add_option("--seed", bench_cmd.seed, "Seed of the fields and the missions")
+      ->check(MustBeWholeNumber)
+      ->capture_default_str();
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {
@@ -317,6 +354,7 @@ int RunCli(int argc, char** argv) {
     if (*risk_set) return SetRisk(FindMission(op.mission_dir), op.valve, op.weight, op.source);
     if (*stop) return StopMission(FindMission(op.mission_dir));
     if (*generate) return CmdFieldGenerate(field_options, field_out);
+    if (*bench_scale) return CmdBenchScale(bench_cmd);
   } catch (const maps::ScenarioError& e) {
     std::cerr << "sage: error: " << e.what() << "\n";
     return 2;

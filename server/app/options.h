@@ -69,6 +69,15 @@ struct AgentsCommand {
   std::optional<double> leave_at_s;  ///< its vehicles leave cleanly at this mission time
 };
 
+/// sage bench scale
+struct BenchScaleCommand {
+  std::string vehicles = "1,10,100,1000";  ///< fleet sizes, comma-separated (see ParseVehicleCounts)
+  std::string transport = "both";          ///< inproc | dds | both
+  std::string out_dir = "runs/bench_scale";
+  double duration_s = 60.0;                ///< mission seconds of each run
+  std::uint64_t seed = 1;                  ///< the fields' and missions' seed
+};
+
 /// The operators' commands on a running mission.
 struct OperatorCommand {
   std::string mission_dir;       ///< default: $SAGE_MISSION, else runs/latest

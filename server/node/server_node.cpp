@@ -1,5 +1,7 @@
 #include "server/node/server_node.h"
 
+#include <sys/resource.h>
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -21,6 +23,7 @@
 #include "proto/messages.h"
 #include "proto/mission_clock.h"
 #include "proto/qos.h"
+#include "proto/wire_size.h"
 #include "server/report/checkpoint.h"
 #include "server/report/report.h"
 #include "server/report/run_directory.h"
@@ -173,6 +176,11 @@ int RunServerNode(const maps::Scenario& scenario, const ServerNodeOptions& optio
   double last_cycle_ms = 0.0, total_cycle_ms = 0.0, max_cycle_ms = 0.0;
   long cycles_run = 0;
   std::uint64_t messages_in = 0, messages_out = 0;
+  // Payload bytes of the valid samples taken and of the samples written (proto/wire_size.h);
+  // a sample written once counts once, however many readers it reaches.
+  std::uint64_t bytes_in = 0, bytes_out = 0;
+  std::vector<double> cycle_ms;  // every cycle's compute time, for the p99
+  cycle_ms.reserve(static_cast<std::size_t>(std::max<std::int64_t>(0, cycles_total - first_cycle + 1)));
   bool stop_requested = false;
   auto publish_status = [&](std::int64_t cycle, double t, bool finished) {
     proto::MissionStatus s{};
@@ -191,6 +199,7 @@ int RunServerNode(const maps::Scenario& scenario, const ServerNodeOptions& optio
     s.vehicle_fingerprint = fingerprint;
     status.Write(s);
     ++messages_out;
+    bytes_out += proto::WireBytes(s);
   };
   auto answer_command = [&](const proto::FleetCommand& c, const OperatorAnswer& a) {
     proto::FleetCommandResult r{};
@@ -204,6 +213,7 @@ int RunServerNode(const maps::Scenario& scenario, const ServerNodeOptions& optio
     r.mission_time_s = core.time_s();
     command_results.Write(r);
     ++messages_out;
+    bytes_out += proto::WireBytes(r);
   };
 
   const auto wall_start = SteadyClock::now();
@@ -233,6 +243,13 @@ int RunServerNode(const maps::Scenario& scenario, const ServerNodeOptions& optio
     scenario_joins.emplace_back(static_cast<std::int64_t>(std::ceil(e.time_s * rate - 1e-9)),
                                 JoinVehicleId(scenario, e.vehicle.name));
   }
+  // A vehicle the scenario loses or takes out ends at its event's cycle: not waited for from
+  // there on (the lease that tells the server takes a few cycles more).
+  const std::vector<std::pair<double, int>> scenario_ends = scenario.VehicleEnds();
+  const auto ended_by_scenario = [&](int id, std::int64_t at_cycle) {
+    return std::any_of(scenario_ends.begin(), scenario_ends.end(),
+                       [&](const auto& end) { return end.second == id && at_cycle >= std::ceil(end.first * rate - 1e-9); });
+  };
   long cycles_not_in_step = 0;
   double first_not_in_step_s = -1.0;
   SteadyClock::time_point compute_start;
@@ -240,6 +257,7 @@ int RunServerNode(const maps::Scenario& scenario, const ServerNodeOptions& optio
       ++messages_in;
       const int id = static_cast<int>(m.vehicle_id);
       if (info.valid_data) {
+        bytes_in += proto::WireBytes(m);
         suspect.erase(id);  // heard: alive
         // A state on another server's clock (sent before its host heard of this one) is not a
         // sample of this mission's time line; the host follows this server within a cycle.
@@ -284,6 +302,7 @@ int RunServerNode(const maps::Scenario& scenario, const ServerNodeOptions& optio
                                              std::chrono::duration<double>(0.45 / rate / options.time_scale));
     const auto all_in = [&] {
       for (const int id : core.roster().alive()) {
+        if (ended_by_scenario(id, cycle)) continue;
         const auto heard = heard_cycle.find(id);
         if (heard == heard_cycle.end() || heard->second < cycle) return false;
       }
@@ -315,11 +334,14 @@ int RunServerNode(const maps::Scenario& scenario, const ServerNodeOptions& optio
     }
     take_all(coverage, [&](const proto::VehicleCoverage& m, const dds_sample_info_t& info) {
       ++messages_in;
-      if (info.valid_data) core.OnCoverage(agents::wire::FromWire(m));
+      if (!info.valid_data) return;
+      bytes_in += proto::WireBytes(m);
+      core.OnCoverage(agents::wire::FromWire(m));
     });
     risk_updates.TakeEach([&](const proto::RiskUpdate& r, const dds_sample_info_t& info) {
       ++messages_in;
       if (!info.valid_data) return;
+      bytes_in += proto::WireBytes(r);
       const OperatorAnswer a =
           core.OnRiskUpdate(std::string(AsStringView(r.valve)), r.weight, std::string(AsStringView(r.source)));
       if (!a.accepted) spdlog::warn("server: ignored a risk update: {}", a.reason);
@@ -332,10 +354,12 @@ int RunServerNode(const maps::Scenario& scenario, const ServerNodeOptions& optio
       result.reason = BorrowString(a.reason);
       risk_results.Write(result);
       ++messages_out;
+      bytes_out += proto::WireBytes(result);
     });
     commands.TakeEach([&](const proto::FleetCommand& c, const dds_sample_info_t& info) {
       ++messages_in;
       if (!info.valid_data) return;
+      bytes_in += proto::WireBytes(c);
       const std::string_view verb = AsStringView(c.verb);
       // An operator sends a command again until answered: a repeat is answered, not executed.
       const auto repeat = std::find_if(answered.begin(), answered.end(), [&](const AnsweredCommand& done) {
@@ -367,6 +391,7 @@ int RunServerNode(const maps::Scenario& scenario, const ServerNodeOptions& optio
           order.vehicle_id = c.vehicle_id;
           retire.Write(order);
           ++messages_out;
+          bytes_out += proto::WireBytes(order);
         }
         answer_command(c, a);
       } else if (verb == "reserve") {
@@ -379,11 +404,16 @@ int RunServerNode(const maps::Scenario& scenario, const ServerNodeOptions& optio
     const CycleOutput out = core.Cycle(cycle);
     record.LogJoins(core.roster().alive_count());
     const long long stamp = NowRealtimeNs();
-    fleet_coverage.Write(agents::wire::ToWire(out.snapshot, instance, order, stamp, ids_scratch, seqs_scratch));
+    const proto::FleetCoverage snapshot =
+        agents::wire::ToWire(out.snapshot, instance, order, stamp, ids_scratch, seqs_scratch);
+    fleet_coverage.Write(snapshot);
     ++messages_out;
+    bytes_out += proto::WireBytes(snapshot);
     for (const agents::Assignment& a : out.assignments) {
-      targets.Write(agents::wire::ToWire(a, instance, order, stamp));
+      const proto::ErgodicTarget target = agents::wire::ToWire(a, instance, order, stamp);
+      targets.Write(target);
       ++messages_out;
+      bytes_out += proto::WireBytes(target);
     }
     if (out.fleet_empty && !empty_warned && cycle > first_cycle + 2 * static_cast<std::int64_t>(rate)) {
       spdlog::warn("server: no vehicle is alive at t = {:.1f} s; the mission goes on for vehicles that join", t);
@@ -393,6 +423,7 @@ int RunServerNode(const maps::Scenario& scenario, const ServerNodeOptions& optio
     last_cycle_ms = std::chrono::duration<double, std::milli>(SteadyClock::now() - cycle_start).count();
     total_cycle_ms += last_cycle_ms;
     max_cycle_ms = std::max(max_cycle_ms, last_cycle_ms);
+    cycle_ms.push_back(last_cycle_ms);
     ++cycles_run;
     if (cycle % 5 == 0) publish_status(cycle, t, false);
     if (options.show_progress && cycle % std::max<std::int64_t>(1, cycles_total / 20) == 0) {
@@ -412,11 +443,18 @@ int RunServerNode(const maps::Scenario& scenario, const ServerNodeOptions& optio
 
   const double mission_s = end_time - static_cast<double>(first_cycle) / rate;
   std::cout << FormatTable({core.Metrics(end_time)});
+  rusage usage{};
+  getrusage(RUSAGE_SELF, &usage);  // ru_maxrss: KiB on Linux
+  const double peak_rss_mb = static_cast<double>(usage.ru_maxrss) * 1024.0 / 1e6;
+  const double p99_ms = cycle_ms.empty() ? 0.0 : NearestRankPercentile(std::move(cycle_ms), 0.99);
+  // One line that scripts and `sage bench scale` parse (tests/bench/launch_scale.sh): keep its order.
   spdlog::info("server: {:.0f} s of mission in {:.1f} s wall ({:.2f}x real time); {} messages in, {} out ({:.0f}/s); "
-               "server cycle {:.2f} ms mean, {:.2f} ms max; wrote {} in {:.1f} s",
+               "{:.3f} MB in, {:.3f} MB out at {:.3f} MB/s; server cycle {:.2f} ms mean, {:.2f} ms p99, {:.2f} ms max; "
+               "peak RSS {:.1f} MB; wrote {} in {:.1f} s",
                mission_s, wall_s, mission_s / std::max(1e-9, wall_s), messages_in, messages_out,
-               (messages_in + messages_out) / std::max(1e-9, wall_s), total_cycle_ms / std::max(1L, cycles_run),
-               max_cycle_ms, options.out_dir, finish_s);
+               (messages_in + messages_out) / std::max(1e-9, wall_s), bytes_in / 1e6, bytes_out / 1e6,
+               (bytes_in + bytes_out) / 1e6 / std::max(1e-9, wall_s), total_cycle_ms / std::max(1L, cycles_run), p99_ms,
+               max_cycle_ms, peak_rss_mb, options.out_dir, finish_s);
   // In lockstep the mission is the one sage run flies with the same scenario and seed.
   spdlog::info("server: {} of {} cycles in lockstep with the vehicles{}", cycles_run - cycles_not_in_step, cycles_run,
                cycles_not_in_step == 0

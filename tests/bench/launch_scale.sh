@@ -20,12 +20,13 @@ for n in ${counts[@]}; do
   fi
   summary=$(grep "server: .* of mission in" "$log" | tail -1)
   hosts=$(grep -o "[0-9]* agent host(s)" "$log" | head -1 | cut -d' ' -f1)
-  # "... 30 s of mission in 30.0 s wall (1.00x real time); 310149 messages in, 1364 out (10380/s); server cycle 9.79 ms mean, ..."
+  # "... 30 s of mission in 30.0 s wall (1.00x real time); 310149 messages in, 1364 out (10380/s); 31.020 MB in, 1.204 MB
+  # out at 1.074 MB/s; server cycle 9.79 ms mean, 21.40 ms p99, 49.30 ms max; peak RSS 80.1 MB; ..."
   mission=$(sed -E 's/.*server: ([0-9.]+) s of mission.*/\1/' <<<"$summary")
   wall=$(sed -E 's/.* in ([0-9.]+) s wall.*/\1/' <<<"$summary")
   rtf=$(sed -E 's/.*\(([0-9.]+)x real time\).*/\1/' <<<"$summary")
   rate=$(sed -E 's/.*out \(([0-9]+)\/s\).*/\1/' <<<"$summary")
-  cycle=$(sed -E 's/.*server cycle ([0-9.]+ ms mean, [0-9.]+ ms max).*/\1/' <<<"$summary")
+  cycle=$(sed -E 's/.*server cycle ([0-9.]+ ms mean, [0-9.]+ ms p99, [0-9.]+ ms max).*/\1/' <<<"$summary")
   echo "| $n | $hosts | $mission s | $wall s | ${rtf}x | $cycle | $rate |" | tee -a "$out"
   rm -rf "$dir"
 done

@@ -152,6 +152,27 @@ TEST(PearsonCorrelation, MatchesHandComputation) {
   EXPECT_THROW(PearsonCorrelation({1, 2}, {1, 2, 3}), std::invalid_argument);
 }
 
+// Nearest rank on known samples: the p99 of 1..100 is 99 and of 1..600 is 594 (six above it),
+// q = 1 is the maximum, a tiny q the minimum, order does not matter, nothing is NaN.
+TEST(NearestRankPercentile, KnownSamples) {
+  std::vector<double> hundred, six_hundred;
+  for (int i = 100; i >= 1; --i) hundred.push_back(i);  // descending: the input order is irrelevant
+  for (int i = 1; i <= 600; ++i) six_hundred.push_back(i);
+  EXPECT_EQ(NearestRankPercentile(hundred, 0.99), 99.0);
+  EXPECT_EQ(NearestRankPercentile(hundred, 0.5), 50.0);
+  EXPECT_EQ(NearestRankPercentile(six_hundred, 0.99), 594.0);
+  EXPECT_EQ(NearestRankPercentile(six_hundred, 1.0), 600.0);
+  EXPECT_EQ(NearestRankPercentile(six_hundred, 1e-6), 1.0);
+  EXPECT_EQ(NearestRankPercentile({7.0}, 0.99), 7.0);
+  // One slow cycle in 100 is the p99's own value; two are above the p98.
+  std::vector<double> cycles(98, 1.0);
+  cycles.push_back(50.0);
+  cycles.push_back(40.0);
+  EXPECT_EQ(NearestRankPercentile(cycles, 0.99), 40.0);
+  EXPECT_EQ(NearestRankPercentile(cycles, 0.98), 1.0);
+  EXPECT_TRUE(std::isnan(NearestRankPercentile({}, 0.99)));
+}
+
 // Samples drawn from the target mixture itself give a far smaller ergodic metric than uniform
 // coverage (100x) and than a vehicle parked in a corner (1000x; measured: 9e-8, 3e-3, 4e-2), and
 // the metric is reported every second to the end.

@@ -243,6 +243,20 @@ TEST(Mission, GuardBoostsAnOverdueValve) {
   EXPECT_NEAR(off.effective_weights()[2], 0.10, 1e-12);
 }
 
+// The optional server-cycle timing hook records one non-negative time per server cycle (301
+// for 30 s at 10 Hz, both ends included) and leaves the mission as it would be without it.
+TEST(Mission, ServerCycleTimesOnePerCycle) {
+  std::vector<double> times;
+  MissionOptions timed{"", ControllerKind::kErgodic};
+  timed.server_cycle_s = &times;
+  const MissionResult with = Mission(TwoXt(30.0), timed).Run();
+  const MissionResult without = Mission(TwoXt(30.0), MissionOptions{"", ControllerKind::kErgodic}).Run();
+  ASSERT_EQ(times.size(), 301u);
+  EXPECT_TRUE(std::all_of(times.begin(), times.end(), [](double t) { return t >= 0.0 && t < 10.0; }));
+  ASSERT_EQ(with.trajectory.samples.size(), without.trajectory.samples.size());
+  EXPECT_EQ(with.trajectory.samples.back().position_m, without.trajectory.samples.back().position_m);
+}
+
 TEST(Mission, UnknownProfileIsAOneLineError) {
   try {
     Mission m(TwoXt(10.0), ControllerKind::kErgodic, "nope");
