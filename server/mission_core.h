@@ -203,6 +203,7 @@ class MissionCore {
   struct RegionShare {
     std::vector<int> valves;
     std::unique_ptr<maps::RegionField> field;
+    Eigen::VectorXd sent_weights;  // proportions of the share's valve weights its target was made from
   };
   struct RegionPlan {
     std::vector<int> planned_for;
@@ -210,7 +211,6 @@ class MissionCore {
     double changed_s = -1.0;
     double first_join_s = -1.0;
     std::map<int, RegionShare> shares;
-    Eigen::VectorXd sent_weights;
   };
   RegionPlan region_plan_;
 };

@@ -5,6 +5,7 @@
 
 #include <cmath>
 #include <limits>
+#include <map>
 #include <string>
 
 #include <gtest/gtest.h>
@@ -125,6 +126,38 @@ TEST(MissionCore, CoverageArrivesEveryCoveragePeriod) {
     EXPECT_GE(seq, 19u) << id;
     EXPECT_LE(seq, 20u) << id;
   }
+}
+
+// Regions: a risk change reaches only the vehicle whose region holds the valve; the others'
+// targets are not sent again (at 1,000 vehicles re-sending every region's target on any change
+// was nearly all of the server's traffic).
+TEST(MissionCore, RegionTargetsAreSentAgainOnlyForTheirOwnValves) {
+  maps::Scenario s = maps::WithVehicleCount(maps::LoadScenario(std::string(SAGE_SOURCE_DIR) + "/scenarios/fleet_field.yaml"), 4);
+  s.fleet.assignment = maps::FleetAssignment::kRegions;
+  s.fleet_events.clear();
+  maps::World world(s);
+  MissionCore core(world, s, "", ControllerKind::kErgodic);
+  std::map<int, Eigen::VectorXd> phi;
+  const auto cycle = [&](std::int64_t k) {
+    for (int id = 0; id < 4; ++id) core.OnState(State(id, s.vehicles[id].name, k, s.vehicles[id].start_m));
+    std::vector<int> sent;
+    for (const agents::Assignment& a : core.Cycle(k).assignments) {
+      sent.push_back(a.id);
+      phi[a.id] = a.phi;
+    }
+    return sent;
+  };
+  std::int64_t k = 0;
+  for (; k < 30; ++k) cycle(k);
+  ASSERT_EQ(phi.size(), 4u);
+  for (const auto& [id, p] : phi) ASSERT_GT(p.size(), 0) << "vehicle " << id << " has no region yet";
+  EXPECT_TRUE(cycle(k++).empty()) << "targets sent again with nothing changed";
+  const std::map<int, Eigen::VectorXd> before = phi;
+  ASSERT_TRUE(core.OnRiskUpdate("P3", 5.0, "test").accepted);
+  const std::vector<int> sent = cycle(k++);
+  ASSERT_EQ(sent.size(), 1u) << "a risk change on P3 re-sent " << sent.size() << " targets";
+  EXPECT_GT((phi[sent[0]] - before.at(sent[0])).norm(), 1e-6) << "the re-sent target did not change";
+  EXPECT_TRUE(cycle(k++).empty());
 }
 
 // A server that died at t = 55 s with its last checkpoint at t = 40 s: a new core restored from
