@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <limits>
 #include <numbers>
 #include <optional>
@@ -94,6 +95,32 @@ bool SegmentFree(const maps::OccupancyGrid& grid, const Eigen::Vector2d& a, cons
 // both orthogonal cells it passes are free. Octile heuristic
 //   h = r (max(dx, dy) + (sqrt(2) - 1) min(dx, dy))
 // is the exact obstacle-free cost, hence admissible and consistent.
+// The search's per-cell state, kept between searches of one thread and stamped per search, so a
+// search costs what it touches: on a 10,000-vehicle field (12.8 million cells) each vehicle's
+// first path had cleared 166 MB of per-cell arrays, 10-12 minutes for the fleet.
+struct AStarScratch {
+  std::vector<double> g;
+  std::vector<int> parent;
+  std::vector<std::uint32_t> reached, closed;  // == stamp: this search's g/parent, closed
+  std::uint32_t stamp = 0;
+
+  void Begin(int cells) {
+    if (static_cast<int>(g.size()) != cells) {
+      g.assign(static_cast<std::size_t>(cells), kInf);
+      parent.assign(static_cast<std::size_t>(cells), -1);
+      reached.assign(static_cast<std::size_t>(cells), 0);
+      closed.assign(static_cast<std::size_t>(cells), 0);
+      stamp = 0;
+    }
+    if (++stamp == 0) {  // wrapped: clear the stamps once
+      std::fill(reached.begin(), reached.end(), 0u);
+      std::fill(closed.begin(), closed.end(), 0u);
+      stamp = 1;
+    }
+  }
+  double G(int k) const { return reached[k] == stamp ? g[k] : kInf; }
+};
+
 std::vector<Cell> AStar(const maps::OccupancyGrid& grid, const Cell& start, const Cell& goal) {
   const int rows = grid.rows();
   const double r = grid.resolution_m();
@@ -102,20 +129,22 @@ std::vector<Cell> AStar(const maps::OccupancyGrid& grid, const Cell& start, cons
     const int dx = std::abs(c.x() - goal.x()), dy = std::abs(c.y() - goal.y());
     return r * (std::max(dx, dy) + (std::numbers::sqrt2 - 1.0) * std::min(dx, dy));
   };
-  const int n = grid.cols() * rows;
-  std::vector<double> g(n, kInf);
-  std::vector<int> parent(n, -1);
-  std::vector<char> closed(n, 0);
+  thread_local AStarScratch scratch;
+  scratch.Begin(grid.cols() * rows);
+  const std::uint32_t stamp = scratch.stamp;
   using Entry = std::pair<double, int>;  // (f, cell index)
   std::priority_queue<Entry, std::vector<Entry>, std::greater<>> open;
-  g[index(start)] = 0.0;
-  open.emplace(heuristic(start), index(start));
+  const int start_index = index(start);
+  scratch.g[start_index] = 0.0;
+  scratch.parent[start_index] = -1;
+  scratch.reached[start_index] = stamp;
+  open.emplace(heuristic(start), start_index);
   const int goal_index = index(goal);
   while (!open.empty()) {
     const int current = open.top().second;
     open.pop();
-    if (closed[current]) continue;
-    closed[current] = 1;
+    if (scratch.closed[current] == stamp) continue;
+    scratch.closed[current] = stamp;
     if (current == goal_index) break;
     const Cell c(current / rows, current % rows);
     for (int di = -1; di <= 1; ++di) {
@@ -126,18 +155,19 @@ std::vector<Cell> AStar(const maps::OccupancyGrid& grid, const Cell& start, cons
         const bool diagonal = di != 0 && dj != 0;
         if (diagonal && (!Free(grid, Cell(c.x() + di, c.y())) || !Free(grid, Cell(c.x(), c.y() + dj)))) continue;
         const int k = index(nb);
-        const double cost = g[current] + (diagonal ? std::numbers::sqrt2 * r : r);
-        if (cost < g[k]) {
-          g[k] = cost;
-          parent[k] = current;
+        const double cost = scratch.g[current] + (diagonal ? std::numbers::sqrt2 * r : r);
+        if (cost < scratch.G(k)) {
+          scratch.g[k] = cost;
+          scratch.parent[k] = current;
+          scratch.reached[k] = stamp;
           open.emplace(cost + heuristic(nb), k);
         }
       }
     }
   }
-  if (g[goal_index] == kInf) return {};
+  if (scratch.G(goal_index) == kInf) return {};
   std::vector<Cell> cells;
-  for (int k = goal_index; k != -1; k = parent[k]) cells.emplace_back(k / rows, k % rows);
+  for (int k = goal_index; k != -1; k = scratch.parent[k]) cells.emplace_back(k / rows, k % rows);
   std::reverse(cells.begin(), cells.end());
   return cells;
 }

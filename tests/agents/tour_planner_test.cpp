@@ -6,6 +6,7 @@
 #include <cmath>
 #include <numeric>
 #include <random>
+#include <thread>
 
 #include <gtest/gtest.h>
 
@@ -147,6 +148,42 @@ TEST(GridPath, UnreachableGoalGivesEmptyPath) {
   EXPECT_TRUE(PlanGridPath(grid, {1.05, 1.05}, {7.05, 7.05}).empty());
   const Tour tour = PlanTour(grid, {{1.05, 1.05}, {3.05, 1.05}, {7.05, 7.05}});
   EXPECT_FALSE(tour.ok);
+}
+
+// A search reuses its thread's per-cell state from earlier searches (stamped per search): paths
+// planned after many others, on grids of other sizes and after an unreachable search that
+// reached every free cell, equal the same paths planned each on a fresh thread.
+TEST(GridPath, EarlierSearchesLeaveNoTrace) {
+  std::mt19937 rng(11);
+  std::vector<OccupancyGrid> grids;
+  for (int field = 0; field < 3; ++field) {
+    OccupancyGrid grid(12.0 + 2.0 * field, 10.0, 0.1);
+    std::uniform_real_distribution<double> x(0.0, grid.width_m()), y(0.0, 10.0), size(0.3, 2.0);
+    for (int b = 0; b < 8; ++b) {
+      const Eigen::Vector2d corner(x(rng), y(rng));
+      grid.FillBox(corner, corner + Eigen::Vector2d(size(rng), size(rng)));
+    }
+    grids.push_back(std::move(grid));
+  }
+  OccupancyGrid walled(12.0, 10.0, 0.1);  // the size of grids[0]; the goal fenced in
+  walled.FillBox({6.0, 6.0}, {8.0, 6.2});
+  walled.FillBox({6.0, 7.8}, {8.0, 8.0});
+  walled.FillBox({6.0, 6.0}, {6.2, 8.0});
+  walled.FillBox({7.8, 6.0}, {8.0, 8.0});
+  std::uniform_real_distribution<double> x(0.0, 12.0), y(0.0, 10.0);
+  int compared = 0;
+  for (int trial = 0; trial < 30; ++trial) {
+    const OccupancyGrid& grid = grids[trial % grids.size()];
+    const Eigen::Vector2d from(x(rng), y(rng)), to(x(rng), y(rng));
+    if (trial % 4 == 0) ASSERT_TRUE(PlanGridPath(walled, {1.05, 1.05}, {7.05, 7.05}).empty());
+    const std::vector<Eigen::Vector2d> reused = PlanGridPath(grid, from, to);
+    std::vector<Eigen::Vector2d> fresh;
+    std::thread([&] { fresh = PlanGridPath(grid, from, to); }).join();
+    ASSERT_EQ(reused.size(), fresh.size()) << "trial " << trial;
+    for (std::size_t k = 0; k < reused.size(); ++k) EXPECT_EQ(reused[k], fresh[k]) << "trial " << trial << " point " << k;
+    compared += reused.empty() ? 0 : 1;
+  }
+  EXPECT_GE(compared, 20);
 }
 
 // Held-Karp equals the brute-force optimum over all (M-1)! orders (1e-9 m), M = 6 and 8.
