@@ -158,6 +158,10 @@ TEST(MissionCore, RegionTargetsAreSentAgainOnlyForTheirOwnValves) {
   ASSERT_EQ(sent.size(), 1u) << "a risk change on P3 re-sent " << sent.size() << " targets";
   EXPECT_GT((phi[sent[0]] - before.at(sent[0])).norm(), 1e-6) << "the re-sent target did not change";
   EXPECT_TRUE(cycle(k++).empty());
+  // A change that moves the share's proportions by under 1 % of themselves is not sent.
+  const int owner = sent[0];
+  ASSERT_TRUE(core.OnRiskUpdate("P3", 5.02, "test").accepted);
+  EXPECT_TRUE(cycle(k++).empty()) << "a 0.4 % change of P3 re-sent vehicle " << owner << "'s target";
 }
 
 // A server that died at t = 55 s with its last checkpoint at t = 40 s: a new core restored from
