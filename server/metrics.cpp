@@ -56,52 +56,87 @@ Eigen::VectorXd TimeAveragedWeights(const std::vector<WeightChange>& schedule, d
 
 }  // namespace
 
+NearbyPoints::NearbyPoints(const std::vector<Eigen::Vector2d>& points, double cell_m) : points_(points), cell_m_(cell_m) {
+  if (!(cell_m > 0.0) || !std::isfinite(cell_m)) throw std::invalid_argument("NearbyPoints: cell size must be > 0");
+  for (std::size_t i = 0; i < points_.size(); ++i) {
+    if (!points_[i].allFinite()) throw std::invalid_argument("NearbyPoints: a point is not finite");
+    const auto ci = static_cast<std::int64_t>(std::floor(points_[i].x() / cell_m_));
+    const auto cj = static_cast<std::int64_t>(std::floor(points_[i].y() / cell_m_));
+    cells_[Key(ci, cj)].push_back(static_cast<int>(i));  // ascending within a cell
+  }
+}
+
+void NearbyPoints::Within(const Eigen::Vector2d& x, double radius_m, std::vector<int>& out) const {
+  out.clear();
+  if (!x.allFinite() || !(radius_m >= 0.0) || cells_.empty()) return;
+  // Beyond the points' reach of int32 cells a position is far from every point.
+  constexpr double kFar = 1e9;
+  if (std::abs(x.x()) / cell_m_ > kFar || std::abs(x.y()) / cell_m_ > kFar) return;
+  const auto i0 = static_cast<std::int64_t>(std::floor((x.x() - radius_m) / cell_m_));
+  const auto i1 = static_cast<std::int64_t>(std::floor((x.x() + radius_m) / cell_m_));
+  const auto j0 = static_cast<std::int64_t>(std::floor((x.y() - radius_m) / cell_m_));
+  const auto j1 = static_cast<std::int64_t>(std::floor((x.y() + radius_m) / cell_m_));
+  for (std::int64_t i = i0; i <= i1; ++i) {
+    for (std::int64_t j = j0; j <= j1; ++j) {
+      const auto cell = cells_.find(Key(i, j));
+      if (cell == cells_.end()) continue;
+      for (int k : cell->second)
+        if ((x - points_[k]).norm() <= radius_m) out.push_back(k);
+    }
+  }
+  std::sort(out.begin(), out.end());
+}
+
 VisitTracker::VisitTracker(std::vector<Eigen::Vector2d> valves, double visit_radius_m,
                            double rearm_radius_m)
     : valves_(std::move(valves)),
       visit_radius_m_(visit_radius_m),
       rearm_radius_m_(rearm_radius_m),
+      nearby_(valves_, visit_radius_m > 0.0 && std::isfinite(visit_radius_m) ? visit_radius_m : 1.0),
       visit_times_(valves_.size()) {
   if (!(visit_radius_m_ > 0.0) || !(rearm_radius_m_ >= visit_radius_m_)) {
     throw std::invalid_argument("VisitTracker: need 0 < visit_radius <= rearm_radius");
   }
 }
 
+// The valves this vehicle had disarmed are re-armed once it is past rearm_radius of them; the
+// armed valves within visit_radius are visited (and disarmed). The two sets are apart (a valve
+// re-armed here is beyond rearm_radius >= visit_radius), so the order of the two steps is moot.
 std::vector<int> VisitTracker::Update(int vehicle, const Eigen::Vector2d& position_m, double time_s) {
   if (vehicle < 0) throw std::invalid_argument("VisitTracker: vehicle id must be >= 0");
-  if (static_cast<std::size_t>(vehicle) >= armed_.size()) {
-    armed_.resize(vehicle + 1, std::vector<unsigned char>(valves_.size(), 1));
-  }
+  if (static_cast<std::size_t>(vehicle) >= disarmed_.size()) disarmed_.resize(vehicle + 1);
+  std::vector<int>& disarmed = disarmed_[vehicle];
+  std::erase_if(disarmed, [&](int i) { return (position_m - valves_[i]).norm() > rearm_radius_m_; });
+  nearby_.Within(position_m, visit_radius_m_, near_scratch_);
   std::vector<int> visited;
-  std::vector<unsigned char>& armed = armed_[vehicle];
-  for (std::size_t i = 0; i < valves_.size(); ++i) {
-    const double distance = (position_m - valves_[i]).norm();
-    if (armed[i] && distance <= visit_radius_m_) {
-      armed[i] = 0;
-      // Vehicles' samples may interleave out of time order (a late host over DDS): keep each
-      // valve's visits sorted.
-      std::vector<double>& times = visit_times_[i];
-      times.insert(std::upper_bound(times.begin(), times.end(), time_s), time_s);
-      visited.push_back(static_cast<int>(i));
-    } else if (!armed[i] && distance > rearm_radius_m_) {
-      armed[i] = 1;
-    }
+  for (int i : near_scratch_) {
+    const auto at = std::lower_bound(disarmed.begin(), disarmed.end(), i);
+    if (at != disarmed.end() && *at == i) continue;  // still disarmed
+    disarmed.insert(at, i);
+    // Vehicles' samples may interleave out of time order (a late host over DDS): keep each
+    // valve's visits sorted.
+    std::vector<double>& times = visit_times_[i];
+    times.insert(std::upper_bound(times.begin(), times.end(), time_s), time_s);
+    visited.push_back(i);
   }
   return visited;
 }
 
-void VisitTracker::Restore(std::vector<std::vector<unsigned char>> armed, std::vector<std::vector<double>> visit_times) {
+void VisitTracker::Restore(std::vector<std::vector<int>> disarmed, std::vector<std::vector<double>> visit_times) {
   if (visit_times.size() != valves_.size()) throw std::invalid_argument("VisitTracker::Restore: wrong valve count");
-  for (const auto& a : armed)
-    if (a.size() != valves_.size()) throw std::invalid_argument("VisitTracker::Restore: wrong valve count");
-  armed_ = std::move(armed);
+  for (const auto& d : disarmed) {
+    for (std::size_t k = 0; k < d.size(); ++k) {
+      if (d[k] < 0 || static_cast<std::size_t>(d[k]) >= valves_.size() || (k > 0 && d[k] <= d[k - 1])) {
+        throw std::invalid_argument("VisitTracker::Restore: disarmed valves out of range or not ascending");
+      }
+    }
+  }
+  disarmed_ = std::move(disarmed);
   visit_times_ = std::move(visit_times);
 }
 
 void VisitTracker::Forget(int vehicle) {
-  if (vehicle >= 0 && static_cast<std::size_t>(vehicle) < armed_.size()) {
-    std::fill(armed_[vehicle].begin(), armed_[vehicle].end(), 1);
-  }
+  if (vehicle >= 0 && static_cast<std::size_t>(vehicle) < disarmed_.size()) disarmed_[vehicle].clear();
 }
 
 double VisitTracker::LastVisit(int valve) const {
@@ -203,8 +238,8 @@ void MetricsAccumulator::Restore(State state, VisitTracker visits) {
 // A sample held for dt: time near each valve, at the boundary, and its share of the coverage.
 void MetricsAccumulator::Hold(const TrajectorySample& sample, double dt_s) {
   const Eigen::Vector2d& p = sample.position_m;
-  for (std::size_t v = 0; v < valves_.size(); ++v) {
-    if ((p - valves_[v]).norm() > scenario_.visit_radius_m) continue;
+  visits_.ValvesWithinVisitRadius(p, near_scratch_);
+  for (const int v : near_scratch_) {
     state_.time_near_s[v] += dt_s;
     // Watched over [t, t + dt): the stretch since it was last watched closes here.
     const double unwatched = sample.time_s - state_.watched_until_s[v];

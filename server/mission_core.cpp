@@ -495,7 +495,7 @@ MissionCheckpoint MissionCore::Checkpoint() const {
   c.fleet = fleet_.Checkpoint();
   c.roster = roster_.Checkpoint();
   c.metrics = metrics_.state();
-  c.armed = metrics_.visits().armed();
+  c.disarmed = metrics_.visits().disarmed();
   c.visit_times = metrics_.visits().visit_times();
   c.rejected_samples = rejected_;
   return c;
@@ -513,7 +513,7 @@ void MissionCore::Restore(const MissionCheckpoint& c) {
     fleet_.Restore(c.fleet);
     roster_.Restore(c.roster);
     VisitTracker visits = metrics_.visits();
-    visits.Restore(c.armed, c.visit_times);
+    visits.Restore(c.disarmed, c.visit_times);
     metrics_.Restore(c.metrics, std::move(visits));
   } catch (const std::invalid_argument& e) {
     throw maps::ScenarioError(std::string("checkpoint: does not fit the scenario: ") + e.what());

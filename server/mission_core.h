@@ -85,7 +85,7 @@ struct MissionCheckpoint {
   FleetServer::State fleet;
   Roster::State roster;
   MetricsAccumulator::State metrics;
-  std::vector<std::vector<unsigned char>> armed;      ///< visit arming [vehicle index][valve]
+  std::vector<std::vector<int>> disarmed;            ///< valves each vehicle has disarmed [vehicle] (ascending)
   std::vector<std::vector<double>> visit_times;       ///< [valve]
   std::size_t rejected_samples = 0;
 };

@@ -14,7 +14,7 @@ namespace sage::server {
 namespace {
 
 using Json = nlohmann::json;
-constexpr int kFormatVersion = 1;
+constexpr int kFormatVersion = 2;  // 2: visit arming as each vehicle's disarmed valves
 
 // Doubles as raw bytes (CBOR byte string): exact and a third of a text encoding's size.
 Json Doubles(const double* data, std::size_t count) {
@@ -194,14 +194,12 @@ MetricsAccumulator::State ToMetrics(const Json& j) {
 }  // namespace
 
 std::vector<std::uint8_t> EncodeCheckpoint(const MissionCheckpoint& c) {
-  Json armed = Json::array();
-  for (const auto& a : c.armed) armed.push_back(Json::binary(std::vector<std::uint8_t>(a.begin(), a.end())));
   Json visits = Json::array();
   for (const auto& v : c.visit_times) visits.push_back(Doubles(v));
   const Json j = {{"format", "sage-checkpoint"}, {"version", kFormatVersion}, {"scenario_hash", c.scenario_hash},
                   {"profile", c.profile}, {"controller", c.controller}, {"cycle", c.cycle}, {"t", c.time_s},
                   {"fleet", FleetJson(c.fleet)}, {"roster", RosterJson(c.roster)}, {"metrics", MetricsStateJson(c.metrics)},
-                  {"armed", armed}, {"visit_times", visits}, {"rejected", c.rejected_samples}};
+                  {"disarmed", c.disarmed}, {"visit_times", visits}, {"rejected", c.rejected_samples}};
   return Json::to_cbor(j);
 }
 
@@ -220,10 +218,7 @@ MissionCheckpoint DecodeCheckpoint(const std::vector<std::uint8_t>& bytes, const
     c.fleet = ToFleet(j.at("fleet"));
     c.roster = ToRoster(j.at("roster"));
     c.metrics = ToMetrics(j.at("metrics"));
-    for (const Json& a : j.at("armed")) {
-      const auto& b = a.get_binary();
-      c.armed.emplace_back(b.begin(), b.end());
-    }
+    c.disarmed = j.at("disarmed").get<std::vector<std::vector<int>>>();
     for (const Json& v : j.at("visit_times")) c.visit_times.push_back(ToDoubles(v));
     c.rejected_samples = j.at("rejected").get<std::size_t>();
     return c;

@@ -117,6 +117,76 @@ TEST(VisitTracker, VehiclesCountSeparately) {
   EXPECT_EQ(tracker.visit_times()[0].size(), 3u);
 }
 
+// The bucketed search returns what a scan of every point returns (ascending, the same
+// distances), for radii smaller and larger than a cell, points on cell edges and negative
+// coordinates included.
+TEST(NearbyPoints, FindsWhatAScanFinds) {
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> coord(-20.0, 60.0);
+  std::vector<Eigen::Vector2d> points;
+  for (int i = 0; i < 2000; ++i) points.emplace_back(coord(rng), coord(rng));
+  for (int i = 0; i < 50; ++i) points.emplace_back(0.5 * i, 0.5 * (i % 7));  // on cell edges
+  const NearbyPoints nearby(points, 0.5);
+  std::vector<int> found;
+  for (int q = 0; q < 500; ++q) {
+    const Eigen::Vector2d x(coord(rng), coord(rng));
+    for (const double r : {0.3, 0.5, 1.7, 4.0}) {
+      std::vector<int> scan;
+      for (int i = 0; i < static_cast<int>(points.size()); ++i)
+        if ((x - points[i]).norm() <= r) scan.push_back(i);
+      nearby.Within(x, r, found);
+      ASSERT_EQ(found, scan) << "query " << q << " radius " << r;
+    }
+  }
+  nearby.Within({std::nan(""), 1.0}, 1.0, found);
+  EXPECT_TRUE(found.empty());
+  EXPECT_THROW(NearbyPoints(points, 0.0), std::invalid_argument);
+}
+
+// Visits counted from each vehicle's disarmed valves and the valves near it equal the rule run
+// on every (vehicle, valve) pair: random walks of 6 vehicles among 300 clustered valves.
+TEST(VisitTracker, AgreesWithEveryPairScanned) {
+  std::mt19937 rng(9);
+  std::uniform_real_distribution<double> where(0.0, 30.0), step(-0.35, 0.35);
+  std::vector<Eigen::Vector2d> valves;
+  for (int c = 0; c < 60; ++c) {
+    const Eigen::Vector2d centre(where(rng), where(rng));
+    for (int k = 0; k < 5; ++k) valves.push_back(centre + Eigen::Vector2d(step(rng), step(rng)));
+  }
+  const double visit = 0.5, rearm = 1.0;
+  VisitTracker tracker(valves, visit, rearm);
+  std::vector<std::vector<bool>> armed(6, std::vector<bool>(valves.size(), true));
+  std::vector<std::vector<double>> times(valves.size());
+  std::vector<Eigen::Vector2d> at(6);
+  for (auto& x : at) x = {where(rng), where(rng)};
+  std::size_t visits = 0;
+  for (int t = 0; t < 4000; ++t) {
+    const int v = t % 6;
+    at[v] += Eigen::Vector2d(step(rng), step(rng));
+    at[v] = at[v].cwiseMax(0.0).cwiseMin(30.0);
+    std::vector<int> expected;
+    for (std::size_t i = 0; i < valves.size(); ++i) {
+      const double d = (at[v] - valves[i]).norm();
+      if (armed[v][i] && d <= visit) {
+        armed[v][i] = false;
+        times[i].push_back(0.1 * t);
+        expected.push_back(static_cast<int>(i));
+      } else if (!armed[v][i] && d > rearm) {
+        armed[v][i] = true;
+      }
+    }
+    ASSERT_EQ(tracker.Update(v, at[v], 0.1 * t), expected) << "sample " << t;
+    visits += expected.size();
+  }
+  EXPECT_EQ(tracker.visit_times(), times);
+  EXPECT_GT(visits, 50u);  // the walks do pass valves
+  // A checkpoint's arming state restores to the same counting.
+  VisitTracker restored(valves, visit, rearm);
+  restored.Restore(tracker.disarmed(), tracker.visit_times());
+  for (int v = 0; v < 6; ++v) EXPECT_EQ(restored.Update(v, at[v], 400.0), tracker.Update(v, at[v], 400.0));
+  EXPECT_THROW(restored.Restore({{3, 2}}, tracker.visit_times()), std::invalid_argument);
+}
+
 // Through ComputeMetrics too: two vehicles, one entry each, are two visits and vehicle_count 2.
 TEST(ComputeMetrics, TwoVehiclesEachVisit) {
   const maps::Scenario scenario = MakeScenario({{6, 5}});
