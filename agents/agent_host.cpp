@@ -5,6 +5,7 @@
 #include <limits>
 #include <stdexcept>
 #include <string>
+#include <unordered_map>
 
 #include <optional>
 
@@ -12,6 +13,7 @@
 #include "agents/physics_world.h"
 #include "agents/tour_controller.h"
 #include "agents/tour_planner.h"
+#include "maps/nearby_points.h"
 
 namespace sage::agents {
 
@@ -43,6 +45,7 @@ struct AgentHost::Impl {
   PhysicsWorld world;
   std::vector<Eigen::Vector2d> valves;  // the scenario's valve positions (A* tours)
   std::vector<Vehicle> vehicles;
+  std::unordered_map<VehicleId, std::size_t> position_of;  // id -> index into vehicles (a host runs hundreds)
   std::vector<Eigen::Vector2d> others;  // vehicles of other hosts
   std::optional<std::vector<std::pair<VehicleId, Eigen::Vector2d>>> own_reported;  // this host's, as last reported
   int physics_substeps = 1;
@@ -62,18 +65,44 @@ struct AgentHost::Impl {
 
   // Vehicles (this host's and the others') within the filter's reach of vehicle i: this host's
   // as they last reported if told (SetOwnReported), else where they are now.
-  std::vector<Eigen::Vector2d> Neighbours(std::size_t i, const std::vector<Eigen::Vector2d>& positions) const {
-    const double reach2 = std::pow(ObstacleFilterSettings{}.neighbour_influence_m, 2);
-    std::vector<Eigen::Vector2d> near;
+  // Where every vehicle a host's vehicle may have to keep clear of stands this cycle: its own
+  // vehicles (as last reported, or where they are) and the other hosts', bucketed by position so
+  // each vehicle looks only at the cells around it (a scan of all of them was N^2 a cycle).
+  struct Surroundings {
+    std::vector<Eigen::Vector2d> points;
+    std::vector<VehicleId> ids;  // the host's own vehicle at each point; kNotOwn for another host's
+    std::optional<maps::NearbyPoints> index;
+    std::vector<int> found;
+  };
+  static constexpr VehicleId kNotOwn = std::numeric_limits<VehicleId>::max();
+
+  void Gather(const std::vector<Eigen::Vector2d>& positions, Surroundings& around) const {
+    around.points.clear();
+    around.ids.clear();
+    const auto add = [&](const Eigen::Vector2d& p, VehicleId id) {
+      if (!p.allFinite()) return;  // not a place to keep clear of
+      around.points.push_back(p);
+      around.ids.push_back(id);
+    };
     if (own_reported) {
-      for (const auto& [id, p] : *own_reported)
-        if (id != vehicles[i].id && (p - positions[i]).squaredNorm() < reach2) near.push_back(p);
+      for (const auto& [id, p] : *own_reported) add(p, id);
     } else {
-      for (std::size_t j = 0; j < positions.size(); ++j)
-        if (j != i && (positions[j] - positions[i]).squaredNorm() < reach2) near.push_back(positions[j]);
+      for (std::size_t j = 0; j < positions.size(); ++j) add(positions[j], vehicles[j].id);
     }
-    for (const Eigen::Vector2d& p : others)
-      if ((p - positions[i]).squaredNorm() < reach2) near.push_back(p);
+    for (const Eigen::Vector2d& p : others) add(p, kNotOwn);
+    around.index.emplace(around.points, ObstacleFilterSettings{}.neighbour_influence_m);
+  }
+
+  std::vector<Eigen::Vector2d> Neighbours(std::size_t i, const std::vector<Eigen::Vector2d>& positions,
+                                          Surroundings& around) const {
+    const double reach = ObstacleFilterSettings{}.neighbour_influence_m, reach2 = reach * reach;
+    std::vector<Eigen::Vector2d> near;
+    // Candidates within a hair more than the reach; the rule itself is the strict squared one.
+    around.index->Within(positions[i], reach * (1.0 + 1e-9), around.found);
+    for (const int k : around.found) {
+      if (around.ids[k] == vehicles[i].id) continue;  // itself
+      if ((around.points[k] - positions[i]).squaredNorm() < reach2) near.push_back(around.points[k]);
+    }
     // The filter takes neighbours one after another: in an order of their own (by position),
     // not of which host simulates them.
     std::sort(near.begin(), near.end(), [](const Eigen::Vector2d& a, const Eigen::Vector2d& b) {
@@ -146,9 +175,9 @@ struct AgentHost::Impl {
     return const_cast<Vehicle&>(static_cast<const Impl*>(this)->Find(id));
   }
   const Vehicle& Find(VehicleId id) const {
-    for (const Vehicle& v : vehicles)
-      if (v.id == id) return v;
-    throw std::out_of_range("AgentHost: no vehicle with id " + std::to_string(id));
+    const auto at = position_of.find(id);
+    if (at == position_of.end()) throw std::out_of_range("AgentHost: no vehicle with id " + std::to_string(id));
+    return vehicles[at->second];
   }
 };
 
@@ -179,6 +208,7 @@ void AgentHost::AddVehicle(VehicleId id, const maps::VehicleSpec& spec) {
     tours.neighbour_clearance_m = 0.7;
     v.keep_clear = std::make_unique<ObstacleFilter>(impl_->clearance, impl_->scenario.workspace, tours);
   }
+  impl_->position_of[v.id] = impl_->vehicles.size();
   impl_->vehicles.push_back(std::move(v));
 }
 
@@ -238,12 +268,13 @@ int AgentHost::BasisSize(VehicleId id) const {
 void AgentHost::RemoveVehicle(VehicleId id) {
   const Impl::Vehicle& v = impl_->Find(id);
   impl_->world.RemoveVehicle(v.body);
-  impl_->vehicles.erase(impl_->vehicles.begin() + (&v - impl_->vehicles.data()));
+  const std::size_t at = static_cast<std::size_t>(&v - impl_->vehicles.data());
+  impl_->vehicles.erase(impl_->vehicles.begin() + static_cast<std::ptrdiff_t>(at));
+  impl_->position_of.erase(id);
+  for (std::size_t k = at; k < impl_->vehicles.size(); ++k) impl_->position_of[impl_->vehicles[k].id] = k;
 }
 
-bool AgentHost::Contains(VehicleId id) const {
-  return std::any_of(impl_->vehicles.begin(), impl_->vehicles.end(), [&](const Impl::Vehicle& v) { return v.id == id; });
-}
+bool AgentHost::Contains(VehicleId id) const { return impl_->position_of.count(id) != 0; }
 
 std::vector<VehicleId> AgentHost::ids() const {
   std::vector<VehicleId> out;
@@ -288,10 +319,12 @@ void AgentHost::Step(double time_s) {
   // Everyone's position at the start of the cycle, so the order of vehicles does not matter.
   std::vector<Eigen::Vector2d> positions;
   for (const Impl::Vehicle& v : impl_->vehicles) positions.push_back(impl_->world.State(v.body).position_m);
+  Impl::Surroundings around;
+  impl_->Gather(positions, around);
   for (std::size_t i = 0; i < impl_->vehicles.size(); ++i) {
     Impl::Vehicle& v = impl_->vehicles[i];
     const VehicleState state = impl_->world.State(v.body);
-    std::vector<Eigen::Vector2d> nearby = impl_->Neighbours(i, positions);
+    std::vector<Eigen::Vector2d> nearby = impl_->Neighbours(i, positions, around);
     if (v.tour) v.tour->SetNearby(nearby);
     if (v.transit) v.transit->SetNearby(nearby);
     // An A* vehicle holds station until it has a tour.

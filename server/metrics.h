@@ -12,31 +12,13 @@
 
 #include <Eigen/Core>
 
+#include "maps/nearby_points.h"
 #include "maps/risk_field.h"
 #include "maps/scenario/scenario.h"
 #include "maps/spectral_basis.h"
 #include "server/trajectory.h"
 
 namespace sage::server {
-
-/// Points (the valves) bucketed in square cells, so "which are within r of x" costs the few
-/// points near x and not all of them: a fleet's cycle asks it once per vehicle, and 10,000
-/// vehicles against 35,000 valves had been 700 million distances a cycle.
-class NearbyPoints {
- public:
-  /// cell_m > 0: the bucket side (a query of radius r looks at ceil(r / cell_m) cells around x).
-  NearbyPoints(const std::vector<Eigen::Vector2d>& points, double cell_m);
-  /// Indices i, ascending, with (points[i] - x).norm() <= radius_m; into `out` (cleared first).
-  /// Nothing for a non-finite x.
-  void Within(const Eigen::Vector2d& x, double radius_m, std::vector<int>& out) const;
-
- private:
-  std::int64_t Key(std::int64_t i, std::int64_t j) const { return i * kStride + j; }
-  static constexpr std::int64_t kStride = std::int64_t{1} << 32;
-  std::vector<Eigen::Vector2d> points_;
-  double cell_m_;
-  std::unordered_map<std::int64_t, std::vector<int>> cells_;
-};
 
 /// Counts visits online: a visit is an entry within visit_radius of a valve; the valve is
 /// re-armed for that vehicle only after it leaves rearm_radius, so jitter is not counted twice.
@@ -67,7 +49,7 @@ class VisitTracker {
   std::vector<Eigen::Vector2d> valves_;
   double visit_radius_m_;
   double rearm_radius_m_;
-  NearbyPoints nearby_;
+  maps::NearbyPoints nearby_;
   std::vector<std::vector<int>> disarmed_;        // [vehicle] -> valves, ascending
   std::vector<std::vector<double>> visit_times_;  // [valve]
   std::vector<int> near_scratch_;
