@@ -487,7 +487,8 @@ MissionMetrics MissionCore::Metrics(double end_s) const {
 
 MissionCheckpoint MissionCore::Checkpoint() const {
   MissionCheckpoint c;
-  c.scenario_hash = maps::ScenarioHash(scenario_);
+  if (!scenario_hash_) scenario_hash_ = maps::ScenarioHash(scenario_);
+  c.scenario_hash = *scenario_hash_;
   c.profile = fleet_.profile().name;
   c.controller = ToString(controller_);
   c.cycle = cycle_;

@@ -7,6 +7,7 @@
 // agents' reports directly. Its whole state is a checkpoint a new server resumes from.
 #include <cstdint>
 #include <map>
+#include <optional>
 #include <memory>
 #include <string>
 #include <vector>
@@ -171,6 +172,9 @@ class MissionCore {
 
   const maps::World& world_;
   const maps::Scenario& scenario_;
+  // The scenario's hash, taken at the first checkpoint: emitting a 10,000-XT scenario to hash it
+  // took seconds, and a mission checkpoints every few.
+  mutable std::optional<std::uint64_t> scenario_hash_;
   ControllerKind controller_;
   MissionRecorder* recorder_;
   FleetServer fleet_;
