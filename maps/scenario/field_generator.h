@@ -66,7 +66,7 @@ struct FieldOptions {
 ///   quarter of the risk, revisit bound 18 s per valve a vehicle holds, in [90, 300] s. A* grid
 ///   0.05, 0.1, 0.2 or 0.25 m, the finest with <= 200,000 cells over the field (the OctoMap uses
 ///   it too), clearance 0.3 m. Coverage reports every max(0.5, N / 500) s (about 500 a second
-///   from the fleet); shared coverage.
+///   from the fleet); regions coverage for a fleet (shared for one vehicle).
 /// Throws ScenarioError (one line, naming the option) for a bad option, or when the field would
 /// be wider than an OctoMap spans at its grid (2^15 - 1 voxels: 8,191 m at 0.25 m).
 Scenario GenerateField(const FieldOptions& options);

@@ -246,7 +246,7 @@ ScaleRow RunDds(const std::string& field_path, ControllerKind kind, const BenchS
   fs::remove_all(dir, ignored);
   fs::remove(log, ignored);
   const pid_t launcher = Spawn({"launch", field_path, "--duration", fmt::format("{}", c.duration_s), "--seed",
-                                std::to_string(c.seed), "--controller", ToString(kind), "--out", dir.string()},
+                                std::to_string(c.seed), "--controller", ToString(kind), "--out", dir.string(), "--no-latest"},
                                log.string());
   Progress progress(label);
   std::map<pid_t, double> host_hwm_mb;

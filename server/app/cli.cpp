@@ -183,6 +183,9 @@ int RunCli(int argc, char** argv) {
   launch->add_option("--out,-o", launch_cmd.out_dir, "Run directory (default: runs/<scenario>_launch)");
   launch->add_option("--hosts", launch_cmd.hosts, "Agent host processes (default: one per 250 vehicles)")->check(MustBePositive);
   launch->add_option("--domain", launch_cmd.domain, "DDS domain id 0..232 (default: a free one, reserved machine-wide)");
+  launch->add_flag("!--no-latest", launch_cmd.point_latest,
+                   "Leave runs/latest alone (scripts and benchmarks that run many missions); operators then need "
+                   "--mission DIR");
   launch->add_option("--resume", launch_cmd.resume_dir,
                      "Bring back the mission whose server died, from the checkpoint in this run directory (no "
                      "scenario or overrides: the run's own are used); vehicles still flying carry on, the others are "
@@ -265,7 +268,9 @@ int RunCli(int argc, char** argv) {
   generate->add_option("--xts", field_options.xts, "Christmas trees (>= 1)")->capture_default_str();
   generate->add_option("--valves", field_options.valves, "Valves in all, 2 to 5 per XT")->capture_default_str();
   generate->add_option("--vehicles", field_options.vehicles, "BlueROV2s (>= 1)")->capture_default_str();
-  generate->add_option("--seed", field_options.seed, "Same seed, same field; also the mission's seed")->capture_default_str();
+  generate->add_option("--seed", field_options.seed, "Same seed, same field; also the mission's seed")
+      ->check(MustBeWholeNumber)
+      ->capture_default_str();
   generate->add_option("--area-per-xt", field_options.area_per_xt_m2, "Seabed per XT (m^2), 50..10000")
       ->capture_default_str();
   generate->add_option("--name", field_options.name, "The scenario's name (default: field_<xts>xt_<valves>v_<vehicles>rov_s<seed>)");

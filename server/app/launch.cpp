@@ -169,7 +169,7 @@ int Launch(const LaunchCommand& c) {
   } catch (const std::runtime_error& e) {
     throw maps::ScenarioError(fmt::format("--out = {}: cannot write there: {}", out_dir, e.what()));
   }
-  PointLatestAt(out_dir);
+  if (c.point_latest) PointLatestAt(out_dir);
 
   const std::vector<std::string> common = {"--domain", std::to_string(domain), "--controller", mission.controller};
   std::vector<std::string> server_args = {"server", scenario_file, "--out", out_dir, "--time-scale",
@@ -298,8 +298,10 @@ int Launch(const LaunchCommand& c) {
                            "{}",
                            scenario.name, domain, server, hosts.size(),
                            resume ? to_resume.size() : scenario.vehicles.size(), out_dir));
-  terminal.Log("launch: in another shell: sage risk set P1 0.9 | sage vehicle add --count 2 | sage vehicle remove ID | "
-               "sage stop (they find this mission through runs/latest)");
+  terminal.Log(std::string("launch: in another shell: sage risk set P1 0.9 | sage vehicle add --count 2 | sage vehicle "
+                           "remove ID | ") +
+               (c.point_latest ? std::string("sage stop (they find this mission through runs/latest)")
+                               : fmt::format("sage stop, each with --mission {}", out_dir)));
 
   std::size_t next_event = 0;
   while (next_event < scenario.fleet_events.size() && scenario.fleet_events[next_event].time_s <= resumed_at) ++next_event;
@@ -385,10 +387,11 @@ int Launch(const LaunchCommand& c) {
       // On a terminal the line is redrawn with every status; in a log, once per tenth.
       if (t > last_print && (tty || t - last_print >= s.duration_s / 10.0 - 1e-9 || s.finished)) {
         last_print = t;
-        terminal.Progress(fmt::format("t = {:5.0f} / {:.0f} s  vehicles {} (lost {})  ergodic metric {:.2e}  server cycle "
+        // No metric before the first vehicle's coverage: "---", as in the run table.
+        const std::string metric = std::isfinite(s.ergodic_metric) ? fmt::format("{:.2e}", s.ergodic_metric) : "---";
+        terminal.Progress(fmt::format("t = {:5.0f} / {:.0f} s  vehicles {} (lost {})  ergodic metric {}  server cycle "
                                       "{:.2f} ms",
-                                      t, s.duration_s, s.vehicles_alive, s.vehicles_lost, s.ergodic_metric,
-                                      s.cycle_time_ms));
+                                      t, s.duration_s, s.vehicles_alive, s.vehicles_lost, metric, s.cycle_time_ms));
       }
     });
     bool any_host = false;

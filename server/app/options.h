@@ -37,6 +37,7 @@ struct LaunchCommand {
   std::optional<int> hosts;      ///< agent host processes (default: one per 250 vehicles)
   double time_scale = 1.0;       ///< mission seconds per wall second
   std::string resume_dir;        ///< continue the crashed mission recorded there
+  bool point_latest = true;      ///< runs/latest points to the mission (off: --no-latest)
   const std::atomic<bool>* stop = nullptr;
 };
 

@@ -41,7 +41,7 @@ PY
 for seed in ${seeds[@]}; do
   echo "inproc_vs_dds: seed $seed" >&2
   "$build/bin/sage" run "$scenario" --seed "$seed" --out "$work/run$seed" >/dev/null 2>&1
-  "$build/bin/sage" launch "$scenario" --seed "$seed" --time-scale 4 --out "$work/launch$seed" >"$work/launch$seed.log" 2>&1
+  "$build/bin/sage" launch "$scenario" --seed "$seed" --time-scale 4 --no-latest --out "$work/launch$seed" >"$work/launch$seed.log" 2>&1
   path=$(same_path "$work/run$seed/trajectory.csv" "$work/launch$seed/trajectory.csv")
   lockstep=$(grep -o "[0-9]* of [0-9]* cycles in lockstep" "$work/launch$seed.log" | tail -1 | sed 's/ cycles in lockstep//')
   for kind in run launch; do

@@ -14,7 +14,7 @@ echo "|---|---|---|---|---|---|---|" | tee -a "$out"
 for n in ${counts[@]}; do
   dir=$(mktemp -d)
   log="$dir/launch.log"
-  if ! "$build/bin/sage" launch scenarios/fleet_large.yaml --vehicles "$n" --duration 30 --out "$dir" >"$log" 2>&1; then
+  if ! "$build/bin/sage" launch scenarios/fleet_large.yaml --vehicles "$n" --duration 30 --no-latest --out "$dir" >"$log" 2>&1; then
     echo "launch_scale: the $n-vehicle mission failed; its log: $log" >&2
     exit 1
   fi

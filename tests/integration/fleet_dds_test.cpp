@@ -1204,10 +1204,13 @@ TEST_F(FleetDds, LaunchFliesTheInProcessMission) {
   const fs::path in_process = run_dir_ / "run", over_dds = run_dir_ / "launch";
   ChildProcess& run = Start("run", {"run", scenario.string(), "--duration", "30", "--seed", "3", "--out", in_process.string()});
   ASSERT_EQ(run.WaitExit(60s), std::optional<int>(0));
+  const fs::path cwd = run_dir_ / "cwd";
+  fs::create_directories(cwd);
   ChildProcess& launch = StartLaunch("launch", {scenario.string(), "--duration", "30", "--seed", "3", "--time-scale",
-                                                Num(kTimeScale)},
-                                     over_dds, FreeDomainForLaunch());
+                                                Num(kTimeScale), "--no-latest"},
+                                     over_dds, FreeDomainForLaunch(), cwd);
   ASSERT_EQ(WaitMissionEnd(launch, 30.0), std::optional<int>(0));
+  EXPECT_FALSE(fs::exists(cwd / "runs" / "latest")) << "--no-latest: runs/latest was pointed at the mission";
   const auto samples = [](const fs::path& csv) {
     std::istringstream in(ReadFile(csv));
     std::vector<std::string> rows;
