@@ -23,6 +23,7 @@ namespace sage::agents {
 namespace {
 
 using Clock = std::chrono::system_clock;  // CLOCK_REALTIME: shared by every process of the mission
+constexpr std::chrono::seconds kSlowServerWait{2};
 
 // The mission clock as the current server announces it.
 struct MissionClock {
@@ -130,6 +131,7 @@ int RunAgentNode(const maps::Scenario& scenario, const AgentNodeOptions& options
     });
   };
   auto last_heard = std::chrono::steady_clock::now();
+  Clock::time_point last_snapshot_at{};  // wall time the last fleet snapshot of this server arrived
   // The server's readers matched before the first report: a state or coverage report written
   // before discovery is done is lost (a join started ahead has seconds for it).
   states.WaitForReaders(1, std::chrono::milliseconds(2000));
@@ -181,14 +183,21 @@ int RunAgentNode(const maps::Scenario& scenario, const AgentNodeOptions& options
       }
       fleet.TakeEach([&](const proto::FleetCoverage& m, const dds_sample_info_t& info) {
         if (!info.valid_data || m.server_instance != clock.instance) return;
-        if (mission.OnFleetSnapshot(wire::FromWire(m))) last_heard = std::chrono::steady_clock::now();
+        if (mission.OnFleetSnapshot(wire::FromWire(m))) {
+          last_heard = std::chrono::steady_clock::now();
+          last_snapshot_at = Clock::now();
+        }
       });
     };
     take_server_words();
     // Lockstep where it can be: cycle k steers on the server's word of cycle k - 1, as in the
-    // in-process mission; it waits up to 0.45 of a period for it, then goes on (counted).
+    // in-process mission; it waits up to 0.45 of a period for it, then goes on (counted). A server
+    // heard within kSlowServerWait is waited for that long: a long cycle of its own (splitting a
+    // 1,000-vehicle field into regions took 0.8 s) is not a silence. The host then catches up
+    // with the clock; a server gone silent costs that wait once.
     if (mission.has_snapshot() && mission.snapshot_cycle() + 1 < static_cast<std::uint64_t>(std::max<std::int64_t>(k, 1))) {
-      const auto deadline = clock.WallOf((static_cast<double>(k) + 0.45) / rate);
+      const auto deadline = std::max(clock.WallOf((static_cast<double>(k) + 0.45) / rate),
+                                     last_snapshot_at + std::chrono::duration_cast<Clock::duration>(kSlowServerWait));
       while (mission.snapshot_cycle() + 1 < static_cast<std::uint64_t>(k)) {
         if (std::chrono::system_clock::now() >= deadline) {
           if (cycles_not_in_step++ == 0) first_not_in_step_s = static_cast<double>(k) / rate;

@@ -298,8 +298,11 @@ int RunServerNode(const maps::Scenario& scenario, const ServerNodeOptions& optio
     // state of this cycle, so that it accounts what the in-process mission would (a vehicle that
     // died is waited for until its lease runs out); a cycle that
     // has to go on without one is counted (the mission is then no longer the in-process one).
-    const auto lockstep_deadline = due + std::chrono::duration_cast<std::chrono::system_clock::duration>(
-                                             std::chrono::duration<double>(0.45 / rate / options.time_scale));
+    // Behind its schedule (a long cycle of its own, the vehicles waiting on it) it waits as long
+    // from now: the states are on their way.
+    const auto lockstep_deadline = std::max(due, std::chrono::system_clock::now()) +
+                                   std::chrono::duration_cast<std::chrono::system_clock::duration>(
+                                       std::chrono::duration<double>(0.45 / rate / options.time_scale));
     const auto all_in = [&] {
       for (const int id : core.roster().alive()) {
         if (ended_by_scenario(id, cycle)) continue;
