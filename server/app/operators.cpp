@@ -126,7 +126,8 @@ int RemoveVehicle(const MissionFile& mission, int id) {
                  answer->mission_time_s);
     return 1;
   }
-  std::printf("vehicle %d left the mission at t = %.1f s\n", id, answer->mission_time_s);
+  // The server records the leave when the state is disposed, a cycle or two after its order.
+  std::printf("vehicle %d left the mission (told to at t = %.1f s)\n", id, answer->mission_time_s);
   return 0;
 }
 
