@@ -122,24 +122,16 @@ int RunAgentNode(const maps::Scenario& scenario, const AgentNodeOptions& options
     states.Dispose(key);
   };
   const double rate = scenario.control_rate_hz;
-  // Vehicles the scenario loses or takes out send no state from their event's cycle on: not
-  // waited for as neighbours from there (their lease tells this host a few cycles later).
-  const std::vector<std::pair<double, int>> scenario_ends = scenario.VehicleEnds();
-  const auto ended_by_scenario = [&](int id, std::int64_t at_cycle) {
-    return std::any_of(scenario_ends.begin(), scenario_ends.end(), [&](const auto& end) {
-      return end.second == id && static_cast<double>(at_cycle) >= std::ceil(end.first * rate - 1e-9);
-    });
-  };
+  const std::map<int, std::int64_t> scenario_ends = scenario.VehicleEndCycles();
   auto last_heard = std::chrono::steady_clock::now();
   Clock::time_point last_snapshot_at{};  // wall time the last fleet snapshot of this server arrived
   // The server's readers matched before the first report: a state or coverage report written
   // before discovery is done is lost (a join started ahead has seconds for it).
   states.WaitForReaders(1, std::chrono::milliseconds(2000));
   coverage.WaitForReaders(1, std::chrono::milliseconds(2000));
-  const std::int64_t first_cycle = static_cast<std::int64_t>(std::ceil(options.start_at_s * rate - 1e-9));
-  const std::int64_t end_cycle = std::isfinite(options.end_at_s)
-                                     ? static_cast<std::int64_t>(std::ceil(options.end_at_s * rate - 1e-9))
-                                     : std::numeric_limits<std::int64_t>::max();
+  const std::int64_t first_cycle = scenario.CycleAt(options.start_at_s);
+  const std::int64_t end_cycle =
+      std::isfinite(options.end_at_s) ? scenario.CycleAt(options.end_at_s) : std::numeric_limits<std::int64_t>::max();
   std::int64_t k = std::max(first_cycle,
                             static_cast<std::int64_t>(std::ceil(clock.MissionTime(proto::NowRealtimeNs()) * rate)));
   spdlog::info("agents: found the server on DDS domain {}; {} vehicle(s) joining the mission at t = {:.1f} s",
@@ -241,7 +233,11 @@ int RunAgentNode(const maps::Scenario& scenario, const AgentNodeOptions& options
     const auto near_ones_in = [&] {
       for (const auto& [other, seen] : others) {
         if (seen.empty() || seen.back().first >= k - 1 || seen.back().first < k - 3) continue;  // in, or gone
-        if (ended_by_scenario(static_cast<int>(other), k - 1)) continue;  // lost or left at its cycle
+        // The scenario lost it or took it out at its cycle (its lease tells this host later).
+        if (const auto end = scenario_ends.find(static_cast<int>(other));
+            end != scenario_ends.end() && k - 1 >= end->second) {
+          continue;
+        }
         for (const VehicleId id : mission.ids())
           if ((mission.host().State(id).position_m - seen.back().second).squaredNorm() < 3.0 * 3.0) return false;
       }

@@ -40,12 +40,16 @@ int Scenario::VehicleId(const std::string& vehicle_name) const {
   return -1;
 }
 
-std::vector<std::pair<double, int>> Scenario::VehicleEnds() const {
-  std::vector<std::pair<double, int>> ends;
-  for (const FleetEvent& e : fleet_events) {
+std::int64_t Scenario::CycleAt(double time_s) const {
+  return static_cast<std::int64_t>(std::ceil(time_s * control_rate_hz - 1e-9));
+}
+
+std::map<int, std::int64_t> Scenario::VehicleEndCycles() const {
+  std::map<int, std::int64_t> ends;
+  for (const FleetEvent& e : fleet_events) {  // sorted by time: the first end is kept
     if (e.kind == FleetEvent::Kind::kJoin) continue;
     const int id = VehicleId(e.vehicle.name);
-    if (id >= 0) ends.emplace_back(e.time_s, id);
+    if (id >= 0) ends.emplace(id, CycleAt(e.time_s));
   }
   return ends;
 }

@@ -180,8 +180,10 @@ struct Scenario {
   /// A vehicle's mission id by name: its index among `vehicles`, or for a fleet_events join
   /// vehicles.size() plus the join's rank among the joins; -1 if no vehicle has the name.
   int VehicleId(const std::string& name) const;
-  /// (mission time, vehicle id) of every fleet_events loss and leave, in time order.
-  std::vector<std::pair<double, int>> VehicleEnds() const;
+  /// The first control cycle at or after mission time t: the cycle a timed event happens on.
+  std::int64_t CycleAt(double time_s) const;
+  /// Vehicle id -> the control cycle of its first fleet_events loss or leave (none: not listed).
+  std::map<int, std::int64_t> VehicleEndCycles() const;
   const RiskProfile* FindProfile(const std::string& name) const;  ///< nullptr if none
   /// The named profile (empty: default_profile); throws ScenarioError listing the profiles.
   const RiskProfile& ProfileOrThrow(const std::string& name) const;

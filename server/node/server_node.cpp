@@ -240,16 +240,9 @@ int RunServerNode(const maps::Scenario& scenario, const ServerNodeOptions& optio
   std::vector<std::pair<std::int64_t, int>> scenario_joins;  // (cycle, vehicle id) of each fleet_events join
   for (const maps::FleetEvent& e : scenario.fleet_events) {
     if (e.kind != maps::FleetEvent::Kind::kJoin) continue;
-    scenario_joins.emplace_back(static_cast<std::int64_t>(std::ceil(e.time_s * rate - 1e-9)),
-                                JoinVehicleId(scenario, e.vehicle.name));
+    scenario_joins.emplace_back(scenario.CycleAt(e.time_s), JoinVehicleId(scenario, e.vehicle.name));
   }
-  // A vehicle the scenario loses or takes out ends at its event's cycle: not waited for from
-  // there on (the lease that tells the server takes a few cycles more).
-  const std::vector<std::pair<double, int>> scenario_ends = scenario.VehicleEnds();
-  const auto ended_by_scenario = [&](int id, std::int64_t at_cycle) {
-    return std::any_of(scenario_ends.begin(), scenario_ends.end(),
-                       [&](const auto& end) { return end.second == id && at_cycle >= std::ceil(end.first * rate - 1e-9); });
-  };
+  const std::map<int, std::int64_t> scenario_ends = scenario.VehicleEndCycles();
   long cycles_not_in_step = 0;
   double first_not_in_step_s = -1.0;
   SteadyClock::time_point compute_start;
@@ -305,7 +298,9 @@ int RunServerNode(const maps::Scenario& scenario, const ServerNodeOptions& optio
                                        std::chrono::duration<double>(0.45 / rate / options.time_scale));
     const auto all_in = [&] {
       for (const int id : core.roster().alive()) {
-        if (ended_by_scenario(id, cycle)) continue;
+        // A vehicle the scenario loses or takes out ends at its event's cycle: not waited for
+        // from there on (the lease that tells the server takes a few cycles more).
+        if (const auto end = scenario_ends.find(id); end != scenario_ends.end() && cycle >= end->second) continue;
         const auto heard = heard_cycle.find(id);
         if (heard == heard_cycle.end() || heard->second < cycle) return false;
       }

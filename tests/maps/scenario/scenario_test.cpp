@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <map>
 #include <set>
 #include <string>
 #include <vector>
@@ -161,6 +162,21 @@ TEST(Scenario, TwoXtLoads) {
 }
 
 // ParseScenario(EmitScenario(s)) == s, field by field, and emitting again gives the same text.
+// Vehicles by name: the starting ones by index, a join after them; events on their cycle (the
+// first at or after the event's time, 10 Hz), a loss listed by its vehicle's id.
+TEST(Scenario, VehicleIdsAndEventCycles) {
+  const Scenario s = LoadScenario(kFleetFieldPath);  // rov1..rov4; rov5 joins at 200 s, rov2 lost at 400 s
+  EXPECT_EQ(s.VehicleId("rov1"), 0);
+  EXPECT_EQ(s.VehicleId("rov4"), 3);
+  EXPECT_EQ(s.VehicleId("rov5"), 4);
+  EXPECT_EQ(s.VehicleId("nobody"), -1);
+  EXPECT_EQ(s.CycleAt(0.0), 0);
+  EXPECT_EQ(s.CycleAt(0.1), 1);
+  EXPECT_EQ(s.CycleAt(0.12), 2);
+  EXPECT_EQ(s.CycleAt(200.0), 2000);
+  EXPECT_EQ(s.VehicleEndCycles(), (std::map<int, std::int64_t>{{1, 4000}}));
+}
+
 TEST(Scenario, EmitParseRoundTripIsExact) {
   for (const Scenario& s : {LoadScenario(kTwoXtPath), ParseScenario(kBase, "base.yaml"), LoadScenario(kFleetFieldPath),
                             LoadScenario(kFleetLargePath)}) {
