@@ -127,6 +127,14 @@ void FillQuality(ScaleRow& row, const MissionMetrics& m) {
   row.visit_weight_correlation = m.visit_weight_correlation;
 }
 
+// CPU seconds, over what they were counted, and per vehicle-second of the mission.
+static void FillCpu(ScaleRow& row, double cpu_s, double mission_s, const char* scope) {
+  row.cpu_s = cpu_s;
+  row.cpu_scope = scope;
+  const double vehicle_s = row.vehicles * mission_s;
+  row.cpu_s_per_vehicle_s = vehicle_s > 0.0 ? cpu_s / vehicle_s : ScaleRow::kNaN;
+}
+
 ScaleRow InprocRow(ScaleRow row, const InprocRun& run) {
   row.transport = "inproc";
   row.mission_s = run.mission_s;
@@ -139,10 +147,7 @@ ScaleRow InprocRow(ScaleRow row, const InprocRun& run) {
     row.server_cycle_p99_ms = 1e3 * NearestRankPercentile(run.server_cycle_s, 0.99);
     row.server_cycle_max_ms = 1e3 * *std::max_element(run.server_cycle_s.begin(), run.server_cycle_s.end());
   }
-  row.cpu_s = run.cpu_s;
-  row.cpu_scope = "the mission loop of the process that ran it (RUSAGE_SELF)";
-  const double vehicle_s = row.vehicles * run.mission_s;
-  row.cpu_s_per_vehicle_s = vehicle_s > 0.0 ? run.cpu_s / vehicle_s : ScaleRow::kNaN;
+  FillCpu(row, run.cpu_s, run.mission_s, "the mission loop of the process that ran it (RUSAGE_SELF)");
   row.peak_rss_mb = run.peak_rss_mb;
   row.all_moved_after_s = run.all_moved_s;
   row.vehicles_never_moved = run.never_moved;
@@ -159,10 +164,7 @@ ScaleRow DdsRow(ScaleRow row, const DdsRun& run) {
   row.server_cycle_mean_ms = s.cycle_mean_ms;
   row.server_cycle_p99_ms = s.cycle_p99_ms;
   row.server_cycle_max_ms = s.cycle_max_ms;
-  row.cpu_s = run.cpu_s;
-  row.cpu_scope = "every process of the launch, start to exit (wait4 on the launcher)";
-  const double vehicle_s = row.vehicles * s.mission_s;
-  row.cpu_s_per_vehicle_s = vehicle_s > 0.0 ? run.cpu_s / vehicle_s : ScaleRow::kNaN;
+  FillCpu(row, run.cpu_s, s.mission_s, "every process of the launch, start to exit (wait4 on the launcher)");
   row.peak_rss_mb = run.largest_rss_mb;
   row.server_peak_rss_mb = s.peak_rss_mb;
   row.agent_host_peak_rss_mb = run.agent_host_rss_mb;
