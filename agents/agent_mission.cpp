@@ -188,8 +188,7 @@ AgentMission::CycleOutput AgentMission::Step(std::int64_t cycle) {
     out.states.push_back(std::move(s));
   }
   // Vehicles hold still until the server's first word.
-  const bool steer = snapshot_.has_value() && snapshot_->phi.size() == host_.basis().size();
-  if (!steer) return out;
+  if (!snapshot_.has_value()) return out;
   for (auto& [id, member] : members_) {
     if (const std::optional<VehicleTarget> target = TargetOf(id, member, t)) host_.SetTarget(id, *target);
   }

@@ -133,7 +133,15 @@ Eigen::VectorXd RiskField::CoefficientsFor(const Eigen::VectorXd& weights) const
 
 void RiskField::Recompute() {
   weights_ = raw_weights_ / raw_weights_.sum();
-  coefficients_.noalias() = per_component_ * weights_;  // phi_k is linear in the weights: O(M K^2)
+  coefficients_stale_ = true;
+}
+
+const Eigen::VectorXd& RiskField::coefficients() const {
+  if (coefficients_stale_) {
+    coefficients_.noalias() = per_component_ * weights_;  // phi_k is linear in the weights: O(M K^2)
+    coefficients_stale_ = false;
+  }
+  return coefficients_;
 }
 
 double RiskField::Density(const Eigen::Vector2d& x) const {

@@ -37,8 +37,10 @@ class RiskField {
   /// Normalised weights (sum 1).
   const Eigen::VectorXd& weights() const { return weights_; }
 
-  /// phi_k of the normalised mixture, flat-indexed as SpectralBasis.
-  const Eigen::VectorXd& coefficients() const { return coefficients_; }
+  /// phi_k of the normalised mixture, flat-indexed as SpectralBasis. Computed when asked after a
+  /// weight change (O(M K^2)): a server whose vehicles steer on regions of their own changes the
+  /// field's weights every cycle (the guard) but seldom needs the field's phi_k.
+  const Eigen::VectorXd& coefficients() const;
   /// The cached phi_k of one unit-weight component.
   Eigen::VectorXd ComponentCoefficients(int component) const { return per_component_.col(component); }
 
@@ -77,7 +79,8 @@ class RiskField {
   Eigen::MatrixXd per_component_;  // size() x M
   Eigen::VectorXd raw_weights_;
   Eigen::VectorXd weights_;
-  Eigen::VectorXd coefficients_;
+  mutable Eigen::VectorXd coefficients_;
+  mutable bool coefficients_stale_ = true;
   Eigen::VectorXd blocked_mass_;
 };
 

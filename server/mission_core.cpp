@@ -267,7 +267,11 @@ CycleOutput MissionCore::Cycle(std::int64_t cycle) {
   }
 
   out.snapshot.cycle = snapshot_cycle;
-  out.snapshot.phi = fleet_.phi();
+  // Only shared coverage (and a partition's vehicle without valves) steers on the field's phi_k;
+  // regions and tours leave it out (at 35,000 valves it is 143 Mflop a cycle, 32 kB a host).
+  const bool field_phi = controller_ == ControllerKind::kErgodic &&
+                         scenario_.fleet.assignment != maps::FleetAssignment::kRegions;
+  if (field_phi) out.snapshot.phi = fleet_.phi();
   out.snapshot.coverage = fleet_.coverage();
   out.snapshot.valve_weights = fleet_.schedule().back().weights.array().pow(scenario_.astar.weight_exponent);
 
