@@ -1,7 +1,8 @@
 // The fleet tour planner: a partition (every valve once, no vehicle without one), closed tours
 // through exactly each share, lap times that PlanGridPath and the weights reproduce, near the
 // brute-force min-max optimum on small fields, balanced on a random one, a wall respected,
-// deterministic, and tours that TourController flies.
+// deterministic, and tours that TourController flies; the large-fleet matching against the sorted
+// list of all pairs.
 #include "agents/fleet_tour_planner.h"
 
 #include <algorithm>
@@ -11,6 +12,7 @@
 
 #include <gtest/gtest.h>
 
+#include "agents/greedy_match.h"
 #include "agents/tour_controller.h"
 
 namespace sage::agents {
@@ -336,6 +338,34 @@ TEST(FleetTourPlanner, RejectsInvalidInput) {
   FleetTourOptions negative_exponent;
   negative_exponent.weight_exponent = -1.0;
   EXPECT_THROW(PlanFleetTours(grid, valves, weights, Vehicles(1, 0.5), 1.0, negative_exponent), std::invalid_argument);
+}
+
+// GreedyMatch against what it replaces: every (cost, cluster, vehicle) sorted, each pair taken if
+// both ends are free. Small integer costs make ties (broken by cluster, then vehicle) common, and
+// more clusters than the shortlist's 16 wanting the same few vehicles make shortlists run out.
+TEST(GreedyMatch, TakesThePairsTheSortedListWould) {
+  std::mt19937_64 rng(11);
+  for (int trial = 0; trial < 60; ++trial) {
+    const int n = 1 + static_cast<int>(rng() % 40), m = n + static_cast<int>(rng() % 30);
+    const int spread = trial % 3 == 0 ? 4 : 1000;  // few distinct costs: ties everywhere
+    std::vector<std::vector<double>> cost(n, std::vector<double>(m));
+    for (auto& row : cost)
+      for (double& c : row) c = static_cast<double>(rng() % spread);
+    if (trial % 5 == 0) {  // every cluster prefers the same vehicles
+      for (auto& row : cost)
+        for (int k = 0; k < m; ++k) row[k] = k + static_cast<double>(rng() % 2);
+    }
+    std::vector<std::tuple<double, int, int>> pairs;
+    for (int c = 0; c < n; ++c)
+      for (int k = 0; k < m; ++k) pairs.emplace_back(cost[c][k], c, k);
+    std::sort(pairs.begin(), pairs.end());
+    std::vector<int> expected(n, -1);
+    std::vector<char> taken(m, 0);
+    for (const auto& [d, c, k] : pairs)
+      if (expected[c] < 0 && !taken[k]) expected[c] = k, taken[k] = 1;
+    const std::vector<int> got = GreedyMatch(n, m, [&](int c, int k) { return cost[c][k]; });
+    ASSERT_EQ(got, expected) << "trial " << trial << ": " << n << " clusters, " << m << " vehicles";
+  }
 }
 
 }  // namespace
