@@ -421,9 +421,10 @@ struct Tours {
 class Search {
  public:
   Search(ValveDistances& dist, const Points& p, const std::vector<FleetVehicle>& vehicles, double wait_s,
-         const FleetTourOptions& options, std::mt19937_64& rng)
+         const Eigen::VectorXd& weights, const FleetTourOptions& options, std::mt19937_64& rng)
       : dist_(dist), p_(p), near_(NearestValves(p, std::max(1, options.neighbours))), vehicles_(vehicles),
-        wait_s_(wait_s), rng_(rng),
+        wait_s_(wait_s), risk_share_(options.risk_share),
+        mass_(weights.sum() > 0.0 ? Eigen::VectorXd(weights / weights.sum()) : weights), rng_(rng),
         deadline_(options.time_budget_s > 0.0
                       ? Clock::now() + std::chrono::duration_cast<Clock::duration>(
                                            std::chrono::duration<double>(options.time_budget_s))
@@ -471,8 +472,17 @@ class Search {
     int u = -1;
     std::uint64_t t_version = 0, u_version = 0;
   };
-  double Lap(int k, double length_m) const { return length_m / vehicles_[k].speed_mps + wait_s_; }
-  double Lap(const Tours& s, int k) const { return Lap(k, s.length[k]); }
+  // The lap the search balances: travel and waits, times 1 + beta n W for a share holding W of
+  // the field's risk (FleetTourOptions::risk_share; beta = 0: the lap itself).
+  double Lap(int k, double length_m, const std::vector<int>& order) const {
+    const double lap = length_m / vehicles_[k].speed_mps + wait_s_;
+    if (risk_share_ <= 0.0) return lap;
+    double mass = 0.0;
+    for (int v : order) mass += mass_[v];
+    return lap * (1.0 + risk_share_ * static_cast<double>(vehicles_.size()) * mass);
+  }
+  double Lap(int k, const Candidate& c) const { return Lap(k, c.length, c.order); }
+  double Lap(const Tours& s, int k) const { return Lap(k, s.length[k], s.order[k]); }
   bool OutOfTime() const { return Clock::now() > deadline_; }
   static Candidate Of(const Tours& s, int k) { return {s.order[k], s.length[k]}; }
   int Longest(const Tours& s) const {
@@ -557,7 +567,7 @@ class Search {
     auto c = cs.begin();
     for (auto k = ks.begin(); k != ks.end(); ++k, ++c) {
       old_max = std::max(old_max, Lap(s, *k)), old_sum += Lap(s, *k);
-      new_max = std::max(new_max, Lap(*k, c->length)), new_sum += Lap(*k, c->length);
+      new_max = std::max(new_max, Lap(*k, *c)), new_sum += Lap(*k, *c);
     }
     if (!Better(new_max, new_sum, old_max, old_sum)) return false;
     c = cs.begin();
@@ -623,8 +633,7 @@ class Search {
       for (int v : s.order[t]) merged = Edit(std::move(merged), -1, v);
       if (splits.empty()) make_splits();
       const auto best = std::min_element(splits.begin(), splits.end(), [&](const auto& x, const auto& y) {
-        return std::max(Lap(a, x.first.length), Lap(t, x.second.length)) <
-               std::max(Lap(a, y.first.length), Lap(t, y.second.length));
+        return std::max(Lap(a, x.first), Lap(t, x.second)) < std::max(Lap(a, y.first), Lap(t, y.second));
       });
       if (Try(s, {a, t, u}, {best->first, best->second, merged})) {
         touched = {a, t, u};
@@ -645,7 +654,7 @@ class Search {
         if (u == e.u || std::max(s.order[t].size(), s.order[u].size()) > kExactTourSize) continue;
         Candidate merged = Of(s, u);
         for (int x : s.order[t]) merged = Edit(std::move(merged), -1, x);
-        if (Lap(u, merged.length) < e.lap) e = {Lap(u, merged.length), u, s.version[t], s.version[u]};
+        if (Lap(u, merged) < e.lap) e = {Lap(u, merged), u, s.version[t], s.version[u]};
       }
     }
     return e;
@@ -674,6 +683,8 @@ class Search {
   std::vector<std::vector<int>> near_;
   const std::vector<FleetVehicle>& vehicles_;
   double wait_s_;
+  double risk_share_;
+  Eigen::VectorXd mass_;  // each valve's share of the field's risk (sums to 1)
   std::mt19937_64& rng_;
   Clock::time_point deadline_;
   std::map<std::vector<int>, Candidate> exact_;
@@ -808,7 +819,7 @@ FleetTourPlan Plan(const maps::OccupancyGrid& grid, const Points& valves_m, cons
     for (int v : s.order[k]) s.owner[v] = k;
   }
   if (n < m) {
-    Search(dist, centres, vehicles, wait_per_lap_s, options, rng).Run(s, std::max(0, options.perturbation_rounds));
+    Search(dist, centres, vehicles, wait_per_lap_s, weights, options, rng).Run(s, std::max(0, options.perturbation_rounds));
     // The search moves valves between tours wherever that shortens the longest lap, so a tour can
     // end far from the vehicle it was matched to (on a generated 1,000-vehicle field, 330 m: a
     // tour unwatched for 8 minutes). Match the tours as they came out, among vehicles of one

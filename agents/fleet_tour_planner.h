@@ -98,6 +98,10 @@ struct FleetTourOptions {
   /// Wall-clock cap (s) on steps 3-4; 0 = none. A plan cut short by it depends on the machine's
   /// speed, so the default keeps results deterministic.
   double time_budget_s = 0.0;
+  /// beta >= 0: the search balances lap x (1 + beta n W), W the share of the field's risk a tour
+  /// holds (n vehicles), so that a vehicle with the riskier valves gets fewer of them; 0 = the
+  /// lap alone (an operator's tours).
+  double risk_share = 0.0;
 };
 
 /// One vehicle's share and its tour, ready for TourController(tour, grid, speed, wait, weights).

@@ -119,13 +119,15 @@ class FleetServer {
   /// Throws std::invalid_argument if the state does not fit this scenario (valve count, basis).
   void Restore(const State& state);
 
+  /// When the valve was last visited (s; -inf if never or no visit tracker).
+  double LastVisit(int valve) const;
+
  private:
   using VehicleRecord = Vehicle;
 
   void UpdateEffectiveWeights(double time_s);
   void RecordWeightChange(double time_s, int valve, const std::string& source);
   void Repartition();
-  double LastVisit(int valve) const;
 
   maps::World& world_;
   const maps::Scenario& scenario_;

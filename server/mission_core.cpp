@@ -361,7 +361,7 @@ void MissionCore::AssignTours(const std::vector<int>& alive, bool risk_changed, 
   }
 }
 
-agents::FleetTourPlan MissionCore::PlanShares(const std::vector<int>& alive, double weight_exponent) const {
+agents::FleetTourPlan MissionCore::PlanShares(const std::vector<int>& alive, double weight_exponent, double risk_share) const {
   std::vector<agents::FleetVehicle> vehicles;
   for (int id : alive) {
     const Roster::Member& m = *roster_.Find(id);
@@ -371,6 +371,7 @@ agents::FleetTourPlan MissionCore::PlanShares(const std::vector<int>& alive, dou
   agents::FleetTourOptions options;
   options.seed = scenario_.seed;
   options.weight_exponent = weight_exponent;
+  options.risk_share = risk_share;
   return agents::PlanFleetTours(world_.astar_grid(), scenario_.ValvePositions(), fleet_.schedule().back().weights,
                                 vehicles, scenario_.astar.wait_per_lap_s, options);
 }
@@ -393,13 +394,30 @@ void MissionCore::AssignRegions(const std::vector<int>& alive, CycleOutput& out)
     plan.last_seen = alive;
     plan.changed_s = time_s_;
   }
-  const bool replan =
+  bool replan =
       alive != plan.planned_for &&
       (plan.planned_for.empty() ? alive.size() >= scenario_.vehicles.size() || time_s_ - plan.first_join_s >= kFirstPlanWait_s
                                 : time_s_ - plan.changed_s >= kSettle_s - 1e-9);
+  // Split by risk (fleet.risk_share > 0): a leak, or an operator's risk change, that moves some
+  // region's share of the field's risk by more than kResplitRatio either way splits the field
+  // again on the next cycle; smaller changes only re-weight the regions' targets (hysteresis).
+  constexpr double kResplitRatio = 1.5;
+  bool by_risk = false;
+  if (!replan && scenario_.fleet.risk_share > 0.0 && !plan.shares.empty() && fleet_.schedule().size() > plan.risk_seen) {
+    plan.risk_seen = fleet_.schedule().size();
+    const Eigen::VectorXd& raw = fleet_.schedule().back().weights;
+    const double total = raw.sum();
+    for (const auto& [id, share] : plan.shares) {
+      double mass = 0.0;
+      for (int i : share.valves) mass += raw[i] / total;
+      const double ratio = (mass + 1e-12) / (share.split_mass + 1e-12);
+      if (ratio > kResplitRatio || ratio < 1.0 / kResplitRatio) replan = by_risk = true;
+    }
+  }
   if (replan) {
-    const agents::FleetTourPlan shares = PlanShares(alive, 1.0);
+    const agents::FleetTourPlan shares = PlanShares(alive, 1.0, scenario_.fleet.risk_share);
     const std::vector<maps::Valve> valves = scenario_.AllValves();
+    const Eigen::VectorXd risk = fleet_.schedule().back().weights / fleet_.schedule().back().weights.sum();
     plan.shares.clear();
     std::vector<RegionRecord> records;
     std::size_t most = 0;
@@ -407,6 +425,8 @@ void MissionCore::AssignRegions(const std::vector<int>& alive, CycleOutput& out)
     for (std::size_t k = 0; k < alive.size(); ++k) {
       RegionShare share;
       share.valves = shares.vehicles[k].valves;
+      share.lap_time_s = shares.vehicles[k].lap_time_s;
+      for (int i : share.valves) share.split_mass += risk[i];
       std::vector<Eigen::Vector2d> points;
       std::vector<maps::GaussianComponent> components;
       for (int i : share.valves) {
@@ -424,6 +444,7 @@ void MissionCore::AssignRegions(const std::vector<int>& alive, CycleOutput& out)
       plan.shares[alive[k]] = std::move(share);
     }
     plan.planned_for = alive;
+    plan.risk_seen = fleet_.schedule().size();
     // The guard watches each valve against its share's tour lap: no valve waits longer than
     // kGuardLaps laps of the tour its vehicle could fly instead (nor the scenario's bound).
     Eigen::VectorXd bounds = Eigen::VectorXd::Constant(static_cast<Eigen::Index>(valves.size()),
@@ -433,9 +454,10 @@ void MissionCore::AssignRegions(const std::vector<int>& alive, CycleOutput& out)
     }
     fleet_.SetRevisitBounds(bounds);
     if (recorder_ != nullptr) recorder_->OnRegions(time_s_, records);
-    Note("regions", fmt::format("{} regions for {} vehicles: up to {} valves and {:.1f} m a side each; the guard "
+    Note("regions", fmt::format("{} regions for {} vehicles{}: up to {} valves and {:.1f} m a side each; the guard "
                                 "boosts a valve after {:.0f}-{:.0f} s",
-                                plan.shares.size(), alive.size(), most, largest, bounds.minCoeff(), bounds.maxCoeff()));
+                                plan.shares.size(), alive.size(), by_risk ? " (the risk moved)" : "", most, largest,
+                                bounds.minCoeff(), bounds.maxCoeff()));
   }
   // A target is sent again only when its own share's weights change: at fleet scale the guard
   // boosts some valve somewhere nearly every cycle, and re-sending every share then was 21 of the
@@ -457,13 +479,25 @@ void MissionCore::AssignRegions(const std::vector<int>& alive, CycleOutput& out)
     RegionShare& share = found->second;
     Eigen::VectorXd own(static_cast<Eigen::Index>(share.valves.size()));
     for (std::size_t k = 0; k < share.valves.size(); ++k) own[static_cast<Eigen::Index>(k)] = weights[share.valves[k]];
+    // Age weighting: w (1 + age / (L lap)); a valve just seen weighs its risk, one unseen for a
+    // lap twice that (L = 1). A leak is as likely to have started at a valve as its risk and the
+    // time since anyone looked: the target leans to where one would go unnoticed longest.
+    const double laps = scenario_.fleet.age_weighting_laps;
+    if (laps > 0.0) {
+      const double scale = laps * std::max(share.lap_time_s, 1.0);
+      for (std::size_t k = 0; k < share.valves.size(); ++k) {
+        const double age = time_s_ - std::max(0.0, fleet_.LastVisit(share.valves[k]));
+        own[static_cast<Eigen::Index>(k)] *= 1.0 + std::max(age, 0.0) / scale;
+      }
+    }
     if (!(own.sum() > 0.0)) own.setOnes();  // a share whose valves all weigh zero is still watched, evenly
     own /= own.sum();  // the target is the share's mixture: only the weights' proportions count
     // The field's weights are normalised over all valves and the guard's floor is absolute, so a
     // boost anywhere nudges every share's proportions a little (at 1,000 vehicles: ~430 targets a
-    // cycle, 11 MB/s). A share's target is sent again when one of its proportions has moved by
-    // more than 1 % of itself since it was sent: its own guard boosts, risk changes, operators'.
-    constexpr double kSameProportion = 0.01;
+    // cycle, 11 MB/s), and age weighting moves them all the time. A share's target is sent again
+    // when one of its proportions has moved by more than 5 % of itself since it was sent: a visit
+    // to one of its valves, its own guard boosts, risk changes, operators'.
+    constexpr double kSameProportion = 0.05;
     if (m.target_sent && own.size() == share.sent_weights.size() &&
         ((own - share.sent_weights).array().abs() <= kSameProportion * share.sent_weights.array()).all()) {
       continue;

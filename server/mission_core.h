@@ -167,7 +167,7 @@ class MissionCore {
   void AssignTours(const std::vector<int>& alive, bool risk_changed, CycleOutput& out);
   void AssignRegions(const std::vector<int>& alive, CycleOutput& out);
   // The valves split among the live vehicles, balanced on travel (the fleet's tours).
-  agents::FleetTourPlan PlanShares(const std::vector<int>& alive, double weight_exponent) const;
+  agents::FleetTourPlan PlanShares(const std::vector<int>& alive, double weight_exponent, double risk_share = 0.0) const;
   double next_time_s() const;  // the mission time of the coming cycle, when input takes effect
 
   const maps::World& world_;
@@ -208,12 +208,15 @@ class MissionCore {
     std::vector<int> valves;
     std::unique_ptr<maps::RegionField> field;
     Eigen::VectorXd sent_weights;  // proportions of the share's valve weights its target was made from
+    double lap_time_s = 0.0;       // of its tour: the age weighting's and the guard's clock
+    double split_mass = 0.0;       // its share of the field's risk when the field was split
   };
   struct RegionPlan {
     std::vector<int> planned_for;
     std::vector<int> last_seen;  // the live vehicles as of changed_s
     double changed_s = -1.0;
     double first_join_s = -1.0;
+    std::size_t risk_seen = 0;  // schedule entries looked at for a re-split
     std::map<int, RegionShare> shares;
   };
   RegionPlan region_plan_;

@@ -139,6 +139,13 @@ struct FleetSettings {
   FleetAssignment assignment = FleetAssignment::kShared;
   double coverage_period_s = 0.5;  ///< how often a vehicle publishes its coverage sums (s), > 0
   double liveliness_lease_s = 0.5; ///< a vehicle silent this long is lost (s), > 0
+  /// Regions: a valve weighs w (1 + age / (L lap)) in its region's target, age the time since its
+  /// last visit and lap its share's tour lap: the chance that a leak has started there unseen
+  /// grows with the time nobody looked. In [0, 100]; 0 = off (the weights alone).
+  double age_weighting_laps = 1.0;
+  /// Regions: the split balances lap x (1 + beta n W), W the share of the field's risk a region
+  /// holds, so that the riskier valves come in smaller regions. In [0, 10]; 0 = laps alone.
+  double risk_share = 0.5;
 };
 
 /// A change of the fleet during a mission: a vehicle joins, is lost (dies without a word), or

@@ -92,6 +92,8 @@ std::string EmitScenario(const Scenario& s) {
   key("assignment") << ToString(s.fleet.assignment);
   number("coverage_period_s", s.fleet.coverage_period_s);
   number("liveliness_lease_s", s.fleet.liveliness_lease_s);
+  number("age_weighting_laps", s.fleet.age_weighting_laps);
+  number("risk_share", s.fleet.risk_share);
   out << YAML::EndMap;
   key("fleet_events");
   if (s.fleet_events.empty()) out << YAML::Flow;  // "fleet_events: []" on one line

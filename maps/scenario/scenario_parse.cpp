@@ -313,12 +313,14 @@ Scenario ReadScenario(const Reader& r, const YAML::Node& root, const std::string
   });
   if (s.default_profile.empty() && !s.profiles.empty()) s.default_profile = s.profiles.front().name;
   r.Optional(root, "fleet", "", [&](const YAML::Node& n, const std::string& p) {
-    r.ExpectMap(n, p, {"assignment", "coverage_period_s", "liveliness_lease_s"});
+    r.ExpectMap(n, p, {"assignment", "coverage_period_s", "liveliness_lease_s", "age_weighting_laps", "risk_share"});
     r.Optional(n, "assignment", p, [&](const YAML::Node& v, const std::string& q) {
       s.fleet.assignment = ParseFleetAssignment(r.Text(v, q), r.file() + ": " + q);
     });
     r.OptionalNumber(n, "coverage_period_s", p, s.fleet.coverage_period_s);
     r.OptionalNumber(n, "liveliness_lease_s", p, s.fleet.liveliness_lease_s);
+    r.OptionalNumber(n, "age_weighting_laps", p, s.fleet.age_weighting_laps);
+    r.OptionalNumber(n, "risk_share", p, s.fleet.risk_share);
   });
   r.Optional(root, "fleet_events", "", [&](const YAML::Node& list, const std::string& p) {
     r.ExpectList(list, p);

@@ -249,6 +249,12 @@ void Scenario::Validate() const {
   }
   c.Positive("fleet.coverage_period_s", fleet.coverage_period_s);
   c.Positive("fleet.liveliness_lease_s", fleet.liveliness_lease_s);
+  if (!(fleet.age_weighting_laps >= 0.0 && fleet.age_weighting_laps <= 100.0)) {
+    c.Fail("fleet.age_weighting_laps", FormatNumber(fleet.age_weighting_laps), "must be in [0, 100] laps (0 = off)");
+  }
+  if (!(fleet.risk_share >= 0.0 && fleet.risk_share <= 10.0)) {
+    c.Fail("fleet.risk_share", FormatNumber(fleet.risk_share), "must be in [0, 10] (0 = regions balanced on laps alone)");
+  }
   CheckFleetEvents(c, fleet_events, vehicles, duration_s, check_vehicle);
 
   const std::size_t valve_count = valve_names.size();

@@ -60,6 +60,12 @@ void AddScenarioOverrides(CLI::App& cmd, ScenarioOverrides& o, OverrideSet set, 
                    "Target shaping alpha: vehicles aim for visit rates by w^alpha (1 = by risk, the paper; 0.5 = the "
                    "square-root law, least expected time a leak goes unnoticed); sets ergodic and A* alike")
         ->check(CLI::Range(0.0, 4.0));
+    cmd.add_option("--age-weighting", o.age_weighting_laps,
+                   "Regions: a valve weighs w (1 + age / (L lap)) in its region's target, age the time since its last "
+                   "visit (L laps of its region's tour; default: the scenario's, 1; 0 = the weights alone)");
+    cmd.add_option("--risk-share", o.risk_share,
+                   "Regions: the split balances lap x (1 + beta n W), W a region's share of the field's risk, so the "
+                   "riskier valves come in smaller regions (default: the scenario's, 0.5; 0 = laps alone)");
     cmd.add_option("--guard", o.guard,
                    "No-starving-valve guard (weight floor + revisit bound): on|off (default: the scenario's; off "
                    "reproduces the paper)")
@@ -204,6 +210,11 @@ int RunCli(int argc, char** argv) {
   server->add_flag("--resume", server_cmd.resume,
                    "Continue the mission recorded in --out from its checkpoint (give the run's scenario.yaml)");
   server->add_option("--resumes", server_cmd.resumes, "How many times the mission was resumed before (for metrics.json)");
+  server->add_option("--start-in", server_cmd.start_in_s,
+                     "Wall seconds from now to the mission's t = 0, so that agent hosts started with the server are "
+                     "all in from the first cycle (sage launch gives 1 s + 1 ms per vehicle); not for --resume")
+      ->check(CLI::Range(0.0, 600.0))
+      ->capture_default_str();
 
   AgentsCommand agents_cmd;
   CLI::App* agents = app.add_subcommand("agents", "An agent host: several BlueROV2s in one Box2D world (sage launch "

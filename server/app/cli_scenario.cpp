@@ -28,6 +28,12 @@ void CheckOverrides(const ScenarioOverrides& o) {
     throw maps::ScenarioError(fmt::format("--weight-exponent = {}: must be in [0, 4] (1 = by risk, 0.5 = square-root law)",
                                           *o.weight_exponent));
   }
+  if (o.age_weighting_laps && !(*o.age_weighting_laps >= 0.0 && *o.age_weighting_laps <= 100.0)) {
+    throw maps::ScenarioError(fmt::format("--age-weighting = {}: must be in [0, 100] laps (0 = off)", *o.age_weighting_laps));
+  }
+  if (o.risk_share && !(*o.risk_share >= 0.0 && *o.risk_share <= 10.0)) {
+    throw maps::ScenarioError(fmt::format("--risk-share = {}: must be in [0, 10] (0 = regions balanced on laps alone)", *o.risk_share));
+  }
   if (o.start_jitter_m && !(*o.start_jitter_m >= 0.0 && *o.start_jitter_m <= maps::kMaxStartJitter_m)) {
     throw maps::ScenarioError(fmt::format("--start-jitter = {}: must be in [0, {}] m (0 = start exactly at start_m)",
                                           *o.start_jitter_m, maps::kMaxStartJitter_m));
@@ -63,6 +69,8 @@ maps::Scenario LoadWithOverrides(const ScenarioOverrides& o) {
   if (o.seed) scenario.seed = *o.seed;
   if (o.weight_exponent) scenario.ergodic.weight_exponent = scenario.astar.weight_exponent = *o.weight_exponent;
   if (o.start_jitter_m) scenario.start_jitter_m = *o.start_jitter_m;
+  if (o.age_weighting_laps) scenario.fleet.age_weighting_laps = *o.age_weighting_laps;
+  if (o.risk_share) scenario.fleet.risk_share = *o.risk_share;
   if (o.guard) scenario.guard.enabled = (*o.guard == "on");
   if (o.forgetting_time_s) scenario.ergodic.forgetting_time_s = *o.forgetting_time_s;
   if (o.basis_order) scenario.ergodic.basis_order = *o.basis_order;

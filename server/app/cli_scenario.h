@@ -25,6 +25,8 @@ struct ScenarioOverrides {
   std::optional<std::string> assignment;  // shared | partition
   std::optional<double> start_jitter_m;
   std::optional<double> weight_exponent;  // both the SMC target's and the A* waits
+  std::optional<double> age_weighting_laps;  // regions
+  std::optional<double> risk_share;          // regions
 };
 
 /// Loads the scenario and applies the overrides; each bad value is a maps::ScenarioError naming

@@ -196,6 +196,40 @@ TEST(FleetTourPlanner, LapsAreBalancedOnARandomField) {
   }
 }
 
+// Split by risk (FleetTourOptions::risk_share, the regions' split): on fields where a few valves
+// hold most of the risk, the vehicle holding a leak gets fewer valves than when laps alone are
+// balanced, every valve still in one share; the risk each vehicle holds is more even.
+TEST(FleetTourPlanner, RiskShareGivesTheRiskyValvesSmallerShares) {
+  const OccupancyGrid grid = FieldGrid();
+  for (unsigned seed = 31; seed <= 33; ++seed) {
+    const Points valves = RandomFreePoints(grid, 36, seed);
+    Eigen::VectorXd weights = Eigen::VectorXd::Ones(36);
+    weights[seed % 36] = weights[(seed * 7) % 36] = 12.0;  // two leaks: 24 of the field's 58
+    weights /= weights.sum();
+    const auto leak_share = [&](const FleetTourPlan& plan) {
+      std::size_t valves_with_leaks = 0;
+      double heaviest = 0.0;
+      for (const VehicleTour& vt : plan.vehicles) {
+        double mass = 0.0;
+        for (int v : vt.valves) mass += weights[v];
+        heaviest = std::max(heaviest, mass);
+        for (int v : vt.valves)
+          if (weights[v] > 0.1) valves_with_leaks += vt.valves.size();
+      }
+      return std::pair(valves_with_leaks, heaviest);
+    };
+    FleetTourOptions by_lap, by_risk;
+    by_risk.risk_share = 1.0;
+    const FleetTourPlan laps = PlanFleetTours(grid, valves, weights, Vehicles(6, 0.5), 1.0, by_lap);
+    const FleetTourPlan risk = PlanFleetTours(grid, valves, weights, Vehicles(6, 0.5), 1.0, by_risk);
+    ExpectPartitionOfClosedTours(risk, grid, valves);
+    const auto [lap_sizes, lap_heaviest] = leak_share(laps);
+    const auto [risk_sizes, risk_heaviest] = leak_share(risk);
+    EXPECT_LT(risk_sizes, lap_sizes) << "seed " << seed << ": valves in the leaks' shares";
+    EXPECT_LT(risk_heaviest, lap_heaviest) << "seed " << seed << ": the largest share of the risk";
+  }
+}
+
 // Vehicles go to the tours near them: 12 vehicles started at random over the field, 60 valves.
 // No two vehicles would both shorten their squared approaches (to their tours' centroids) by
 // swapping tours; the planner's search moves valves between tours after the first match, and

@@ -128,40 +128,112 @@ TEST(MissionCore, CoverageArrivesEveryCoveragePeriod) {
   }
 }
 
-// Regions: a risk change reaches only the vehicle whose region holds the valve; the others'
-// targets are not sent again (at 1,000 vehicles re-sending every region's target on any change
-// was nearly all of the server's traffic).
-TEST(MissionCore, RegionTargetsAreSentAgainOnlyForTheirOwnValves) {
-  maps::Scenario s = maps::WithVehicleCount(maps::LoadScenario(std::string(SAGE_SOURCE_DIR) + "/scenarios/fleet_field.yaml"), 4);
-  s.fleet.assignment = maps::FleetAssignment::kRegions;
-  s.fleet_events.clear();
-  maps::World world(s);
-  MissionCore core(world, s, "", ControllerKind::kErgodic);
-  std::map<int, Eigen::VectorXd> phi;
-  const auto cycle = [&](std::int64_t k) {
-    for (int id = 0; id < 4; ++id) core.OnState(State(id, s.vehicles[id].name, k, s.vehicles[id].start_m));
+// fleet_field in four regions, the vehicles parked where they started (away from every valve):
+// a driver that answers each cycle with the parked states and collects the targets sent.
+struct ParkedRegions {
+  ParkedRegions(double age_weighting_laps, double risk_share, bool guard = true)
+      : s(Scenario(age_weighting_laps, risk_share, guard)), world(s), core(world, s, "", ControllerKind::kErgodic) {
+    for (int id = 0; id < 4; ++id) at[id] = s.vehicles[id].start_m;
+  }
+  static maps::Scenario Scenario(double age_weighting_laps, double risk_share, bool guard) {
+    maps::Scenario s =
+        maps::WithVehicleCount(maps::LoadScenario(std::string(SAGE_SOURCE_DIR) + "/scenarios/fleet_field.yaml"), 4);
+    s.fleet.assignment = maps::FleetAssignment::kRegions;
+    s.fleet.age_weighting_laps = age_weighting_laps;
+    s.fleet.risk_share = risk_share;
+    s.guard.enabled = guard;
+    s.fleet_events.clear();
+    return s;
+  }
+  std::vector<int> Cycle() {
+    for (int id = 0; id < 4; ++id) core.OnState(State(id, s.vehicles[id].name, k, at[id]));
     std::vector<int> sent;
     for (const agents::Assignment& a : core.Cycle(k).assignments) {
       sent.push_back(a.id);
-      phi[a.id] = a.phi;
+      last[a.id] = a;
     }
+    ++k;
     return sent;
-  };
+  }
+  maps::Scenario s;
+  maps::World world;
+  MissionCore core;
+  std::map<int, Eigen::Vector2d> at;
+  std::map<int, agents::Assignment> last;
   std::int64_t k = 0;
-  for (; k < 30; ++k) cycle(k);
-  ASSERT_EQ(phi.size(), 4u);
-  for (const auto& [id, p] : phi) ASSERT_GT(p.size(), 0) << "vehicle " << id << " has no region yet";
-  EXPECT_TRUE(cycle(k++).empty()) << "targets sent again with nothing changed";
-  const std::map<int, Eigen::VectorXd> before = phi;
-  ASSERT_TRUE(core.OnRiskUpdate("P3", 5.0, "test").accepted);
-  const std::vector<int> sent = cycle(k++);
+};
+
+// Regions at fleet scale: a risk change re-sends only the target of the region holding the valve
+// (at 1,000 vehicles every region had been re-sent on any change anywhere, 21 MB/s), and not
+// even that one for a change under 5 % of its proportions. Split by laps alone, no age weighting.
+TEST(MissionCore, RegionTargetsAreSentAgainOnlyForTheirOwnValves) {
+  ParkedRegions m(0.0, 0.0);
+  for (int i = 0; i < 30; ++i) m.Cycle();
+  ASSERT_EQ(m.last.size(), 4u);
+  for (const auto& [id, a] : m.last) ASSERT_GT(a.phi.size(), 0) << "vehicle " << id << " has no region yet";
+  EXPECT_TRUE(m.Cycle().empty()) << "targets sent again with nothing changed";
+  const std::map<int, agents::Assignment> before = m.last;
+  ASSERT_TRUE(m.core.OnRiskUpdate("P3", 5.0, "test").accepted);
+  const std::vector<int> sent = m.Cycle();
   ASSERT_EQ(sent.size(), 1u) << "a risk change on P3 re-sent " << sent.size() << " targets";
-  EXPECT_GT((phi[sent[0]] - before.at(sent[0])).norm(), 1e-6) << "the re-sent target did not change";
-  EXPECT_TRUE(cycle(k++).empty());
-  // A change that moves the share's proportions by under 1 % of themselves is not sent.
-  const int owner = sent[0];
-  ASSERT_TRUE(core.OnRiskUpdate("P3", 5.02, "test").accepted);
-  EXPECT_TRUE(cycle(k++).empty()) << "a 0.4 % change of P3 re-sent vehicle " << owner << "'s target";
+  EXPECT_GT((m.last[sent[0]].phi - before.at(sent[0]).phi).norm(), 1e-6) << "the re-sent target did not change";
+  EXPECT_EQ(m.last[sent[0]].region_origin_m, before.at(sent[0]).region_origin_m) << "the boxes stay";
+  EXPECT_TRUE(m.Cycle().empty());
+  ASSERT_TRUE(m.core.OnRiskUpdate("P3", 5.1, "test").accepted);  // P3's proportion moves ~1 %
+  EXPECT_TRUE(m.Cycle().empty()) << "a 2 % change of P3 re-sent vehicle " << sent[0] << "'s target";
+}
+
+// Split by risk (fleet.risk_share): a leak that moves its region's share of the field's risk by
+// more than 1.5x splits the field again on the next cycle (new boxes, every vehicle a new target);
+// a smaller change afterwards only re-weights its region.
+TEST(MissionCore, RegionsSplitAgainWhenALeakMovesTheRisk) {
+  ParkedRegions m(0.0, 0.25);
+  for (int i = 0; i < 30; ++i) m.Cycle();
+  ASSERT_EQ(m.last.size(), 4u);
+  EXPECT_TRUE(m.Cycle().empty());
+  const std::map<int, agents::Assignment> before = m.last;
+  ASSERT_TRUE(m.core.OnRiskUpdate("P3", 40.0, "test").accepted);  // a leak: P3 alone outweighs the field
+  EXPECT_EQ(m.Cycle().size(), 4u) << "the field was not split again";
+  int moved = 0;
+  for (const auto& [id, a] : m.last) {
+    moved += (a.region_origin_m - before.at(id).region_origin_m).norm() > 1e-9 ||
+             (a.region_size_m - before.at(id).region_size_m).norm() > 1e-9;
+  }
+  EXPECT_GT(moved, 0) << "the same boxes after the split";
+  ASSERT_TRUE(m.core.OnRiskUpdate("P3", 44.0, "test").accepted);  // 10 % more: its region's mass moves < 1.5x
+  EXPECT_EQ(m.Cycle().size(), 1u) << "a 10 % change split the field again";
+}
+
+// Age weighting (fleet.age_weighting_laps): valves that all wait alike keep their proportions, so
+// parked vehicles away from their valves get no new target; a vehicle parked on one of its
+// valves keeps that one fresh while the others age, and its target is sent again (the others'
+// are not). With age weighting off it is never sent again.
+TEST(MissionCore, AgeWeightingResendsTheTargetOfAVehicleKeepingOneValveFresh) {
+  for (const double laps : {1.0, 0.0}) {
+    ParkedRegions m(laps, 0.0, /*guard=*/false);  // its boosts of valves unseen for two laps re-send targets too
+    for (int i = 0; i < 30; ++i) m.Cycle();
+    ASSERT_EQ(m.last.size(), 4u);
+    // Vehicle 0 onto a valve inside its box.
+    const agents::Assignment& own = m.last.at(0);
+    bool parked = false;
+    for (const maps::Valve& v : m.s.AllValves()) {
+      const Eigen::Vector2d rel = v.position_m - own.region_origin_m;
+      if (!parked && (rel.array() >= 0.0).all() && (rel.array() <= own.region_size_m.array()).all()) {
+        m.at[0] = v.position_m;
+        parked = true;
+      }
+    }
+    ASSERT_TRUE(parked) << "no valve in vehicle 0's box";
+    std::map<int, int> resent;
+    for (int i = 0; i < 300; ++i)
+      for (int id : m.Cycle()) ++resent[id];
+    if (laps > 0.0) {
+      EXPECT_GT(resent[0], 0) << "the target of the vehicle on its valve was not sent again in 30 s";
+    } else {
+      EXPECT_EQ(resent[0], 0) << "sent again " << resent[0] << " times without age weighting";
+    }
+    for (int id = 1; id < 4; ++id) EXPECT_EQ(resent[id], 0) << "vehicle " << id << " (valves aging alike)";
+  }
 }
 
 // A server that died at t = 55 s with its last checkpoint at t = 40 s: a new core restored from

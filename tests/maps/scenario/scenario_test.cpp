@@ -45,7 +45,7 @@ profiles:
     weights: {P1: 1, P2: 1}
     events: [{time_s: 200, valve: P2, weight: 2}, {time_s: 150, valve: P1, weight: 4}]
 default_profile: leak
-fleet: {assignment: partition, coverage_period_s: 0.25, liveliness_lease_s: 1.5}
+fleet: {assignment: partition, coverage_period_s: 0.25, liveliness_lease_s: 1.5, age_weighting_laps: 2, risk_share: 0.75}
 fleet_events:
   - {time_s: 250, lose: rov3}
   - {time_s: 100, join: {name: rov4, start_m: [3.5, 0.5], model: single_integrator, transit_speed_mps: 0.6}}
@@ -108,6 +108,8 @@ void ExpectSameScenario(const Scenario& a, const Scenario& b) {
   EXPECT_EQ(a.fleet.assignment, b.fleet.assignment);
   EXPECT_EQ(a.fleet.coverage_period_s, b.fleet.coverage_period_s);
   EXPECT_EQ(a.fleet.liveliness_lease_s, b.fleet.liveliness_lease_s);
+  EXPECT_EQ(a.fleet.age_weighting_laps, b.fleet.age_weighting_laps);
+  EXPECT_EQ(a.fleet.risk_share, b.fleet.risk_share);
   ASSERT_EQ(a.fleet_events.size(), b.fleet_events.size());
   for (std::size_t i = 0; i < a.fleet_events.size(); ++i) {
     const FleetEvent &x = a.fleet_events[i], &y = b.fleet_events[i];
@@ -211,6 +213,8 @@ profiles: {only: {weights: {V: 1}}}
   EXPECT_EQ(s.fleet.assignment, defaults.fleet.assignment);
   EXPECT_EQ(s.fleet.coverage_period_s, defaults.fleet.coverage_period_s);
   EXPECT_EQ(s.fleet.liveliness_lease_s, defaults.fleet.liveliness_lease_s);
+  EXPECT_EQ(s.fleet.age_weighting_laps, 1.0);
+  EXPECT_EQ(s.fleet.risk_share, 0.5);
   EXPECT_TRUE(s.fleet_events.empty());
 }
 
@@ -280,6 +284,8 @@ TEST(Scenario, FleetEventsParseAndSortOnLoad) {
   EXPECT_EQ(s.fleet.assignment, FleetAssignment::kPartition);
   EXPECT_EQ(s.fleet.coverage_period_s, 0.25);
   EXPECT_EQ(s.fleet.liveliness_lease_s, 1.5);
+  EXPECT_EQ(s.fleet.age_weighting_laps, 2.0);
+  EXPECT_EQ(s.fleet.risk_share, 0.75);
   ASSERT_EQ(s.fleet_events.size(), 4u);
   const std::vector<double> times = {100, 120, 250, 250};
   const std::vector<FleetEvent::Kind> kinds = {FleetEvent::Kind::kJoin, FleetEvent::Kind::kLeave,
@@ -476,6 +482,9 @@ TEST(Scenario, BadInputsGiveOneLineNamingFieldAndValue) {
       {"coverage_period_s: 0.25", "coverage_period_s: 0", {"base.yaml: fleet.coverage_period_s = 0: must be > 0"}},
       {"liveliness_lease_s: 1.5", "liveliness_lease_s: -1", {"fleet.liveliness_lease_s = -1: must be > 0"}},
       {"liveliness_lease_s: 1.5", "lease_s: 1.5", {"fleet.lease_s", "unknown key", "liveliness_lease_s"}},
+      {"age_weighting_laps: 2", "age_weighting_laps: -1", {"base.yaml: fleet.age_weighting_laps = -1: must be in [0, 100]"}},
+      {"age_weighting_laps: 2", "age_weighting_laps: .nan", {"fleet.age_weighting_laps", "must be in [0, 100]"}},
+      {"risk_share: 0.75", "risk_share: 11", {"base.yaml: fleet.risk_share = 11: must be in [0, 10]"}},
       {"{time_s: 250, lose: rov3}", "{time_s: 301, lose: rov3}",
        {"base.yaml: fleet_events[0].time_s = 301: must be in [0, duration_s = 300]"}},
       {"{time_s: 250, lose: rov3}", "{time_s: -1, lose: rov3}", {"fleet_events[0].time_s = -1", "[0, duration_s"}},
