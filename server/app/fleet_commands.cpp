@@ -46,6 +46,7 @@ int CmdServer(const ServerCommand& c) {
   options.out_dir = c.out_dir.empty() ? "runs/" + scenario.name + "_server" : c.out_dir;
   options.resume = c.resume;
   options.resumes = c.resumes;
+  options.start_in_s = c.resume ? 0.0 : c.start_in_s;
   options.show_progress = !c.quiet;
   options.stop = stop;
   return RunServerNode(scenario, options);

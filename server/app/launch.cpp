@@ -175,7 +175,15 @@ int Launch(const LaunchCommand& c) {
   std::vector<std::string> server_args = {"server", scenario_file, "--out", out_dir, "--time-scale",
                                           Number(mission.time_scale), "--quiet"};
   if (!mission.profile.empty()) server_args.insert(server_args.end(), {"--profile", mission.profile});
-  if (resume) server_args.insert(server_args.end(), {"--resume", "--resumes", std::to_string(mission.resumes)});
+  if (resume) {
+    server_args.insert(server_args.end(), {"--resume", "--resumes", std::to_string(mission.resumes)});
+  } else {
+    // The hosts start with the server; its clock starts far enough ahead that every host is in
+    // by t = 0 (each builds its Box2D world and finds the server over DDS meanwhile), so all of
+    // the fleet steps from cycle 0 as in sage run (1,000 vehicles had joined over two cycles).
+    const double lead_s = 1.0 + 0.001 * static_cast<double>(scenario.vehicles.size());
+    server_args.insert(server_args.end(), {"--start-in", Number(lead_s)});
+  }
   server_args.insert(server_args.end(), common.begin(), common.end());
   int server_stdout = -1;
   const pid_t server = Spawn(server_args, "", false, &server_stdout);

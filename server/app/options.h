@@ -51,6 +51,7 @@ struct ServerCommand {
   bool quiet = false;
   bool resume = false;           ///< continue the crashed mission recorded in out_dir
   int resumes = 0;
+  double start_in_s = 0.0;       ///< wall seconds from start-up to the mission's t = 0 (a fresh mission)
 };
 
 /// sage agents

@@ -23,6 +23,9 @@ struct ServerNodeOptions {
   std::string out_dir;             ///< the run directory
   bool resume = false;             ///< continue the crashed mission recorded in out_dir
   int resumes = 0;                 ///< times it was resumed before (for metrics.json)
+  /// Wall seconds from start-up to a fresh mission's t = 0: agent hosts started alongside find the
+  /// server's clock in the future and all step from cycle 0, as every vehicle does in sage run.
+  double start_in_s = 0.0;
   double checkpoint_period_s = 2.0;  ///< wall seconds between checkpoints
   bool show_progress = true;       ///< a progress line on stderr
   const std::atomic<bool>* stop = nullptr;  ///< set (e.g. by SIGINT) to end the mission early
