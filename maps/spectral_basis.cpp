@@ -94,6 +94,20 @@ void SpectralBasis::Evaluate(const Eigen::Vector2d& x, Eigen::VectorXd& f) const
   }
 }
 
+void SpectralBasis::AddScaled(const Eigen::Vector2d& x, double scale, Eigen::VectorXd& sum) const {
+  Trigonometry t;
+  EvaluateTrigonometry(x, t);
+  const auto& cx = t.cos_x;
+  const auto& cy = t.cos_y;
+  double* out = sum.data();
+  const double* inv_h = inv_h_.data();
+  for (int k1 = 0; k1 < order_; ++k1) {
+    const int row = k1 * order_;
+    const double c1 = cx[k1];
+    for (int k2 = 0; k2 < order_; ++k2) out[row + k2] += scale * (c1 * cy[k2] * inv_h[row + k2]);
+  }
+}
+
 Eigen::Vector2d SpectralBasis::GradientOfSum(const Eigen::Vector2d& x, const Eigen::VectorXd& a) const {
   Trigonometry t;
   EvaluateTrigonometry(x, t);

@@ -225,8 +225,7 @@ void MetricsAccumulator::Hold(const TrajectorySample& sample, double dt_s) {
   } else if (to_edge <= options_.boundary_margin_m) {
     state_.time_pinned_s += dt_s;
   }
-  basis_.Evaluate(p, f_);
-  state_.sum_f.noalias() += dt_s * f_;
+  basis_.AddScaled(p, dt_s, state_.sum_f);
   state_.sum_dt += dt_s;
   state_.last_held[sample.vehicle] = {sample.time_s, sample.time_s + dt_s, p};
 }
