@@ -136,6 +136,7 @@ int RunAgentNode(const maps::Scenario& scenario, const AgentNodeOptions& options
                             static_cast<std::int64_t>(std::ceil(clock.MissionTime(proto::NowRealtimeNs()) * rate)));
   spdlog::info("agents: found the server on DDS domain {}; {} vehicle(s) joining the mission at t = {:.1f} s",
                options.domain_id, mission.vehicle_count(), static_cast<double>(k) / rate);
+  const std::int64_t own_first_cycle = k;  // this host's first cycle: it steps it without the server's word
   for (;; ++k) {
     std::this_thread::sleep_until(clock.WallOf(static_cast<double>(k) / rate));
     if (options.stop && options.stop->load()) break;
@@ -193,7 +194,7 @@ int RunAgentNode(const maps::Scenario& scenario, const AgentNodeOptions& options
     if (last_snapshot_at == Clock::time_point{}) last_snapshot_at = Clock::now();
     const auto behind_server = [&] {
       return mission.has_snapshot() ? mission.snapshot_cycle() + 1 < static_cast<std::uint64_t>(std::max<std::int64_t>(k, 1))
-                                    : k > first_cycle;
+                                    : k > own_first_cycle;
     };
     if (behind_server()) {
       const auto deadline = std::max(clock.WallOf((static_cast<double>(k) + 0.45) / rate),
