@@ -62,10 +62,12 @@ void AddScenarioOverrides(CLI::App& cmd, ScenarioOverrides& o, OverrideSet set, 
         ->check(CLI::Range(0.0, 4.0));
     cmd.add_option("--age-weighting", o.age_weighting_laps,
                    "Regions: a valve weighs w (1 + age / (L lap)) in its region's target, age the time since its last "
-                   "visit (L laps of its region's tour; default: the scenario's, 1; 0 = the weights alone)");
+                   "visit (L laps of its region's tour; default: the scenario's, 1; 0 = the weights alone)")
+        ->check(CLI::Range(0.0, 100.0));
     cmd.add_option("--risk-share", o.risk_share,
                    "Regions: the split balances lap x (1 + beta n W), W a region's share of the field's risk, so the "
-                   "riskier valves come in smaller regions (default: the scenario's, 0.5; 0 = laps alone)");
+                   "riskier valves come in smaller regions (default: the scenario's, 0.5; 0 = laps alone)")
+        ->check(CLI::Range(0.0, 10.0));
     cmd.add_option("--guard", o.guard,
                    "No-starving-valve guard (weight floor + revisit bound): on|off (default: the scenario's; off "
                    "reproduces the paper)")

@@ -46,6 +46,9 @@ int CmdServer(const ServerCommand& c) {
   options.out_dir = c.out_dir.empty() ? "runs/" + scenario.name + "_server" : c.out_dir;
   options.resume = c.resume;
   options.resumes = c.resumes;
+  if (!(c.start_in_s >= 0.0 && c.start_in_s <= 600.0)) {  // CLI11's range lets NaN through
+    throw maps::ScenarioError(fmt::format("--start-in = {}: must be in [0, 600] wall seconds", c.start_in_s));
+  }
   options.start_in_s = c.resume ? 0.0 : c.start_in_s;
   options.show_progress = !c.quiet;
   options.stop = stop;

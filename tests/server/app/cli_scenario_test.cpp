@@ -2,6 +2,8 @@
 
 #include <string>
 
+#include <cmath>
+
 #include <gtest/gtest.h>
 
 namespace sage::server {
@@ -35,6 +37,8 @@ TEST(ScenarioOverrides, EachLandsInItsField) {
   o.min_turn_radius_m = 0.4;
   o.model = "single_integrator";
   o.assignment = "partition";
+  o.age_weighting_laps = 2.5;
+  o.risk_share = 0.0;
   const maps::Scenario s = LoadWithOverrides(o);
   EXPECT_EQ(s.vehicles.size(), 6u);
   EXPECT_EQ(s.duration_s, 300.0);
@@ -44,6 +48,8 @@ TEST(ScenarioOverrides, EachLandsInItsField) {
   EXPECT_EQ(s.ergodic.basis_order, 24);
   EXPECT_EQ(s.ergodic.min_turn_radius_m, 0.4);
   EXPECT_EQ(s.fleet.assignment, maps::FleetAssignment::kPartition);
+  EXPECT_EQ(s.fleet.age_weighting_laps, 2.5);
+  EXPECT_EQ(s.fleet.risk_share, 0.0);
   for (const maps::VehicleSpec& v : s.vehicles) EXPECT_EQ(v.model, maps::MotionModel::kSingleIntegrator) << v.name;
   ASSERT_EQ(s.fleet_events.size(), 1u);  // the join at 200 s stays, the loss at 400 s is past the end
   EXPECT_EQ(s.fleet_events[0].kind, maps::FleetEvent::Kind::kJoin);
@@ -62,6 +68,8 @@ TEST(ScenarioOverrides, BadValuesNameTheOption) {
       {[](ScenarioOverrides& o) { o.basis_order = 65; }, "--basis-order = 65: must be in 1..64"},
       {[](ScenarioOverrides& o) { o.forgetting_time_s = 0.0; }, "--forgetting = 0: must be > 0"},
       {[](ScenarioOverrides& o) { o.min_turn_radius_m = -0.1; }, "--turn-radius = -0.1: must be a finite number >= 0"},
+      {[](ScenarioOverrides& o) { o.age_weighting_laps = std::nan(""); }, "--age-weighting = nan: must be in [0, 100]"},
+      {[](ScenarioOverrides& o) { o.risk_share = 11.0; }, "--risk-share = 11: must be in [0, 10]"},
       // Checked on load, so `sage launch -p nope` fails before it starts any process.
       {[](ScenarioOverrides& o) { o.profile = "nope"; }, "fleet_field.yaml: profile = nope: must be one of routine"},
   };
