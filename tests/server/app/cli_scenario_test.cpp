@@ -1,8 +1,7 @@
 #include "server/app/cli_scenario.h"
 
-#include <string>
-
 #include <cmath>
+#include <string>
 
 #include <gtest/gtest.h>
 
