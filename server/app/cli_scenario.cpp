@@ -82,6 +82,11 @@ maps::Scenario LoadWithOverrides(const ScenarioOverrides& o) {
       if (e.kind == maps::FleetEvent::Kind::kJoin) e.vehicle.model = model;
   }
   scenario.Validate();  // the overrides obey the same rules as the file
+  if ((o.age_weighting_laps || o.risk_share) && scenario.fleet.assignment != maps::FleetAssignment::kRegions) {
+    spdlog::warn("--age-weighting and --risk-share shape regions only; this mission's assignment is {} "
+                 "(--assignment regions to use them)",
+                 maps::ToString(scenario.fleet.assignment));
+  }
   return scenario;
 }
 
