@@ -166,6 +166,14 @@ class ValveDistances {
   std::unordered_map<std::uint64_t, double> cache_;
 };
 
+// The larger side of the points' bounding box (m; at least 1e-6): what a bucket index's cell size
+// and its search radii scale with.
+double Span(const Points& p) {
+  Eigen::Vector2d lo = p[0], hi = p[0];
+  for (const Eigen::Vector2d& x : p) lo = lo.cwiseMin(x), hi = hi.cwiseMax(x);
+  return std::max((hi - lo).maxCoeff(), 1e-6);
+}
+
 // Each valve's `count` nearest other valves in straight line (the search's candidate moves; each
 // move is then priced on the grid), nearest first, ties by index. Bucketed: a valve looks at the
 // valves within a radius that doubles until it holds `count` of them (all M against all M was
@@ -175,9 +183,7 @@ std::vector<std::vector<int>> NearestValves(const Points& p, int count) {
   std::vector<std::vector<int>> near(m);
   if (m < 2) return near;
   const int want = std::min(count, m - 1);
-  Eigen::Vector2d lo = p[0], hi = p[0];
-  for (const Eigen::Vector2d& x : p) lo = lo.cwiseMin(x), hi = hi.cwiseMax(x);
-  const double span = std::max((hi - lo).maxCoeff(), 1e-6);
+  const double span = Span(p);
   const double cell = std::max(span * std::sqrt((want + 1.0) / m), 1e-6);  // ~ want valves a cell
   const maps::NearbyPoints index(p, cell);
   std::vector<int> within;
@@ -212,9 +218,7 @@ class NearestMedoid {
   NearestMedoid(ValveDistances& dist, const std::vector<int>& medoids) : dist_(dist), medoids_(medoids) {
     Points at;
     for (int c : medoids) at.push_back(dist.centre(c));
-    Eigen::Vector2d lo = at[0], hi = at[0];
-    for (const Eigen::Vector2d& x : at) lo = lo.cwiseMin(x), hi = hi.cwiseMax(x);
-    span_ = std::max((hi - lo).maxCoeff(), 1e-6);
+    span_ = Span(at);
     cell_ = std::max(span_ / std::sqrt(static_cast<double>(at.size())), 1e-6);  // ~1 medoid a cell
     index_.emplace(at, cell_);
   }

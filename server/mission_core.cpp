@@ -376,6 +376,14 @@ agents::FleetTourPlan MissionCore::PlanShares(const std::vector<int>& alive, dou
                                 vehicles, scenario_.astar.wait_per_lap_s, options);
 }
 
+// The share of the field's current risk (the operators' and the profile's weights) these valves hold.
+double MissionCore::RiskMass(const std::vector<int>& valves) const {
+  const Eigen::VectorXd& w = fleet_.schedule().back().weights;
+  double mass = 0.0;
+  for (int i : valves) mass += w[i];
+  return mass / w.sum();
+}
+
 // Regions: the live vehicles split the valves as the fleet's tours would (balanced on travel),
 // each share a box of its own with its own basis; a vehicle steers alone on its share's risk
 // there. The first split waits for the fleet to be in (every starting vehicle, or 2 s); then a
@@ -405,19 +413,14 @@ void MissionCore::AssignRegions(const std::vector<int>& alive, CycleOutput& out)
   bool by_risk = false;
   if (!replan && scenario_.fleet.risk_share > 0.0 && !plan.shares.empty() && fleet_.schedule().size() > plan.risk_seen) {
     plan.risk_seen = fleet_.schedule().size();
-    const Eigen::VectorXd& raw = fleet_.schedule().back().weights;
-    const double total = raw.sum();
     for (const auto& [id, share] : plan.shares) {
-      double mass = 0.0;
-      for (int i : share.valves) mass += raw[i] / total;
-      const double ratio = (mass + 1e-12) / (share.split_mass + 1e-12);
+      const double ratio = (RiskMass(share.valves) + 1e-12) / (share.split_mass + 1e-12);
       if (ratio > kResplitRatio || ratio < 1.0 / kResplitRatio) replan = by_risk = true;
     }
   }
   if (replan) {
     const agents::FleetTourPlan shares = PlanShares(alive, 1.0, scenario_.fleet.risk_share);
     const std::vector<maps::Valve> valves = scenario_.AllValves();
-    const Eigen::VectorXd risk = fleet_.schedule().back().weights / fleet_.schedule().back().weights.sum();
     plan.shares.clear();
     std::vector<RegionRecord> records;
     std::size_t most = 0;
@@ -426,7 +429,7 @@ void MissionCore::AssignRegions(const std::vector<int>& alive, CycleOutput& out)
       RegionShare share;
       share.valves = shares.vehicles[k].valves;
       share.lap_time_s = shares.vehicles[k].lap_time_s;
-      for (int i : share.valves) share.split_mass += risk[i];
+      share.split_mass = RiskMass(share.valves);
       std::vector<Eigen::Vector2d> points;
       std::vector<maps::GaussianComponent> components;
       for (int i : share.valves) {

@@ -169,6 +169,7 @@ class MissionCore {
   // The valves split among the live vehicles, balanced on travel (the fleet's tours).
   agents::FleetTourPlan PlanShares(const std::vector<int>& alive, double weight_exponent, double risk_share = 0.0) const;
   double next_time_s() const;  // the mission time of the coming cycle, when input takes effect
+  double RiskMass(const std::vector<int>& valves) const;
 
   const maps::World& world_;
   const maps::Scenario& scenario_;
