@@ -85,6 +85,7 @@ class AgentMission {
     bool shared = true;
     Eigen::VectorXd own_phi;
     std::uint64_t own_cycle = 0;
+    bool own_applied = false;  // own_phi is the host's target already (set once, not each cycle)
     std::uint64_t steered_cycle = 0;
     std::uint64_t seq = 0;
     bool in_region = false;  // steers on a region's own basis

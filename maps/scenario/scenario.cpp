@@ -21,6 +21,12 @@ std::vector<Valve> Scenario::AllValves() const {
   return valves;
 }
 
+int Scenario::ValveCount() const {
+  std::size_t n = 0;
+  for (const ChristmasTree& tree : structures) n += tree.valves.size();
+  return static_cast<int>(n);
+}
+
 std::vector<Eigen::Vector2d> Scenario::ValvePositions() const {
   std::vector<Eigen::Vector2d> points;
   for (const Valve& valve : AllValves()) points.push_back(valve.position_m);

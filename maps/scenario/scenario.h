@@ -182,6 +182,7 @@ struct Scenario {
 
   /// All valves in file order (P1..Pn), structure after structure.
   std::vector<Valve> AllValves() const;
+  int ValveCount() const;  ///< AllValves().size() without the copy (checked on every assignment)
   int ValveIndex(const std::string& name) const;  ///< index into AllValves(); -1 if none
   std::vector<Eigen::Vector2d> ValvePositions() const;  ///< AllValves()' positions, same order
   /// A vehicle's mission id by name: its index among `vehicles`, or for a fleet_events join

@@ -346,14 +346,14 @@ int CmdBenchScale(const BenchScaleCommand& c) {
     WriteScenarioTo(field_path, field);
     spdlog::info("bench scale: N = {}: field {} ({} XTs, {} valves, {:.0f} x {:.0f} m, K = {}, {} coverage) generated "
                  "in {:.2f} s",
-                 n, field_path, field.structures.size(), field.AllValves().size(), field.workspace.width_m,
+                 n, field_path, field.structures.size(), field.ValveCount(), field.workspace.width_m,
                  field.workspace.height_m, field.ergodic.basis_order, ToString(field.fleet.assignment),
                  Since(generate_start));
     ScaleRow base;
     base.vehicles = n;
     base.field = field_path;
     base.xts = static_cast<int>(field.structures.size());
-    base.valves = static_cast<int>(field.AllValves().size());
+    base.valves = field.ValveCount();
     base.field_width_m = field.workspace.width_m;
     base.field_height_m = field.workspace.height_m;
     base.duration_s = c.duration_s;

@@ -18,7 +18,7 @@ int CmdFieldGenerate(const maps::FieldOptions& options, const std::string& out_p
   }
   spdlog::info("wrote {}: {} XTs, {} valves, {} vehicles on {:.1f} x {:.1f} m (K = {}, A* grid {} m) in {:.2f} s; run it "
                "with sage run {} or sage launch {}",
-               out_path, field.structures.size(), field.AllValves().size(), field.vehicles.size(),
+               out_path, field.structures.size(), field.ValveCount(), field.vehicles.size(),
                field.workspace.width_m, field.workspace.height_m, field.ergodic.basis_order,
                field.astar.grid_resolution_m,
                std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(), out_path, out_path);
