@@ -2,12 +2,17 @@
 
 #include <algorithm>
 #include <cmath>
+#include <condition_variable>
+#include <exception>
+#include <functional>
 #include <limits>
+#include <mutex>
+#include <optional>
 #include <stdexcept>
 #include <string>
+#include <thread>
 #include <unordered_map>
-
-#include <optional>
+#include <utility>
 
 #include "agents/obstacle_filter.h"
 #include "agents/physics_world.h"
@@ -16,6 +21,92 @@
 #include "maps/nearby_points.h"
 
 namespace sage::agents {
+namespace host_detail {  // named: AgentHost::Impl holds one
+
+// Threads kept for the host's life, so that what they keep per thread (the A* search's per-cell
+// state, sized to the grid: 256 MB on a 10,000-vehicle field) is built once, not every cycle.
+// Run(job, parts) runs job(0) on the caller and job(1 .. parts-1) on the workers, and returns
+// when all are done; the first exception any part threw is thrown again there.
+class WorkerPool {
+ public:
+  explicit WorkerPool(int workers) {
+    for (int w = 0; w < workers; ++w) threads_.emplace_back([this, w] { Serve(w + 1); });
+  }
+  ~WorkerPool() {
+    {
+      std::lock_guard lock(mutex_);
+      stop_ = true;
+    }
+    wake_.notify_all();
+    for (std::thread& t : threads_) t.join();
+  }
+  WorkerPool(const WorkerPool&) = delete;
+  WorkerPool& operator=(const WorkerPool&) = delete;
+
+  int workers() const { return static_cast<int>(threads_.size()); }
+
+  void Run(const std::function<void(int)>& job, int parts) {
+    {
+      std::lock_guard lock(mutex_);
+      job_ = &job;
+      parts_ = parts;
+      pending_ = parts - 1;
+      ++generation_;
+    }
+    wake_.notify_all();
+    std::exception_ptr failed;
+    try {
+      job(0);
+    } catch (...) {
+      failed = std::current_exception();
+    }
+    std::unique_lock lock(mutex_);
+    done_.wait(lock, [this] { return pending_ == 0; });
+    job_ = nullptr;
+    if (!failed) failed = std::exchange(worker_failed_, nullptr);
+    worker_failed_ = nullptr;
+    if (failed) std::rethrow_exception(failed);
+  }
+
+ private:
+  void Serve(int part) {
+    std::uint64_t seen = 0;
+    for (;;) {
+      const std::function<void(int)>* job = nullptr;
+      {
+        std::unique_lock lock(mutex_);
+        wake_.wait(lock, [&] { return stop_ || generation_ != seen; });
+        if (stop_) return;
+        seen = generation_;
+        if (part < parts_) job = job_;
+      }
+      if (job == nullptr) continue;
+      std::exception_ptr failed;
+      try {
+        (*job)(part);
+      } catch (...) {
+        failed = std::current_exception();
+      }
+      {
+        std::lock_guard lock(mutex_);
+        if (failed && !worker_failed_) worker_failed_ = failed;
+        --pending_;
+      }
+      done_.notify_one();
+    }
+  }
+
+  std::vector<std::thread> threads_;
+  std::mutex mutex_;
+  std::condition_variable wake_, done_;
+  const std::function<void(int)>* job_ = nullptr;
+  std::exception_ptr worker_failed_;
+  int parts_ = 0, pending_ = 0;
+  std::uint64_t generation_ = 0;
+  bool stop_ = false;
+};
+
+}  // namespace host_detail
 
 struct AgentHost::Impl {
   struct Vehicle {
@@ -50,6 +141,8 @@ struct AgentHost::Impl {
   std::optional<std::vector<std::pair<VehicleId, Eigen::Vector2d>>> own_reported;  // this host's, as last reported
   int physics_substeps = 1;
   double control_dt = 0.1;
+  int threads = 1, vehicles_per_thread = 256;
+  std::unique_ptr<host_detail::WorkerPool> pool;  // threads - 1 workers, made on the first cycle that uses them
 
   Impl(const maps::World& w, const maps::Scenario& s, Guidance g)
       : scenario(s),
@@ -72,7 +165,6 @@ struct AgentHost::Impl {
     std::vector<Eigen::Vector2d> points;
     std::vector<VehicleId> ids;  // the host's own vehicle at each point; kNotOwn for another host's
     std::optional<maps::NearbyPoints> index;
-    std::vector<int> found;
   };
   static constexpr VehicleId kNotOwn = std::numeric_limits<VehicleId>::max();
 
@@ -93,13 +185,14 @@ struct AgentHost::Impl {
     around.index.emplace(around.points, ObstacleFilterSettings{}.neighbour_influence_m);
   }
 
+  // found: the caller's scratch (one per thread).
   std::vector<Eigen::Vector2d> Neighbours(std::size_t i, const std::vector<Eigen::Vector2d>& positions,
-                                          Surroundings& around) const {
+                                          const Surroundings& around, std::vector<int>& found) const {
     const double reach = ObstacleFilterSettings{}.neighbour_influence_m, reach2 = reach * reach;
     std::vector<Eigen::Vector2d> near;
     // Candidates within a hair more than the reach; the rule itself is the strict squared one.
-    around.index->Within(positions[i], reach * (1.0 + 1e-9), around.found);
-    for (const int k : around.found) {
+    around.index->Within(positions[i], reach * (1.0 + 1e-9), found);
+    for (const int k : found) {
       if (around.ids[k] == vehicles[i].id) continue;  // itself
       if ((around.points[k] - positions[i]).squaredNorm() < reach2) near.push_back(around.points[k]);
     }
@@ -315,25 +408,53 @@ void AgentHost::SetTourWeights(const Eigen::VectorXd& weights) {
   }
 }
 
+void AgentHost::SetThreads(int threads, int min_vehicles_per_thread) {
+  if (threads < 1 || min_vehicles_per_thread < 1) {
+    throw std::invalid_argument("AgentHost::SetThreads: at least one thread and one vehicle per thread");
+  }
+  if (threads != impl_->threads) impl_->pool.reset();
+  impl_->threads = threads;
+  impl_->vehicles_per_thread = min_vehicles_per_thread;
+}
+
 void AgentHost::Step(double time_s) {
   // Everyone's position at the start of the cycle, so the order of vehicles does not matter.
   std::vector<Eigen::Vector2d> positions;
   for (const Impl::Vehicle& v : impl_->vehicles) positions.push_back(impl_->world.State(v.body).position_m);
   Impl::Surroundings around;
   impl_->Gather(positions, around);
-  for (std::size_t i = 0; i < impl_->vehicles.size(); ++i) {
-    Impl::Vehicle& v = impl_->vehicles[i];
-    const VehicleState state = impl_->world.State(v.body);
-    std::vector<Eigen::Vector2d> nearby = impl_->Neighbours(i, positions, around);
-    if (v.tour) v.tour->SetNearby(nearby);
-    if (v.transit) v.transit->SetNearby(nearby);
-    // An A* vehicle holds station until it has a tour.
-    Eigen::Vector2d command = v.ergodic ? impl_->ErgodicCommand(v, state, time_s)
-                                        : (v.tour ? v.tour->Command(state, time_s) : Eigen::Vector2d::Zero());
-    if (v.keep_clear) command = v.keep_clear->Apply(state.position_m, command, nearby);
-    v.command = command;
-    impl_->world.SetVelocityCommand(v.body, command);
+  // Each vehicle's guidance reads the shared world (structures, grid, basis, where everyone was
+  // at the start of the cycle) and writes only its own vehicle, so the vehicles split over
+  // threads in fixed contiguous blocks give the very commands one thread gives.
+  const auto guide = [&](std::size_t begin, std::size_t end) {
+    std::vector<int> found;
+    for (std::size_t i = begin; i < end; ++i) {
+      Impl::Vehicle& v = impl_->vehicles[i];
+      const VehicleState state = impl_->world.State(v.body);
+      std::vector<Eigen::Vector2d> nearby = impl_->Neighbours(i, positions, around, found);
+      if (v.tour) v.tour->SetNearby(nearby);
+      if (v.transit) v.transit->SetNearby(nearby);
+      // An A* vehicle holds station until it has a tour.
+      Eigen::Vector2d command = v.ergodic ? impl_->ErgodicCommand(v, state, time_s)
+                                          : (v.tour ? v.tour->Command(state, time_s) : Eigen::Vector2d::Zero());
+      if (v.keep_clear) command = v.keep_clear->Apply(state.position_m, command, nearby);
+      v.command = command;
+    }
+  };
+  const std::size_t n = impl_->vehicles.size();
+  const int parts = static_cast<int>(std::clamp<std::size_t>(n / static_cast<std::size_t>(impl_->vehicles_per_thread), 1,
+                                                             static_cast<std::size_t>(impl_->threads)));
+  if (parts == 1) {
+    guide(0, n);
+  } else {
+    if (!impl_->pool || impl_->pool->workers() < parts - 1) impl_->pool = std::make_unique<host_detail::WorkerPool>(impl_->threads - 1);
+    const std::function<void(int)> part = [&](int k) {
+      guide(n * static_cast<std::size_t>(k) / static_cast<std::size_t>(parts),
+            n * static_cast<std::size_t>(k + 1) / static_cast<std::size_t>(parts));
+    };
+    impl_->pool->Run(part, parts);
   }
+  for (const Impl::Vehicle& v : impl_->vehicles) impl_->world.SetVelocityCommand(v.body, v.command);
   const double dt = impl_->control_dt / impl_->physics_substeps;
   for (int s = 0; s < impl_->physics_substeps; ++s) impl_->world.Step(dt);
 }

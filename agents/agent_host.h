@@ -70,6 +70,11 @@ class AgentHost {
   /// taken at each tour's next lap.
   void SetTourWeights(const Eigen::VectorXd& weights);
 
+  /// Threads the guidance of a cycle may use (default 1), each with at least
+  /// min_vehicles_per_thread vehicles (below a few hundred a thread costs more to start than it
+  /// saves); the commands are the same for any count (each vehicle's guidance reads the shared
+  /// world and writes only its own vehicle). Throws std::invalid_argument below 1.
+  void SetThreads(int threads, int min_vehicles_per_thread = 256);
   /// One control cycle at mission time t: every vehicle's guidance turns its state into a
   /// command; then physics advances one control period in physics_rate substeps.
   void Step(double time_s);

@@ -76,6 +76,8 @@ class AgentMission {
   CycleOutput Step(std::int64_t cycle);
 
   const AgentHost& host() const { return host_; }
+  /// Threads the host's guidance may use each cycle (AgentHost::SetThreads).
+  void SetThreads(int threads) { host_.SetThreads(threads); }
   double control_period_s() const { return host_.control_period_s(); }
 
  private:

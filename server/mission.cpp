@@ -1,7 +1,9 @@
 #include "server/mission.h"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <thread>
 
 #include "agents/agent_mission.h"
 #include "maps/world.h"
@@ -65,6 +67,7 @@ struct Mission::Impl {
         agents(world, scenario,
                o.controller == ControllerKind::kErgodic ? agents::Guidance::kErgodic : agents::Guidance::kAstar) {
     cycles_total = std::llround(scenario.duration_s * scenario.control_rate_hz);
+    agents.SetThreads(o.threads > 0 ? o.threads : static_cast<int>(std::max(1u, std::thread::hardware_concurrency())));
     for (std::size_t i = 0; i < scenario.vehicles.size(); ++i) agents.AddVehicle(static_cast<int>(i), scenario.vehicles[i]);
   }
 

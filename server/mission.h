@@ -36,6 +36,9 @@ struct MissionOptions {
   /// If set, the wall time (s) of each server cycle (MissionCore::Cycle) is appended here: what
   /// `sage bench scale` reports as the in-process server cycle. Off by default (no clock reads).
   std::vector<double>* server_cycle_s = nullptr;
+  /// Threads for the vehicles' guidance each cycle; 0 (default): the machine's cores. The mission
+  /// is the same for any count.
+  int threads = 0;
 };
 
 /// A recorder that keeps the trajectory in memory (tests, benchmarks, the result of Run).

@@ -125,6 +125,50 @@ TEST(AgentHost, VehiclesInOneHostDoNotOverlap) {
   }
 }
 
+// The guidance split over threads gives the very mission one thread gives: 24 vehicles packed
+// round two XTs (neighbours keep clear of each other, structures block some), a third of them
+// in regions (grid paths to their boxes), flown by 1 thread and by 3 (8 vehicles each); every
+// state equal, bit for bit, over 20 s.
+TEST(AgentHost, ThreadsFlyTheSameMission) {
+  const maps::Scenario s = maps::LoadScenario(kTwoXt);
+  const maps::World world(s);
+  AgentHost one(world, s, Guidance::kErgodic), three(world, s, Guidance::kErgodic);
+  three.SetThreads(3, 1);
+  const Eigen::VectorXd phi = BumpAt(one.basis(), {3.5, 2.5});
+  for (AgentHost* host : {&one, &three}) {
+    for (int k = 0; k < 24; ++k) {
+      std::string name = "r";
+      name += std::to_string(k);
+      host->AddVehicle(k, Rov(name, {0.6 + 0.45 * (k % 12), 0.6 + 3.6 * (k / 12)}, 0.3 * k));
+      if (k % 3 == 0) {
+        host->SetRegion(k, {Eigen::Vector2d(4.0, 1.0), Eigen::Vector2d(2.5, 2.5), 8});
+      } else {
+        host->SetTarget(k, {phi, {}, 0.0});
+      }
+    }
+  }
+  for (int k = 0; k < 24; k += 3) {
+    Eigen::VectorXd uniform = Eigen::VectorXd::Zero(one.BasisSize(k));
+    uniform[0] = 1.0;  // the box's mean alone: cover it evenly
+    one.SetTarget(k, {uniform, {}, 0.0});
+    three.SetTarget(k, {uniform, {}, 0.0});
+  }
+  for (int i = 0; i < 200; ++i) {
+    one.Step(i * one.control_period_s());
+    three.Step(i * three.control_period_s());
+    for (int k = 0; k < 24; ++k) {
+      ASSERT_EQ(one.State(k).position_m, three.State(k).position_m) << "vehicle " << k << " at step " << i;
+      ASSERT_EQ(one.LastCommand(k), three.LastCommand(k)) << "vehicle " << k << " at step " << i;
+    }
+  }
+  double moved_m = 0.0;
+  for (int k = 0; k < 24; ++k) {
+    moved_m += (one.State(k).position_m - Eigen::Vector2d(0.6 + 0.45 * (k % 12), 0.6 + 3.6 * (k / 12))).norm();
+  }
+  EXPECT_GT(moved_m / 24, 1.0) << "the vehicles hardly flew: the comparison would prove little";
+  EXPECT_THROW(one.SetThreads(0), std::invalid_argument);
+}
+
 // Shared coverage enters the SMC law: the same vehicle, in the same state, with the same phi,
 // commands a different velocity (> 1 degree) when its target carries another vehicle's sums
 // than when the fleet sums are empty.

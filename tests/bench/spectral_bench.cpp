@@ -4,6 +4,8 @@
 // K = 10, 20 and 40, as the paper runs it (no forgetting, one vehicle) and as fleet_field runs it
 // (60 s forgetting, the rest of the fleet's coverage, a 0.3 m turning radius); and the phi_k
 // update after one valve's weight changes (O(M K^2) re-weighting of cached vectors).
+// Also one grid path (A*, shortcut) of a vehicle crossing to a valve up to 40 m away on a
+// generated 1,000-XT field, as every vehicle plans when it is sent to its region or tour.
 // The paper's Python reference takes ~45 us per step; our goal is <= 0.5 us at K = 20.
 // Figures only: nothing here asserts on time (the machine is shared; see --benchmark_repetitions).
 // Run: build/bin/sage_bench_spectral --benchmark_out=bench_spectral.json
@@ -15,6 +17,9 @@
 #include <benchmark/benchmark.h>
 
 #include "agents/ergodic_controller.h"
+#include "agents/tour_planner.h"
+#include "maps/scenario/field_generator.h"
+#include "maps/world.h"
 #include "maps/risk_field.h"
 
 namespace {
@@ -94,6 +99,44 @@ void BM_WeightChange(benchmark::State& state) {
   state.counters["valves"] = valves;
 }
 BENCHMARK(BM_WeightChange)->Args({10, 5})->Args({20, 5})->Args({20, 200});
+
+// Crossings of a generated field at its density (80 m^2 of seabed per XT): each vehicle's start
+// to a valve 10-40 m from it, the same pairs every run.
+void BM_GridPath(benchmark::State& state) {
+  sage::maps::FieldOptions options;
+  options.xts = 1000;
+  options.valves = 3500;
+  options.vehicles = 1000;
+  static const sage::maps::Scenario field = sage::maps::GenerateField(options);
+  static const sage::maps::World world(field);
+  static const std::vector<std::pair<Eigen::Vector2d, Eigen::Vector2d>> pairs = [] {
+    std::vector<std::pair<Eigen::Vector2d, Eigen::Vector2d>> out;
+    const std::vector<Eigen::Vector2d> valves = field.ValvePositions();
+    std::mt19937 rng(3);
+    std::uniform_int_distribution<std::size_t> pick(0, valves.size() - 1);
+    for (const auto& v : field.vehicles) {
+      for (int tries = 0; tries < 1000; ++tries) {
+        const Eigen::Vector2d& goal = valves[pick(rng)];
+        const double d = (goal - v.start_m).norm();
+        if (d >= 10.0 && d <= 40.0) {
+          out.emplace_back(v.start_m, goal);
+          break;
+        }
+      }
+    }
+    return out;
+  }();
+  std::size_t k = 0, waypoints = 0;
+  for (auto _ : state) {
+    const auto& [from, to] = pairs[k++ % pairs.size()];
+    const std::vector<Eigen::Vector2d> path = sage::agents::PlanGridPath(world.astar_grid(), from, to);
+    waypoints += path.size();
+    benchmark::DoNotOptimize(path.data());
+  }
+  state.counters["pairs"] = static_cast<double>(pairs.size());
+  state.counters["waypoints"] = benchmark::Counter(static_cast<double>(waypoints), benchmark::Counter::kAvgIterations);
+}
+BENCHMARK(BM_GridPath)->Unit(benchmark::kMicrosecond);
 
 }  // namespace
 
