@@ -3,6 +3,7 @@
 // (XTs) with their valves, named risk profiles with timed events, the vehicles, and the
 // controller settings. Plain structs with defaults; LoadScenario() validates and throws
 // ScenarioError with one line naming file, field, value and rule.
+#include <cstddef>
 #include <cstdint>
 #include <limits>
 #include <map>
@@ -73,6 +74,27 @@ inline constexpr double kMaxOctoMapVoxels = 32767.0;
 
 /// Largest start jitter (m): a vehicle's start stays near the start_m the scenario names.
 inline constexpr double kMaxStartJitter_m = 0.5;
+
+/// Bounds on what a scenario may cost to load and to run (each broken one is a one-line error).
+/// A scenario file is read only up to this size (a 10,000-XT field is 6.3 MB).
+inline constexpr std::size_t kMaxScenarioBytes = std::size_t{64} << 20;
+/// A mission of at most a week of mission time.
+inline constexpr double kMaxDuration_s = 7.0 * 86400.0;
+/// Control at most 100 Hz, physics at most 1 kHz (BlueROV2 dynamics need no more).
+inline constexpr double kMaxControlRate_hz = 100.0;
+inline constexpr double kMaxPhysicsRate_hz = 1000.0;
+/// The A* grid: cells of at least 1 cm and at most 64 million of them (the 10,000-vehicle field
+/// at 0.25 m has 12.8 million).
+inline constexpr double kMinGridResolution_m = 0.01;
+inline constexpr double kMaxGridCells = 64e6;
+/// Clearance kept from structures by the tours (m); a BlueROV2 needs ~0.3.
+inline constexpr double kMaxClearance_m = 10.0;
+/// Structures at most 100 m tall (an XT stands 2-5 m; the seabed map voxelises every height).
+inline constexpr double kMaxStructureHeight_m = 100.0;
+/// Seabed per vehicle, counting those who join (m^2): a BlueROV2's hull covers 0.26 m^2; the
+/// paper's point vehicles start 0.3 m apart.
+inline constexpr double kMinAreaPerBlueRov2_m2 = 1.0;
+inline constexpr double kMinAreaPerPointVehicle_m2 = 0.1;
 
 /// The BlueROV2 Heavy's top speed in surge at full thrust (m/s): the drag law of its model
 /// (agents/physics_world) gives 0.848, and tests/agents/physics_world_test.cpp checks the two

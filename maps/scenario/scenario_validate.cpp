@@ -47,6 +47,9 @@ class Checker {
     if (!(infinity_ok && v == std::numeric_limits<double>::infinity())) Finite(field, v);
     if (!(v > 0)) Fail(field, FormatNumber(v), "must be > 0");
   }
+  void AtMost(const std::string& field, double v, double most, const std::string& unit) const {
+    if (v > most) Fail(field, FormatNumber(v), "must be <= " + FormatNumber(most) + " " + unit);
+  }
   void NonNegative(const std::string& field, double v) const {
     Finite(field, v);
     if (!(v >= 0)) Fail(field, FormatNumber(v), "must be >= 0");
@@ -130,8 +133,11 @@ void Scenario::Validate() const {
   const std::string workspace_text = "[0, " + FormatNumber(workspace.width_m) + "] x [0, " +
                                      FormatNumber(workspace.height_m) + "]";
   c.Positive("duration_s", duration_s);
+  c.AtMost("duration_s", duration_s, kMaxDuration_s, "s (a week)");
   c.Positive("control_rate_hz", control_rate_hz);
+  c.AtMost("control_rate_hz", control_rate_hz, kMaxControlRate_hz, "Hz");
   c.Positive("physics_rate_hz", physics_rate_hz);
+  c.AtMost("physics_rate_hz", physics_rate_hz, kMaxPhysicsRate_hz, "Hz");
   // Whole number of physics steps per control step, up to rounding of the decimal rates.
   const double steps = physics_rate_hz / control_rate_hz;
   if (steps < 1 - 1e-9 || std::abs(steps - std::round(steps)) > 1e-9 * steps) {
@@ -155,6 +161,17 @@ void Scenario::Validate() const {
   c.NonNegative("ergodic.min_turn_radius_m", ergodic.min_turn_radius_m);
   c.NonNegative("ergodic.weight_exponent", ergodic.weight_exponent);
   c.Positive("astar.grid_resolution_m", astar.grid_resolution_m);
+  if (astar.grid_resolution_m < kMinGridResolution_m) {
+    c.Fail("astar.grid_resolution_m", FormatNumber(astar.grid_resolution_m),
+           "must be >= " + FormatNumber(kMinGridResolution_m) + " m");
+  }
+  if (const double cells = std::ceil(workspace.width_m / astar.grid_resolution_m) *
+                           std::ceil(workspace.height_m / astar.grid_resolution_m);
+      cells > kMaxGridCells) {
+    c.Fail("astar.grid_resolution_m", FormatNumber(astar.grid_resolution_m),
+           "gives " + FormatNumber(std::round(cells / 1e6)) + " million cells over the workspace; at most " +
+               FormatNumber(kMaxGridCells / 1e6) + " million (use a coarser grid)");
+  }
   // The seabed OctoMap is voxelised at the grid resolution and its keys span +-2^15 voxels: a
   // wider workspace cannot be mapped (it overflowed the keys and crashed).
   const double span_m = kMaxOctoMapVoxels * astar.grid_resolution_m;
@@ -164,6 +181,7 @@ void Scenario::Validate() const {
                " (" + FormatNumber(std::floor(span_m * 100.0) / 100.0) + " m): use a coarser grid or a smaller field");
   }
   c.NonNegative("astar.clearance_m", astar.clearance_m);
+  c.AtMost("astar.clearance_m", astar.clearance_m, kMaxClearance_m, "m");
   c.NonNegative("astar.wait_per_lap_s", astar.wait_per_lap_s);
   c.NonNegative("astar.weight_exponent", astar.weight_exponent);
   c.NonNegative("astar.replan_delay_s", astar.replan_delay_s);
@@ -179,6 +197,7 @@ void Scenario::Validate() const {
       c.Fail(path + ".size_m", FormatVector(tree.size_m), "must be > 0 and finite");
     }
     c.Positive(path + ".height_m", tree.height_m);
+    c.AtMost(path + ".height_m", tree.height_m, kMaxStructureHeight_m, "m");
     if (!InsideBox(tree.center_m - tree.size_m / 2, Eigen::Vector2d::Zero(), workspace_max) ||
         !InsideBox(tree.center_m + tree.size_m / 2, Eigen::Vector2d::Zero(), workspace_max)) {
       c.Fail(path + ".center_m", FormatVector(tree.center_m),
@@ -256,6 +275,21 @@ void Scenario::Validate() const {
     c.Fail("fleet.risk_share", FormatNumber(fleet.risk_share), "must be in [0, 10] (0 = regions balanced on laps alone)");
   }
   CheckFleetEvents(c, fleet_events, vehicles, duration_s, check_vehicle);
+  std::size_t fleet_size = 0;
+  double room_needed_m2 = 0.0;
+  const auto count_in = [&](const VehicleSpec& v) {
+    ++fleet_size;
+    room_needed_m2 += v.model == MotionModel::kBlueRov2 ? kMinAreaPerBlueRov2_m2 : kMinAreaPerPointVehicle_m2;
+  };
+  for (const VehicleSpec& v : vehicles) count_in(v);
+  for (const FleetEvent& event : fleet_events) {
+    if (event.kind == FleetEvent::Kind::kJoin) count_in(event.vehicle);
+  }
+  if (const double area_m2 = workspace.width_m * workspace.height_m; room_needed_m2 > area_m2 * (1.0 + 1e-12)) {
+    c.Fail("vehicles", std::to_string(fleet_size) + " vehicles (joins included)",
+           "need " + FormatNumber(room_needed_m2) + " m^2 (" + FormatNumber(kMinAreaPerBlueRov2_m2) + " a BlueROV2, " +
+               FormatNumber(kMinAreaPerPointVehicle_m2) + " a point vehicle); the workspace has " + FormatNumber(area_m2));
+  }
 
   const std::size_t valve_count = valve_names.size();
   c.Positive("guard.revisit_bound_s", guard.revisit_bound_s, /*infinity_ok=*/true);

@@ -4,10 +4,14 @@
 
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
+#include <fstream>
 #include <map>
 #include <set>
 #include <string>
 #include <vector>
+
+#include <unistd.h>
 
 #include <gtest/gtest.h>
 
@@ -261,6 +265,29 @@ profiles: {only: {weights: {V: 1}}}
 }
 
 // .inf, inf and infinity (any case, quoted or not) all mean no forgetting.
+// A fleet (joins included) that needs more seabed than the workspace has (1 m^2 a BlueROV2,
+// 0.1 m^2 a point vehicle) is refused at load (a probe's 100,000 vehicles on a 12 x 9.5 m field
+// took 20 GB). The base's 35 m^2 hold its two BlueROV2s and two point vehicles (2.2 m^2) and
+// 32 more BlueROV2s, not 33.
+TEST(Scenario, FleetMustFitTheWorkspace) {
+  const auto with_extra = [](int extra) {
+    std::string more;
+    for (int k = 0; k < extra; ++k) {
+      more += "  - {name: x" + std::to_string(k) + ", start_m: [" + std::to_string(0.2 + 0.2 * (k % 30)) + ", " +
+              std::to_string(0.3 + 0.5 * (k / 30)) + "], model: bluerov2, transit_speed_mps: 0.5}\n";
+    }
+    return Replace(kBase, "vehicles:\n", "vehicles:\n" + more);
+  };
+  EXPECT_NO_THROW(ParseScenario(with_extra(32), "base.yaml"));
+  try {
+    ParseScenario(with_extra(33), "base.yaml");
+    ADD_FAILURE() << "37 vehicles needing 35.2 m^2 were taken on 35 m^2";
+  } catch (const ScenarioError& e) {
+    EXPECT_STREQ(e.what(), "base.yaml: vehicles = 37 vehicles (joins included): need 35.2 m^2 (1 a BlueROV2, 0.1 a point "
+                           "vehicle); the workspace has 35");
+  }
+}
+
 TEST(Scenario, InfinitySpellings) {
   for (const char* spelling : {".inf", "inf", "infinity", "Infinity", "\"infinity\"", ".Inf"}) {
     const std::string text = Replace(kBase, "forgetting_time_s: .inf", std::string("forgetting_time_s: ") + spelling);
@@ -476,6 +503,17 @@ TEST(Scenario, BadInputsGiveOneLineNamingFieldAndValue) {
       {"default_profile: leak", "default_profile: calm", {"default_profile = calm", "equal, leak"}},
       {"  leak:\n", "  equal:\n", {"profiles.equal", "duplicate key"}},
       {"vehicles:", "vehicle:", {"vehicle", "unknown key"}},
+      // Bounds on what a scenario costs (probes: physics_rate_hz 5e7 and grid_resolution_m 1e-6
+      // hung for minutes, clearance_m 300000 took 16.8 GB).
+      {"duration_s: 300", "duration_s: 1e9", {"base.yaml: duration_s = 1e+09: must be <= 604800 s (a week)"}},
+      {"control_rate_hz: 10", "control_rate_hz: 1000", {"control_rate_hz = 1000: must be <= 100 Hz"}},
+      {"physics_rate_hz: 50", "physics_rate_hz: 5e7", {"base.yaml: physics_rate_hz = 5e+07: must be <= 1000 Hz"}},
+      {"fleet: {", "astar: {grid_resolution_m: 1e-6}\nfleet: {", {"astar.grid_resolution_m = 1e-06: must be >= 0.01 m"}},
+      {"width_m: 7.0, height_m: 5.0", "width_m: 1000, height_m: 900",
+       {"base.yaml: astar.grid_resolution_m = 0.1: gives 90 million cells over the workspace; at most 64 million"}},
+      {"fleet: {", "astar: {clearance_m: 300000}\nfleet: {", {"base.yaml: astar.clearance_m = 3e+05: must be <= 10 m"}},
+      {"size_m: [0.8, 0.8]", "size_m: [0.8, 0.8]\n    height_m: 1e6",
+       {"base.yaml: structures[0].height_m = 1e+06: must be <= 100 m"}},
       // Fleet settings and events.
       {"assignment: partition", "assignment: split",
        {"base.yaml: fleet.assignment = split: must be shared, partition or regions"}},
