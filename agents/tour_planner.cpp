@@ -288,11 +288,6 @@ std::vector<Eigen::Vector2d> PlanGridPath(const maps::OccupancyGrid& grid, const
   const std::optional<Cell> start = SnapToFree(grid, from);
   const std::optional<Cell> goal = SnapToFree(grid, to);
   if (!start || !goal) return {};
-  // In the clear: the straight line between the cells' centres, which is what the search's path
-  // shortcuts to in open water (a vehicle crossing to its region had searched ~2 ms for it).
-  if (const Eigen::Vector2d a = grid.CenterOf(*start), b = grid.CenterOf(*goal); SegmentFree(grid, a, b)) {
-    return *start == *goal ? std::vector<Eigen::Vector2d>{a} : std::vector<Eigen::Vector2d>{a, b};
-  }
   const std::vector<Cell> cells = AStar(grid, *start, *goal);
   if (cells.empty()) return {};
   std::vector<Eigen::Vector2d> path;
