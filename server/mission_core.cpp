@@ -199,6 +199,17 @@ OperatorAnswer MissionCore::ReserveIds(int count) {
     answer.reason = fmt::format("count = {}: must be in 1..{}", count, kMaxIdsPerRequest);
     return answer;
   }
+  // The fleet must still fit the workspace as a scenario's must (maps::kMinAreaPerBlueRov2_m2):
+  // a probe's `sage vehicle add --count 100000` on a 12 x 9.5 m field had taken the server to 20 GB.
+  const double area_m2 = scenario_.workspace.width_m * scenario_.workspace.height_m;
+  const std::size_t room = static_cast<std::size_t>(std::floor(area_m2 / maps::kMinAreaPerBlueRov2_m2));
+  const std::size_t alive = roster_.alive().size();
+  if (alive + static_cast<std::size_t>(count) > room) {
+    answer.reason = fmt::format("count = {}: the {} x {} m workspace holds {} vehicles ({} m^2 each) and {} are in the mission",
+                                count, scenario_.workspace.width_m, scenario_.workspace.height_m, room,
+                                maps::kMinAreaPerBlueRov2_m2, alive);
+    return answer;
+  }
   answer.accepted = true;
   answer.first_id = roster_.ReserveIds(count);
   return answer;

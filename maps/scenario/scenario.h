@@ -75,6 +75,9 @@ inline constexpr double kMaxOctoMapVoxels = 32767.0;
 /// Largest start jitter (m): a vehicle's start stays near the start_m the scenario names.
 inline constexpr double kMaxStartJitter_m = 0.5;
 
+/// Longest name of a scenario, structure, valve, vehicle or profile (characters).
+inline constexpr std::size_t kMaxNameLength = 64;
+
 /// Bounds on what a scenario may cost to load and to run (each broken one is a one-line error).
 /// A scenario file is read only up to this size (a 10,000-XT field is 6.3 MB).
 inline constexpr std::size_t kMaxScenarioBytes = std::size_t{64} << 20;

@@ -58,9 +58,23 @@ class Checker {
     NonNegative(field, v);
     if (v > kMaxRawWeight) Fail(field, FormatNumber(v), "must be in [0, 1e12] (weights are relative)");
   }
-  // A non-empty name not used before by another entry of the same kind.
-  void UniqueName(std::map<std::string, std::string>& seen, const std::string& field, const std::string& name) const {
+  // A name goes into logs, tables and CSV files: 1..kMaxNameLength characters, none a control
+  // character (a valve named with a newline or ESC forged log lines and broke fleet_events.csv).
+  void Name(const std::string& field, const std::string& name) const {
     if (name.empty()) Fail(field, "\"\"", "must not be empty");
+    if (name.size() > kMaxNameLength) {
+      Fail(field, name.substr(0, 20) + "...", "must be at most " + std::to_string(kMaxNameLength) + " characters");
+    }
+    const auto control = [](char ch) { return static_cast<unsigned char>(ch) < 0x20 || ch == 0x7f; };
+    if (std::any_of(name.begin(), name.end(), control)) {
+      std::string shown = name;
+      std::replace_if(shown.begin(), shown.end(), control, '?');
+      Fail(field, shown, "must not hold control characters (newline, tab, escape: shown as ?)");
+    }
+  }
+  // A valid name not used before by another entry of the same kind.
+  void UniqueName(std::map<std::string, std::string>& seen, const std::string& field, const std::string& name) const {
+    Name(field, name);
     const auto [it, inserted] = seen.emplace(name, field);
     if (!inserted) Fail(field, name, "duplicate name (also " + it->second + ")");
   }
@@ -126,7 +140,7 @@ void CheckFleetEvents(const Checker& c, const std::vector<FleetEvent>& events, c
 
 void Scenario::Validate() const {
   const Checker c(source_path.empty() ? "<scenario>" : source_path);
-  if (name.empty()) c.Fail("name", "\"\"", "must not be empty");
+  c.Name("name", name);
   c.Positive("workspace.width_m", workspace.width_m);
   c.Positive("workspace.height_m", workspace.height_m);
   const Eigen::Vector2d workspace_max(workspace.width_m, workspace.height_m);

@@ -84,6 +84,20 @@ TEST(MissionCore, IssuesSmallPredictableIds) {
   EXPECT_FALSE(core.ReserveIds(10001).accepted);
 }
 
+// Vehicles added at runtime must fit the workspace as a scenario's must (1 m^2 a vehicle): two_xt's
+// 5.6 x 4.3 m hold 24; with 2 in the mission 22 more are taken, 23 are refused with the reason.
+TEST(MissionCore, RuntimeAdditionsMustFitTheWorkspace) {
+  const maps::Scenario s = maps::LoadScenario(kTwoXt);
+  maps::World world(s);
+  MissionCore core(world, s, "", ControllerKind::kErgodic);
+  core.OnState(State(0, "a", 0, {0.6, 0.6}));
+  core.OnState(State(1, "b", 0, {1.6, 0.6}));
+  const OperatorAnswer too_many = core.ReserveIds(23);
+  EXPECT_FALSE(too_many.accepted);
+  EXPECT_EQ(too_many.reason, "count = 23: the 5.6 x 4.3 m workspace holds 24 vehicles (1 m^2 each) and 2 are in the mission");
+  EXPECT_TRUE(core.ReserveIds(22).accepted);
+}
+
 // Names reach logs and CSV files: control characters and separators are replaced, a numeric or
 // empty name gets one, and a second vehicle of the same name is told apart by its id.
 TEST(MissionCore, NamesAreMadeSafeAndUnique) {

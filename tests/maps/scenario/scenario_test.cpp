@@ -288,6 +288,31 @@ TEST(Scenario, FleetMustFitTheWorkspace) {
   }
 }
 
+// A file over the size limit is refused while it is read, not parsed first (a 100 MB scenario
+// had taken 104 s and 6.8 GB before its error): a valid scenario padded with a comment to
+// 65 MB gives the size error; the same scenario unpadded loads.
+TEST(Scenario, OversizedFileIsRefusedWhileRead) {
+  const std::filesystem::path dir = std::filesystem::temp_directory_path() / ("sage_scenario_size_" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  const std::string small = (dir / "small.yaml").string(), big = (dir / "big.yaml").string();
+  std::ofstream(small) << kBase;
+  {
+    std::ofstream out(big);
+    out << kBase << "#";
+    const std::string line(1 << 20, 'x');
+    for (int k = 0; k < 65; ++k) out << line;
+    out << "\n";
+  }
+  EXPECT_NO_THROW(LoadScenario(small));
+  try {
+    LoadScenario(big);
+    ADD_FAILURE() << "a 65 MB scenario was read";
+  } catch (const ScenarioError& e) {
+    EXPECT_EQ(std::string(e.what()), big + ": over 64 MB: too large for a scenario (a 10,000-XT field is 6.3 MB)");
+  }
+  std::filesystem::remove_all(dir);
+}
+
 TEST(Scenario, InfinitySpellings) {
   for (const char* spelling : {".inf", "inf", "infinity", "Infinity", "\"infinity\"", ".Inf"}) {
     const std::string text = Replace(kBase, "forgetting_time_s: .inf", std::string("forgetting_time_s: ") + spelling);
@@ -503,6 +528,12 @@ TEST(Scenario, BadInputsGiveOneLineNamingFieldAndValue) {
       {"default_profile: leak", "default_profile: calm", {"default_profile = calm", "equal, leak"}},
       {"  leak:\n", "  equal:\n", {"profiles.equal", "duplicate key"}},
       {"vehicles:", "vehicle:", {"vehicle", "unknown key"}},
+      // Names reach logs and CSV files.
+      {"name: P2", "name: \"P2\\nfake line\"", {"base.yaml: structures[0].valves[1].name = P2?fake line: must not hold control characters"}},
+      {"name: rov2", "name: \"rov\\e[31m2\"", {"vehicles[1].name = rov?[31m2: must not hold control characters"}},
+      {"name: XT-A", "name: XT-AAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAA",
+       {"base.yaml: structures[0].name = XT-AAAAAAAAAAAAAAAAA...: must be at most 64 characters"}},
+      {"name: base", "name: \"base\\t1\"", {"base.yaml: name = base?1: must not hold control characters"}},
       // Bounds on what a scenario costs (probes: physics_rate_hz 5e7 and grid_resolution_m 1e-6
       // hung for minutes, clearance_m 300000 took 16.8 GB).
       {"duration_s: 300", "duration_s: 1e9", {"base.yaml: duration_s = 1e+09: must be <= 604800 s (a week)"}},
