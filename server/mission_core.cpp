@@ -426,7 +426,10 @@ void MissionCore::AssignRegions(const std::vector<int>& alive, CycleOutput& out)
     plan.risk_seen = fleet_.schedule().size();
     for (const auto& [id, share] : plan.shares) {
       const double ratio = (RiskMass(share.valves) + 1e-12) / (share.split_mass + 1e-12);
-      if (ratio > kResplitRatio || ratio < 1.0 / kResplitRatio) replan = by_risk = true;
+      if (ratio > kResplitRatio || ratio < 1.0 / kResplitRatio) {
+        replan = by_risk = true;
+        break;  // one share moved is enough: the whole field is split again
+      }
     }
   }
   if (replan) {
