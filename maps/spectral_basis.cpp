@@ -94,17 +94,22 @@ void SpectralBasis::Evaluate(const Eigen::Vector2d& x, Eigen::VectorXd& f) const
   }
 }
 
-void SpectralBasis::AddScaled(const Eigen::Vector2d& x, double scale, Eigen::VectorXd& sum) const {
+// F_k(x) = (cos(kappa1 x1) / h_x[k1]) (cos(kappa2 x2) / h_y[k2]): the normalised y cosines once,
+// then one multiply-add a term. Every term is its own element (no reduction), so the AVX2 clone
+// (chosen at load time where the CPU has it; no FMA, so no contraction) gives the same bits as
+// the SSE2 one, 4,096 terms a sample at K = 64.
+__attribute__((target_clones("avx2", "default"))) void SpectralBasis::AddScaled(const Eigen::Vector2d& x,
+                                                                                double scale,
+                                                                                Eigen::VectorXd& sum) const {
   Trigonometry t;
   EvaluateTrigonometry(x, t);
-  const auto& cx = t.cos_x;
-  const auto& cy = t.cos_y;
+  std::array<double, kMaxOrder> y;
+  for (int k2 = 0; k2 < order_; ++k2) y[k2] = t.cos_y[k2] * inv_h_y_[k2];
   double* out = sum.data();
-  const double* inv_h = inv_h_.data();
   for (int k1 = 0; k1 < order_; ++k1) {
-    const int row = k1 * order_;
-    const double c1 = cx[k1];
-    for (int k2 = 0; k2 < order_; ++k2) out[row + k2] += scale * (c1 * cy[k2] * inv_h[row + k2]);
+    double* row = out + k1 * order_;
+    const double c1 = scale * (t.cos_x[k1] * inv_h_x_[k1]);
+    for (int k2 = 0; k2 < order_; ++k2) row[k2] += c1 * y[k2];
   }
 }
 

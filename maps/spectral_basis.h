@@ -52,9 +52,9 @@ class SpectralBasis {
 
   /// F_k(x) for all k into f (resized to size()). x in metres, workspace frame.
   void Evaluate(const Eigen::Vector2d& x, Eigen::VectorXd& f) const;
-  /// sum += scale F(x), in one pass with no F vector: the same products as Evaluate, then scaled
-  /// and added (a fleet's metric accumulates a sample of every vehicle every cycle: at 10,000
-  /// vehicles and K = 64, 41 million terms).
+  /// sum += scale F(x), in one pass with no F vector, F_k as the product of one normalised cosine
+  /// per dimension (equal to Evaluate's to rounding; a fleet's metric accumulates a sample of
+  /// every vehicle every cycle: at 10,000 vehicles and K = 64, 41 million terms).
   void AddScaled(const Eigen::Vector2d& x, double scale, Eigen::VectorXd& sum) const;
 
   /// Gradient of sum_k a_k F_k at x (1/m times units of a). Used by the SMC law with

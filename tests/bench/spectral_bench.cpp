@@ -4,6 +4,7 @@
 // K = 10, 20 and 40, as the paper runs it (no forgetting, one vehicle) and as fleet_field runs it
 // (60 s forgetting, the rest of the fleet's coverage, a 0.3 m turning radius); and the phi_k
 // update after one valve's weight changes (O(M K^2) re-weighting of cached vectors).
+// The server adding one vehicle sample to the fleet's coverage sum (K = 20 and 64).
 // Also one grid path (A*, shortcut) of a vehicle crossing to a valve up to 40 m away on a
 // generated 1,000-XT field, as every vehicle plans when it is sent to its region or tour.
 // The paper's Python reference takes ~45 us per step; our goal is <= 0.5 us at K = 20.
@@ -83,6 +84,22 @@ void BM_SmcStepFleet(benchmark::State& state) {
   StepAlong(state, controller, basis);
 }
 BENCHMARK(BM_SmcStepFleet)->Arg(10)->Arg(20)->Arg(40);
+
+// The server's fleet metric: every vehicle's sample adds dt F_k(x) to the fleet's coverage sum,
+// each cycle (K = 64 on a generated 10,000-vehicle field: 4,096 terms a sample).
+void BM_CoverageSample(benchmark::State& state) {
+  const int order = static_cast<int>(state.range(0));
+  const SpectralBasis basis(700.0, 500.0, order);
+  Eigen::VectorXd sum = Eigen::VectorXd::Zero(basis.size());
+  Eigen::Vector2d x(3.1, 2.7);
+  for (auto _ : state) {
+    basis.AddScaled(x, 0.1, sum);
+    x.x() = x.x() > 690.0 ? 3.1 : x.x() + 0.37;
+    benchmark::DoNotOptimize(sum.data());
+  }
+  state.counters["K"] = order;
+}
+BENCHMARK(BM_CoverageSample)->Arg(20)->Arg(64);
 
 void BM_WeightChange(benchmark::State& state) {
   const int order = static_cast<int>(state.range(0));
