@@ -29,6 +29,10 @@ struct Mission::Impl {
       if (a_) a_->OnSample(s, name);
       if (b_) b_->OnSample(s, name);
     }
+    void OnSamples(const std::vector<TrajectorySample>& samples, const std::vector<const std::string*>& names) override {
+      if (a_) a_->OnSamples(samples, names);
+      if (b_) b_->OnSamples(samples, names);
+    }
     void OnFleetEvent(const FleetEventRecord& e) override {
       if (a_) a_->OnFleetEvent(e);
       if (b_) b_->OnFleetEvent(e);

@@ -233,16 +233,12 @@ void MissionCore::RecordSamples() {
   std::stable_sort(samples_.begin(), samples_.end(), [](const TrajectorySample& a, const TrajectorySample& b) {
     return a.time_s != b.time_s ? a.time_s < b.time_s : a.vehicle < b.vehicle;
   });
-  const std::map<int, Roster::Member>& members = roster_.members();
-  std::vector<const std::string*> names;
-  for (const TrajectorySample& s : samples_) {
-    metrics_.Add(s);
-    if (recorder_ == nullptr) continue;
-    if (names.empty()) {
-      names.resize(members.size(), nullptr);
-      for (const auto& [id, m] : members) names[m.index] = &m.name;
-    }
-    recorder_->OnSample(s, *names[s.vehicle]);
+  for (const TrajectorySample& s : samples_) metrics_.Add(s);
+  if (recorder_ != nullptr && !samples_.empty()) {
+    const std::map<int, Roster::Member>& members = roster_.members();
+    std::vector<const std::string*> names(members.size(), nullptr);
+    for (const auto& [id, m] : members) names[m.index] = &m.name;
+    recorder_->OnSamples(samples_, names);
   }
   samples_.clear();
 }

@@ -54,6 +54,11 @@ class MissionRecorder {
  public:
   virtual ~MissionRecorder() = default;
   virtual void OnSample(const TrajectorySample& sample, const std::string& vehicle_name) = 0;
+  /// A cycle's samples at once, names[s.vehicle] naming each (valid for the call only); by
+  /// default OnSample one by one. A recorder may do its part of the work off the cycle.
+  virtual void OnSamples(const std::vector<TrajectorySample>& samples, const std::vector<const std::string*>& names) {
+    for (const TrajectorySample& s : samples) OnSample(s, *names[s.vehicle]);
+  }
   virtual void OnFleetEvent(const FleetEventRecord& event) = 0;
   virtual void OnRiskEvent(const RiskEventRecord& event) = 0;
   /// A new split of the field into regions (the regions assignment), at time_s.

@@ -56,6 +56,9 @@ class LoggedRecord final : public MissionRecorder {
  public:
   explicit LoggedRecord(RunDirectory& run) : run_(run) {}
   void OnSample(const TrajectorySample& s, const std::string& name) override { run_.OnSample(s, name); }
+  void OnSamples(const std::vector<TrajectorySample>& samples, const std::vector<const std::string*>& names) override {
+    run_.OnSamples(samples, names);
+  }
   void OnFleetEvent(const FleetEventRecord& e) override {
     run_.OnFleetEvent(e);
     if (e.what == "joined" || e.what == "rejoined") {

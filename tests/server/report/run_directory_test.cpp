@@ -135,6 +135,50 @@ TEST_F(RunDirectoryTest, ResumeContinuesACutRecord) {
   EXPECT_EQ(Read(dir_ / "trajectory.csv"), "t,vehicle,x,y,heading,vx,vy,cmd_x,cmd_y\n");
 }
 
+// A large fleet's cycles (rows formatted off the cycle) land in trajectory.csv in order and
+// byte for byte as one sample at a time writes them, with small cycles and single samples in
+// between, and a flush in the middle holds every row given before it.
+TEST_F(RunDirectoryTest, LargeCyclesWriteTheSameRowsInOrder) {
+  const maps::Scenario s = maps::LoadScenario(kTwoXt);
+  std::vector<std::string> names;
+  std::vector<const std::string*> name_of;
+  for (int v = 0; v < 900; ++v) names.push_back(fmt::format("rov{}", v));
+  for (const std::string& n : names) name_of.push_back(&n);
+  const auto cycle = [](int c, int vehicles) {
+    std::vector<TrajectorySample> samples;
+    for (int v = 0; v < vehicles; ++v) {
+      samples.push_back({0.1 * c, v, {0.01 * v + c / 3.0, 7.0 / (v + 1)}, 0.001 * v, {1.0 / 3, -0.25}, {0, 1e-9 * v}});
+    }
+    return samples;
+  };
+  const std::vector<int> sizes = {900, 3, 700, 900, 1};
+  const fs::path one_by_one = dir_.string() + "_one_by_one";
+  {
+    RunDirectory run(one_by_one.string(), s);
+    for (std::size_t c = 0; c < sizes.size(); ++c)
+      for (const TrajectorySample& x : cycle(static_cast<int>(c), sizes[c])) run.OnSample(x, names[x.vehicle]);
+  }
+  RunDirectoryOptions options;
+  options.flush_period_s = 0.0;
+  {
+    RunDirectory run(dir_.string(), s, options);
+    Mission mission(s, MissionOptions{"", ControllerKind::kErgodic, nullptr, false});
+    for (std::size_t c = 0; c < sizes.size(); ++c) {
+      run.OnSamples(cycle(static_cast<int>(c), sizes[c]), name_of);
+      if (c == 2) {
+        run.Tick(mission.core());  // flush period 0: everything so far is on disk
+        EXPECT_EQ(run.flushed_until_s(), 0.2);
+        const std::string so_far = Read(dir_ / "trajectory.csv");
+        EXPECT_EQ(std::count(so_far.begin(), so_far.end(), '\n'), 1 + 900 + 3 + 700);
+      }
+    }
+  }
+  const std::string expected = Read(one_by_one / "trajectory.csv");
+  fs::remove_all(one_by_one);
+  EXPECT_EQ(std::count(expected.begin(), expected.end(), '\n'), 1 + 900 + 3 + 700 + 900 + 1);
+  EXPECT_EQ(Read(dir_ / "trajectory.csv"), expected);
+}
+
 // Free text in the event files cannot break a row: a detail with commas, quotes and a newline
 // reads back as it was (control characters as spaces).
 TEST_F(RunDirectoryTest, EventTextStaysInItsField) {
