@@ -711,7 +711,15 @@ std::vector<int> Match(const Points& centroids, const std::vector<FleetVehicle>&
     return (centroids[c] - vehicles[k].position_m).squaredNorm() / (vehicles[k].speed_mps * vehicles[k].speed_mps);
   };
   std::vector<int> vehicle_of(n, -1);
-  if (n > kHungarianMax) return GreedyMatch(n, m, cost);  // agents/greedy_match.h
+  if (n > kHungarianMax) {  // agents/greedy_match.h
+    std::vector<Eigen::Vector2d> at;
+    double fastest = 0.0;
+    for (const FleetVehicle& vehicle : vehicles) {
+      at.push_back(vehicle.position_m);
+      fastest = std::max(fastest, vehicle.speed_mps);
+    }
+    return GreedyMatchNear(centroids, at, fastest, cost);
+  }
   // Rows are clusters (1..n), columns vehicles (1..m); u, v the potentials, p[j] the row matched
   // to column j, way[] the alternating path.
   std::vector<double> u(n + 1, 0.0), v(m + 1, 0.0);

@@ -402,5 +402,31 @@ TEST(GreedyMatch, TakesThePairsTheSortedListWould) {
   }
 }
 
+// GreedyMatchNear (shortlists from the vehicles near each cluster) makes GreedyMatch's matching
+// of the same costs: vehicles spread out, crowded into a few spots (equal costs, shortlists that
+// run out), on one line (a box of no area), and of three speeds (the cheapest is not the nearest).
+TEST(GreedyMatch, NearbyShortlistsMatchAsPricingEveryVehicle) {
+  std::mt19937_64 rng(23);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  for (int trial = 0; trial < 24; ++trial) {
+    const int m = 20 + static_cast<int>(rng() % 400), n = 1 + static_cast<int>(rng() % m);
+    std::vector<Eigen::Vector2d> at(m), centroids(n);
+    std::vector<double> speed(m, 0.5);
+    for (int k = 0; k < m; ++k) {
+      if (trial % 4 == 1) {
+        at[k] = {std::floor(4 * unit(rng)) * 10.0, 3.0};  // four spots on a line
+      } else {
+        at[k] = {200.0 * unit(rng), trial % 4 == 2 ? 5.0 : 80.0 * unit(rng)};
+      }
+      if (trial % 2 == 0) speed[k] = 0.3 + 0.2 * static_cast<double>(rng() % 3);
+    }
+    for (Eigen::Vector2d& c : centroids) c = {220.0 * unit(rng) - 10.0, 90.0 * unit(rng) - 5.0};
+    const auto cost = [&](int c, int k) { return (centroids[c] - at[k]).squaredNorm() / (speed[k] * speed[k]); };
+    const double fastest = *std::max_element(speed.begin(), speed.end());
+    ASSERT_EQ(GreedyMatchNear(centroids, at, fastest, cost), GreedyMatch(n, m, cost))
+        << "trial " << trial << ": " << n << " clusters, " << m << " vehicles";
+  }
+}
+
 }  // namespace
 }  // namespace sage::agents
