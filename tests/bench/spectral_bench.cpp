@@ -5,12 +5,15 @@
 // (60 s forgetting, the rest of the fleet's coverage, a 0.3 m turning radius); and the phi_k
 // update after one valve's weight changes (O(M K^2) re-weighting of cached vectors).
 // The server adding one vehicle sample to the fleet's coverage sum (K = 20 and 64).
-// Also one grid path (A*, shortcut) of a vehicle crossing to a valve up to 40 m away on a
-// generated 1,000-XT field, as every vehicle plans when it is sent to its region or tour.
+// Also one grid path (A*, shortcut) of a vehicle to a valve 10-40 m away on a generated 1,000-XT
+// field, and 20-100 m away on a 10,000-XT one, as every vehicle plans when it is sent to its
+// region or tour.
 // The paper's Python reference takes ~45 us per step; our goal is <= 0.5 us at K = 20.
 // Figures only: nothing here asserts on time (the machine is shared; see --benchmark_repetitions).
 // Run: build/bin/sage_bench_spectral --benchmark_out=bench_spectral.json
 #include <cstdio>
+#include <map>
+#include <memory>
 #include <random>
 #include <string>
 #include <vector>
@@ -119,30 +122,44 @@ BENCHMARK(BM_WeightChange)->Args({10, 5})->Args({20, 5})->Args({20, 200});
 
 // Crossings of a generated field at its density (80 m^2 of seabed per XT): each vehicle's start
 // to a valve 10-40 m from it, the same pairs every run.
+// A generated field of `xts` XTs (3.5 valves and one vehicle each) and its world, made once.
+const sage::maps::World& FieldWorld(int xts, const sage::maps::Scenario** field_out) {
+  static std::map<int, std::pair<sage::maps::Scenario, std::unique_ptr<sage::maps::World>>> made;
+  auto it = made.find(xts);
+  if (it == made.end()) {
+    sage::maps::FieldOptions options;
+    options.xts = xts;
+    options.valves = xts * 7 / 2;
+    options.vehicles = xts;
+    it = made.emplace(xts, std::make_pair(sage::maps::GenerateField(options), nullptr)).first;
+    it->second.second = std::make_unique<sage::maps::World>(it->second.first);
+  }
+  *field_out = &it->second.first;
+  return *it->second.second;
+}
+
+// Args: XTs of the field, then the shortest and longest path (m) between a vehicle's start and
+// a valve: 10-40 m as a vehicle sent to a valve of its region, 20-100 m as one crossing a
+// 10,000-vehicle field to its region.
 void BM_GridPath(benchmark::State& state) {
-  sage::maps::FieldOptions options;
-  options.xts = 1000;
-  options.valves = 3500;
-  options.vehicles = 1000;
-  static const sage::maps::Scenario field = sage::maps::GenerateField(options);
-  static const sage::maps::World world(field);
-  static const std::vector<std::pair<Eigen::Vector2d, Eigen::Vector2d>> pairs = [] {
-    std::vector<std::pair<Eigen::Vector2d, Eigen::Vector2d>> out;
-    const std::vector<Eigen::Vector2d> valves = field.ValvePositions();
-    std::mt19937 rng(3);
-    std::uniform_int_distribution<std::size_t> pick(0, valves.size() - 1);
-    for (const auto& v : field.vehicles) {
-      for (int tries = 0; tries < 1000; ++tries) {
-        const Eigen::Vector2d& goal = valves[pick(rng)];
-        const double d = (goal - v.start_m).norm();
-        if (d >= 10.0 && d <= 40.0) {
-          out.emplace_back(v.start_m, goal);
-          break;
-        }
+  const sage::maps::Scenario* field = nullptr;
+  const sage::maps::World& world = FieldWorld(static_cast<int>(state.range(0)), &field);
+  const double shortest = static_cast<double>(state.range(1)), longest = static_cast<double>(state.range(2));
+  std::vector<std::pair<Eigen::Vector2d, Eigen::Vector2d>> pairs;
+  const std::vector<Eigen::Vector2d> valves = field->ValvePositions();
+  std::mt19937 rng(3);
+  std::uniform_int_distribution<std::size_t> pick(0, valves.size() - 1);
+  for (std::size_t i = 0; i < field->vehicles.size() && pairs.size() < 1000; ++i) {
+    const Eigen::Vector2d& start = field->vehicles[i].start_m;
+    for (int tries = 0; tries < 1000; ++tries) {
+      const Eigen::Vector2d& goal = valves[pick(rng)];
+      const double d = (goal - start).norm();
+      if (d >= shortest && d <= longest) {
+        pairs.emplace_back(start, goal);
+        break;
       }
     }
-    return out;
-  }();
+  }
   std::size_t k = 0, waypoints = 0;
   for (auto _ : state) {
     const auto& [from, to] = pairs[k++ % pairs.size()];
@@ -153,7 +170,7 @@ void BM_GridPath(benchmark::State& state) {
   state.counters["pairs"] = static_cast<double>(pairs.size());
   state.counters["waypoints"] = benchmark::Counter(static_cast<double>(waypoints), benchmark::Counter::kAvgIterations);
 }
-BENCHMARK(BM_GridPath)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_GridPath)->Args({1000, 10, 40})->Args({10000, 20, 100})->Unit(benchmark::kMicrosecond);
 
 }  // namespace
 
