@@ -30,12 +30,6 @@ OccupancyGrid::OccupancyGrid(double width_m, double height_m, double resolution_
   cells_.assign(static_cast<std::size_t>(cols_) * static_cast<std::size_t>(rows_), 0);
 }
 
-bool OccupancyGrid::Occupied(int i, int j) const {
-  // Outside the workspace counts as an obstacle so planners never leave it.
-  if (!InBounds(i, j)) return true;
-  return cells_[static_cast<std::size_t>(i) * rows_ + j] != 0;
-}
-
 void OccupancyGrid::SetOccupied(int i, int j, bool occupied) {
   // Out-of-bounds writes are ignored: outside is already "occupied" for every reader.
   if (!InBounds(i, j)) return;

@@ -19,7 +19,11 @@ class OccupancyGrid {
   double height_m() const { return height_m_; }
 
   bool InBounds(int i, int j) const { return i >= 0 && j >= 0 && i < cols_ && j < rows_; }
-  bool Occupied(int i, int j) const;  ///< out of bounds counts as occupied
+  /// Out of bounds counts as occupied, so planners never leave the workspace. Inline: the A*
+  /// and the vehicles' guidance ask it for every neighbour of every cell they look at.
+  bool Occupied(int i, int j) const {
+    return !InBounds(i, j) || cells_[static_cast<std::size_t>(i) * rows_ + j] != 0;
+  }
   void SetOccupied(int i, int j, bool occupied = true);
   /// Marks every cell whose centre lies in the axis-aligned box [min, max] (m).
   void FillBox(const Eigen::Vector2d& min_m, const Eigen::Vector2d& max_m);
