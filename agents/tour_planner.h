@@ -16,6 +16,10 @@ namespace sage::agents {
 std::vector<Eigen::Vector2d> PlanGridPath(const maps::OccupancyGrid& grid, const Eigen::Vector2d& from,
                                           const Eigen::Vector2d& to);
 
+/// Length (m) of the shortest 8-connected cell path PlanGridPath searches, before its shortcut:
+/// r (a + b sqrt(2)) for a orthogonal and b diagonal steps; infinity if unreachable.
+double GridDistance(const maps::OccupancyGrid& grid, const Eigen::Vector2d& from, const Eigen::Vector2d& to);
+
 double PathLength(const std::vector<Eigen::Vector2d>& path);
 
 struct Tour {

@@ -5,6 +5,8 @@
 #include <algorithm>
 #include <cmath>
 #include <numeric>
+#include <queue>
+#include <limits>
 #include <random>
 #include <thread>
 
@@ -124,6 +126,57 @@ TEST(GridPath, NoSegmentCrossesOccupiedCell) {
       const auto path = PlanGridPath(grid, {x(rng), y(rng)}, {x(rng), y(rng)});
       if (path.empty()) continue;  // walled off: allowed
       ExpectPathOnFreeCells(grid, path);
+    }
+  }
+}
+
+// The A*'s cost against Dijkstra over the same moves (8-connected, no corner cutting), written
+// here on its own: random obstacle fields of boxes and single cells, random ends (snapped as the
+// planner snaps them: both ends are chosen free here), 1e-9 m; unreachable pairs agree too. The
+// shortcut path is never longer than the cell path.
+TEST(GridPath, CostEqualsDijkstra) {
+  std::mt19937 rng(19);
+  for (int field = 0; field < 6; ++field) {
+    OccupancyGrid grid(9.0, 7.0, 0.1);
+    std::uniform_real_distribution<double> x(0.0, 9.0), y(0.0, 7.0), size(0.2, 2.5);
+    for (int b = 0; b < 6 + 2 * field; ++b) {
+      const Eigen::Vector2d corner(x(rng), y(rng));
+      grid.FillBox(corner, corner + Eigen::Vector2d(size(rng), 0.3 * size(rng)));
+    }
+    for (int c = 0; c < 150; ++c) grid.SetOccupied(static_cast<int>(x(rng) * 10), static_cast<int>(y(rng) * 10));
+    const int cols = grid.cols(), rows = grid.rows();
+    for (int trial = 0; trial < 8; ++trial) {
+      Eigen::Vector2i a, b;
+      do a = grid.CellOf({x(rng), y(rng)}); while (grid.Occupied(a.x(), a.y()));
+      do b = grid.CellOf({x(rng), y(rng)}); while (grid.Occupied(b.x(), b.y()));
+      std::vector<double> d(static_cast<std::size_t>(cols) * rows, std::numeric_limits<double>::infinity());
+      using Item = std::pair<double, int>;
+      std::priority_queue<Item, std::vector<Item>, std::greater<>> queue;
+      d[a.x() * rows + a.y()] = 0.0;
+      queue.emplace(0.0, a.x() * rows + a.y());
+      while (!queue.empty()) {
+        const auto [dist, k] = queue.top();
+        queue.pop();
+        if (dist > d[k]) continue;
+        const int i = k / rows, j = k % rows;
+        for (int di = -1; di <= 1; ++di)
+          for (int dj = -1; dj <= 1; ++dj) {
+            if ((di == 0 && dj == 0) || grid.Occupied(i + di, j + dj)) continue;
+            if (di != 0 && dj != 0 && (grid.Occupied(i + di, j) || grid.Occupied(i, j + dj))) continue;
+            const double next = dist + (di != 0 && dj != 0 ? std::sqrt(2.0) : 1.0) * grid.resolution_m();
+            const int n = (i + di) * rows + j + dj;
+            if (next < d[n]) d[n] = next, queue.emplace(next, n);
+          }
+      }
+      const double expected = d[b.x() * rows + b.y()];
+      const double got = GridDistance(grid, grid.CenterOf(a), grid.CenterOf(b));
+      if (std::isinf(expected)) {
+        EXPECT_TRUE(std::isinf(got)) << "field " << field << " trial " << trial;
+        EXPECT_TRUE(PlanGridPath(grid, grid.CenterOf(a), grid.CenterOf(b)).empty());
+        continue;
+      }
+      EXPECT_NEAR(got, expected, 1e-9) << "field " << field << " trial " << trial;
+      EXPECT_LE(PathLength(PlanGridPath(grid, grid.CenterOf(a), grid.CenterOf(b))), got + 1e-9);
     }
   }
 }
