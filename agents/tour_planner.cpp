@@ -1,5 +1,6 @@
 // A* grid paths and the shortest closed inspection tour (the SAGE paper's baseline).
 #include "agents/tour_planner.h"
+#include "agents/grid_steps.h"
 
 #include <algorithm>
 #include <cmath>
@@ -98,36 +99,24 @@ bool SegmentFree(const maps::OccupancyGrid& grid, const Eigen::Vector2d& a, cons
 // both orthogonal cells it passes are free. Octile heuristic
 //   h = r (max(dx, dy) + (sqrt(2) - 1) min(dx, dy))
 // is the exact obstacle-free cost, hence admissible and consistent.
-// Costs are kept exactly, as a + b sqrt(2) steps with integer a (orthogonal) and b (diagonal):
-// in doubles the many cells of equal f (every cell on some shortest octile path) differ by
-// rounding, and the search had expanded them all in effect at random, ~80 cells per cell of path
-// on 20-100 m crossings of a 10,000-XT field. Exact ties break toward the goal (least h), then
-// by cell index, so the search runs along one shortest path and the result is deterministic.
-struct Steps {
-  std::int32_t a = 0, b = 0;  // cost a + b sqrt(2), in cells
-  friend Steps operator+(Steps x, Steps y) { return {x.a + y.a, x.b + y.b}; }
-};
-// Sign of (x.a - y.a) + (x.b - y.b) sqrt(2), exactly.
-int Compare(const Steps& x, const Steps& y) {
-  const std::int64_t p = x.a - y.a, q = x.b - y.b;
-  if (p >= 0 && q >= 0) return p > 0 || q > 0 ? 1 : 0;
-  if (p <= 0 && q <= 0) return -1;
-  const std::int64_t pp = p * p, qq = 2 * q * q;  // p + q sqrt(2) with p, q of opposite signs
-  return p > 0 ? (pp > qq ? 1 : -1) : (qq > pp ? 1 : -1);  // p^2 = 2 q^2 has no integer root but 0
-}
+// Costs are kept exactly, as a + b sqrt(2) steps (agents/grid_steps.h): in doubles the many
+// cells of equal f (every cell on some shortest octile path) differ by rounding, and the search
+// had expanded them all in effect at random, ~80 cells per cell of path on 20-100 m crossings of
+// a 10,000-XT field. Exact ties break toward the goal (least h), then by cell index, so the
+// search runs along one shortest path and the result is deterministic.
 
 // The search's per-cell state, kept between searches of one thread and stamped per search, so a
 // search costs what it touches: on a 10,000-vehicle field (12.8 million cells) each vehicle's
 // first path had cleared 166 MB of per-cell arrays, 10-12 minutes for the fleet.
 struct AStarScratch {
-  std::vector<Steps> g;
+  std::vector<GridSteps> g;
   std::vector<int> parent;
   std::vector<std::uint32_t> reached, closed;  // == stamp: this search's g/parent, closed
   std::uint32_t stamp = 0;
 
   void Begin(int cells) {
     if (static_cast<int>(g.size()) != cells) {
-      g.assign(static_cast<std::size_t>(cells), Steps{});
+      g.assign(static_cast<std::size_t>(cells), GridSteps{});
       parent.assign(static_cast<std::size_t>(cells), -1);
       reached.assign(static_cast<std::size_t>(cells), 0);
       closed.assign(static_cast<std::size_t>(cells), 0);
@@ -142,15 +131,12 @@ struct AStarScratch {
 };
 
 // The cells of a shortest path from start to goal (empty if none); its cost into *cost.
-std::vector<Cell> AStar(const maps::OccupancyGrid& grid, const Cell& start, const Cell& goal, Steps* cost = nullptr) {
+std::vector<Cell> AStar(const maps::OccupancyGrid& grid, const Cell& start, const Cell& goal, GridSteps* cost = nullptr) {
   const int rows = grid.rows();
   auto index = [rows](const Cell& c) { return c.x() * rows + c.y(); };
-  auto heuristic = [&](const Cell& c) {
-    const int dx = std::abs(c.x() - goal.x()), dy = std::abs(c.y() - goal.y());
-    return Steps{std::max(dx, dy) - std::min(dx, dy), std::min(dx, dy)};
-  };
+  auto heuristic = [&](const Cell& c) { return Octile(c.x() - goal.x(), c.y() - goal.y()); };
   struct Entry {
-    Steps f, h;
+    GridSteps f, h;
     int cell;
   };
   // The open list's order: least f, then least h, then least cell index (a heap's "greater").
@@ -164,7 +150,7 @@ std::vector<Cell> AStar(const maps::OccupancyGrid& grid, const Cell& start, cons
   const std::uint32_t stamp = scratch.stamp;
   std::priority_queue<Entry, std::vector<Entry>, decltype(later)> open(later);
   const int start_index = index(start);
-  scratch.g[start_index] = Steps{};
+  scratch.g[start_index] = GridSteps{};
   scratch.parent[start_index] = -1;
   scratch.reached[start_index] = stamp;
   open.push({heuristic(start), heuristic(start), start_index});
@@ -184,12 +170,12 @@ std::vector<Cell> AStar(const maps::OccupancyGrid& grid, const Cell& start, cons
         const bool diagonal = di != 0 && dj != 0;
         if (diagonal && (!Free(grid, Cell(c.x() + di, c.y())) || !Free(grid, Cell(c.x(), c.y() + dj)))) continue;
         const int k = index(nb);
-        const Steps cost = scratch.g[current] + (diagonal ? Steps{0, 1} : Steps{1, 0});
+        const GridSteps cost = scratch.g[current] + (diagonal ? GridSteps{0, 1} : GridSteps{1, 0});
         if (scratch.reached[k] != stamp || Compare(cost, scratch.g[k]) < 0) {
           scratch.g[k] = cost;
           scratch.parent[k] = current;
           scratch.reached[k] = stamp;
-          const Steps h = heuristic(nb);
+          const GridSteps h = heuristic(nb);
           open.push({cost + h, h, k});
         }
       }
@@ -327,9 +313,9 @@ std::vector<Eigen::Vector2d> PlanGridPath(const maps::OccupancyGrid& grid, const
 double GridDistance(const maps::OccupancyGrid& grid, const Eigen::Vector2d& from, const Eigen::Vector2d& to) {
   const std::optional<Cell> start = SnapToFree(grid, from);
   const std::optional<Cell> goal = SnapToFree(grid, to);
-  Steps cost;
+  GridSteps cost;
   if (!start || !goal || AStar(grid, *start, *goal, &cost).empty()) return kInf;
-  return grid.resolution_m() * (cost.a + std::numbers::sqrt2 * cost.b);
+  return cost.Metres(grid.resolution_m());
 }
 
 double PathLength(const std::vector<Eigen::Vector2d>& path) {
