@@ -159,7 +159,7 @@ std::vector<int> MetricsAccumulator::Add(const TrajectorySample& sample) {
     ++state_.refused;
     return {};
   }
-  auto pending = state_.pending.find(sample.vehicle);
+  const auto pending = pending_at_.Find(state_.pending, sample.vehicle);
   if (pending != state_.pending.end()) {
     const double dt = sample.time_s - pending->second.time_s;
     if (!(dt > 0.0)) {
@@ -183,6 +183,7 @@ void MetricsAccumulator::Retire(int vehicle) {
   if (it != state_.pending.end()) {
     TakeCheckpointsBefore(it->second.time_s);
     Hold(it->second, MedianSpacing());
+    pending_at_.Forget();
     state_.pending.erase(it);
   }
   visits_.Forget(vehicle);
@@ -200,6 +201,8 @@ void MetricsAccumulator::Restore(State state, VisitTracker visits) {
   }
   phi_.clear();
   for (const WeightChange& change : state.schedule) phi_.push_back(risk_.CoefficientsFor(change.weights));
+  pending_at_.Forget();
+  held_at_.Forget();
   state_ = std::move(state);
   visits_ = std::move(visits);
 }
@@ -227,7 +230,13 @@ void MetricsAccumulator::Hold(const TrajectorySample& sample, double dt_s) {
   }
   basis_.AddScaled(p, dt_s, state_.sum_f);
   state_.sum_dt += dt_s;
-  state_.last_held[sample.vehicle] = {sample.time_s, sample.time_s + dt_s, p};
+  const LastHeld held{sample.time_s, sample.time_s + dt_s, p};
+  const auto at = held_at_.Find(state_.last_held, sample.vehicle);
+  if (at != state_.last_held.end()) {
+    at->second = held;
+  } else {
+    state_.last_held.emplace(sample.vehicle, held);
+  }
 }
 
 double MetricsAccumulator::MedianSpacing() const {
