@@ -125,8 +125,9 @@ const maps::Scenario& Mission::scenario() const { return impl_->scenario; }
 const Eigen::VectorXd& Mission::effective_weights() const { return impl_->core.fleet().effective_weights(); }
 const MissionCore& Mission::core() const { return impl_->core; }
 const maps::World& Mission::world() const { return impl_->world; }
-OperatorAnswer Mission::SetRisk(const std::string& valve, double weight, const std::string& source) {
-  return impl_->core.OnRiskUpdate(valve, weight, source);
+OperatorAnswer Mission::SetRisk(const std::string& valve, double weight, const std::string& source,
+                               const std::string& sender) {
+  return impl_->core.OnRiskUpdate(valve, weight, source, sender);
 }
 
 MissionResult Mission::Run(const std::function<void(double)>& progress) {

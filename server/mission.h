@@ -75,7 +75,8 @@ class Mission {
   /// The mission's one World (seabed, maps, basis, risk).
   const maps::World& world() const;
   /// An operator's risk update, taken in the next cycle (as the DDS server does).
-  OperatorAnswer SetRisk(const std::string& valve, double weight, const std::string& source = "operator");
+  OperatorAnswer SetRisk(const std::string& valve, double weight, const std::string& source = "operator",
+                         const std::string& sender = {});
 
   /// Runs to the end; calls progress(fraction) about every percent. Computes metrics.
   MissionResult Run(const std::function<void(double)>& progress = {});

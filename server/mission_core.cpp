@@ -158,7 +158,18 @@ bool MissionCore::OnCoverage(const agents::CoverageMessage& c) {
   return fleet_.OnCoverage(c.id, r.seq, r.stamp_s, r.kernel_time_s, r.sums);
 }
 
-OperatorAnswer MissionCore::OnRiskUpdate(const std::string& valve, double weight, const std::string& source) {
+OperatorAnswer MissionCore::OnRiskUpdate(const std::string& valve, double weight, const std::string& source,
+                                         const std::string& sender) {
+  if (!risk_limits_.Allow(sender.empty() ? source : sender, next_time_s())) {
+    OperatorAnswer answer;
+    answer.reason = fmt::format("rate limit: at most {:.0f} risk updates at once, then {:.0f} a second, per sender",
+                                kRiskUpdateBurst, kRiskUpdatesPerSecond);
+    return answer;
+  }
+  return ApplyRiskUpdate(valve, weight, source);
+}
+
+OperatorAnswer MissionCore::ApplyRiskUpdate(const std::string& valve, double weight, const std::string& source) {
   OperatorAnswer answer;
   try {
     fleet_.SetRiskWeight(valve, weight, next_time_s(), source);
@@ -608,7 +619,8 @@ std::int64_t MissionCore::Replay(const std::vector<std::pair<TrajectorySample, s
     }
     for (; next_risk < risk_events.size() && risk_events[next_risk].time_s <= t + 1e-9; ++next_risk) {
       const RiskEventRecord& r = risk_events[next_risk];
-      if (r.source != "scenario") OnRiskUpdate(r.valve, r.raw_weight, r.source);  // the profile's fire by themselves
+      // The profile's fire by themselves; the record holds only updates that were applied.
+      if (r.source != "scenario") ApplyRiskUpdate(r.valve, r.raw_weight, r.source);
     }
     for (; next_sample < samples.size() &&
            std::llround(samples[next_sample].first.time_s * scenario_.control_rate_hz) <= k;

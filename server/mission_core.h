@@ -22,6 +22,7 @@
 #include "server/fleet_server.h"
 #include "server/metrics.h"
 #include "server/roster.h"
+#include "server/sender_limits.h"
 #include "server/trajectory.h"
 
 namespace sage::server {
@@ -119,7 +120,16 @@ class MissionCore {
   bool OnCoverage(const agents::CoverageMessage& coverage);
 
   // ---- from operators ----
-  OperatorAnswer OnRiskUpdate(const std::string& valve, double weight, const std::string& source);
+  /// An operator's (or a sensor's) change of a valve's risk: applied unless `sender` (who sent
+  /// it as the transport knows them, e.g. the DDS writer; `source`, the name the update gives,
+  /// when empty) has spent its allowance of risk_limits(): a flood from one sender is refused
+  /// ("rate limit ...") and counted, and every other sender is still answered.
+  OperatorAnswer OnRiskUpdate(const std::string& valve, double weight, const std::string& source,
+                              const std::string& sender = {});
+  /// Risk updates allowed per sender: kRiskUpdateBurst at once, then kRiskUpdatesPerSecond a
+  /// mission second (an operator setting every valve of a 100-valve field at once is served).
+  static constexpr double kRiskUpdatesPerSecond = 20.0, kRiskUpdateBurst = 100.0;
+  const SenderLimits& risk_limits() const { return risk_limits_; }
   /// May vehicle `id` be taken out? Refused for an unknown id, one already gone, or the last one.
   OperatorAnswer RemoveRequest(int id) const;
   /// Issues `count` new ids (1..10000) for vehicles an operator adds; names are rov<id + 1>.
@@ -160,6 +170,7 @@ class MissionCore {
                       const std::vector<RiskEventRecord>& risk_events);
 
  private:
+  OperatorAnswer ApplyRiskUpdate(const std::string& valve, double weight, const std::string& source);
   struct PendingHeadingChange {
     std::size_t response;  // index into fleet_.responses()
     std::uint64_t cycle;   // the snapshot cycle that first carried the new field
@@ -194,6 +205,7 @@ class MissionCore {
   std::size_t risk_measured_ = 0;  // risk changes whose heading change is being measured
   std::size_t schedule_seen_ = 0;  // weight schedule entries handed to the metrics
   std::size_t rejected_ = 0;
+  SenderLimits risk_limits_{kRiskUpdatesPerSecond, kRiskUpdateBurst};
   std::int64_t cycle_ = -1;
   double time_s_ = 0.0;
   double clock_s_ = 0.0;

@@ -31,6 +31,16 @@
 namespace sage::server {
 namespace {
 
+// Text from outside as it may appear in a log line: at most 64 characters, control characters
+// (newline, escape) as '?', so a sender cannot forge or break lines.
+std::string LogSafe(std::string_view text) {
+  std::string out(text.substr(0, 64));
+  for (char& c : out) {
+    if (static_cast<unsigned char>(c) < 0x20 || c == 0x7f) c = '?';
+  }
+  return text.size() > 64 ? out + "..." : out;
+}
+
 using proto::AsStringView;
 using proto::BorrowString;
 using proto::NowRealtimeNs;
@@ -353,9 +363,18 @@ int RunServerNode(const maps::Scenario& scenario, const ServerNodeOptions& optio
       ++messages_in;
       if (!info.valid_data) return;
       bytes_in += proto::WireBytes(r);
-      const OperatorAnswer a =
-          core.OnRiskUpdate(std::string(AsStringView(r.valve)), r.weight, std::string(AsStringView(r.source)));
-      if (!a.accepted) spdlog::warn("server: ignored a risk update: {}", a.reason);
+      // The sender is the DDS writer (its instance handle), which an update cannot name falsely.
+      const std::string source(AsStringView(r.source));
+      const std::string sender = fmt::format("{} (writer {:x})", LogSafe(source), info.publication_handle);
+      const std::uint64_t limited = core.risk_limits().refused(sender);
+      const OperatorAnswer a = core.OnRiskUpdate(std::string(AsStringView(r.valve)), r.weight, source, sender);
+      const bool newly_limited = core.risk_limits().refused(sender) > limited;
+      // A flood's refusals are logged at 1, 10, 100, ... per sender, not each.
+      const auto decade = [](std::uint64_t n) { while (n % 10 == 0 && n > 1) n /= 10; return n == 1; };
+      if (!a.accepted && (!newly_limited || decade(core.risk_limits().refused(sender)))) {
+        spdlog::warn("server: ignored a risk update from {}: {}{}", sender, a.reason,
+                     newly_limited ? fmt::format(" ({} refused so far)", core.risk_limits().refused(sender)) : "");
+      }
       proto::RiskUpdateResult result{};
       result.update_stamp_ns = r.stamp_ns;
       result.valve = r.valve;

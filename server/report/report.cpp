@@ -260,6 +260,8 @@ std::string MetricsJson(const MissionMetrics& metrics, const RunInfo* info) {
     json["rejected_samples"] = info->rejected_samples;
     json["transport"] = info->transport;
     json["resumes"] = info->resumes;
+    json["rate_limited"] = {{"risk_updates", info->rate_limited_risk_updates},
+                            {"by_sender", info->rate_limited_by_sender}};
   }
   return json.dump(2) + "\n";
 }

@@ -2,7 +2,9 @@
 // The run directory a mission leaves behind: metrics.json, trajectory.csv and plot.svg
 // (trajectory over the risk field with XTs and valves, like the SAGE paper's Fig. 1), and the
 // terminal table in the layout of the paper's Table 1.
+#include <cstdint>
 #include <limits>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -28,10 +30,14 @@ struct RunInfo {
   std::size_t rejected_samples = 0;   ///< inputs refused at the door (non-finite, stale, ...)
   std::string transport;              ///< "in-process" or "dds"; empty for a recorded log
   int resumes = 0;                    ///< times the mission was resumed from a checkpoint
+  /// Operators' risk updates refused by the per-sender rate limit, in all and by sender.
+  std::uint64_t rate_limited_risk_updates = 0;
+  std::map<std::string, std::uint64_t> rate_limited_by_sender;
 };
 
 /// metrics.json's text: the metrics (below) and, when given, the run's status
-/// (complete, planned_duration_s, stopped_early, rejected_samples, transport, resumes).
+/// (complete, planned_duration_s, stopped_early, rejected_samples, transport, resumes,
+/// rate_limited: {risk_updates, by_sender}).
 std::string MetricsJson(const MissionMetrics& metrics, const RunInfo* info = nullptr);
 
 /// Writes metrics as JSON (keys: controller, profile, duration_s, vehicle_count,

@@ -255,6 +255,8 @@ RunInfo RunDirectory::Info(const MissionCore& core, bool complete, bool stopped_
   info.rejected_samples = core.rejected_samples() + core.metrics_accumulator().refused_samples();
   info.transport = options_.transport;
   info.resumes = options_.resumes;
+  info.rate_limited_risk_updates = core.risk_limits().refused();
+  info.rate_limited_by_sender = core.risk_limits().refused_by_sender();
   return info;
 }
 

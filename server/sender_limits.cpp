@@ -1,0 +1,47 @@
+#include "server/sender_limits.h"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+namespace sage::server {
+
+SenderLimits::SenderLimits(double per_second, double burst, std::size_t max_senders)
+    : per_second_(per_second), burst_(burst), max_senders_(max_senders) {
+  if (!(per_second > 0.0) || !std::isfinite(per_second) || !(burst >= 1.0) || !std::isfinite(burst) || max_senders < 1) {
+    throw std::invalid_argument("SenderLimits: need a rate > 0, a burst >= 1 and room for one sender");
+  }
+}
+
+bool SenderLimits::Allow(const std::string& sender, double time_s) {
+  auto it = buckets_.find(sender);
+  if (it == buckets_.end()) {
+    if (buckets_.size() >= max_senders_) {
+      const auto idle = std::min_element(buckets_.begin(), buckets_.end(),
+                                         [](const auto& a, const auto& b) { return a.second.time_s < b.second.time_s; });
+      buckets_.erase(idle);
+    }
+    it = buckets_.emplace(sender, Bucket{burst_, time_s}).first;
+  }
+  Bucket& b = it->second;
+  // A clock that went back (a resumed mission's, or a sender's skew) refills nothing.
+  b.tokens = std::min(burst_, b.tokens + per_second_ * std::max(0.0, time_s - b.time_s));
+  b.time_s = std::max(b.time_s, time_s);
+  if (b.tokens >= 1.0) {
+    b.tokens -= 1.0;
+    return true;
+  }
+  ++refused_;
+  // Counted by name for as many senders as are tracked; beyond, together (a flood of made-up
+  // names must not grow this either).
+  const bool known = refused_by_sender_.count(sender) > 0 || refused_by_sender_.size() < max_senders_;
+  ++refused_by_sender_[known ? sender : std::string(kOtherSenders)];
+  return false;
+}
+
+std::uint64_t SenderLimits::refused(const std::string& sender) const {
+  const auto it = refused_by_sender_.find(sender);
+  return it == refused_by_sender_.end() ? 0 : it->second;
+}
+
+}  // namespace sage::server
