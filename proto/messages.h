@@ -19,7 +19,7 @@ using VehicleCoverage = sage_msgs_msg_dds__VehicleCoverage_;
 using ErgodicTarget = sage_msgs_msg_dds__ErgodicTarget_;
 /// The field's phi_k and the fleet's coverage, once per server cycle (unkeyed).
 using FleetCoverage = sage_msgs_msg_dds__FleetCoverage_;
-/// One valve's new risk weight (unkeyed).
+/// One valve's new risk weight (key source: each sender's history apart).
 using RiskUpdate = sage_msgs_msg_dds__RiskUpdate_;
 /// The server's answer to one RiskUpdate: applied or why not (unkeyed).
 using RiskUpdateResult = sage_msgs_msg_dds__RiskUpdateResult_;

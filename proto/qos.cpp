@@ -111,8 +111,9 @@ Qos FleetCoverageQos() {
 Qos RiskUpdateQos() {
   Qos qos;
   SetReliable(qos);
-  // Unkeyed: the last 16 changes across all valves, so a late server or viewer replays the
-  // recent history of risk changes (weights are absolute, replay order = publication order).
+  // Keyed by source: the last 16 changes of each sender, so a late server or viewer replays the
+  // recent history of risk changes (weights are absolute, replay order = publication order per
+  // sender), and a sender flooding the topic only pushes out its own.
   SetKeepLast(qos, 16);
   SetTransientLocal(qos, 16);
   return qos;

@@ -56,7 +56,8 @@ Qos ErgodicTargetQos();
 /// newest accounting matters, and the next cycle brings one to a late joiner within 0.1 s.
 Qos FleetCoverageQos();
 
-/// RiskUpdate (operators/sensors -> server, viewers): reliable, transient-local, keep-last 16.
+/// RiskUpdate (operators/sensors -> server, viewers), keyed by source: reliable, transient-local,
+/// keep-last 16 per source.
 Qos RiskUpdateQos();
 
 /// RiskUpdateResult (server -> the operator who sent the update): reliable, transient-local, keep-last 16.

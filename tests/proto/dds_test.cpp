@@ -7,6 +7,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <map>
@@ -257,6 +258,33 @@ TEST(DdsEntities, RiskHistoryAndCommandsCarryStrings) {
   EXPECT_EQ(AsStringView(commands[1].data().verb), "remove");
   EXPECT_EQ(commands[1].data().vehicle_id, 3u);
   EXPECT_EQ(AsStringView(commands[2].data().verb), "stop");
+}
+
+// One sender's flood of risk updates cannot push another's out of the server's history: 50,000
+// updates from "flood" written before and after one from "operator" (another writer), taken only
+// afterwards as a busy server would, and the operator's is there (the topic was unkeyed, keep
+// last 16, and a probe's flood had starved every operator).
+TEST(DdsEntities, RiskFloodKeepsOtherSendersUpdates) {
+  const DomainReservation domain = ReserveTestDomain();
+  Participant server(domain.domain_id(), TestConfig());
+  Reader<RiskUpdate> risk_reader(server, RiskUpdateQos());
+  Participant flooder(domain.domain_id(), TestConfig()), operator_tool(domain.domain_id(), TestConfig());
+  Writer<RiskUpdate> flood(flooder, RiskUpdateQos()), op(operator_tool, RiskUpdateQos());
+  ASSERT_TRUE(flood.WaitForReaders(1, 2s));
+  ASSERT_TRUE(op.WaitForReaders(1, 2s));
+  const std::string flood_source = "flood", op_source = "operator", valve = "P1", op_valve = "P3";
+  for (int i = 0; i < 25000; ++i) flood.Write(RiskUpdate{i, BorrowString(valve), 1.0, BorrowString(flood_source)});
+  op.Write(RiskUpdate{7, BorrowString(op_valve), 5.0, BorrowString(op_source)});
+  for (int i = 25000; i < 50000; ++i) flood.Write(RiskUpdate{i, BorrowString(valve), 1.0, BorrowString(flood_source)});
+  const auto seen = [&](const auto& samples, const std::string& source, std::int64_t stamp) {
+    return std::any_of(samples.begin(), samples.end(), [&](const auto& x) {
+      return AsStringView(x.data().source) == source && x.data().stamp_ns == stamp;
+    });
+  };
+  const auto taken = TakeUntil(
+      risk_reader, [&](const auto& s) { return seen(s, op_source, 7) && seen(s, flood_source, 49999); }, 5000ms);
+  EXPECT_TRUE(seen(taken, op_source, 7)) << "the operator's update was pushed out by the flood";
+  EXPECT_TRUE(seen(taken, flood_source, 49999)) << "the flood's last update never arrived";
 }
 
 // Two domains on one machine do not exchange samples (a positive control reader on the
