@@ -1,0 +1,61 @@
+#include "server/app/security_command.h"
+
+#include <algorithm>
+#include <cstdio>
+#include <filesystem>
+#include <system_error>
+
+#include <fmt/format.h>
+
+#include "maps/scenario/scenario.h"
+#include "proto/dds_config.h"
+#include "proto/security/security_files.h"
+
+namespace sage::server {
+
+namespace fs = std::filesystem;
+
+int CmdSecurityInit(const SecurityInitCommand& c) {
+  proto::SecurityDirectorySummary summary;
+  try {
+    summary = proto::InitSecurityDirectory(c.dir, {.validity_days = c.validity_days, .keep_ca_key = true});
+  } catch (const proto::SecurityError& e) {
+    throw maps::ScenarioError(e.what());
+  }
+  std::printf("wrote %s: CA (ca.pem, ca_key.pem), identities server, agent_host, operator, viewer (<role>/cert.pem, "
+              "key.pem), governance.p7s and permissions.p7s signed by the CA; valid %s to %s UTC\n"
+              "use it with: sage launch SCENARIO --security %s\n",
+              summary.dir.c_str(), summary.not_before.c_str(), summary.not_after.c_str(), summary.dir.c_str());
+  return 0;
+}
+
+std::string MakeMissionSecurity(const std::string& dir, double mission_wall_s) {
+  std::error_code error;
+  fs::remove_all(dir, error);  // a previous mission's identities; each mission gets its own
+  if (error) throw maps::ScenarioError(fmt::format("{}: cannot remove the previous mission's identities: {}", dir, error.message()));
+  // 30 days beyond the mission's own wall time: a crashed mission can still be resumed for a month.
+  const double days = std::min(3650.0, 30.0 + mission_wall_s / 86400.0);
+  try {
+    return proto::InitSecurityDirectory(dir, {.validity_days = days, .keep_ca_key = false}).dir;
+  } catch (const proto::SecurityError& e) {
+    throw maps::ScenarioError(e.what());
+  }
+}
+
+std::optional<proto::SecurityIdentity> MissionIdentity(const std::string& security_dir, proto::SecurityRole role,
+                                                       int domain_id, const std::string& what) {
+  if (security_dir.empty()) return std::nullopt;
+  if (domain_id < 0 || domain_id > proto::kMaxSecureDomainId) {
+    throw maps::ScenarioError(fmt::format("--domain = {}: a secured mission's domain must be in 0..{} (what Cyclone's "
+                                          "governance accepts); use --insecure for plain DDS on it",
+                                          domain_id, proto::kMaxSecureDomainId));
+  }
+  try {
+    proto::CheckSecurityDirectory(security_dir);
+  } catch (const proto::SecurityError& e) {
+    throw maps::ScenarioError(what + " = " + security_dir + ": " + e.what());
+  }
+  return proto::IdentityInDirectory(security_dir, role);
+}
+
+}  // namespace sage::server
