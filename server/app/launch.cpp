@@ -132,17 +132,7 @@ int Launch(const LaunchCommand& c) {
 
   // DDS Security unless --insecure: the identities given with --security, or new ones for this
   // mission in its run directory; a resumed mission keeps its own (mission.json).
-  if (!resume) {
-    if (c.insecure) {
-      mission.security_dir.clear();
-    } else if (!c.security_dir.empty()) {
-      mission.security_dir = fs::absolute(c.security_dir).lexically_normal().string();
-      MissionIdentity(mission.security_dir, proto::SecurityRole::kOperator, 0);  // every file there, before anything starts
-    } else {
-      mission.security_dir = (fs::absolute(out_dir) / "security").lexically_normal().string();
-    }
-  }
-  const bool secured = !mission.security_dir.empty();
+  const bool secured = resume ? !mission.security_dir.empty() : !c.insecure;
   // Secured missions live on the domains their governance names (0..230; Cyclone's parser takes
   // no more).
   const int last_domain = secured ? proto::kMaxSecureDomainId : proto::kMaxDomainId;
@@ -150,6 +140,18 @@ int Launch(const LaunchCommand& c) {
     throw maps::ScenarioError(fmt::format("--domain = {}: a secured mission's domain must be in 0..{} (what Cyclone's "
                                           "governance accepts); choose another or add --insecure",
                                           *c.domain, proto::kMaxSecureDomainId));
+  }
+  if (!resume) {
+    if (!secured) {
+      mission.security_dir.clear();
+    } else if (!c.security_dir.empty()) {
+      mission.security_dir = fs::absolute(c.security_dir).lexically_normal().string();
+      MissionIdentity(mission.security_dir, proto::SecurityRole::kOperator, 0);  // every file there, before anything starts
+    } else {
+      // The mission's wall time bounds how long its identities must last (see MakeMissionSecurity).
+      mission.security_dir = MakeMissionSecurity((fs::absolute(out_dir) / "security").lexically_normal().string(),
+                                                 scenario.duration_s / c.time_scale);
+    }
   }
   // An explicit --domain is that domain or an error; a resumed mission prefers its own; otherwise
   // the first free one from a hash of the run directory.
@@ -167,10 +169,6 @@ int Launch(const LaunchCommand& c) {
   };
   const proto::DomainReservation reservation = reserve();
   const int domain = reservation.domain_id();
-  if (secured && !resume && c.security_dir.empty()) {
-    // The mission's wall time bounds how long its identities must last (see MakeMissionSecurity).
-    MakeMissionSecurity(mission.security_dir, scenario.duration_s / c.time_scale);
-  }
   // The launcher is the operator's own process: it reads status and states and sends the stop.
   const std::optional<proto::SecurityIdentity> identity =
       MissionIdentity(mission.security_dir, proto::SecurityRole::kOperator, domain, resume ? "mission.json security_dir" : "--security");

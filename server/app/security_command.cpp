@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cstdio>
 #include <filesystem>
+#include <set>
 #include <system_error>
 
 #include <fmt/format.h>
@@ -29,10 +30,44 @@ int CmdSecurityInit(const SecurityInitCommand& c) {
   return 0;
 }
 
+namespace {
+
+// True if `dir` holds only what a mission's own security directory holds (what launch wrote
+// there before): that, and nothing a user keeps, may be replaced.
+bool IsMissionSecurityDirectory(const fs::path& dir) {
+  static const std::set<std::string> kTop = {"ca.pem", "governance.xml", "governance.p7s", "permissions.xml",
+                                             "permissions.p7s", "server", "agent_host", "operator", "viewer"};
+  std::error_code error;
+  for (const fs::directory_entry& entry : fs::directory_iterator(dir, error)) {
+    const std::string name = entry.path().filename().string();
+    if (!kTop.count(name)) return false;
+    if (entry.is_directory(error)) {
+      for (const fs::directory_entry& inner : fs::directory_iterator(entry.path(), error)) {
+        const std::string file = inner.path().filename().string();
+        if (file != "cert.pem" && file != "key.pem") return false;
+      }
+    }
+  }
+  return !error;
+}
+
+}  // namespace
+
 std::string MakeMissionSecurity(const std::string& dir, double mission_wall_s) {
   std::error_code error;
-  fs::remove_all(dir, error);  // a previous mission's identities; each mission gets its own
-  if (error) throw maps::ScenarioError(fmt::format("{}: cannot remove the previous mission's identities: {}", dir, error.message()));
+  if (fs::exists(dir, error)) {
+    // A previous mission's identities are replaced: each mission gets its own. Anything else
+    // there is not ours to delete.
+    if (!fs::is_directory(dir, error) || !IsMissionSecurityDirectory(dir)) {
+      throw maps::ScenarioError(fmt::format("{}: exists and is not a mission's security directory (sage launch writes "
+                                            "one there); move it, choose another --out, or give --security DIR",
+                                            dir));
+    }
+    fs::remove_all(dir, error);
+    if (error) {
+      throw maps::ScenarioError(fmt::format("{}: cannot remove the previous mission's identities: {}", dir, error.message()));
+    }
+  }
   // 30 days beyond the mission's own wall time: a crashed mission can still be resumed for a month.
   const double days = std::min(3650.0, 30.0 + mission_wall_s / 86400.0);
   try {

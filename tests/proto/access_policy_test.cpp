@@ -149,7 +149,7 @@ TEST(AccessPolicy, GovernanceEncryptsAndControlsEveryTopic) {
   EXPECT_NE(xml.find("<allow_unauthenticated_participants>false<"), std::string::npos);
   EXPECT_NE(xml.find("<enable_join_access_control>true<"), std::string::npos);
   for (const char* kind : {"discovery", "liveliness", "rtps"}) {
-    EXPECT_NE(xml.find("<" + std::string(kind) + "_protection_kind>ENCRYPT<"), std::string::npos) << kind;
+    EXPECT_NE(xml.find(std::string("<").append(kind).append("_protection_kind>ENCRYPT<")), std::string::npos) << kind;
   }
   EXPECT_NE(xml.find("<min>0</min><max>230</max>"), std::string::npos);
   const std::vector<std::string> rules = Between(xml, "<topic_rule>", "</topic_rule>");
@@ -160,7 +160,7 @@ TEST(AccessPolicy, GovernanceEncryptsAndControlsEveryTopic) {
     EXPECT_EQ(rule.find('*'), std::string::npos) << "no wildcard rule: " << rule;
     for (const char* on : {"enable_read_access_control", "enable_write_access_control", "enable_discovery_protection",
                            "enable_liveliness_protection"}) {
-      EXPECT_NE(rule.find("<" + std::string(on) + ">true<"), std::string::npos) << on << " in " << rule;
+      EXPECT_NE(rule.find(std::string("<").append(on).append(">true<")), std::string::npos) << on << " in " << rule;
     }
     EXPECT_NE(rule.find("<data_protection_kind>ENCRYPT<"), std::string::npos) << rule;
     EXPECT_NE(rule.find("<metadata_protection_kind>ENCRYPT<"), std::string::npos) << rule;

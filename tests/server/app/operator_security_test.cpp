@@ -10,6 +10,8 @@
 
 #include <chrono>
 #include <filesystem>
+#include <fstream>
+#include <sstream>
 #include <string>
 
 #include "proto/access_policy.h"
@@ -19,6 +21,7 @@
 #include "proto/qos.h"
 #include "proto/security/security_files.h"
 #include "server/app/operators.h"
+#include "server/app/security_command.h"
 
 namespace sage::server {
 namespace {
@@ -137,6 +140,36 @@ TEST(OperatorSecurity, InsecureCommandIsNotHeardBySecuredMission) {
   const pid_t server = StartServer(m.mission, 4000ms);
   EXPECT_EQ(SetRisk(m.mission, "P1", 0.9, "operator", /*insecure=*/true), 1);
   EXPECT_EQ(UpdatesTheServerRead(server), 0);
+}
+
+std::string ReadText(const fs::path& path) {
+  std::ifstream in(path);
+  std::stringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
+
+// sage launch's own security directory: each mission gets a new CA (a second launch into the
+// run directory replaces the first's identities), without the CA key; a directory there with
+// anything else in it is not deleted but refused with its path.
+TEST(MissionSecurity, ReplacesItsOwnDirectoryButNoOtherOne) {
+  const fs::path root = SecuredMission::MakeTemp();
+  const fs::path dir = root / "security";
+  EXPECT_EQ(MakeMissionSecurity(dir.string(), 600.0), dir.string());
+  const std::string first_ca = ReadText(dir / "ca.pem");
+  EXPECT_FALSE(fs::exists(dir / "ca_key.pem"));
+  MakeMissionSecurity(dir.string(), 600.0);
+  EXPECT_NE(ReadText(dir / "ca.pem"), first_ca) << "a second mission reused the first one's CA";
+  std::ofstream(dir / "notes.txt") << "the user's own\n";
+  try {
+    MakeMissionSecurity(dir.string(), 600.0);
+    ADD_FAILURE() << "a directory with a file of the user's was replaced";
+  } catch (const maps::ScenarioError& e) {
+    EXPECT_EQ(std::string(e.what()).rfind(dir.string() + ": exists and is not a mission's security directory", 0), 0u)
+        << e.what();
+  }
+  EXPECT_TRUE(fs::exists(dir / "notes.txt"));
+  fs::remove_all(root);
 }
 
 }  // namespace
