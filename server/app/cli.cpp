@@ -194,7 +194,9 @@ int RunCli(int argc, char** argv) {
       ->capture_default_str();
   launch->add_option("--out,-o", launch_cmd.out_dir, "Run directory (default: runs/<scenario>_launch)");
   launch->add_option("--hosts", launch_cmd.hosts, "Agent host processes (default: one per 250 vehicles)")->check(MustBePositive);
-  launch->add_option("--domain", launch_cmd.domain, "DDS domain id 0..232 (default: a free one, reserved machine-wide)");
+  launch->add_option("--domain", launch_cmd.domain,
+                     "DDS domain id 0..230 (secured, the default) or 0..232 (--insecure) (default: a free one, reserved "
+                     "machine-wide)");
   launch->add_flag("!--no-latest", launch_cmd.point_latest,
                    "Leave runs/latest alone (scripts and benchmarks that run many missions); operators then need "
                    "--mission DIR");

@@ -82,7 +82,7 @@ std::optional<proto::SecurityIdentity> MissionIdentity(const std::string& securi
   if (security_dir.empty()) return std::nullopt;
   if (domain_id < 0 || domain_id > proto::kMaxSecureDomainId) {
     throw maps::ScenarioError(fmt::format("--domain = {}: a secured mission's domain must be in 0..{} (what Cyclone's "
-                                          "governance accepts); use --insecure for plain DDS on it",
+                                          "governance accepts); plain DDS (no --security, or launch --insecure) takes 0..232",
                                           domain_id, proto::kMaxSecureDomainId));
   }
   try {
