@@ -1,4 +1,6 @@
 #pragma once
+#include <array>
+
 /// Topic names of the SAGE Fleet DDS streams, ROS 2 style ("rt/" prefix) so ros2 topic list sees them.
 namespace sage::proto {
 inline constexpr const char* kVehicleStateTopic = "rt/sage/vehicle_state";
@@ -10,4 +12,12 @@ inline constexpr const char* kRiskUpdateResultTopic = "rt/sage/risk_update_resul
 inline constexpr const char* kMissionStatusTopic = "rt/sage/mission_status";
 inline constexpr const char* kFleetCommandTopic = "rt/sage/fleet_command";
 inline constexpr const char* kFleetCommandResultTopic = "rt/sage/fleet_command_result";
+
+/// Every topic of a mission: DDS Security's governance and permissions are derived from this list
+/// (proto/access_policy.h), so a topic added here without an access rule fails their tests.
+inline constexpr std::array<const char*, 9> kMissionTopics = {
+    kVehicleStateTopic,   kVehicleCoverageTopic, kErgodicTargetTopic,
+    kFleetCoverageTopic,  kRiskUpdateTopic,      kRiskUpdateResultTopic,
+    kMissionStatusTopic,  kFleetCommandTopic,    kFleetCommandResultTopic,
+};
 }  // namespace sage::proto

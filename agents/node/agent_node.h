@@ -14,11 +14,14 @@
 #include "agents/agent_host.h"
 #include "agents/agent_mission.h"
 #include "maps/scenario/scenario.h"
+#include "proto/dds_config.h"
 
 namespace sage::agents {
 
 struct AgentNodeOptions {
   int domain_id = 0;                         ///< DDS domain of the mission
+  /// The agent host's DDS Security identity (a secured mission); none: plain DDS.
+  std::optional<proto::SecurityIdentity> security;
   Guidance guidance = Guidance::kErgodic;    ///< must be the server's controller
   std::vector<maps::VehicleSpec> vehicles;   ///< the vehicles this host simulates
   std::vector<std::uint32_t> ids;            ///< their fleet-wide ids (unique across hosts)

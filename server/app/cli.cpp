@@ -17,6 +17,7 @@
 #include "server/app/operators.h"
 #include "server/app/options.h"
 #include "server/app/run_commands.h"
+#include "server/app/security_command.h"
 #include "proto/dds_config.h"
 
 namespace sage::server {
@@ -102,6 +103,9 @@ void AddController(CLI::App& cmd, std::string& controller) {
 
 void AddMissionDir(CLI::App& cmd, OperatorCommand& o) {
   cmd.add_option("--mission", o.mission_dir, "Run directory of the mission (default: $SAGE_MISSION or runs/latest)");
+  cmd.add_flag("--insecure", o.insecure,
+               "Plain DDS instead of the mission's operator identity (mission.json security_dir); a secured mission "
+               "does not hear such a command");
 }
 
 // One line for a mistyped or missing command word, at any depth: "unknown command 'frobnicate'
@@ -190,10 +194,20 @@ int RunCli(int argc, char** argv) {
       ->capture_default_str();
   launch->add_option("--out,-o", launch_cmd.out_dir, "Run directory (default: runs/<scenario>_launch)");
   launch->add_option("--hosts", launch_cmd.hosts, "Agent host processes (default: one per 250 vehicles)")->check(MustBePositive);
-  launch->add_option("--domain", launch_cmd.domain, "DDS domain id 0..232 (default: a free one, reserved machine-wide)");
+  launch->add_option("--domain", launch_cmd.domain,
+                     "DDS domain id 0..230 (secured, the default) or 0..232 (--insecure) (default: a free one, reserved "
+                     "machine-wide)");
   launch->add_flag("!--no-latest", launch_cmd.point_latest,
                    "Leave runs/latest alone (scripts and benchmarks that run many missions); operators then need "
                    "--mission DIR");
+  CLI::Option* launch_security = launch->add_option(
+      "--security", launch_cmd.security_dir,
+      "DDS Security directory from sage security init whose identities the mission's processes use (default: new "
+      "ones for this mission in RUN_DIR/security)");
+  launch->add_flag("--insecure", launch_cmd.insecure,
+                   "Plain DDS: no authentication, no encryption, any local process can join the mission (default: DDS "
+                   "Security on)")
+      ->excludes(launch_security);
   launch->add_option("--resume", launch_cmd.resume_dir,
                      "Bring back the mission whose server died, from the checkpoint in this run directory (no "
                      "scenario or overrides: the run's own are used); vehicles still flying carry on, the others are "
@@ -209,6 +223,8 @@ int RunCli(int argc, char** argv) {
   server->add_option("--out,-o", server_cmd.out_dir, "Run directory (default: runs/<scenario>_server)");
   server->add_option("--domain", server_cmd.domain, "DDS domain id 0..232")->required();
   server->add_flag("--quiet", server_cmd.quiet, "No progress lines");
+  server->add_option("--security", server_cmd.security_dir,
+                     "DDS Security directory (sage security init): the server's identity there (default: plain DDS)");
   server->add_flag("--resume", server_cmd.resume,
                    "Continue the mission recorded in --out from its checkpoint (give the run's scenario.yaml)");
   server->add_option("--resumes", server_cmd.resumes, "How many times the mission was resumed before (for metrics.json)");
@@ -224,6 +240,8 @@ int RunCli(int argc, char** argv) {
   AddScenarioOverrides(*agents, agents_cmd.scenario, OverrideSet::kVehicles, "scenarios/fleet_field.yaml");
   AddController(*agents, agents_cmd.controller);
   agents->add_option("--domain", agents_cmd.domain, "DDS domain id 0..232")->required();
+  agents->add_option("--security", agents_cmd.security_dir,
+                     "DDS Security directory (sage security init): the agent host's identity there (default: plain DDS)");
   agents->add_option("--offset", agents_cmd.offset, "First of the fleet's vehicles this host simulates")->capture_default_str();
   agents->add_option("--count", agents_cmd.count, "How many of them (default: all from --offset on)");
   agents->add_option("--join", agents_cmd.join, "Simulate the vehicle that joins in the scenario's fleet_events under this name");
@@ -269,6 +287,19 @@ int RunCli(int argc, char** argv) {
 
   CLI::App* stop = app.add_subcommand("stop", "End the running mission now; its server writes the run directory");
   AddMissionDir(*stop, op);
+
+  SecurityInitCommand security_cmd;
+  CLI::App* security = app.add_subcommand("security", "DDS Security material for missions");
+  security->require_subcommand(1);
+  CLI::App* security_init = security->add_subcommand(
+      "init", "Write a CA, identities for the roles server, agent_host, operator and viewer, and governance and "
+              "permissions (which role may publish and read each mission topic; everything encrypted) signed by the "
+              "CA, into a new directory (mode 0700, keys 0600); sage launch --security DIR uses it");
+  security_init->add_option("dir", security_cmd.dir, "Directory to create (must not exist, or be empty)")->required();
+  security_init->add_option("--validity-days", security_cmd.validity_days,
+                            "Days the certificates and permissions are valid, from an hour ago (1..3650)")
+      ->check(CLI::Range(1.0, 3650.0))
+      ->capture_default_str();
 
   maps::FieldOptions field_options;
   std::string field_out;
@@ -360,6 +391,10 @@ int RunCli(int argc, char** argv) {
       if (!launch_cmd.resume_dir.empty() && !launch_cmd.scenario.scenario_path.empty()) {
         throw maps::ScenarioError("--resume: resumes the run's own scenario; give no scenario file with it");
       }
+      if (!launch_cmd.resume_dir.empty() && (launch_cmd.insecure || !launch_cmd.security_dir.empty())) {
+        throw maps::ScenarioError("--resume: the mission keeps its own security (mission.json security_dir); give no "
+                                  "--security or --insecure with it");
+      }
       launch_cmd.stop = StopOnSignals();
       const int status = Launch(launch_cmd);
       // Stopped by a signal: the shell's convention, 128 + its number (130 for Ctrl-C).
@@ -367,10 +402,11 @@ int RunCli(int argc, char** argv) {
     }
     if (*server) return CmdServer(server_cmd);
     if (*agents) return CmdAgents(agents_cmd);
-    if (*vehicle_add) return AddVehicles(FindMission(op.mission_dir), op.add_count);
-    if (*vehicle_remove) return RemoveVehicle(FindMission(op.mission_dir), op.remove_id);
-    if (*risk_set) return SetRisk(FindMission(op.mission_dir), op.valve, op.weight, op.source);
-    if (*stop) return StopMission(FindMission(op.mission_dir));
+    if (*vehicle_add) return AddVehicles(FindMission(op.mission_dir), op.add_count, op.insecure);
+    if (*vehicle_remove) return RemoveVehicle(FindMission(op.mission_dir), op.remove_id, op.insecure);
+    if (*risk_set) return SetRisk(FindMission(op.mission_dir), op.valve, op.weight, op.source, op.insecure);
+    if (*stop) return StopMission(FindMission(op.mission_dir), op.insecure);
+    if (*security_init) return CmdSecurityInit(security_cmd);
     if (*generate) return CmdFieldGenerate(field_options, field_out);
     if (*bench_scale) return CmdBenchScale(bench_cmd);
   } catch (const maps::ScenarioError& e) {

@@ -7,6 +7,7 @@
 
 #include "agents/node/agent_node.h"
 #include "server/app/resume_plan.h"
+#include "server/app/security_command.h"
 #include "server/node/server_node.h"
 
 namespace sage::server {
@@ -40,6 +41,7 @@ int CmdServer(const ServerCommand& c) {
   const maps::Scenario scenario = LoadWithOverrides(c.scenario);
   ServerNodeOptions options;
   options.domain_id = c.domain;
+  options.security = MissionIdentity(c.security_dir, proto::SecurityRole::kServer, c.domain);
   options.profile = c.scenario.profile;
   options.controller = ParseControllerKind(c.controller);
   options.time_scale = c.time_scale;
@@ -60,6 +62,7 @@ int CmdAgents(const AgentsCommand& c) {
   const maps::Scenario scenario = LoadWithOverrides(c.scenario);
   agents::AgentNodeOptions options;
   options.domain_id = c.domain;
+  options.security = MissionIdentity(c.security_dir, proto::SecurityRole::kAgentHost, c.domain);
   options.guidance = GuidanceOf(c.controller);
   options.stop = stop;
   for (const auto& [flag, value] : {std::pair{"--start-at", std::optional<double>(c.start_at_s)},

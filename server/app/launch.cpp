@@ -23,6 +23,7 @@
 #include "proto/qos.h"
 #include "server/app/processes.h"
 #include "server/app/resume_plan.h"
+#include "server/app/security_command.h"
 #include "server/mission_core.h"
 #include "server/report/mission_file.h"
 #include "server/report/report.h"
@@ -129,12 +130,35 @@ int Launch(const LaunchCommand& c) {
   }
   ParseControllerKind(mission.controller);  // checked before anything starts
 
+  // DDS Security unless --insecure: the identities given with --security, or new ones for this
+  // mission in its run directory; a resumed mission keeps its own (mission.json).
+  const bool secured = resume ? !mission.security_dir.empty() : !c.insecure;
+  // Secured missions live on the domains their governance names (0..230; Cyclone's parser takes
+  // no more).
+  const int last_domain = secured ? proto::kMaxSecureDomainId : proto::kMaxDomainId;
+  if (c.domain && secured && *c.domain > proto::kMaxSecureDomainId) {
+    throw maps::ScenarioError(fmt::format("--domain = {}: a secured mission's domain must be in 0..{} (what Cyclone's "
+                                          "governance accepts); choose another or add --insecure",
+                                          *c.domain, proto::kMaxSecureDomainId));
+  }
+  if (!resume) {
+    if (!secured) {
+      mission.security_dir.clear();
+    } else if (!c.security_dir.empty()) {
+      mission.security_dir = fs::absolute(c.security_dir).lexically_normal().string();
+      MissionIdentity(mission.security_dir, proto::SecurityRole::kOperator, 0);  // every file there, before anything starts
+    } else {
+      // The mission's wall time bounds how long its identities must last (see MakeMissionSecurity).
+      mission.security_dir = MakeMissionSecurity((fs::absolute(out_dir) / "security").lexically_normal().string(),
+                                                 scenario.duration_s / c.time_scale);
+    }
+  }
   // An explicit --domain is that domain or an error; a resumed mission prefers its own; otherwise
   // the first free one from a hash of the run directory.
   const std::optional<int> wanted = c.domain ? c.domain : (resume ? std::optional<int>(mission.domain_id) : std::nullopt);
-  const int preferred = proto::MissionDomainId(wanted, fs::absolute(out_dir).string());
+  const int preferred = proto::MissionDomainId(wanted, fs::absolute(out_dir).string(), last_domain);
   auto reserve = [&] {
-    if (!c.domain) return proto::DomainReservation::Acquire(preferred);
+    if (!c.domain) return proto::DomainReservation::Acquire(std::max(1, preferred), 1, last_domain);
     try {
       return proto::DomainReservation::Acquire(preferred, preferred, preferred);
     } catch (const std::runtime_error&) {
@@ -145,7 +169,11 @@ int Launch(const LaunchCommand& c) {
   };
   const proto::DomainReservation reservation = reserve();
   const int domain = reservation.domain_id();
-  proto::Participant participant(domain, proto::LocalhostConfigXml(proto::kMaxLocalParticipants));
+  // The launcher is the operator's own process: it reads status and states and sends the stop.
+  const std::optional<proto::SecurityIdentity> identity =
+      MissionIdentity(mission.security_dir, proto::SecurityRole::kOperator, domain, resume ? "mission.json security_dir" : "--security");
+  proto::Participant participant(domain, proto::LocalhostConfigXml(proto::kMaxLocalParticipants,
+                                                                   proto::LoopbackDiscovery::kUnicastPeers, identity));
   {
     // The reservation keeps other launches off this domain, not a server started by hand.
     proto::Reader<proto::MissionStatus> servers(participant, proto::MissionStatusQos());
@@ -171,7 +199,9 @@ int Launch(const LaunchCommand& c) {
   }
   if (c.point_latest) PointLatestAt(out_dir);
 
-  const std::vector<std::string> common = {"--domain", std::to_string(domain), "--controller", mission.controller};
+  std::vector<std::string> common = {"--domain", std::to_string(domain), "--controller", mission.controller};
+  // Each process takes its own role's identity from the mission's directory.
+  if (secured) common.insert(common.end(), {"--security", mission.security_dir});
   std::vector<std::string> server_args = {"server", scenario_file, "--out", out_dir, "--time-scale",
                                           Number(mission.time_scale), "--quiet"};
   if (!mission.profile.empty()) server_args.insert(server_args.end(), {"--profile", mission.profile});
@@ -306,6 +336,12 @@ int Launch(const LaunchCommand& c) {
                            "{}",
                            scenario.name, domain, server, hosts.size(),
                            resume ? to_resume.size() : scenario.vehicles.size(), out_dir));
+  terminal.Log(secured ? fmt::format("launch: DDS Security on: every process authenticates with its role's identity and "
+                                     "all mission traffic is encrypted (identities in {}); --insecure turns it off",
+                                     mission.security_dir)
+                       : std::string("launch: --insecure: plain DDS, no authentication or encryption: any local process "
+                                     "can join domain ") + std::to_string(domain),
+               /*warning=*/!secured);
   terminal.Log(std::string("launch: in another shell: sage risk set P1 0.9 | sage vehicle add --count 2 | sage vehicle "
                            "remove ID | ") +
                (c.point_latest ? std::string("sage stop (they find this mission through runs/latest)")

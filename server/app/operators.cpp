@@ -13,6 +13,7 @@
 #include "proto/mission_clock.h"
 #include "proto/qos.h"
 #include "server/app/processes.h"
+#include "server/app/security_command.h"
 
 namespace sage::server {
 namespace {
@@ -21,9 +22,26 @@ namespace fs = std::filesystem;
 constexpr auto kAnswerTimeout = std::chrono::seconds(5);
 constexpr auto kResendEvery = std::chrono::seconds(1);
 
-int NoMission(const MissionFile& mission) {
-  std::fprintf(stderr, "sage: error: no mission is listening on DDS domain %d (is it still running?)\n", mission.domain_id);
+int NoMission(const MissionFile& mission, bool insecure) {
+  if (insecure && !mission.security_dir.empty()) {
+    std::fprintf(stderr, "sage: error: no answer on DDS domain %d: the mission is secured (DDS Security, identities in %s) "
+                 "and an --insecure command cannot reach it\n", mission.domain_id, mission.security_dir.c_str());
+  } else {
+    std::fprintf(stderr, "sage: error: no mission is listening on DDS domain %d (is it still running?)\n", mission.domain_id);
+  }
   return 1;
+}
+
+// The operator's participant on the mission's domain: with the mission's operator identity when
+// it is secured, plain DDS when it is not or when asked (--insecure; a secured mission's
+// participants then never match it).
+proto::Participant OperatorParticipant(const MissionFile& mission, bool insecure) {
+  const std::optional<proto::SecurityIdentity> identity =
+      insecure ? std::nullopt
+               : MissionIdentity(mission.security_dir, proto::SecurityRole::kOperator, mission.domain_id,
+                                 "mission.json security_dir");
+  return proto::Participant(mission.domain_id, proto::LocalhostConfigXml(proto::kMaxLocalParticipants,
+                                                                         proto::LoopbackDiscovery::kUnicastPeers, identity));
 }
 
 struct CommandAnswer {
@@ -81,32 +99,34 @@ MissionFile FindMission(const std::string& dir) {
   return ReadMissionFile(where);
 }
 
-int AddVehicles(const MissionFile& mission, int count) {
+int AddVehicles(const MissionFile& mission, int count, bool insecure) {
   if (count < 1 || count > 10000) throw maps::ScenarioError(fmt::format("--count = {}: must be in 1..10000", count));
-  proto::Participant participant(mission.domain_id, proto::LocalhostConfigXml(proto::kMaxLocalParticipants));
+  proto::Participant participant = OperatorParticipant(mission, insecure);
   const std::optional<CommandAnswer> answer = AskServer(participant, "reserve", static_cast<std::uint32_t>(count), 0);
-  if (!answer) return NoMission(mission);
+  if (!answer) return NoMission(mission, insecure);
   if (!answer->accepted) {
     std::fprintf(stderr, "sage: error: the mission refused: %s\n", answer->reason.c_str());
     return 2;
   }
   const int first = answer->first_id;
   const std::string log = (fs::path(mission.run_dir) / fmt::format("agents-add-{}.log", first)).string();
-  const pid_t pid = Spawn({"agents", mission.scenario_path, "--add", std::to_string(count), "--first-id",
-                           std::to_string(first), "--domain", std::to_string(mission.domain_id), "--controller",
-                           mission.controller},
-                          log, /*detach=*/true);
+  std::vector<std::string> args = {"agents", mission.scenario_path, "--add", std::to_string(count), "--first-id",
+                                   std::to_string(first), "--domain", std::to_string(mission.domain_id), "--controller",
+                                   mission.controller};
+  // The new host joins a secured mission with the mission's agent-host identity, as launch's own do.
+  if (!mission.security_dir.empty()) args.insert(args.end(), {"--security", mission.security_dir});
+  const pid_t pid = Spawn(args, log, /*detach=*/true);
   std::printf("started agent host pid %d with %d vehicle(s): rov%d..rov%d, ids %d..%d (log: %s)\n", pid, count,
               first + 1, first + count, first, first + count - 1, log.c_str());
   return 0;
 }
 
-int RemoveVehicle(const MissionFile& mission, int id) {
+int RemoveVehicle(const MissionFile& mission, int id, bool insecure) {
   if (id < 0) throw maps::ScenarioError(fmt::format("id = {}: must be >= 0", id));
-  proto::Participant participant(mission.domain_id, proto::LocalhostConfigXml(proto::kMaxLocalParticipants));
+  proto::Participant participant = OperatorParticipant(mission, insecure);
   proto::Reader<proto::VehicleState> states(participant, proto::VehicleStateReaderQos());
   const std::optional<CommandAnswer> answer = AskServer(participant, "remove", 0, static_cast<std::uint32_t>(id));
-  if (!answer) return NoMission(mission);
+  if (!answer) return NoMission(mission, insecure);
   if (!answer->accepted) {
     std::fprintf(stderr, "sage: error: the mission refused: %s\n", answer->reason.c_str());
     return 2;
@@ -131,7 +151,8 @@ int RemoveVehicle(const MissionFile& mission, int id) {
   return 0;
 }
 
-int SetRisk(const MissionFile& mission, const std::string& valve, double weight, const std::string& source) {
+int SetRisk(const MissionFile& mission, const std::string& valve, double weight, const std::string& source,
+            bool insecure) {
   if (!(weight >= 0.0 && weight <= maps::kMaxRawWeight)) {
     throw maps::ScenarioError(fmt::format("weight = {}: must be a number in [0, 1e12] (weights are relative)", weight));
   }
@@ -141,12 +162,12 @@ int SetRisk(const MissionFile& mission, const std::string& valve, double weight,
     for (const maps::Valve& v : scenario.AllValves()) names += (names.empty() ? "" : ", ") + v.name;
     throw maps::ScenarioError("valve = " + valve + ": not in this mission (valves: " + names + ")");
   }
-  proto::Participant participant(mission.domain_id, proto::LocalhostConfigXml(proto::kMaxLocalParticipants));
+  proto::Participant participant = OperatorParticipant(mission, insecure);
   // The answer's reader exists before the update is written, so the answer reaches it.
   proto::Reader<proto::RiskUpdateResult> results(participant, proto::RiskUpdateResultQos());
   proto::Writer<proto::RiskUpdate> writer(participant, proto::RiskUpdateQos());
   if (!writer.WaitForReaders(1, std::chrono::seconds(3)) || !results.WaitForWriters(1, std::chrono::seconds(3))) {
-    return NoMission(mission);
+    return NoMission(mission, insecure);
   }
   proto::RiskUpdate r{};
   r.stamp_ns = proto::NowRealtimeNs();
@@ -182,10 +203,10 @@ int SetRisk(const MissionFile& mission, const std::string& valve, double weight,
   return 0;
 }
 
-int StopMission(const MissionFile& mission) {
-  proto::Participant participant(mission.domain_id, proto::LocalhostConfigXml(proto::kMaxLocalParticipants));
+int StopMission(const MissionFile& mission, bool insecure) {
+  proto::Participant participant = OperatorParticipant(mission, insecure);
   const std::optional<CommandAnswer> answer = AskServer(participant, "stop", 0, 0);
-  if (!answer) return NoMission(mission);
+  if (!answer) return NoMission(mission, insecure);
   if (!answer->accepted) {
     std::fprintf(stderr, "sage: error: %s\n", answer->reason.c_str());
     return 1;

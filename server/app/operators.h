@@ -10,14 +10,19 @@ namespace sage::server {
 /// Reads DIR/mission.json (DIR empty: $SAGE_MISSION, else runs/latest).
 MissionFile FindMission(const std::string& dir);
 
+// Each command joins the mission's domain with the mission's operator identity when it is secured
+// (mission.json's security_dir); `insecure` joins with plain DDS instead, which a secured
+// mission's participants never match: the command then finds no one to answer it.
+
 /// `sage vehicle add`: the server issues `count` ids; a detached agent host with that many new
-/// vehicles (rov<id + 1>, at free starts) joins the mission.
-int AddVehicles(const MissionFile& mission, int count);
+/// vehicles (rov<id + 1>, at free starts) joins the mission (with the agent-host identity).
+int AddVehicles(const MissionFile& mission, int count, bool insecure = false);
 /// `sage vehicle remove`: the server takes vehicle `id` out (or says why not); waits for it to leave.
-int RemoveVehicle(const MissionFile& mission, int id);
+int RemoveVehicle(const MissionFile& mission, int id, bool insecure = false);
 /// `sage risk set`: a valve's new raw risk weight.
-int SetRisk(const MissionFile& mission, const std::string& valve, double weight, const std::string& source);
+int SetRisk(const MissionFile& mission, const std::string& valve, double weight, const std::string& source,
+            bool insecure = false);
 /// `sage stop`: the mission ends now; the server writes the run directory.
-int StopMission(const MissionFile& mission);
+int StopMission(const MissionFile& mission, bool insecure = false);
 
 }  // namespace sage::server

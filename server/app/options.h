@@ -38,6 +38,8 @@ struct LaunchCommand {
   double time_scale = 1.0;       ///< mission seconds per wall second
   std::string resume_dir;        ///< continue the crashed mission recorded there
   bool point_latest = true;      ///< runs/latest points to the mission (off: --no-latest)
+  std::string security_dir;      ///< DDS Security identities to use (default: new ones in DIR/security)
+  bool insecure = false;         ///< plain DDS: no authentication, no encryption (--insecure)
   const std::atomic<bool>* stop = nullptr;
 };
 
@@ -52,6 +54,7 @@ struct ServerCommand {
   bool resume = false;           ///< continue the crashed mission recorded in out_dir
   int resumes = 0;
   double start_in_s = 0.0;       ///< wall seconds from start-up to the mission's t = 0 (a fresh mission)
+  std::string security_dir;      ///< DDS Security directory: the server's identity there (empty: plain DDS)
 };
 
 /// sage agents
@@ -69,6 +72,7 @@ struct AgentsCommand {
   double start_at_s = 0.0;       ///< mission time of the host's first cycle, at the earliest (a join)
   std::optional<double> lose_at_s;   ///< the host SIGKILLs itself at this mission time (a loss)
   std::optional<double> leave_at_s;  ///< its vehicles leave cleanly at this mission time
+  std::string security_dir;      ///< DDS Security directory: the agent host's identity there (empty: plain DDS)
 };
 
 /// sage bench scale
@@ -88,6 +92,13 @@ struct OperatorCommand {
   std::string valve;
   double weight = 0.0;
   std::string source = "operator";
+  bool insecure = false;         ///< plain DDS even if the mission is secured (its server will not hear it)
+};
+
+/// sage security init
+struct SecurityInitCommand {
+  std::string dir;
+  double validity_days = 365.0;  ///< certificates' and permissions' validity
 };
 
 }  // namespace sage::server

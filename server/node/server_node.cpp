@@ -146,7 +146,9 @@ int RunServerNode(const maps::Scenario& scenario, const ServerNodeOptions& optio
                                      checkpoint.time_s, core.time_s(), tail.samples.size()));
   }
 
-  proto::Participant participant(options.domain_id, proto::LocalhostConfigXml(proto::kMaxLocalParticipants));
+  proto::Participant participant(options.domain_id, proto::LocalhostConfigXml(proto::kMaxLocalParticipants,
+                                                                             proto::LoopbackDiscovery::kUnicastPeers,
+                                                                             options.security));
   {
     // Two servers on one domain would both adopt the same vehicles and clocks: refuse to be the
     // second. Asked before this server's own status writer exists; discovery on loopback takes

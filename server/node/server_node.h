@@ -10,13 +10,18 @@
 #include <atomic>
 #include <string>
 
+#include <optional>
+
 #include "maps/scenario/scenario.h"
+#include "proto/dds_config.h"
 #include "server/mission_core.h"
 
 namespace sage::server {
 
 struct ServerNodeOptions {
   int domain_id = 0;               ///< DDS domain of the mission
+  /// The server's DDS Security identity (a secured mission: domain_id <= 230); none: plain DDS.
+  std::optional<proto::SecurityIdentity> security;
   std::string profile;             ///< risk profile (empty: the scenario's default)
   ControllerKind controller = ControllerKind::kErgodic;
   double time_scale = 1.0;         ///< mission seconds per wall second (> 0); 1 = real time

@@ -39,7 +39,8 @@ void WriteMissionFile(const std::string& dir, const MissionFile& m) {
   const nlohmann::ordered_json j = {{"domain_id", m.domain_id},   {"scenario", m.scenario_path},
                                     {"run_dir", m.run_dir},        {"time_scale", m.time_scale},
                                     {"controller", m.controller},  {"profile", m.profile},
-                                    {"launcher_pid", m.launcher_pid}, {"resumes", m.resumes}};
+                                    {"launcher_pid", m.launcher_pid}, {"resumes", m.resumes},
+                                    {"security_dir", m.security_dir}};
   detail::WriteAtomically((fs::path(dir) / "mission.json").string(), j.dump(2) + "\n");
 }
 
@@ -61,6 +62,7 @@ MissionFile ReadMissionFile(const std::string& dir) {
     m.profile = j.value("profile", std::string());
     m.launcher_pid = j.value("launcher_pid", -1);
     m.resumes = j.value("resumes", 0);
+    m.security_dir = j.value("security_dir", std::string());  // absent in missions launched before DDS Security
     return m;
   } catch (const nlohmann::json::exception& e) {
     throw maps::ScenarioError(file.string() + ": not a mission file: " + e.what());

@@ -17,6 +17,7 @@ struct MissionFile {
   std::string profile;
   int launcher_pid = -1;
   int resumes = 0;            ///< times the mission was resumed
+  std::string security_dir;   ///< absolute DDS Security directory (sage security init); empty: plain DDS (--insecure)
 };
 
 /// Writes DIR/mission.json atomically. Throws std::runtime_error naming the file.

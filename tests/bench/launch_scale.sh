@@ -3,6 +3,7 @@
 # vehicles (agent hosts of up to 250 vehicles each), at real time. Prints and appends to
 # BUILD_DIR/launch_scale.md: the real-time factor the server kept, its cycle time, and the DDS message
 # rate it saw. Usage: tests/bench/launch_scale.sh [BUILD_DIR] [N ...]   (default: build 100 1000)
+# Missions are secured (DDS Security, sage launch's default); LAUNCH_FLAGS=--insecure runs them plain.
 set -euo pipefail
 cd "$(dirname "$0")/../.."   # the repository root: scenarios/ and build/ are relative to it
 build=${1:-build}
@@ -14,7 +15,7 @@ echo "|---|---|---|---|---|---|---|" | tee -a "$out"
 for n in ${counts[@]}; do
   dir=$(mktemp -d)
   log="$dir/launch.log"
-  if ! "$build/bin/sage" launch scenarios/fleet_large.yaml --vehicles "$n" --duration 30 --no-latest --out "$dir" >"$log" 2>&1; then
+  if ! "$build/bin/sage" launch scenarios/fleet_large.yaml --vehicles "$n" --duration 30 --no-latest --out "$dir" ${LAUNCH_FLAGS:-} >"$log" 2>&1; then
     echo "launch_scale: the $n-vehicle mission failed; its log: $log" >&2
     exit 1
   fi

@@ -41,6 +41,7 @@
 #include <nlohmann/json.hpp>
 
 #include "maps/scenario/scenario.h"
+#include "proto/access_policy.h"
 #include "proto/dds_config.h"
 #include "proto/dds_endpoints.h"
 #include "proto/messages.h"
@@ -187,8 +188,12 @@ class ChildProcess {
 // vehicles' states, read over DDS like any viewer would.
 class MissionWatcher {
  public:
-  explicit MissionWatcher(int domain_id)
-      : participant_(static_cast<uint32_t>(domain_id), proto::LocalhostConfigXml(proto::kMaxLocalParticipants)),
+  /// On a secured mission (sage launch's default) the watcher needs an identity that may read
+  /// status and states: the mission's operator identity (see OperatorIdentityOf).
+  explicit MissionWatcher(int domain_id, const std::optional<proto::SecurityIdentity>& identity = std::nullopt)
+      : participant_(static_cast<uint32_t>(domain_id),
+                     proto::LocalhostConfigXml(proto::kMaxLocalParticipants, proto::LoopbackDiscovery::kUnicastPeers,
+                                               identity)),
         status_(participant_, proto::MissionStatusQos()),
         states_(participant_, proto::VehicleStateReaderQos()) {}
 
@@ -386,10 +391,19 @@ class FleetDds : public ::testing::Test {
 
   // A domain of this test's own: distinct preferred ids per process and per call, and the lock
   // skips ids held by other tests or missions.
+  // Within 1..230: launched missions are secured, and their governance accepts no more.
   static proto::DomainReservation ReserveDomain() {
     static int counter = 0;
-    const int preferred = 1 + (static_cast<int>(getpid()) * 31 + counter++ * 17) % proto::kMaxDomainId;
-    return proto::DomainReservation::Acquire(preferred);
+    const int preferred = 1 + (static_cast<int>(getpid()) * 31 + counter++ * 17) % proto::kMaxSecureDomainId;
+    return proto::DomainReservation::Acquire(preferred, 1, proto::kMaxSecureDomainId);
+  }
+
+  // The operator identity of the mission launched into `out` (mission.json security_dir), for
+  // the test's own participants on its domain; none for an --insecure mission.
+  static std::optional<proto::SecurityIdentity> OperatorIdentityOf(const fs::path& out) {
+    const std::string dir = ReadJson(out / "mission.json").value("security_dir", std::string());
+    if (dir.empty()) return std::nullopt;
+    return proto::IdentityInDirectory(dir, proto::SecurityRole::kOperator);
   }
 
   ChildProcess& Start(const std::string& label, const std::vector<std::string>& args,
@@ -717,7 +731,7 @@ TEST_F(FleetDds, OperatorRiskUpdateReachesServer) {
   ASSERT_TRUE(fs::exists(out / "mission.json"));
   const Json mission = ReadJson(out / "mission.json");
   EXPECT_EQ(mission.at("domain_id").get<int>(), domain_id) << "launch did not use the free domain it was given";
-  MissionWatcher watcher(mission.at("domain_id").get<int>());
+  MissionWatcher watcher(mission.at("domain_id").get<int>(), OperatorIdentityOf(out));
   ASSERT_TRUE(watcher.PollUntil(
       [&] { return watcher.status() && watcher.status()->vehicles_alive >= 1 && watcher.MissionTimeNow() >= 4.0; },
       kStartupTimeout))
@@ -779,7 +793,9 @@ TEST_F(FleetDds, OperatorRiskUpdateReachesServer) {
   // the next two.
   {
     proto::Participant operator_side(static_cast<uint32_t>(domain_id),
-                                     proto::LocalhostConfigXml(proto::kMaxLocalParticipants));
+                                     proto::LocalhostConfigXml(proto::kMaxLocalParticipants,
+                                                               proto::LoopbackDiscovery::kUnicastPeers,
+                                                               OperatorIdentityOf(out)));
     proto::Reader<proto::FleetCommandResult> results(operator_side, proto::FleetCommandResultQos());
     proto::Writer<proto::FleetCommand> commands(operator_side, proto::FleetCommandQos());
     ASSERT_TRUE(results.WaitForWriters(1, 3s));
@@ -878,7 +894,7 @@ TEST_F(FleetDds, PartitionTargetsFollowRiskUpdates) {
                                                 "partition", "--duration", Num(duration), "--time-scale", Num(kTimeScale)},
                                      out, domain_id);
   ASSERT_TRUE(fs::exists(out / "mission.json"));
-  MissionWatcher watcher(domain_id);
+  MissionWatcher watcher(domain_id, OperatorIdentityOf(out));
   ASSERT_TRUE(watcher.PollUntil(
       [&] { return watcher.status() && watcher.status()->vehicles_alive == 4 && watcher.MissionTimeNow() >= 6.0; },
       kStartupTimeout))
@@ -931,7 +947,7 @@ TEST_F(FleetDds, TwoMissionsDoNotSeeEachOther) {
   ASSERT_NE(domains[0], domains[1]);
   {
     // While both run, each domain holds exactly one server and one vehicle writer.
-    MissionWatcher w0(domains[0]), w1(domains[1]);
+    MissionWatcher w0(domains[0], OperatorIdentityOf(outs[0])), w1(domains[1], OperatorIdentityOf(outs[1]));
     auto both = [&] {
       return w0.status() && w1.status() && w0.status()->vehicles_alive >= 1 && w1.status()->vehicles_alive >= 1 &&
              !w0.States(0).empty() && !w1.States(0).empty();
@@ -1036,7 +1052,7 @@ TEST_F(FleetDds, KilledServerResumesFromItsCheckpoint) {
                                      out, domain_id);
   const auto server_pid = WaitForLog(launch, R"(server pid ([0-9]+))", kStartupTimeout);
   ASSERT_TRUE(server_pid.has_value()) << "the launcher never said which process is the server";
-  MissionWatcher watcher(domain_id);
+  MissionWatcher watcher(domain_id, OperatorIdentityOf(out));
   ASSERT_TRUE(WaitForFleet(watcher, 3, 25.0)) << "the mission never had its three vehicles";
   const double t_kill = watcher.MissionTimeNow();
   ::kill(std::stoi((*server_pid)[1]), SIGKILL);
@@ -1172,7 +1188,7 @@ TEST_F(FleetDds, LaunchEndsWhenTheFleetIsGone) {
   ChildProcess& launch = StartLaunch("launch", {Scenario("two_xt.yaml"), "--vehicles", "1", "--duration", "200",
                                                 "--time-scale", Num(kTimeScale)},
                                      out, domain_id);
-  MissionWatcher watcher(domain_id);
+  MissionWatcher watcher(domain_id, OperatorIdentityOf(out));
   ASSERT_TRUE(WaitForFleet(watcher, 1, 5.0));
   std::system(fmt::format("pkill -KILL -f 'sage agents .*--domain {}( |$)'", domain_id).c_str());
   const std::optional<int> launch_exit = launch.WaitExit(20s);
@@ -1184,6 +1200,63 @@ TEST_F(FleetDds, LaunchEndsWhenTheFleetIsGone) {
   EXPECT_TRUE(metrics.at("complete").get<bool>());
   EXPECT_TRUE(metrics.at("stopped_early").get<bool>());
   EXPECT_LT(metrics.at("duration_s").get<double>(), 100.0);
+}
+
+// 11. sage launch secures its mission by default (DDS Security): the identities are in the run
+// directory (0700, no CA key); a plain participant on the domain sees no status and no vehicle
+// while the mission's operator identity sees both; an --insecure operator command is not heard;
+// a vehicle added at runtime joins with the agent-host identity; and a domain the governance
+// does not accept is refused.
+TEST_F(FleetDds, LaunchedMissionIsSecuredByDefault) {
+  ChildProcess& high = Start("high", {"launch", Scenario("two_xt.yaml"), "--domain", "231", "--out",
+                                      (run_dir_ / "high").string(), "--no-latest"});
+  EXPECT_EQ(high.WaitExit(15s), std::optional<int>(2)) << high.LogText();
+  EXPECT_NE(high.LogText().find("--domain = 231: a secured mission's domain must be in 0..230"), std::string::npos)
+      << high.LogText();
+
+  const int domain_id = FreeDomainForLaunch();
+  const fs::path out = run_dir_ / "out";
+  const double duration = 30;
+  ChildProcess& launch = StartLaunch("launch", {Scenario("two_xt.yaml"), "--vehicles", "2", "--duration", Num(duration),
+                                                "--time-scale", Num(kTimeScale), "--no-latest"},
+                                     out, domain_id);
+  ASSERT_TRUE(fs::exists(out / "mission.json"));
+  const std::optional<proto::SecurityIdentity> identity = OperatorIdentityOf(out);
+  ASSERT_TRUE(identity.has_value()) << "mission.json names no security directory";
+  EXPECT_EQ(fs::status(out / "security").permissions() & fs::perms::all, fs::perms::owner_all);
+  EXPECT_FALSE(fs::exists(out / "security" / "ca_key.pem")) << "a mission's own directory keeps no CA key";
+  {
+    MissionWatcher watcher(domain_id, identity);
+    ASSERT_TRUE(WaitForFleet(watcher, 2, 2.0)) << "the operator identity never saw the mission's two vehicles";
+  }
+  // The --insecure command tries (3 s) while the plain participant below watches.
+  ChildProcess& insecure = Start("insecure", {"risk", "set", "P3", "5", "--mission", out.string(), "--insecure"});
+  {
+    // Plain DDS on the same domain (the secured participant above is gone, so this process
+    // can make the domain anew without security): nothing matches, nothing arrives.
+    MissionWatcher plain(domain_id);
+    plain.PollUntil([] { return false; }, 2s);
+    EXPECT_FALSE(plain.status().has_value()) << "a plain participant read the mission's status";
+    EXPECT_TRUE(plain.States(0).empty() && plain.States(1).empty()) << "a plain participant read vehicle states";
+    EXPECT_EQ(plain.StatusWriters(), 0u);
+    EXPECT_EQ(plain.StateWriters(), 0u);
+  }
+  EXPECT_EQ(insecure.WaitExit(15s), std::optional<int>(1)) << insecure.LogText();
+  EXPECT_NE(insecure.LogText().find("the mission is secured"), std::string::npos) << insecure.LogText();
+
+  ChildProcess& add = Start("add", {"vehicle", "add", "--count", "1", "--mission", out.string()});
+  EXPECT_EQ(add.WaitExit(15s), std::optional<int>(0)) << add.LogText();
+  {
+    MissionWatcher watcher(domain_id, identity);
+    EXPECT_TRUE(watcher.PollUntil([&] { return watcher.status() && watcher.status()->vehicles_alive == 3; },
+                                  kStartupTimeout))
+        << "the added vehicle never joined the secured mission; its host's log: " << ReadFile(out / "agents-add-2.log");
+  }
+  ASSERT_EQ(WaitMissionEnd(launch, duration), std::optional<int>(0)) << launch.LogText();
+  const auto events = ReadFleetEvents(out / "fleet_events.csv");
+  EXPECT_EQ(EventsOf(events, "joined").size(), 3u);
+  // The server never applied the --insecure update: no risk event for P3.
+  EXPECT_FALSE(EventOf(ReadJson(out / "metrics.json"), "P3").has_value());
 }
 
 // 12. The same scenario and seed fly the same mission in-process and over DDS: fleet_field with

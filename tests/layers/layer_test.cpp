@@ -29,7 +29,7 @@ struct SourceFile {
 std::string LayerOf(const std::string& path) {
   static const std::vector<std::pair<std::string, std::string>> kFolders = {
       {"maps/scenario/", "scenario"}, {"maps/", "maps"},           {"agents/node/", "agents_node"},
-      {"agents/", "agents"},          {"proto/", "proto"},         {"server/report/", "report"},
+      {"agents/", "agents"},          {"proto/security/", "security"}, {"proto/", "proto"},         {"server/report/", "report"},
       {"server/node/", "server_node"}, {"server/app/", "app"},     {"server/", "server"},
   };
   for (const auto& [folder, layer] : kFolders)
@@ -44,11 +44,12 @@ const std::map<std::string, std::set<std::string>>& AllowedLayers() {
       {"maps", {"scenario", "maps"}},
       {"agents", {"scenario", "maps", "agents"}},
       {"proto", {"proto"}},
+      {"security", {"proto", "security"}},
       {"agents_node", {"scenario", "maps", "agents", "agents_node", "proto"}},
       {"server", {"scenario", "maps", "agents", "server"}},
       {"report", {"scenario", "maps", "agents", "server", "report"}},
       {"server_node", {"scenario", "maps", "agents", "agents_node", "proto", "server", "report", "server_node"}},
-      {"app", {"scenario", "maps", "agents", "agents_node", "proto", "server", "report", "server_node", "app"}},
+      {"app", {"scenario", "maps", "agents", "agents_node", "proto", "security", "server", "report", "server_node", "app"}},
   };
   return kAllowed;
 }
@@ -62,6 +63,7 @@ const std::map<std::string, std::set<std::string>>& ExternalRules() {
       {"octomap/", {"maps"}},
       {"box2d/", {"agents"}},
       {"yaml-cpp/", {"scenario"}},
+      {"openssl/", {"security"}},                               // OpenSSL: the security files
   };
   return kRules;
 }
