@@ -228,7 +228,9 @@ TEST(GridPath, EarlierSearchesLeaveNoTrace) {
   for (int trial = 0; trial < 30; ++trial) {
     const OccupancyGrid& grid = grids[trial % grids.size()];
     const Eigen::Vector2d from(x(rng), y(rng)), to(x(rng), y(rng));
-    if (trial % 4 == 0) ASSERT_TRUE(PlanGridPath(walled, {1.05, 1.05}, {7.05, 7.05}).empty());
+    if (trial % 4 == 0) {
+      ASSERT_TRUE(PlanGridPath(walled, {1.05, 1.05}, {7.05, 7.05}).empty());
+    }
     const std::vector<Eigen::Vector2d> reused = PlanGridPath(grid, from, to);
     std::vector<Eigen::Vector2d> fresh;
     std::thread([&] { fresh = PlanGridPath(grid, from, to); }).join();
