@@ -1,7 +1,6 @@
 // DDS transport layer: round trips, durability, liveliness, dispose, domain isolation, errors.
 // Each test reserves its own domain (DomainReservation) and runs on loopback only, so tests
 // never see each other or a running mission.
-#include <dirent.h>
 #include <gtest/gtest.h>
 #include <signal.h>
 #include <sys/wait.h>
@@ -19,6 +18,7 @@
 #include "proto/dds_endpoints.h"
 #include "proto/messages.h"
 #include "proto/qos.h"
+#include "tests/support/threads.h"
 
 namespace sage::proto {
 namespace {
@@ -51,13 +51,7 @@ std::vector<Sample<T>> TakeUntil(Reader<T>& reader, Done done, std::chrono::mill
   return all;
 }
 
-int CountThreads() {
-  int entries = 0;
-  DIR* dir = opendir("/proc/self/task");
-  while (dir != nullptr && readdir(dir) != nullptr) ++entries;
-  if (dir != nullptr) closedir(dir);
-  return entries - 2;  // "." and ".."
-}
+using sage::testing::CountThreads;
 
 // Owners of DDS handles move but never copy (a copy would dds_delete twice).
 static_assert(!std::is_copy_constructible_v<Participant>);

@@ -4,7 +4,6 @@
 // theirs on any mission topic, so it reads nothing they write and they read nothing it writes;
 // and a participant holding only the viewer identity cannot write a risk update at all. Each
 // role runs in a process of its own (forked before any DDS entity exists), as in a mission.
-#include <dirent.h>
 #include <gtest/gtest.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -26,6 +25,7 @@
 #include "proto/qos.h"
 #include "proto/security/security_files.h"
 #include "proto/topics.h"
+#include "tests/support/threads.h"
 
 namespace sage::proto {
 namespace {
@@ -39,13 +39,7 @@ using Clock = std::chrono::steady_clock;
 // (fail to) match.
 constexpr auto kRunFor = 3s;
 
-int CountThreads() {
-  int entries = 0;
-  DIR* dir = opendir("/proc/self/task");
-  while (dir != nullptr && readdir(dir) != nullptr) ++entries;
-  if (dir != nullptr) closedir(dir);
-  return entries - 2;
-}
+using sage::testing::CountThreads;
 
 struct TempDir {
   fs::path path;

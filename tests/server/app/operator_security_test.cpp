@@ -3,7 +3,6 @@
 // nothing — the server's reader never sees the update. The server is a forked process with the
 // server identity (forked before any DDS entity exists) that answers every risk update it reads
 // and reports how many it read.
-#include <dirent.h>
 #include <gtest/gtest.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -22,6 +21,7 @@
 #include "proto/security/security_files.h"
 #include "server/app/operators.h"
 #include "server/app/security_command.h"
+#include "tests/support/threads.h"
 
 namespace sage::server {
 namespace {
@@ -30,13 +30,7 @@ namespace fs = std::filesystem;
 using namespace std::chrono_literals;
 using Clock = std::chrono::steady_clock;
 
-int CountThreads() {
-  int entries = 0;
-  DIR* dir = opendir("/proc/self/task");
-  while (dir != nullptr && readdir(dir) != nullptr) ++entries;
-  if (dir != nullptr) closedir(dir);
-  return entries - 2;
-}
+using sage::testing::CountThreads;
 
 struct SecuredMission {
   fs::path root;
