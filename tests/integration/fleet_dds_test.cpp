@@ -17,6 +17,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <cstdlib>
@@ -1200,6 +1201,84 @@ TEST_F(FleetDds, LaunchEndsWhenTheFleetIsGone) {
   EXPECT_TRUE(metrics.at("complete").get<bool>());
   EXPECT_TRUE(metrics.at("stopped_early").get<bool>());
   EXPECT_LT(metrics.at("duration_s").get<double>(), 100.0);
+}
+
+// A flood of risk updates from an authenticated sender (this process, on the mission's operator
+// identity, writing as fast as it can) leaves another operator answered: an operator's update
+// during the flood is applied and answered within 1 s of its write, a `sage risk set` started
+// during it (its own process and secured handshake) succeeds, and the flood is refused beyond
+// its allowance and counted in metrics.json under its writer. (A probe's 3 million updates had
+// made every operator's command fail.)
+TEST_F(FleetDds, RiskFloodLeavesAnOperatorAnswered) {
+  const int domain_id = FreeDomainForLaunch();
+  const fs::path out = run_dir_ / "out";
+  const double duration = 30;
+  ChildProcess& launch = StartLaunch("launch", {Scenario("two_xt.yaml"), "--duration", Num(duration), "--time-scale",
+                                                Num(kTimeScale), "--no-latest"},
+                                     out, domain_id);
+  const std::optional<proto::SecurityIdentity> identity = OperatorIdentityOf(out);
+  ASSERT_TRUE(identity.has_value()) << "mission.json names no security directory";
+  MissionWatcher watcher(domain_id, identity);
+  ASSERT_TRUE(watcher.PollUntil([&] { return watcher.status() && watcher.MissionTimeNow() >= 2.0; }, kStartupTimeout))
+      << "the mission never started";
+  // The flood shares the watcher's domain instance (same configuration), its own writer.
+  proto::Participant flooder(static_cast<uint32_t>(domain_id),
+                             proto::LocalhostConfigXml(proto::kMaxLocalParticipants,
+                                                       proto::LoopbackDiscovery::kUnicastPeers, identity));
+  proto::Writer<proto::RiskUpdate> flood(flooder, proto::RiskUpdateQos()), op(flooder, proto::RiskUpdateQos());
+  proto::Reader<proto::RiskUpdateResult> answers(flooder, proto::RiskUpdateResultQos());
+  ASSERT_TRUE(flood.WaitForReaders(1, 10s)) << "the server's risk reader never matched the flood's writer";
+  ASSERT_TRUE(op.WaitForReaders(1, 10s)) << "the server's risk reader never matched the operator's writer";
+  ASSERT_TRUE(answers.WaitForWriters(1, 10s)) << "the server's answers never matched";
+  std::atomic<bool> stop{false};
+  std::atomic<long> written{0};
+  std::thread flooding([&] {
+    const std::string valve = "P1", source = "flood";
+    for (long i = 0; !stop; ++i) {
+      flood.Write(proto::RiskUpdate{i, proto::BorrowString(valve), 1.0 + static_cast<double>(i % 5),
+                                    proto::BorrowString(source)});
+      ++written;
+    }
+  });
+  std::this_thread::sleep_for(1s);
+  // An operator already on the domain: its update's answer, timed from the write.
+  const std::string op_valve = "P2", op_source = "operator";
+  const auto sent = SteadyClock::now();
+  op.Write(proto::RiskUpdate{424242, proto::BorrowString(op_valve), 4.0, proto::BorrowString(op_source)});
+  std::optional<bool> applied;
+  while (!applied && SteadyClock::now() - sent < 10s) {
+    answers.WaitForData(5ms);
+    answers.TakeEach([&](const proto::RiskUpdateResult& r, const dds_sample_info_t& info) {
+      if (info.valid_data && r.update_stamp_ns == 424242 && proto::AsStringView(r.valve) == op_valve) applied = r.applied;
+    });
+  }
+  const double answer_s = std::chrono::duration<double>(SteadyClock::now() - sent).count();
+  // And one that starts now: `sage risk set` (a process, its own secured handshake).
+  ChildProcess& risk = Start("risk", {"risk", "set", "P3", "5", "--mission", out.string()});
+  const std::optional<int> risk_exit = risk.WaitExit(15s);
+  const double command_s = risk.WallSeconds();
+  stop = true;
+  flooding.join();
+  ASSERT_TRUE(applied.has_value()) << "the operator's update was never answered during the flood";
+  EXPECT_TRUE(*applied);
+  EXPECT_LE(answer_s, 1.0) << "the operator waited " << answer_s << " s for the server's answer";
+  ASSERT_TRUE(risk_exit.has_value()) << "sage risk set hung during the flood";
+  EXPECT_EQ(*risk_exit, 0) << risk.LogText();
+  EXPECT_TRUE(std::regex_search(risk.LogText(), std::regex(R"(P3: risk 5 applied at t = [0-9.]+ s)"))) << risk.LogText();
+  EXPECT_GE(written.load(), 1000) << "the flood was no flood";
+  Report("risk_flood_updates_written", static_cast<double>(written.load()), "updates (the flood)");
+  Report("risk_answer_during_flood_s", answer_s, "s wall (an operator's update to the server's answer, during the flood)");
+  Report("risk_set_during_flood_wall_s", command_s, "s wall (sage risk set start to exit, during the flood)");
+
+  ASSERT_EQ(WaitMissionEnd(launch, duration), std::optional<int>(0)) << launch.LogText();
+  const Json metrics = ReadJson(out / "metrics.json");
+  const Json& limited = metrics.at("rate_limited");
+  EXPECT_GT(limited.at("risk_updates").get<long>(), 0) << metrics.dump();
+  bool flood_named = false;
+  for (const auto& [sender, count] : limited.at("by_sender").items()) {
+    flood_named = flood_named || (sender.rfind("flood (writer ", 0) == 0 && count.get<long>() > 0);
+  }
+  EXPECT_TRUE(flood_named) << limited.dump();
 }
 
 // 11. sage launch secures its mission by default (DDS Security): the identities are in the run
