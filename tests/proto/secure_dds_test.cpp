@@ -56,6 +56,21 @@ DomainReservation ReserveSecureDomain() {
   return DomainReservation::Acquire(preferred, 1, kMaxSecureDomainId);
 }
 
+// A secured domain for one test: fresh security material (no CA key kept) in a temporary
+// directory, a reserved domain, and each role's Cyclone configuration on it.
+struct SecuredDomain {
+  TempDir temp;
+  std::string dir = (temp.path / "security").string();
+  DomainReservation domain = [this] {
+    InitSecurityDirectory(dir, {.validity_days = 1, .keep_ca_key = false});
+    return ReserveSecureDomain();
+  }();
+  uint32_t id = static_cast<uint32_t>(domain.domain_id());
+  std::string Config(SecurityRole role) const {
+    return LocalhostConfigXml(8, LoopbackDiscovery::kUnicastPeers, IdentityInDirectory(dir, role));
+  }
+};
+
 using AllMessages = std::tuple<VehicleState, VehicleCoverage, ErgodicTarget, FleetCoverage, RiskUpdate, RiskUpdateResult,
                                MissionStatus, FleetCommand, FleetCommandResult>;
 
@@ -151,14 +166,9 @@ RiskUpdate Update(const char* source) {
 // host adds the states and coverage writers so that every topic has a secured writer and reader.
 TEST(SecureDds, PlainParticipantNeitherReadsNorWritesAnyMissionTopic) {
   ASSERT_EQ(CountThreads(), 1) << "fork needs a single-threaded parent";
-  const TempDir temp;
-  const std::string dir = (temp.path / "security").string();
-  InitSecurityDirectory(dir, {.validity_days = 1, .keep_ca_key = false});
-  const DomainReservation domain = ReserveSecureDomain();
-  const uint32_t id = static_cast<uint32_t>(domain.domain_id());
-  auto secured = [&](SecurityRole role) {
-    return LocalhostConfigXml(8, LoopbackDiscovery::kUnicastPeers, IdentityInDirectory(dir, role));
-  };
+  const SecuredDomain secure;
+  const uint32_t id = secure.id;
+  auto secured = [&](SecurityRole role) { return secure.Config(role); };
 
   Child server = Fork([&] {
     Participant participant(id, secured(SecurityRole::kServer));
@@ -271,14 +281,10 @@ TEST(SecureDds, PlainParticipantNeitherReadsNorWritesAnyMissionTopic) {
 // own access control refuses the writer, and the server's reader never sees a writer match.
 TEST(SecureDds, ViewerIdentityCannotWriteRiskUpdates) {
   ASSERT_EQ(CountThreads(), 1) << "fork needs a single-threaded parent";
-  const TempDir temp;
-  const std::string dir = (temp.path / "security").string();
-  InitSecurityDirectory(dir, {.validity_days = 1, .keep_ca_key = false});
-  const DomainReservation domain = ReserveSecureDomain();
-  const uint32_t id = static_cast<uint32_t>(domain.domain_id());
+  const SecuredDomain secure;
+  const uint32_t id = secure.id;
   Child viewer = Fork([&] {
-    Participant participant(id, LocalhostConfigXml(8, LoopbackDiscovery::kUnicastPeers,
-                                                   IdentityInDirectory(dir, SecurityRole::kViewer)));
+    Participant participant(id, secure.Config(SecurityRole::kViewer));
     Reader<RiskUpdate> reads(participant, RiskUpdateQos());  // allowed
     try {
       Writer<RiskUpdate> writer(participant, RiskUpdateQos());
@@ -289,8 +295,7 @@ TEST(SecureDds, ViewerIdentityCannotWriteRiskUpdates) {
       return std::string(e.what());
     }
   });
-  Participant participant(id, LocalhostConfigXml(8, LoopbackDiscovery::kUnicastPeers,
-                                                 IdentityInDirectory(dir, SecurityRole::kServer)));
+  Participant participant(id, secure.Config(SecurityRole::kServer));
   Reader<RiskUpdate> updates(participant, RiskUpdateQos());
   int received = 0;
   const auto end = Clock::now() + 2s;
