@@ -214,7 +214,7 @@ OperatorAnswer MissionCore::ReserveIds(int count) {
   // a probe's `sage vehicle add --count 100000` on a 12 x 9.5 m field had taken the server to 20 GB.
   const double area_m2 = scenario_.workspace.width_m * scenario_.workspace.height_m;
   const std::size_t room = static_cast<std::size_t>(std::floor(area_m2 / maps::kMinAreaPerBlueRov2_m2));
-  const std::size_t alive = roster_.alive().size();
+  const std::size_t alive = roster_.alive_count();
   if (alive + static_cast<std::size_t>(count) > room) {
     answer.reason = fmt::format("count = {}: the {} x {} m workspace holds {} vehicles ({} m^2 each) and {} are in the mission",
                                 count, scenario_.workspace.width_m, scenario_.workspace.height_m, room,
