@@ -302,6 +302,13 @@ std::vector<Eigen::Vector2d> PlanGridPath(const maps::OccupancyGrid& grid, const
   const std::optional<Cell> start = SnapToFree(grid, from);
   const std::optional<Cell> goal = SnapToFree(grid, to);
   if (!start || !goal) return {};
+  // Open water between the ends: every shortest cell path lies in their free rectangle, so the
+  // shortcut below would keep only its two ends (every segment between centres in a free
+  // rectangle is free). The same result without the search: most of a fleet's legs and transits.
+  if (grid.RectangleFree(*start, *goal)) {
+    if (*start == *goal) return {grid.CenterOf(*start)};
+    return {grid.CenterOf(*start), grid.CenterOf(*goal)};
+  }
   const std::vector<Cell> cells = AStar(grid, *start, *goal);
   if (cells.empty()) return {};
   std::vector<Eigen::Vector2d> path;
@@ -313,8 +320,10 @@ std::vector<Eigen::Vector2d> PlanGridPath(const maps::OccupancyGrid& grid, const
 double GridDistance(const maps::OccupancyGrid& grid, const Eigen::Vector2d& from, const Eigen::Vector2d& to) {
   const std::optional<Cell> start = SnapToFree(grid, from);
   const std::optional<Cell> goal = SnapToFree(grid, to);
+  if (!start || !goal) return kInf;
+  if (grid.RectangleFree(*start, *goal)) return Octile(goal->x() - start->x(), goal->y() - start->y()).Metres(grid.resolution_m());
   GridSteps cost;
-  if (!start || !goal || AStar(grid, *start, *goal, &cost).empty()) return kInf;
+  if (AStar(grid, *start, *goal, &cost).empty()) return kInf;
   return cost.Metres(grid.resolution_m());
 }
 

@@ -3,6 +3,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
+#include <cstring>
 #include <stdexcept>
 #include <string>
 
@@ -98,6 +100,27 @@ Eigen::Vector2i OccupancyGrid::CellOf(const Eigen::Vector2d& x_m) const {
 
 Eigen::Vector2d OccupancyGrid::CenterOf(const Eigen::Vector2i& cell) const {
   return {(cell.x() + 0.5) * resolution_m_, (cell.y() + 0.5) * resolution_m_};
+}
+
+bool OccupancyGrid::RectangleFree(const Eigen::Vector2i& lo, const Eigen::Vector2i& hi) const {
+  const int i0 = std::min(lo.x(), hi.x()), i1 = std::max(lo.x(), hi.x());
+  const int j0 = std::min(lo.y(), hi.y()), j1 = std::max(lo.y(), hi.y());
+  if (!InBounds(i0, j0) || !InBounds(i1, j1)) return false;
+  const std::size_t length = static_cast<std::size_t>(j1 - j0) + 1;
+  for (int i = i0; i <= i1; ++i) {
+    const unsigned char* column = cells_.data() + static_cast<std::size_t>(i) * rows_ + j0;
+    // Eight cells a word: any nonzero byte makes the word nonzero.
+    std::size_t k = 0;
+    for (; k + 8 <= length; k += 8) {
+      std::uint64_t word;
+      std::memcpy(&word, column + k, 8);
+      if (word != 0) return false;
+    }
+    for (; k < length; ++k) {
+      if (column[k] != 0) return false;
+    }
+  }
+  return true;
 }
 
 int OccupancyGrid::OccupiedCount() const {

@@ -33,6 +33,12 @@ class OccupancyGrid {
   Eigen::Vector2i CellOf(const Eigen::Vector2d& x_m) const;    ///< clamped into the grid
   Eigen::Vector2d CenterOf(const Eigen::Vector2i& cell) const;  ///< cell centre (m)
   int OccupiedCount() const;
+  /// True if every cell (i, j) with lo.x() <= i <= hi.x() and lo.y() <= j <= hi.y() is free (false
+  /// if any is out of bounds); the corners may come in any order. O(cells of the rectangle), a
+  /// byte scan per column with an early exit. A shortest 8-connected path never leaves the
+  /// rectangle of its two end cells (leaving adds steps, and the octile cost grows strictly with
+  /// either step count), so a free rectangle means the obstacle-free octile path is the shortest.
+  bool RectangleFree(const Eigen::Vector2i& lo, const Eigen::Vector2i& hi) const;
 
  private:
   double width_m_;

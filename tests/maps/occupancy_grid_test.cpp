@@ -2,6 +2,7 @@
 #include "maps/occupancy_grid.h"
 
 #include <cmath>
+#include <random>
 
 #include <gtest/gtest.h>
 
@@ -115,6 +116,26 @@ TEST(OccupancyGrid, CellOfCenterOfRoundTrip) {
   EXPECT_EQ(grid.CellOf({9.0, 6.0}), Eigen::Vector2i(139, 99));
   EXPECT_EQ(grid.CellOf({7.0, 5.0}), Eigen::Vector2i(139, 99));
   EXPECT_TRUE(grid.CenterOf({0, 0}).isApprox(Eigen::Vector2d(0.025, 0.025)));
+}
+
+// RectangleFree against a cell-by-cell check: random sparse grids (a lone occupied cell at a
+// column's end or in the middle of an 8-cell word), random rectangles given in either corner
+// order, some reaching out of the grid (not free).
+TEST(OccupancyGrid, RectangleFreeMatchesCellByCell) {
+  std::mt19937_64 rng(5);
+  for (int trial = 0; trial < 200; ++trial) {
+    OccupancyGrid grid(0.1 * (1 + rng() % 40), 0.1 * (1 + rng() % 40), 0.1);
+    const int occupied = static_cast<int>(rng() % 6);
+    for (int k = 0; k < occupied; ++k) grid.SetOccupied(static_cast<int>(rng() % grid.cols()), static_cast<int>(rng() % grid.rows()));
+    for (int q = 0; q < 50; ++q) {
+      const Eigen::Vector2i a(static_cast<int>(rng() % (grid.cols() + 2)) - 1, static_cast<int>(rng() % (grid.rows() + 2)) - 1);
+      const Eigen::Vector2i b(static_cast<int>(rng() % (grid.cols() + 2)) - 1, static_cast<int>(rng() % (grid.rows() + 2)) - 1);
+      bool expected = true;
+      for (int i = std::min(a.x(), b.x()); i <= std::max(a.x(), b.x()); ++i)
+        for (int j = std::min(a.y(), b.y()); j <= std::max(a.y(), b.y()); ++j) expected = expected && !grid.Occupied(i, j);
+      ASSERT_EQ(grid.RectangleFree(a, b), expected) << "trial " << trial << " (" << a.transpose() << ") (" << b.transpose() << ")";
+    }
+  }
 }
 
 }  // namespace
