@@ -12,8 +12,10 @@
 //
 // Distances. d(i, j) is the 8-connected grid distance between the valves' cells: moves r and
 // sqrt(2) r, a diagonal only past two free cells, i.e. the graph and costs of PlanGridPath's A*,
-// found by the same A* (octile heuristic, exact) with ties in f broken towards the deeper cell,
-// so open water costs O(L / r) cells; cached per pair, and kInf at once between valves in
+// found by the same A* (octile heuristic; costs exact as a + b sqrt 2 steps, agents/grid_steps.h)
+// with ties in f broken towards the deeper cell, so open water costs O(L / r) cells, and with no
+// search at all when the rectangle of the two cells is free (the octile cost is then the
+// distance: no shortest path leaves that rectangle); cached per pair, and kInf at once between valves in
 // different connected components. The straight line between cell centres is a lower bound of d
 // and prunes every search below before a grid distance is asked for. A* shortcuts its paths, so
 // d exceeds the flown leg by at most 8.2 % in open water (octile / Euclidean at 22.5 degrees).
@@ -26,8 +28,11 @@
 //     argmin_{c} sum_{v in C} d(c, v)" over the current medoid and the 4 members nearest the
 //     centroid, until no medoid moves (or medoid_iterations). Assigning by d keeps a wall
 //     between two groups of valves from being paired across.
-//  2. Clusters to vehicles greedily on the straight line from vehicle to cluster centroid,
-//     shortest pair first: the approach is not part of a lap, it only decides who flies what.
+//  2. Clusters to vehicles by least sum of squared straight-line approach times from vehicle to
+//     cluster centroid (the approach is not part of a lap, it only decides who flies what):
+//     exactly (Hungarian) up to 1,200 clusters, beyond by recursive bisection into exactly
+//     matched parts of at most 256 (agents/matching.h), or greedily, shortest pair first, when
+//     there are spare vehicles (agents/greedy_match.h).
 //  3. Min-max local search. A queue of tours, longest lap first; for each valve v of a popped
 //     tour a and each tour b holding one of v's K nearest valves (straight line; every change is
 //     priced on d): move v to b, or swap v with that valve u. A change of tours a, b (, c) is
@@ -59,7 +64,7 @@
 // O(C) to copy and label the grid; straight-line neighbours O(M^2); seeding O(M N); a k-medoids
 // round O(M N) (a heap of the medoids per valve) plus O(M q) distances; a local-search pass
 // O(M K) candidate changes, each O(2^q q^2) (q <= 8, memoised) or O(q log q); split-merge O(N)
-// cached merges per call; matching O(N^2 log N); legs O(M l^2 log l). A new distance is an A*
+// cached merges per call; matching O(N^3) up to 1,200 vehicles, O(N log N + 256^2 N) beyond; legs O(M l^2 log l). A new distance is an A*
 // over O(l) cells in open water, more around structures. Memory O(C + pairs priced). Measured
 // (one core of this machine, Release, default options): 20 valves / 4 vehicles (fleet_field)
 // 0.05 s, 87 / 24 and 240 / 100 (fleet_large) 0.08 and 0.11 s, 2,400 / 1,000 (fleet_large

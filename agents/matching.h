@@ -1,0 +1,124 @@
+#pragma once
+// Tours (clusters) to vehicles: who flies which share of a field (agents/fleet_tour_planner.cpp,
+// step 2). The cost of a pair is the squared straight-line approach time, so that a chain of
+// vehicles moving a few metres each is preferred to one vehicle sent across the field.
+#include <algorithm>
+#include <cstddef>
+#include <limits>
+#include <numeric>
+#include <vector>
+
+#include <Eigen/Core>
+
+namespace sage::agents {
+
+/// The assignment of rows (clusters) 0..n-1 to distinct columns (vehicles) 0..m-1, n <= m, of
+/// least total cost(c, k): the Hungarian method in the potentials form of Kuhn-Munkres, O(n^2 m).
+/// Returns the vehicle of each cluster.
+template <typename Cost>
+std::vector<int> MinCostMatch(int n, int m, const Cost& cost) {
+  // Rows 1..n, columns 1..m; u, v the potentials, p[j] the row matched to column j, way[] the
+  // alternating path.
+  std::vector<double> u(n + 1, 0.0), v(m + 1, 0.0);
+  std::vector<int> p(m + 1, 0), way(m + 1, 0);
+  std::vector<double> minv(m + 1);
+  std::vector<char> used(m + 1);
+  for (int i = 1; i <= n; ++i) {
+    p[0] = i;
+    int j0 = 0;
+    std::fill(minv.begin(), minv.end(), std::numeric_limits<double>::infinity());
+    std::fill(used.begin(), used.end(), 0);
+    do {
+      used[j0] = 1;
+      const int i0 = p[j0];
+      double delta = std::numeric_limits<double>::infinity();
+      int j1 = 0;
+      for (int j = 1; j <= m; ++j) {
+        if (used[j]) continue;
+        const double cur = cost(i0 - 1, j - 1) - u[i0] - v[j];
+        if (cur < minv[j]) minv[j] = cur, way[j] = j0;
+        if (minv[j] < delta) delta = minv[j], j1 = j;
+      }
+      for (int j = 0; j <= m; ++j) {
+        if (used[j]) {
+          u[p[j]] += delta;
+          v[j] -= delta;
+        } else {
+          minv[j] -= delta;
+        }
+      }
+      j0 = j1;
+    } while (p[j0] != 0);
+    do {
+      const int j1 = way[j0];
+      p[j0] = p[j1];
+      j0 = j1;
+    } while (j0 != 0);
+  }
+  std::vector<int> vehicle_of(n, -1);
+  for (int j = 1; j <= m; ++j)
+    if (p[j] > 0) vehicle_of[p[j] - 1] = j - 1;
+  return vehicle_of;
+}
+
+/// MinCostMatch for fleets too large for O(n^2 m) (10,000 vehicles: 1e12 steps), by recursive
+/// bisection: the clusters are split at the median of the longer side of the bounding box of
+/// clusters and vehicles, and the vehicles at the same line (those below it go with the lower
+/// clusters), moved across it in order along the axis only as far as each side needs one vehicle
+/// per cluster; down to at most `leaf` clusters, each part matched exactly. With as many vehicles
+/// as clusters each split is the 1-D optimal transport of squared distance along its axis (the
+/// monotone rearrangement), so clusters and vehicles pair by their quantiles, alternately in x and
+/// y: where vehicles are spread evenly and valves come in clusters, nobody is left the far side of
+/// the field, as shortest-pair-first greedy leaves its last vehicles (900-1,250 m transits
+/// measured on a 10,000-vehicle field). With spare vehicles (m > n) the quantiles no longer pair
+/// well (1.5-2.2x the optimum measured; greedy 1.3-1.45x). Ties break by index: deterministic. n <= m;
+/// cost(c, k) is priced only within a part. O((n + m) log n) for the splits (a linear selection
+/// each), then O(leaf^2 m') for each part of m' vehicles.
+template <typename Cost>
+std::vector<int> BisectedMatch(const std::vector<Eigen::Vector2d>& centroids,
+                               const std::vector<Eigen::Vector2d>& positions, const Cost& cost, int leaf) {
+  const int n = static_cast<int>(centroids.size()), m = static_cast<int>(positions.size());
+  std::vector<int> vehicle_of(n, -1);
+  std::vector<int> clusters(n), vehicles(m);
+  std::iota(clusters.begin(), clusters.end(), 0);
+  std::iota(vehicles.begin(), vehicles.end(), 0);
+  // Parts as [begin, end) ranges of `clusters` and `vehicles`, reordered in place.
+  struct Part {
+    int c0, c1, k0, k1;
+  };
+  std::vector<Part> stack{{0, n, 0, m}};
+  while (!stack.empty()) {
+    const Part part = stack.back();
+    stack.pop_back();
+    const int pn = part.c1 - part.c0, pm = part.k1 - part.k0;
+    if (pn == 0) continue;
+    if (pn <= std::max(1, leaf)) {
+      const std::vector<int> local = MinCostMatch(pn, pm, [&](int c, int k) {
+        return cost(clusters[part.c0 + c], vehicles[part.k0 + k]);
+      });
+      for (int c = 0; c < pn; ++c) vehicle_of[clusters[part.c0 + c]] = vehicles[part.k0 + local[c]];
+      continue;
+    }
+    Eigen::Vector2d lo = centroids[clusters[part.c0]], hi = lo;
+    for (int i = part.c0; i < part.c1; ++i) lo = lo.cwiseMin(centroids[clusters[i]]), hi = hi.cwiseMax(centroids[clusters[i]]);
+    for (int i = part.k0; i < part.k1; ++i) lo = lo.cwiseMin(positions[vehicles[i]]), hi = hi.cwiseMax(positions[vehicles[i]]);
+    const int axis = hi.x() - lo.x() >= hi.y() - lo.y() ? 0 : 1;
+    const auto by = [axis](const std::vector<Eigen::Vector2d>& at) {
+      return [&at, axis](int a, int b) { return at[a][axis] < at[b][axis] || (at[a][axis] == at[b][axis] && a < b); };
+    };
+    const int n_low = pn / 2;
+    std::nth_element(clusters.begin() + part.c0, clusters.begin() + part.c0 + n_low, clusters.begin() + part.c1,
+                     by(centroids));
+    const double cut = centroids[clusters[part.c0 + n_low]][axis];
+    int below = 0;
+    for (int i = part.k0; i < part.k1; ++i) below += positions[vehicles[i]][axis] < cut;
+    const int m_low = std::clamp(below, n_low, pm - (pn - n_low));
+    std::nth_element(vehicles.begin() + part.k0, vehicles.begin() + part.k0 + m_low, vehicles.begin() + part.k1,
+                     by(positions));
+    stack.push_back({part.c0 + n_low, part.c1, part.k0 + m_low, part.k1});
+    stack.push_back({part.c0, part.c0 + n_low, part.k0, part.k0 + m_low});
+  }
+  return vehicle_of;
+}
+
+}  // namespace sage::agents
