@@ -56,6 +56,10 @@ PhysicsWorld::PhysicsWorld(const maps::Workspace& /*workspace*/,
   // The workspace box has no walls: vehicles may leave it and the metrics count that.
   // Forces are re-applied every step, so nothing may fall asleep between commands.
   world_->SetAllowSleeping(false);
+  // No continuous collision: a BlueROV2 moves at most ~0.9 m/s, 1.8 cm a 50 Hz step against a
+  // 0.46 m hull and metre-wide structures, so nothing can tunnel, and Box2D's time-of-impact
+  // pass over every vehicle was a fifth of the physics at 10,000 vehicles.
+  world_->SetContinuousPhysics(false);
   for (const maps::ChristmasTree& tree : structures) {
     b2BodyDef def;
     def.type = b2_staticBody;
