@@ -60,6 +60,13 @@ void RiskLayerOptions::Validate() const {
   }
 }
 
+RiskLayerOptions RiskLayerOptions::Fitting(double width_m, double height_m) {
+  RiskLayerOptions options;
+  constexpr double kLeavesASide = 32000.0;  // under the 32,767 the keys hold, for rounding
+  options.resolution_m = std::max(options.resolution_m, std::max(width_m, height_m) / kLeavesASide);
+  return options;
+}
+
 struct RiskLayer::Impl {
   struct Cell {
     int i, j;  // leaf indices: the leaf spans [i r, (i + 1) r] x [j r, (j + 1) r], clipped

@@ -39,6 +39,9 @@ struct RiskLayerOptions {
 
   /// Throws std::invalid_argument naming the field, its value and the rule.
   void Validate() const;
+  /// The defaults, with the resolution coarsened (if need be) until a width_m x height_m (m)
+  /// workspace fits OctoMap's 16-bit keys (32,767 leaves a side from the origin: 6.5 km at 0.2 m).
+  static RiskLayerOptions Fitting(double width_m, double height_m);
 };
 
 class RiskLayer {

@@ -230,5 +230,25 @@ TEST(RiskLayer, RefusesBadInputInOneLine) {
   EXPECT_EQ(MaxAbs(layer.coefficients() - phi), 0.0);
 }
 
+// OctoMap's 16-bit keys hold 32,767 leaves a side: a 10 km workspace at 0.2 m is refused in one
+// line, and Fitting() coarsens the leaves until it fits (and leaves a small workspace at 0.2 m).
+TEST(RiskLayer, FittingOptionsHoldALargeWorkspace) {
+  const SpectralBasis basis(10000.0, 8000.0, 4);
+  GaussianComponent g;
+  g.mean_m = {5000.0, 4000.0};
+  try {
+    (void)RiskLayer(basis, RiskField(basis, {g}));
+    ADD_FAILURE() << "a 10 km workspace at 0.2 m was accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("16-bit keys"), std::string::npos) << e.what();
+  }
+  const RiskLayerOptions fitting = RiskLayerOptions::Fitting(10000.0, 8000.0);
+  RiskLayer layer(basis, RiskField(basis, {g}), fitting);
+  layer.SetExcess({9999.9, 7999.9}, 1.0);  // the far corner has a leaf
+  EXPECT_EQ(layer.Excess({9999.9, 7999.9}), 1.0);
+  EXPECT_GT(fitting.resolution_m, 0.2);
+  EXPECT_EQ(RiskLayerOptions::Fitting(49.0, 49.0).resolution_m, 0.2);
+}
+
 }  // namespace
 }  // namespace sage::maps
