@@ -322,7 +322,10 @@ int RiskLayer::Raise(const Eigen::Vector2d& centre_m, double radius_m, double de
       const Impl::Cell c{i, j};
       const Eigen::Vector2d centre = m.CentreOf(c);
       if ((centre - centre_m).squaredNorm() > radius_m * radius_m) continue;
-      if (m.blocked && m.blocked->Occupied(m.blocked->CellOf(centre).x(), m.blocked->CellOf(centre).y())) continue;
+      if (m.blocked) {
+        const Eigen::Vector2i in_grid = m.blocked->CellOf(centre);
+        if (m.blocked->Occupied(in_grid.x(), in_grid.y())) continue;
+      }
       const float before = m.Current(c);
       const float value = Impl::ToStored(before + delta_per_m2, "Raise");
       if (value == before) continue;

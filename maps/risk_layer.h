@@ -16,6 +16,8 @@
 // changed as there are: amortised O(1) per update, and the rounding of the running sums stays
 // that of a few additions.
 //
+// The risk lives in the leaves; inner nodes carry OctoMap's occupancy (brought up to date before
+// a write) and risk 0. One owner, one thread: the const accessors bring the caches up to date.
 // No DDS and no files: the tree is written to and read from streams.
 #include <cstdint>
 #include <iosfwd>
@@ -73,7 +75,9 @@ class RiskLayer {
 
   /// Sets the excess density (1/m^2, finite) of the leaf containing x_m, creating the leaf; the
   /// tree stores it as a float, so the layer uses the float. O(1) here; its phi_k share is paid
-  /// at the next coefficients(). Throws std::invalid_argument (one line) for a point outside
+  /// at the next coefficients(). The layer does not clip: an excess below minus the prior's
+  /// density makes the density negative there (the fusion that lowers leaves is to stop at the
+  /// prior's floor it wants). Throws std::invalid_argument (one line) for a point outside
   /// the workspace, a non-finite value, or a change that would leave the layer without positive
   /// mass (1 + E <= 0); the layer is then as it was.
   void SetExcess(const Eigen::Vector2d& x_m, double excess_per_m2);

@@ -22,7 +22,8 @@ class RiskOcTree;
 
 /// An occupancy node (log-odds, inherited) with the risk state of its cell: for the layer's
 /// leaves, the risk density added to the valves' prior (1/m^2, of a field whose prior has mass 1;
-/// negative lowers the prior). Any finite or non-finite float is kept as it is.
+/// negative lowers the prior; RiskLayer leaves inner nodes at 0). Any float, NaN included, is
+/// kept as it is.
 class RiskOcTreeNode : public octomap::OcTreeNode {
  public:
   friend class RiskOcTree;  // reaches the children, as ColorOcTree does
