@@ -1,5 +1,5 @@
-// The seabed OctoMap (see seabed_map.h). octomap is included only here, so the rest of the
-// code sees the map through SeabedMap and OccupancyGrid.
+// The seabed OctoMap (see seabed_map.h). octomap is included only here and in the risk layer's
+// files, so the rest of the code sees the maps through SeabedMap, OccupancyGrid and RiskLayer.
 #include "maps/seabed_map.h"
 
 #include <algorithm>
@@ -9,34 +9,12 @@
 #include <sstream>
 #include <stdexcept>
 
-#include <fcntl.h>
-#include <unistd.h>
-
 #include <octomap/OcTree.h>
+
+#include "maps/quiet_stderr.h"
 
 namespace sage::maps {
 namespace {
-
-// Debian's liboctomap is built with its debug prints on: writing a tree prints " done." to
-// stderr, which lands in the middle of a progress line. Silences fd 2 for its lifetime.
-class QuietStderr {
- public:
-  QuietStderr() : saved_(dup(STDERR_FILENO)) {
-    const int null = open("/dev/null", O_WRONLY | O_CLOEXEC);
-    if (saved_ >= 0 && null >= 0) dup2(null, STDERR_FILENO);
-    if (null >= 0) close(null);
-  }
-  ~QuietStderr() {
-    if (saved_ < 0) return;
-    dup2(saved_, STDERR_FILENO);
-    close(saved_);
-  }
-  QuietStderr(const QuietStderr&) = delete;
-  QuietStderr& operator=(const QuietStderr&) = delete;
-
- private:
-  int saved_;
-};
 
 // Indices k of the voxels (or cells) of size r whose centres (k + 1/2) r lie in [lo, hi]; the
 // tolerance keeps a centre lying exactly on an edge inside despite rounding.
@@ -121,7 +99,7 @@ std::string SeabedMap::BinaryBytes() const {
   std::ostringstream out;
   bool written = false;
   {
-    QuietStderr quiet;
+    detail::QuietStderr quiet;
     written = tree_->writeBinaryConst(out);
   }
   if (!written) throw std::runtime_error("SeabedMap: OctoMap could not serialise the seabed tree");

@@ -16,6 +16,7 @@
 
 #include <fmt/format.h>
 
+#include "maps/risk_layer.h"
 #include "server/report/atomic_write.h"
 #include "server/report/checkpoint.h"
 
@@ -36,7 +37,7 @@ constexpr const char* kFleetEventsHeader = "t,event,vehicle_id,name,detail\n";
 constexpr const char* kRiskEventsHeader = "t,valve,weight,share,source\n";
 constexpr const char* kRegionsHeader = "t,vehicle_id,name,x_m,y_m,width_m,height_m,order,valves\n";
 // The final set; metrics.json last, since "complete": true says the others are in place.
-constexpr const char* kFinalFiles[] = {"plot.svg", "seabed.bt", "scenario.yaml", "metrics.json"};
+constexpr const char* kFinalFiles[] = {"plot.svg", "seabed.bt", "risk.ot", "scenario.yaml", "metrics.json"};
 
 // A CSV field for free text: quoted, inner quotes doubled, control characters as spaces, so a
 // name or reason can never start a new line or a new column.
@@ -112,6 +113,12 @@ std::vector<std::pair<int, std::string>> Lines(const std::string& path) {
   return lines;
 }
 
+// The risk layer no mission feeds yet: the valves' prior with no leaf changed.
+std::string PriorLayerBytes(const maps::World& world) {
+  const maps::RiskLayerOptions options = maps::RiskLayerOptions::Fitting(world.basis().width_m(), world.basis().height_m());
+  return maps::RiskLayer::ForWorld(world, options).OtBytes();
+}
+
 }  // namespace
 
 RunDirectory::RunDirectory(std::string dir, const maps::Scenario& scenario, RunDirectoryOptions options)
@@ -119,7 +126,7 @@ RunDirectory::RunDirectory(std::string dir, const maps::Scenario& scenario, RunD
   PrepareRunDirectory(dir_);
   if (!options_.resume) {
     // A new mission: nothing of an earlier one in this directory may pass for its results.
-    for (const char* name : {"metrics.json", "plot.svg", "seabed.bt", kCheckpointFile}) {
+    for (const char* name : {"metrics.json", "plot.svg", "seabed.bt", "risk.ot", kCheckpointFile}) {
       std::error_code ignored;
       fs::remove(fs::path(dir_) / name, ignored);
     }
@@ -295,7 +302,8 @@ void RunDirectory::StartCheckpoint(const MissionCore& core, bool wait) {
   });
 }
 
-void RunDirectory::Finish(const MissionCore& core, const maps::World& world, double end_s, bool stopped_early) {
+void RunDirectory::Finish(const MissionCore& core, const maps::World& world, double end_s, bool stopped_early,
+                          const maps::RiskLayer* risk_layer) {
   if (checkpoint_write_.valid()) checkpoint_write_.get();
   Flush();
   const maps::Scenario ran = stopped_early ? maps::WithDuration(scenario_, end_s) : scenario_;
@@ -304,7 +312,9 @@ void RunDirectory::Finish(const MissionCore& core, const maps::World& world, dou
       fmt::format("{}: {} on '{}', {} vehicles, {:.0f} s", scenario_.name, ToString(core.controller()),
                   core.fleet().profile().name, core.roster().members().size(), end_s);
   const std::string contents[] = {PlotSvg(scenario_, core.fleet().schedule().back().weights, plot_, title),
-                                  world.seabed().BinaryBytes(), maps::EmitScenario(ran),
+                                  world.seabed().BinaryBytes(),
+                                  risk_layer ? risk_layer->OtBytes() : PriorLayerBytes(world),
+                                  maps::EmitScenario(ran),
                                   MetricsJson(core.Metrics(end_s), &info)};
   std::vector<std::string> paths;
   for (const char* name : kFinalFiles) paths.push_back((fs::path(dir_) / name).string());

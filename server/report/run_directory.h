@@ -3,9 +3,9 @@
 // process dies: trajectory.csv, fleet_events.csv and risk_events.csv are appended as things
 // happen and flushed at least every second (tail -f works); metrics.json is rewritten
 // atomically every few seconds with "complete": false, beside checkpoint.bin, the state a
-// resumed server starts from. At the end the final set (plot.svg, seabed.bt, scenario.yaml,
-// metrics.json with "complete": true) is written as temporaries and renamed into place with
-// metrics.json last, so a reader sees either the whole final set or the partial one.
+// resumed server starts from. At the end the final set (plot.svg, seabed.bt, risk.ot,
+// scenario.yaml, metrics.json with "complete": true) is written as temporaries and renamed into
+// place with metrics.json last, so a reader sees either the whole final set or the partial one.
 #include <chrono>
 #include <cstdint>
 #include <future>
@@ -18,6 +18,10 @@
 #include "server/mission_core.h"
 #include "server/report/report.h"
 #include "server/trajectory.h"
+
+namespace sage::maps {
+class RiskLayer;
+}
 
 namespace sage::server {
 
@@ -55,8 +59,11 @@ class RunDirectory final : public MissionRecorder {
   void Checkpoint(const MissionCore& core);
   /// The mission ended at end_s (the planned end, or earlier if stopped): flushes and writes the
   /// final set. Throws std::runtime_error naming the file that could not be written (the partial
-  /// set stays as it was).
-  void Finish(const MissionCore& core, const maps::World& world, double end_s, bool stopped_early);
+  /// set stays as it was). risk.ot is `risk_layer` as OctoMap .ot (a maps::RiskOcTree); without
+  /// one (no mission feeds a layer yet) it is the prior layer of `world`: the valves' field with
+  /// no leaf changed, a tree with no leaves.
+  void Finish(const MissionCore& core, const maps::World& world, double end_s, bool stopped_early,
+              const maps::RiskLayer* risk_layer = nullptr);
 
   const std::string& dir() const { return dir_; }
   /// Mission time of the last sample flushed to trajectory.csv (-1 before any).

@@ -14,6 +14,8 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include "maps/risk_layer.h"
+#include "maps/risk_octree.h"
 #include "server/mission.h"
 #include "server/report/checkpoint.h"
 #include "server/report/mission_file.h"
@@ -74,7 +76,7 @@ TEST_F(RunDirectoryTest, PartialWhileRunningCompleteAtTheEnd) {
   EXPECT_TRUE(done.complete);
   EXPECT_DOUBLE_EQ(done.recorded_until_s, 20.0);
   EXPECT_FALSE(done.has_checkpoint);
-  for (const char* name : {"plot.svg", "seabed.bt", "scenario.yaml", "metrics.json", "trajectory.csv",
+  for (const char* name : {"plot.svg", "seabed.bt", "risk.ot", "scenario.yaml", "metrics.json", "trajectory.csv",
                            "fleet_events.csv", "risk_events.csv"}) {
     EXPECT_TRUE(fs::exists(dir_ / name)) << name;
     EXPECT_FALSE(fs::exists(dir_ / (std::string(name) + ".tmp"))) << name;
@@ -105,6 +107,40 @@ TEST_F(RunDirectoryTest, FinalSetIsAllOrNothing) {
   EXPECT_FALSE(fs::exists(dir_ / "plot.svg"));
   EXPECT_FALSE(fs::exists(dir_ / "plot.svg.tmp"));
   EXPECT_FALSE(fs::exists(dir_ / "metrics.json.tmp"));
+}
+
+// risk.ot in the run directory loads back as the risk layer's tree type: without a layer it is
+// the prior layer (no leaf; a layer loading it has the valves' phi_k exactly); with one, every
+// leaf's excess comes back bit for bit and a layer loading it has the same phi_k (1e-12 relative).
+TEST_F(RunDirectoryTest, RiskOtLoadsBackAsTheRiskTree) {
+  const maps::Scenario s = maps::WithDuration(maps::LoadScenario(kTwoXt), 2.0);
+  for (const bool with_layer : {false, true}) {
+    fs::remove_all(dir_);
+    RunDirectory run(dir_.string(), s);
+    Mission mission(s, MissionOptions{"", ControllerKind::kErgodic, &run, false});
+    while (mission.Step()) run.Tick(mission.core());
+    maps::RiskLayer layer = maps::RiskLayer::ForWorld(mission.world());
+    layer.Raise(s.AllValves()[1].position_m, 0.8, 1.5);
+    layer.SetExcess({0.1, 0.1}, -0.25);
+    run.Finish(mission.core(), mission.world(), 2.0, false, with_layer ? &layer : nullptr);
+
+    std::ifstream in(dir_ / "risk.ot", std::ios::binary);
+    ASSERT_TRUE(in) << "no risk.ot";
+    const std::unique_ptr<maps::RiskOcTree> tree = maps::ReadRiskOcTree(in, (dir_ / "risk.ot").string());
+    EXPECT_EQ(tree->getTreeType(), "SageRiskOcTree");
+    EXPECT_EQ(tree->getResolution(), layer.resolution_m());
+    EXPECT_EQ(static_cast<std::int64_t>(tree->getNumLeafNodes()), with_layer ? layer.leaf_count() : 0);
+    for (auto it = tree->begin_leafs(), end = tree->end_leafs(); it != end; ++it) {
+      const Eigen::Vector2d inside(it.getX() - 0.25 * it.getSize(), it.getY() - 0.25 * it.getSize());
+      EXPECT_EQ(it->risk(), static_cast<float>(layer.Excess(inside)));
+    }
+    maps::RiskLayer loaded = maps::RiskLayer::ForWorld(mission.world());
+    std::ifstream again(dir_ / "risk.ot", std::ios::binary);
+    loaded.LoadExcess(again, "risk.ot");
+    const Eigen::VectorXd& expected = with_layer ? layer.coefficients() : mission.world().risk().coefficients();
+    EXPECT_LE((loaded.coefficients() - expected).cwiseAbs().maxCoeff(), 1e-12 * expected.cwiseAbs().maxCoeff())
+        << (with_layer ? "with" : "without") << " a layer";
+  }
 }
 
 // A resumed record is cut back to its last complete line (a crash can leave half a line) and
