@@ -395,6 +395,11 @@ double RiskLayer::Density(const Eigen::Vector2d& x_m) const {
   return (impl_->prior.Density(x_m) + Excess(x_m)) / (1.0 + impl_->mass_set);
 }
 
+std::string RiskLayer::PriorOnlyOtBytes(const RiskLayerOptions& options) {
+  options.Validate();
+  return WriteRiskOcTree(RiskOcTree(options.resolution_m));
+}
+
 std::string RiskLayer::OtBytes() const {
   if (impl_->inner_stale) {
     impl_->tree->updateInnerOccupancy();

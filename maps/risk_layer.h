@@ -109,6 +109,9 @@ class RiskLayer {
   const RiskOcTree& tree() const;
   /// The tree as OctoMap .ot bytes (AbstractOcTree::write; the run directory saves it as risk.ot).
   std::string OtBytes() const;
+  /// The .ot bytes of a layer with no leaf changed (the prior alone) at options' resolution,
+  /// without building one: the prior's cached coefficients are 1.1 GB on a 35,000-valve field.
+  static std::string PriorOnlyOtBytes(const RiskLayerOptions& options);
   /// Replaces every leaf's excess by those of a .ot stream of a RiskOcTree at this layer's
   /// resolution (a saved risk.ot), e.g. to resume. Throws std::runtime_error naming `what` if the
   /// stream is not one, or std::invalid_argument as SetExcess for a leaf it cannot take.

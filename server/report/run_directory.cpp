@@ -115,8 +115,8 @@ std::vector<std::pair<int, std::string>> Lines(const std::string& path) {
 
 // The risk layer no mission feeds yet: the valves' prior with no leaf changed.
 std::string PriorLayerBytes(const maps::World& world) {
-  const maps::RiskLayerOptions options = maps::RiskLayerOptions::Fitting(world.basis().width_m(), world.basis().height_m());
-  return maps::RiskLayer::ForWorld(world, options).OtBytes();
+  return maps::RiskLayer::PriorOnlyOtBytes(
+      maps::RiskLayerOptions::Fitting(world.basis().width_m(), world.basis().height_m()));
 }
 
 }  // namespace
