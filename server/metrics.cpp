@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <map>
+#include <memory>
 #include <stdexcept>
 #include <string>
 #include <utility>
@@ -191,6 +192,31 @@ void MetricsAccumulator::Retire(int vehicle) {
 
 void MetricsAccumulator::Advance(double time_s) { TakeCheckpointsBefore(time_s); }
 
+void MetricsAccumulator::LaunchCoverage() {
+  if (coverage_.queued() >= kCoverageBatch) coverage_.Launch(basis_, state_.sum_f);
+}
+
+// Logically const: the sums become what they are with every held sample in; an accumulator is
+// never defined const, so writing its sums here is defined.
+void MetricsAccumulator::SettleCoverage() const {
+  coverage_.Settle(basis_, const_cast<Eigen::VectorXd&>(state_.sum_f));
+}
+
+void MetricsAccumulator::CoverageBacklog::Launch(const maps::SpectralBasis& basis, Eigen::VectorXd& sums) {
+  Wait();
+  auto batch = std::make_shared<std::vector<std::pair<Eigen::Vector2d, double>>>(std::move(queued_));
+  queued_.clear();
+  job_ = std::async(std::launch::async, [batch, &basis, &sums] {
+           for (const auto& [x, dt] : *batch) basis.AddScaled(x, dt, sums);
+         }).share();
+}
+
+void MetricsAccumulator::CoverageBacklog::Settle(const maps::SpectralBasis& basis, Eigen::VectorXd& sums) const {
+  Wait();
+  for (const auto& [x, dt] : queued_) basis.AddScaled(x, dt, sums);
+  queued_.clear();
+}
+
 double MetricsAccumulator::latest_metric() const {
   return state_.metric_over_time.empty() ? kNaN : state_.metric_over_time.back().ergodic_metric;
 }
@@ -203,6 +229,7 @@ void MetricsAccumulator::Restore(State state, VisitTracker visits) {
   for (const WeightChange& change : state.schedule) phi_.push_back(risk_.CoefficientsFor(change.weights));
   pending_at_.Forget();
   held_at_.Forget();
+  coverage_.Drop();
   state_ = std::move(state);
   visits_ = std::move(visits);
 }
@@ -228,7 +255,9 @@ void MetricsAccumulator::Hold(const TrajectorySample& sample, double dt_s) {
   } else if (to_edge <= options_.boundary_margin_m) {
     state_.time_pinned_s += dt_s;
   }
-  basis_.AddScaled(p, dt_s, state_.sum_f);
+  coverage_.Queue(p, dt_s);
+  // A reader of recorded samples that never launches: the queue stays within a few batches.
+  if (coverage_.queued() >= 64 * kCoverageBatch) coverage_.Settle(basis_, state_.sum_f);
   state_.sum_dt += dt_s;
   const LastHeld held{sample.time_s, sample.time_s + dt_s, p};
   const auto at = held_at_.Find(state_.last_held, sample.vehicle);
@@ -262,6 +291,7 @@ double MetricsAccumulator::MedianSpacing() const {
 // held sample running past it counts only up to it; a sample whose hold is not known yet counts
 // for the median spacing, also only up to time_s.
 double MetricsAccumulator::MetricAt(double time_s) const {
+  SettleCoverage();
   Eigen::VectorXd covered = state_.sum_f;
   double covered_dt = state_.sum_dt;
   for (const auto& [vehicle, held] : state_.last_held) {
@@ -300,6 +330,7 @@ MissionMetrics MetricsAccumulator::Result(double end_s) const {
     throw maps::ScenarioError(fmt::format("metrics: mission length = {}: must be finite and > 0", end_s));
   }
   if (state_.schedule.empty()) throw std::logic_error("MetricsAccumulator: no weights");
+  SettleCoverage();
   // Finish a copy: each vehicle's last sample holds for the median spacing, clipped to the end.
   MetricsAccumulator done = *this;
   const double median = done.MedianSpacing();

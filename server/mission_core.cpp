@@ -245,6 +245,7 @@ void MissionCore::RecordSamples() {
     return a.time_s != b.time_s ? a.time_s < b.time_s : a.vehicle < b.vehicle;
   });
   for (const TrajectorySample& s : samples_) metrics_.Add(s);
+  metrics_.LaunchCoverage();  // the fleet's coverage figure, on a helper thread while vehicles move
   if (recorder_ != nullptr && !samples_.empty()) {
     const std::map<int, Roster::Member>& members = roster_.members();
     std::vector<const std::string*> names(members.size(), nullptr);

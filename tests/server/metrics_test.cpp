@@ -276,6 +276,45 @@ TEST(ComputeMetrics, CoverageIsTheTimeAverageUpToEachCheckpoint) {
   EXPECT_NEAR(m.ergodic_metric, at_end, 1e-9 * at_end);
 }
 
+// A fleet's samples with the coverage added on the helper thread a cycle at a time
+// (LaunchCoverage, batches over kCoverageBatch) and read mid-way (a checkpoint's state, a
+// partial result) give bit for bit the figures of adding each sample at once: the sums, the
+// metric over time and the final metric, exactly equal.
+TEST(MetricsAccumulator, CoverageOnTheHelperThreadIsBitForBitTheSame) {
+  const maps::Scenario scenario = MakeScenario({{3, 5}, {9, 5}, {6, 2}});
+  const maps::SpectralBasis basis(12, 10, 20);
+  const maps::RiskField field = maps::RiskField::ForScenario(scenario, basis);
+  MetricsAccumulator launched(scenario, basis, field), inline_(scenario, basis, field);
+  for (MetricsAccumulator* m : {&launched, &inline_}) m->OnWeights(0.0, Eigen::Vector3d(0.5, 0.3, 0.2));
+  std::mt19937_64 rng(3);
+  std::uniform_real_distribution<double> x(0.0, 12.0), y(0.0, 10.0);
+  const int vehicles = static_cast<int>(MetricsAccumulator::kCoverageBatch) + 100;
+  for (int cycle = 0; cycle < 40; ++cycle) {
+    const double t = 0.1 * cycle;
+    for (int v = 0; v < vehicles; ++v) {
+      const TrajectorySample sample{t, v, Eigen::Vector2d(x(rng), y(rng))};
+      launched.Add(sample);
+      inline_.Add(sample);
+    }
+    launched.LaunchCoverage();
+    for (MetricsAccumulator* m : {&launched, &inline_}) m->Advance(t);
+    if (cycle == 17) {
+      const MetricsAccumulator::State& a = launched.state();
+      const MetricsAccumulator::State& b = inline_.state();
+      ASSERT_EQ(a.sum_f.size(), b.sum_f.size());
+      for (Eigen::Index k = 0; k < a.sum_f.size(); ++k) ASSERT_EQ(a.sum_f[k], b.sum_f[k]) << "k " << k;
+      EXPECT_EQ(launched.Result(1.7).ergodic_metric, inline_.Result(1.7).ergodic_metric);
+    }
+  }
+  const MissionMetrics a = launched.Result(4.0), b = inline_.Result(4.0);
+  ASSERT_EQ(a.metric_over_time.size(), b.metric_over_time.size());
+  ASSERT_GE(a.metric_over_time.size(), 3u);
+  for (std::size_t i = 0; i < a.metric_over_time.size(); ++i)
+    EXPECT_EQ(a.metric_over_time[i].ergodic_metric, b.metric_over_time[i].ergodic_metric) << "checkpoint " << i;
+  EXPECT_EQ(a.ergodic_metric, b.ergodic_metric);
+  EXPECT_GT(a.ergodic_metric, 0.0);
+}
+
 // 1 s in the middle, 2 s beyond the left edge, 3 s 0.1 m from the right edge, 0.5 s above the
 // top: 2.5 s outside and 3 s pinned (margin 0.2 m); a sample after the end does not count.
 // Tolerance 1e-9 s.
