@@ -40,7 +40,8 @@ double Drag(double linear, double quadratic, double x) { return (linear + quadra
 struct PhysicsWorld::Vehicle {
   VehicleId id = -1;
   maps::MotionModel model = maps::MotionModel::kBlueRov2;
-  b2Body* body = nullptr;  // owned by world_
+  b2Body* body = nullptr;  // owned by worlds_[shard]
+  int shard = 0;
   Eigen::Vector2d command_mps = Eigen::Vector2d::Zero();
   // Single integrator: the pose is integrated here in double (x += u dt) and copied into Box2D,
   // so x' = u holds exactly rather than to Box2D's float precision.
@@ -51,23 +52,29 @@ struct PhysicsWorld::Vehicle {
 };
 
 PhysicsWorld::PhysicsWorld(const maps::Workspace& /*workspace*/,
-                           const std::vector<maps::ChristmasTree>& structures, BlueRov2Params rov_params)
-    : rov_params_(rov_params), world_(std::make_unique<b2World>(b2Vec2(0.0f, 0.0f))) {
-  // The workspace box has no walls: vehicles may leave it and the metrics count that.
-  // Forces are re-applied every step, so nothing may fall asleep between commands.
-  world_->SetAllowSleeping(false);
-  // No continuous collision: a BlueROV2 moves at most ~0.9 m/s, 1.8 cm a 50 Hz step against a
-  // 0.46 m hull and metre-wide structures, so nothing can tunnel, and Box2D's time-of-impact
-  // pass over every vehicle was a fifth of the physics at 10,000 vehicles.
-  world_->SetContinuousPhysics(false);
-  for (const maps::ChristmasTree& tree : structures) {
-    b2BodyDef def;
-    def.type = b2_staticBody;
-    def.position.Set(static_cast<float>(tree.center_m.x()), static_cast<float>(tree.center_m.y()));
-    b2Body* body = world_->CreateBody(&def);
-    b2PolygonShape box;
-    box.SetAsBox(static_cast<float>(0.5 * tree.size_m.x()), static_cast<float>(0.5 * tree.size_m.y()));
-    body->CreateFixture(&box, 0.0f);
+                           const std::vector<maps::ChristmasTree>& structures, BlueRov2Params rov_params, int shards)
+    : rov_params_(rov_params) {
+  if (shards < 1) throw std::invalid_argument("PhysicsWorld: shards = " + std::to_string(shards) + ": must be >= 1");
+  for (int k = 0; k < shards; ++k) {
+    auto world = std::make_unique<b2World>(b2Vec2(0.0f, 0.0f));
+    // The workspace box has no walls: vehicles may leave it and the metrics count that.
+    // Forces are re-applied every step, so nothing may fall asleep between commands.
+    world->SetAllowSleeping(false);
+    // No continuous collision: a BlueROV2 moves at most ~0.9 m/s, 1.8 cm a 50 Hz step against a
+    // 0.46 m hull and metre-wide structures, so nothing can tunnel, and Box2D's time-of-impact
+    // pass over every vehicle was a fifth of the physics at 10,000 vehicles.
+    world->SetContinuousPhysics(false);
+    // Every shard holds every structure: a vehicle meets the seabed's XTs whichever it is in.
+    for (const maps::ChristmasTree& tree : structures) {
+      b2BodyDef def;
+      def.type = b2_staticBody;
+      def.position.Set(static_cast<float>(tree.center_m.x()), static_cast<float>(tree.center_m.y()));
+      b2Body* body = world->CreateBody(&def);
+      b2PolygonShape box;
+      box.SetAsBox(static_cast<float>(0.5 * tree.size_m.x()), static_cast<float>(0.5 * tree.size_m.y()));
+      body->CreateFixture(&box, 0.0f);
+    }
+    worlds_.push_back(std::move(world));
   }
 }
 
@@ -79,6 +86,8 @@ VehicleId PhysicsWorld::AddVehicle(const maps::VehicleSpec& spec) {
   vehicle.model = spec.model;
   vehicle.position_m = spec.start_m;
   vehicle.heading_rad = WrapAngle(spec.start_heading_rad);
+  vehicle.shard = static_cast<int>(vehicle.id % static_cast<VehicleId>(worlds_.size()));
+  b2World& world = *worlds_[static_cast<std::size_t>(vehicle.shard)];
 
   b2BodyDef def;
   def.position.Set(static_cast<float>(spec.start_m.x()), static_cast<float>(spec.start_m.y()));
@@ -89,10 +98,10 @@ VehicleId PhysicsWorld::AddVehicle(const maps::VehicleSpec& spec) {
     // Kinematic and without a fixture: the paper's point model passes through structures and
     // vehicles and pushes nothing.
     def.type = b2_kinematicBody;
-    vehicle.body = world_->CreateBody(&def);
+    vehicle.body = world.CreateBody(&def);
   } else {
     def.type = b2_dynamicBody;
-    vehicle.body = world_->CreateBody(&def);
+    vehicle.body = world.CreateBody(&def);
     const BlueRov2Params& p = rov_params_;
     // Box2D mass is isotropic, so surge and sway added mass are averaged:
     //   m_eff = m + (X_udot + Y_vdot) / 2   (20.24 kg for the Heavy; 19.86 / 20.62 per axis).
@@ -120,7 +129,7 @@ VehicleId PhysicsWorld::AddVehicle(const maps::VehicleSpec& spec) {
 
 void PhysicsWorld::RemoveVehicle(VehicleId id) {
   Vehicle& vehicle = Find(id);
-  world_->DestroyBody(vehicle.body);
+  worlds_[static_cast<std::size_t>(vehicle.shard)]->DestroyBody(vehicle.body);
   vehicles_.erase(vehicles_.begin() + (&vehicle - vehicles_.data()));
 }
 
@@ -200,24 +209,34 @@ void PhysicsWorld::ApplyBlueRov2Forces(Vehicle& vehicle) {
 }
 
 void PhysicsWorld::Step(double dt_s) {
-  for (Vehicle& vehicle : vehicles_) {
-    if (vehicle.model == maps::MotionModel::kBlueRov2) {
-      ApplyBlueRov2Forces(vehicle);
-    } else {
-      const Eigen::Vector2d& u = vehicle.command_mps;
-      vehicle.body->SetLinearVelocity(b2Vec2(static_cast<float>(u.x()), static_cast<float>(u.y())));
+  for (int k = 0; k < shard_count(); ++k) StepShard(k, dt_s, 1);
+}
+
+int PhysicsWorld::shard_count() const { return static_cast<int>(worlds_.size()); }
+
+void PhysicsWorld::StepShard(int shard, double dt_s, int steps) {
+  b2World& world = *worlds_.at(static_cast<std::size_t>(shard));
+  for (int step = 0; step < steps; ++step) {
+    for (Vehicle& vehicle : vehicles_) {
+      if (vehicle.shard != shard) continue;
+      if (vehicle.model == maps::MotionModel::kBlueRov2) {
+        ApplyBlueRov2Forces(vehicle);
+      } else {
+        const Eigen::Vector2d& u = vehicle.command_mps;
+        vehicle.body->SetLinearVelocity(b2Vec2(static_cast<float>(u.x()), static_cast<float>(u.y())));
+      }
     }
-  }
-  world_->Step(static_cast<float>(dt_s), kVelocityIterations, kPositionIterations);
-  for (Vehicle& vehicle : vehicles_) {
-    if (vehicle.model != maps::MotionModel::kSingleIntegrator) continue;
-    const Eigen::Vector2d& u = vehicle.command_mps;
-    vehicle.position_m += u * dt_s;  // x' = u, explicit Euler is exact for a held command
-    vehicle.velocity_mps = u;
-    if (u.squaredNorm() > 0.0) vehicle.heading_rad = std::atan2(u.y(), u.x());
-    vehicle.body->SetTransform(
-        b2Vec2(static_cast<float>(vehicle.position_m.x()), static_cast<float>(vehicle.position_m.y())),
-        static_cast<float>(vehicle.heading_rad));
+    world.Step(static_cast<float>(dt_s), kVelocityIterations, kPositionIterations);
+    for (Vehicle& vehicle : vehicles_) {
+      if (vehicle.shard != shard || vehicle.model != maps::MotionModel::kSingleIntegrator) continue;
+      const Eigen::Vector2d& u = vehicle.command_mps;
+      vehicle.position_m += u * dt_s;  // x' = u, explicit Euler is exact for a held command
+      vehicle.velocity_mps = u;
+      if (u.squaredNorm() > 0.0) vehicle.heading_rad = std::atan2(u.y(), u.x());
+      vehicle.body->SetTransform(
+          b2Vec2(static_cast<float>(vehicle.position_m.x()), static_cast<float>(vehicle.position_m.y())),
+          static_cast<float>(vehicle.heading_rad));
+    }
   }
 }
 

@@ -43,8 +43,12 @@ struct BlueRov2Params {
 
 class PhysicsWorld {
  public:
+  /// shards (>= 1): how many Box2D worlds the vehicles are dealt over, vehicle id mod shards, each
+  /// holding every structure. Vehicles of one shard collide with each other; vehicles of
+  /// different shards pass through each other (guidance keeps them apart, as it keeps apart the
+  /// vehicles of different agent hosts), so the shards can be stepped on different threads.
   PhysicsWorld(const maps::Workspace& workspace, const std::vector<maps::ChristmasTree>& structures,
-               BlueRov2Params rov_params = {});
+               BlueRov2Params rov_params = {}, int shards = 1);
   ~PhysicsWorld();
   PhysicsWorld(const PhysicsWorld&) = delete;
   PhysicsWorld& operator=(const PhysicsWorld&) = delete;
@@ -57,8 +61,13 @@ class PhysicsWorld {
 
   /// Desired world-frame velocity (m/s), held until the next call.
   void SetVelocityCommand(VehicleId id, const Eigen::Vector2d& velocity_mps);
-  /// Applies drag and thrust to every BlueROV2, then advances Box2D by dt_s.
+  /// Applies drag and thrust to every BlueROV2, then advances Box2D by dt_s (every shard).
   void Step(double dt_s);
+  int shard_count() const;
+  /// `steps` times: drag and thrust on the shard's BlueROV2s, then its Box2D world advanced by
+  /// dt_s. Shards share nothing but the (read-only) parameters: different shards may be stepped
+  /// on different threads at once, and the result is the same as stepping them one by one.
+  void StepShard(int shard, double dt_s, int steps);
   VehicleState State(VehicleId id) const;
   /// Thrust the BlueROV2 velocity controller applied in the last Step, body frame:
   /// (surge N, sway N, yaw N m), within the thrust limits; zero for a single integrator.
@@ -73,7 +82,7 @@ class PhysicsWorld {
   void ApplyBlueRov2Forces(Vehicle& vehicle);
 
   BlueRov2Params rov_params_;
-  std::unique_ptr<b2World> world_;
+  std::vector<std::unique_ptr<b2World>> worlds_;  // the shards
   std::vector<Vehicle> vehicles_;  // sorted by id
   VehicleId next_id_ = 0;
 };

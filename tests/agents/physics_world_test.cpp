@@ -7,6 +7,8 @@
 #include <cmath>
 #include <numbers>
 #include <stdexcept>
+#include <thread>
+#include <vector>
 
 #include <gtest/gtest.h>
 
@@ -154,6 +156,69 @@ TEST(PhysicsWorld, BlueRov2sDoNotOverlap) {
   }
   EXPECT_LT(worst, 0.02);
   EXPECT_GT(worst, -0.05);  // they did meet
+}
+
+// Shards: vehicle ids dealt over the Box2D worlds (id mod shards). Driven head on, two
+// BlueROV2s of one shard (ids 0 and 2 of two) meet and stay a hull apart (> 0.4 m between
+// centres); two of different shards (ids 0 and 1) pass through each other (< 0.1 m), and each
+// then stops at the XT ahead of it (0.05 m), which every shard holds.
+TEST(PhysicsWorld, ShardsCollideWithinAndPassThroughAcross) {
+  const BlueRov2Params p;
+  const std::vector<maps::ChristmasTree> trees{Tree({12.0, 5.0}, {1.5, 1.5}), Tree({-3.0, 5.0}, {1.5, 1.5})};
+  for (const bool same_shard : {true, false}) {
+    PhysicsWorld world({}, trees, {}, 2);
+    ASSERT_EQ(world.shard_count(), 2);
+    const VehicleId a = world.AddVehicle(Spec(maps::MotionModel::kBlueRov2, {3.0, 5.0}, 0.0));
+    if (same_shard) world.AddVehicle(Spec(maps::MotionModel::kBlueRov2, {30.0, 30.0}));  // id 1, parked
+    const VehicleId b = world.AddVehicle(Spec(maps::MotionModel::kBlueRov2, {6.0, 5.0}, std::numbers::pi));
+    world.SetVelocityCommand(a, {0.8, 0.0});
+    world.SetVelocityCommand(b, {-0.8, 0.0});
+    double closest = 1e9;
+    for (int n = 0; n < 1000; ++n) {
+      world.Step(kDt);
+      closest = std::min(closest, (world.State(a).position_m - world.State(b).position_m).norm());
+    }
+    if (same_shard) {
+      EXPECT_GT(closest, 0.4) << "one shard: the hulls meet";
+    } else {
+      EXPECT_LT(closest, 0.1) << "two shards: they pass through each other";
+      EXPECT_NEAR(world.State(a).position_m.x(), 11.25 - 0.5 * p.length_m, 0.05);
+      EXPECT_NEAR(world.State(b).position_m.x(), -2.25 + 0.5 * p.length_m, 0.05);
+    }
+  }
+}
+
+// Stepping the shards one at a time, in any order, on other threads, gives what Step gives: the
+// shards share nothing. 40 BlueROV2s over 3 shards, crowded round two XTs, 5 s; states equal
+// bit for bit.
+TEST(PhysicsWorld, ShardsSteppedApartMatchStepTogether) {
+  const std::vector<maps::ChristmasTree> trees{Tree({5.0, 5.0}, {1.5, 1.5}), Tree({9.0, 6.0}, {2.0, 1.0})};
+  PhysicsWorld together({}, trees, {}, 3), apart({}, trees, {}, 3);
+  std::vector<VehicleId> ids;
+  for (int k = 0; k < 40; ++k) {
+    const Eigen::Vector2d start(1.0 + 0.6 * (k % 8), 1.0 + 0.9 * (k / 8));
+    ids.push_back(together.AddVehicle(Spec(maps::MotionModel::kBlueRov2, start, 0.3 * k)));
+    apart.AddVehicle(Spec(maps::MotionModel::kBlueRov2, start, 0.3 * k));
+  }
+  for (int cycle = 0; cycle < 50; ++cycle) {
+    for (int k = 0; k < 40; ++k) {
+      const Eigen::Vector2d command(0.7 * std::cos(0.1 * cycle + k), 0.7 * std::sin(0.13 * cycle - k));
+      together.SetVelocityCommand(ids[k], command);
+      apart.SetVelocityCommand(ids[k], command);
+    }
+    for (int s = 0; s < 5; ++s) together.Step(kDt);
+    std::thread other([&] { apart.StepShard(2, kDt, 5); });
+    apart.StepShard(1, kDt, 5);
+    other.join();
+    apart.StepShard(0, kDt, 5);
+  }
+  for (VehicleId id : ids) {
+    const VehicleState x = together.State(id), y = apart.State(id);
+    ASSERT_EQ(x.position_m, y.position_m) << "vehicle " << id;
+    ASSERT_EQ(x.heading_rad, y.heading_rad) << "vehicle " << id;
+    ASSERT_EQ(x.velocity_mps, y.velocity_mps) << "vehicle " << id;
+  }
+  EXPECT_THROW(PhysicsWorld({}, trees, {}, 0), std::invalid_argument);
 }
 
 // Commanded along +y from heading 0, the vehicle faces +y within 3 s (0.05 rad).
