@@ -321,39 +321,10 @@ double GridDistance(const maps::OccupancyGrid& grid, const Eigen::Vector2d& from
   const std::optional<Cell> start = SnapToFree(grid, from);
   const std::optional<Cell> goal = SnapToFree(grid, to);
   if (!start || !goal) return kInf;
-  if (grid.RectangleFree(*start, *goal) || ReachableAtOctileCost(grid, *start, *goal)) {
-    return Octile(goal->x() - start->x(), goal->y() - start->y()).Metres(grid.resolution_m());
-  }
+  if (grid.RectangleFree(*start, *goal)) return Octile(goal->x() - start->x(), goal->y() - start->y()).Metres(grid.resolution_m());
   GridSteps cost;
   if (AStar(grid, *start, *goal, &cost).empty()) return kInf;
   return cost.Metres(grid.resolution_m());
-}
-
-bool ReachableAtOctileCost(const maps::OccupancyGrid& grid, const Eigen::Vector2i& a, const Eigen::Vector2i& b) {
-  const int dx = std::abs(b.x() - a.x()), dy = std::abs(b.y() - a.y());
-  const int sx = b.x() >= a.x() ? 1 : -1, sy = b.y() >= a.y() ? 1 : -1;
-  const auto free = [&](int i, int j) { return !grid.Occupied(a.x() + sx * i, a.y() + sy * j); };
-  // most[j]: the most diagonal steps of a free path toward b from a to (i, j), -1 if none; rows
-  // of i kept two at a time.
-  thread_local std::vector<int> previous, current;
-  previous.assign(static_cast<std::size_t>(dy) + 1, -1);
-  current.assign(static_cast<std::size_t>(dy) + 1, -1);
-  for (int i = 0; i <= dx; ++i) {
-    for (int j = 0; j <= dy; ++j) {
-      int most = -1;
-      if (free(i, j)) {
-        if (i == 0 && j == 0) most = 0;
-        if (i > 0) most = std::max(most, previous[j]);
-        if (j > 0) most = std::max(most, current[j - 1]);
-        if (i > 0 && j > 0 && previous[j - 1] >= 0 && free(i - 1, j) && free(i, j - 1)) {
-          most = std::max(most, previous[j - 1] + 1);
-        }
-      }
-      current[j] = most;
-    }
-    std::swap(previous, current);
-  }
-  return previous[dy] == std::min(dx, dy);
 }
 
 double PathLength(const std::vector<Eigen::Vector2d>& path) {

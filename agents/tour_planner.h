@@ -20,15 +20,6 @@ std::vector<Eigen::Vector2d> PlanGridPath(const maps::OccupancyGrid& grid, const
 /// r (a + b sqrt(2)) for a orthogonal and b diagonal steps; infinity if unreachable.
 double GridDistance(const maps::OccupancyGrid& grid, const Eigen::Vector2d& from, const Eigen::Vector2d& to);
 
-/// True if the shortest 8-connected path from cell a to cell b (PlanGridPath's moves: a diagonal
-/// only past two free cells) costs the obstacle-free octile distance r (max + (sqrt 2 - 1) min of
-/// |dx|, |dy|). Every path of that cost moves only toward b and takes min(|dx|, |dy|) diagonal
-/// steps (any other path has more steps), so a dynamic programme over the rectangle of a and b
-/// (the most diagonal steps of a free path toward b to each cell) decides it exactly, in
-/// O(|dx| |dy|) with no search. On a fleet's fields most valve pairs whose rectangle holds some
-/// structure still have one (57 % of 250,000 on the 10,000-XT field). False if a or b is occupied.
-bool ReachableAtOctileCost(const maps::OccupancyGrid& grid, const Eigen::Vector2i& a, const Eigen::Vector2i& b);
-
 double PathLength(const std::vector<Eigen::Vector2d>& path);
 
 struct Tour {
