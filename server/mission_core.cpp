@@ -99,8 +99,13 @@ MissionCore::MissionCore(maps::World& world, const maps::Scenario& scenario, con
 bool MissionCore::OnState(const agents::StateReport& s) {
   const bool finite = s.state.position_m.allFinite() && s.state.velocity_mps.allFinite() &&
                       std::isfinite(s.state.heading_rad) && s.command_mps.allFinite() && std::isfinite(s.time_s);
-  if (!finite || s.id < 0 || s.time_s < 0.0 || s.time_s > std::max(time_s_, clock_s_) + kMaxStateLead_s) {
-    ++rejected_;
+  const char* refusal = !finite                                                      ? "state not finite"
+                        : s.id < 0                                                     ? "state of no vehicle (id < 0)"
+                        : s.time_s < 0.0                                               ? "state before the mission"
+                        : s.time_s > std::max(time_s_, clock_s_) + kMaxStateLead_s ? "state ahead of the clock"
+                                                                                       : nullptr;
+  if (refusal != nullptr) {
+    rejected_.Count(refusal, fmt::format("vehicle {}", s.id));
     return false;
   }
   const Roster::Member* known = roster_.Find(s.id);
@@ -150,9 +155,13 @@ void MissionCore::OnVehicleGone(int id, bool lost) {
 
 bool MissionCore::OnCoverage(const agents::CoverageMessage& c) {
   const maps::CoverageReport& r = c.report;
-  if (!r.sums.allFinite() || !std::isfinite(r.kernel_time_s) || r.kernel_time_s < 0.0 || !std::isfinite(r.stamp_s) ||
-      r.stamp_s > std::max(time_s_, clock_s_) + kMaxStateLead_s) {
-    ++rejected_;
+  const char* refusal =
+      !r.sums.allFinite() || !std::isfinite(r.kernel_time_s) || !std::isfinite(r.stamp_s) ? "coverage not finite"
+      : r.kernel_time_s < 0.0                                                            ? "coverage of negative time"
+      : r.stamp_s > std::max(time_s_, clock_s_) + kMaxStateLead_s                     ? "coverage ahead of the clock"
+                                                                                         : nullptr;
+  if (refusal != nullptr) {
+    rejected_.Count(refusal, fmt::format("vehicle {}", c.id));
     return false;
   }
   return fleet_.OnCoverage(c.id, r.seq, r.stamp_s, r.kernel_time_s, r.sums);
@@ -561,7 +570,9 @@ MissionCheckpoint MissionCore::Checkpoint() const {
   c.metrics = metrics_.state();
   c.disarmed = metrics_.visits().disarmed();
   c.visit_times = metrics_.visits().visit_times();
-  c.rejected_samples = rejected_;
+  c.rejected_samples = rejected_.total();
+  c.rejected_by_kind = rejected_.by_kind();
+  c.rejected_by_sender = rejected_.by_sender();
   return c;
 }
 
@@ -585,7 +596,10 @@ void MissionCore::Restore(const MissionCheckpoint& c) {
   fleet_.UseVisits(&metrics_.visits());
   cycle_ = c.cycle;
   time_s_ = c.time_s;
-  rejected_ = c.rejected_samples;
+  // A checkpoint of before the counts had kinds: the total as one kind.
+  std::map<std::string, std::size_t> by_kind = c.rejected_by_kind;
+  if (by_kind.empty() && c.rejected_samples > 0) by_kind["refused (kind not recorded)"] = c.rejected_samples;
+  rejected_.Restore(c.rejected_samples, std::move(by_kind), c.rejected_by_sender);
   risk_recorded_ = risk_measured_ = fleet_.responses().size();
   schedule_seen_ = fleet_.schedule().size();
   last_assignment_.clear();

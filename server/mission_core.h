@@ -22,6 +22,7 @@
 #include "server/fleet_server.h"
 #include "server/metrics.h"
 #include "server/roster.h"
+#include "server/rejections.h"
 #include "server/sender_limits.h"
 #include "server/trajectory.h"
 
@@ -95,6 +96,7 @@ struct MissionCheckpoint {
   std::vector<std::vector<int>> disarmed;            ///< valves each vehicle has disarmed [vehicle] (ascending)
   std::vector<std::vector<double>> visit_times;       ///< [valve]
   std::size_t rejected_samples = 0;
+  std::map<std::string, std::size_t> rejected_by_kind, rejected_by_sender;  ///< RejectionCounts' parts
 };
 
 class MissionCore {
@@ -152,7 +154,9 @@ class MissionCore {
   double ergodic_metric() const { return metrics_.latest_metric(); }
   /// Metrics of [0, end_s] as they stand; events answered (time to next visit, intervals).
   MissionMetrics Metrics(double end_s) const;
-  std::size_t rejected_samples() const { return rejected_; }
+  std::size_t rejected_samples() const { return rejected_.total(); }
+  /// The inputs refused at the door, per kind and per sender.
+  const RejectionCounts& rejections() const { return rejected_; }
 
   MissionCheckpoint Checkpoint() const;
   /// Takes a checkpoint's state. Throws maps::ScenarioError if it is of another scenario.
@@ -204,7 +208,7 @@ class MissionCore {
   std::size_t risk_recorded_ = 0;  // risk changes handed to the recorder
   std::size_t risk_measured_ = 0;  // risk changes whose heading change is being measured
   std::size_t schedule_seen_ = 0;  // weight schedule entries handed to the metrics
-  std::size_t rejected_ = 0;
+  RejectionCounts rejected_;
   SenderLimits risk_limits_{kRiskUpdatesPerSecond, kRiskUpdateBurst};
   std::int64_t cycle_ = -1;
   double time_s_ = 0.0;

@@ -462,9 +462,10 @@ int RunServerNode(const maps::Scenario& scenario, const ServerNodeOptions& optio
     ++cycles_run;
     if (cycle % 5 == 0) publish_status(cycle, t, false);
     if (options.show_progress && cycle % std::max<std::int64_t>(1, cycles_total / 20) == 0) {
-      std::fprintf(stderr, "server  t = %5.0f / %.0f s  vehicles %zu (lost %zu)  metric %.2e  cycle %.2f ms\n", t,
+      std::fprintf(stderr, "server  t = %5.0f / %.0f s  vehicles %zu (lost %zu)  metric %.2e  cycle %.2f ms%s\n", t,
                    scenario.duration_s, core.roster().alive_count(), core.roster().lost_count(), core.ergodic_metric(),
-                   last_cycle_ms);
+                   last_cycle_ms,
+                   core.rejected_samples() > 0 ? ("  rejected " + core.rejections().Summary()).c_str() : "");
     }
   }
   const bool stopped_early = cycle <= cycles_total;

@@ -199,7 +199,8 @@ std::vector<std::uint8_t> EncodeCheckpoint(const MissionCheckpoint& c) {
   const Json j = {{"format", "sage-checkpoint"}, {"version", kFormatVersion}, {"scenario_hash", c.scenario_hash},
                   {"profile", c.profile}, {"controller", c.controller}, {"cycle", c.cycle}, {"t", c.time_s},
                   {"fleet", FleetJson(c.fleet)}, {"roster", RosterJson(c.roster)}, {"metrics", MetricsStateJson(c.metrics)},
-                  {"disarmed", c.disarmed}, {"visit_times", visits}, {"rejected", c.rejected_samples}};
+                  {"disarmed", c.disarmed}, {"visit_times", visits}, {"rejected", c.rejected_samples},
+                  {"rejected_by_kind", c.rejected_by_kind}, {"rejected_by_sender", c.rejected_by_sender}};
   return Json::to_cbor(j);
 }
 
@@ -221,6 +222,10 @@ MissionCheckpoint DecodeCheckpoint(const std::vector<std::uint8_t>& bytes, const
     c.disarmed = j.at("disarmed").get<std::vector<std::vector<int>>>();
     for (const Json& v : j.at("visit_times")) c.visit_times.push_back(ToDoubles(v));
     c.rejected_samples = j.at("rejected").get<std::size_t>();
+    if (j.contains("rejected_by_kind")) {  // older checkpoints have the total only
+      c.rejected_by_kind = j.at("rejected_by_kind").get<std::map<std::string, std::size_t>>();
+      c.rejected_by_sender = j.at("rejected_by_sender").get<std::map<std::string, std::size_t>>();
+    }
     return c;
   } catch (const std::exception& e) {  // nlohmann's parse, type and out-of-range errors
     throw maps::ScenarioError(fmt::format("{}: not a readable checkpoint: {}", source, e.what()));

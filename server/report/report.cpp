@@ -258,6 +258,8 @@ std::string MetricsJson(const MissionMetrics& metrics, const RunInfo* info) {
     json["planned_duration_s"] = number(info->planned_duration_s);
     json["stopped_early"] = info->stopped_early;
     json["rejected_samples"] = info->rejected_samples;
+    json["rejected_by_kind"] = info->rejected_by_kind;
+    json["rejected_by_sender"] = info->rejected_by_sender;
     json["transport"] = info->transport;
     json["resumes"] = info->resumes;
     json["rate_limited"] = {{"risk_updates", info->rate_limited_risk_updates},

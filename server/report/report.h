@@ -28,6 +28,9 @@ struct RunInfo {
   double planned_duration_s = std::numeric_limits<double>::quiet_NaN();  ///< the scenario's duration
   bool stopped_early = false;         ///< stopped (Ctrl-C, sage stop) before the planned end
   std::size_t rejected_samples = 0;   ///< inputs refused at the door (non-finite, stale, ...)
+  /// The same refusals by kind ("state ahead of the clock", ...) and by sender ("vehicle 12"; at
+  /// most 1,024 named, the rest as "(other senders)"; samples the metrics refused have no sender).
+  std::map<std::string, std::size_t> rejected_by_kind, rejected_by_sender;
   std::string transport;              ///< "in-process" or "dds"; empty for a recorded log
   int resumes = 0;                    ///< times the mission was resumed from a checkpoint
   /// Operators' risk updates refused by the per-sender rate limit, in all and by sender.

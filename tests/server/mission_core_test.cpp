@@ -126,6 +126,18 @@ TEST(MissionCore, RefusesBadStatesAtTheDoor) {
   EXPECT_TRUE(core.OnState(State(0, "a", 3, {1.0, 1.0})));
   EXPECT_FALSE(core.OnState(State(0, "a", 2, {1.1, 1.0})));  // older than its last: not counted
   EXPECT_EQ(core.rejected_samples(), 2u);
+  // Per kind and per sender, and through a checkpoint into the restored mission.
+  EXPECT_FALSE(core.OnState(State(7, "b", 1000, {1.0, 1.0})));
+  const std::map<std::string, std::size_t> kinds{{"state ahead of the clock", 2}, {"state not finite", 1}};
+  const std::map<std::string, std::size_t> senders{{"vehicle 0", 2}, {"vehicle 7", 1}};
+  EXPECT_EQ(core.rejections().by_kind(), kinds);
+  EXPECT_EQ(core.rejections().by_sender(), senders);
+  EXPECT_EQ(core.rejections().Summary(), "3 (state ahead of the clock 2, state not finite 1)");
+  MissionCore resumed(world, s, "", ControllerKind::kErgodic);
+  resumed.Restore(DecodeCheckpoint(EncodeCheckpoint(core.Checkpoint()), "test"));
+  EXPECT_EQ(resumed.rejected_samples(), 3u);
+  EXPECT_EQ(resumed.rejections().by_kind(), kinds);
+  EXPECT_EQ(resumed.rejections().by_sender(), senders);
 }
 
 // Vehicles report coverage every coverage period, in-process as over DDS: after 10 s at 0.5 s

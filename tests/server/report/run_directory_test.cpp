@@ -5,6 +5,7 @@
 
 #include <unistd.h>
 
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -16,7 +17,9 @@
 
 #include "maps/risk_layer.h"
 #include "maps/risk_octree.h"
+#include "maps/world.h"
 #include "server/mission.h"
+#include "server/mission_core.h"
 #include "server/report/checkpoint.h"
 #include "server/report/mission_file.h"
 
@@ -231,6 +234,30 @@ TEST_F(RunDirectoryTest, EventTextStaysInItsField) {
   ASSERT_EQ(tail.risk_events.size(), 1u);
   EXPECT_EQ(tail.risk_events[0].source, "sonar, \"port\"");
   EXPECT_EQ(tail.risk_events[0].new_share, 0.5);
+}
+
+// metrics.json says what was refused at the door and from whom: a state with a NaN position and
+// one stamped 100 s ahead of the clock, from two vehicles, appear by kind and by sender and add up
+// to rejected_samples.
+TEST_F(RunDirectoryTest, MetricsJsonCountsRefusalsByKindAndSender) {
+  const maps::Scenario s = maps::WithDuration(maps::LoadScenario(kTwoXt), 1.0);
+  maps::World world(s);
+  MissionCore core(world, s, "", ControllerKind::kErgodic);
+  RunDirectory run(dir_.string(), s);
+  agents::StateReport nan_state, future_state;
+  nan_state.id = 4, nan_state.name = "a", nan_state.state.position_m = {std::nan(""), 1.0};
+  future_state.id = 5, future_state.name = "b", future_state.time_s = 100.0, future_state.state.position_m = {1.0, 1.0};
+  EXPECT_FALSE(core.OnState(nan_state));
+  EXPECT_FALSE(core.OnState(future_state));
+  EXPECT_FALSE(core.OnState(future_state));
+  core.Cycle(0);
+  run.Finish(core, world, 1.0, false);
+  const nlohmann::json metrics = nlohmann::json::parse(Read(dir_ / "metrics.json"));
+  EXPECT_EQ(metrics.at("rejected_samples").get<int>(), 3);
+  EXPECT_EQ(metrics.at("rejected_by_kind").at("state not finite").get<int>(), 1);
+  EXPECT_EQ(metrics.at("rejected_by_kind").at("state ahead of the clock").get<int>(), 2);
+  EXPECT_EQ(metrics.at("rejected_by_sender").at("vehicle 4").get<int>(), 1);
+  EXPECT_EQ(metrics.at("rejected_by_sender").at("vehicle 5").get<int>(), 2);
 }
 
 // regions.csv: one row per region of each split, its box, basis order and valves as the split
