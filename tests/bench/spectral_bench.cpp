@@ -25,6 +25,7 @@
 #include "maps/scenario/field_generator.h"
 #include "maps/world.h"
 #include "maps/risk_field.h"
+#include "tests/bench/bench_main.h"
 
 namespace {
 
@@ -174,17 +175,4 @@ BENCHMARK(BM_GridPath)->Args({1000, 10, 40})->Args({10000, 20, 100})->Unit(bench
 
 }  // namespace
 
-// Like BENCHMARK_MAIN, but the figures also go to a file unless --benchmark_out is given.
-int main(int argc, char** argv) {
-  std::vector<char*> args(argv, argv + argc);
-  bool has_out = false;
-  for (int i = 1; i < argc; ++i) has_out = has_out || std::string(argv[i]).rfind("--benchmark_out=", 0) == 0;
-  std::string out = "--benchmark_out=sage_bench_spectral.json";
-  if (!has_out) args.push_back(out.data());
-  int count = static_cast<int>(args.size());
-  benchmark::Initialize(&count, args.data());
-  benchmark::RunSpecifiedBenchmarks();
-  benchmark::Shutdown();
-  if (!has_out) std::fprintf(stderr, "figures written to sage_bench_spectral.json\n");
-  return 0;
-}
+int main(int argc, char** argv) { return sage::bench::RunBenchmarksWritingTo(argc, argv, "sage_bench_spectral.json"); }
