@@ -272,12 +272,17 @@ RunInfo RunDirectory::Info(const MissionCore& core, bool complete, bool stopped_
   return info;
 }
 
+std::size_t RunDirectory::buffered_bytes() const {
+  return trajectory_.buffer.size() + fleet_events_.buffer.size() + risk_events_.buffer.size() + regions_.buffer.size();
+}
+
 void RunDirectory::Tick(const MissionCore& core) {
   const auto now = std::chrono::steady_clock::now();
   if (std::chrono::duration<double>(now - last_checkpoint_).count() >= options_.checkpoint_period_s) {
     StartCheckpoint(core, /*wait=*/false);
-  } else if (std::chrono::duration<double>(now - last_flush_).count() >= options_.flush_period_s) {
-    Flush();
+  } else if (std::chrono::duration<double>(now - last_flush_).count() >= options_.flush_period_s ||
+             buffered_bytes() >= options_.flush_bytes) {
+    Flush();  // at a cycle's end: whole cycles on disk
   }
 }
 

@@ -27,6 +27,10 @@ namespace sage::server {
 
 struct RunDirectoryOptions {
   double flush_period_s = 1.0;       ///< wall seconds between flushes of the appended files
+  /// ... or sooner, at the end of the cycle that leaves more than this many bytes of rows waiting:
+  /// a mission simulated far faster than real time (fleet_field runs at ~3,600x) had held an hour
+  /// of trajectory rows (30 MB) between flushes, and all of a short mission's until its end.
+  std::size_t flush_bytes = 4u << 20;
   double checkpoint_period_s = 2.0;  ///< wall seconds between checkpoints and partial metrics
   std::size_t plot_points = 200000;  ///< trajectory samples kept in memory for the final plot
   std::string transport = "in-process";
@@ -42,6 +46,9 @@ class RunDirectory final : public MissionRecorder {
   RunDirectory(std::string dir, const maps::Scenario& scenario, RunDirectoryOptions options = {});
   ~RunDirectory() override;
   RunDirectory(const RunDirectory&) = delete;
+  /// Bytes of records formatted and not yet written (the trajectory rows of the cycles since the
+  /// last flush, and the event files'), not counting a large cycle's rows still being formatted.
+  std::size_t buffered_bytes() const;
   RunDirectory& operator=(const RunDirectory&) = delete;
 
   void OnSample(const TrajectorySample& sample, const std::string& vehicle_name) override;
