@@ -125,6 +125,18 @@ int RemoveVehicle(const MissionFile& mission, int id, bool insecure) {
   if (id < 0) throw maps::ScenarioError(fmt::format("id = {}: must be >= 0", id));
   proto::Participant participant = OperatorParticipant(mission, insecure);
   proto::Reader<proto::VehicleState> states(participant, proto::VehicleStateReaderQos());
+  // Hear the vehicle before ordering it out: the host's dispose reaches only a reader already
+  // matched with it, and DDS Security's handshake takes tenths of a second, seconds on a loaded
+  // machine (the leave had gone unseen). A vehicle not heard within 3 s is asked for anyway: the
+  // server knows one that already left or never was.
+  const auto heard_by = std::chrono::steady_clock::now() + std::chrono::seconds(3);
+  bool heard = false;
+  while (!heard && std::chrono::steady_clock::now() < heard_by) {
+    states.WaitForData(std::chrono::milliseconds(100));
+    states.TakeEach([&](const proto::VehicleState& s, const dds_sample_info_t& info) {
+      heard = heard || (info.valid_data && s.vehicle_id == static_cast<std::uint32_t>(id));
+    }, 1024);
+  }
   const std::optional<CommandAnswer> answer = AskServer(participant, "remove", 0, static_cast<std::uint32_t>(id));
   if (!answer) return NoMission(mission, insecure);
   if (!answer->accepted) {
