@@ -151,6 +151,12 @@ struct AgentHost::Impl {
   int threads = 1, vehicles_per_thread = 256;
   std::unique_ptr<host_detail::WorkerPool> pool;  // threads - 1 workers, made on the first cycle that uses them
 
+  // The host's workers (threads - 1 of them; SetThreads drops the pool when the count changes).
+  host_detail::WorkerPool& Pool() {
+    if (!pool) pool = std::make_unique<host_detail::WorkerPool>(threads - 1);
+    return *pool;
+  }
+
   Impl(const maps::World& w, const maps::Scenario& s, Guidance g)
       : scenario(s),
         guidance(g),
@@ -454,22 +460,20 @@ void AgentHost::Step(double time_s) {
   if (parts == 1) {
     guide(0, n);
   } else {
-    if (!impl_->pool || impl_->pool->workers() < parts - 1) impl_->pool = std::make_unique<host_detail::WorkerPool>(impl_->threads - 1);
     const std::function<void(int)> part = [&](int k) {
       guide(n * static_cast<std::size_t>(k) / static_cast<std::size_t>(parts),
             n * static_cast<std::size_t>(k + 1) / static_cast<std::size_t>(parts));
     };
-    impl_->pool->Run(part, parts);
+    impl_->Pool().Run(part, parts);
   }
   for (const Impl::Vehicle& v : impl_->vehicles) impl_->world.SetVelocityCommand(v.body, v.command);
   const double dt = impl_->control_dt / impl_->physics_substeps;
   const int shards = impl_->world.shard_count();
   const std::function<void(int)> step = [&](int k) { impl_->world.StepShard(k, dt, impl_->physics_substeps); };
   if (shards > 1 && impl_->threads > 1) {
-    if (!impl_->pool) impl_->pool = std::make_unique<host_detail::WorkerPool>(impl_->threads - 1);
     // Every worker and the caller take shards in turn (parts never exceed the threads).
     const int parts = std::min(shards, impl_->threads);
-    impl_->pool->Run([&](int part) {
+    impl_->Pool().Run([&](int part) {
       for (int k = part; k < shards; k += parts) step(k);
     }, parts);
   } else {

@@ -12,7 +12,6 @@
 #include <deque>
 #include <limits>
 #include <map>
-#include <numbers>
 #include <optional>
 #include <queue>
 #include <random>
