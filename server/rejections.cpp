@@ -18,11 +18,16 @@ void RejectionCounts::Count(const std::string& kind, const std::string& sender, 
   const auto it = by_sender_.find(sender);
   if (it != by_sender_.end()) {
     it->second += n;
-  } else if (by_sender_.size() - by_sender_.count(kOtherSenders) < kMaxSenders) {
+  } else if (by_sender_.size() - by_sender_.count(kOtherSenders) < max_senders_) {
     by_sender_.emplace(sender, n);
   } else {
     by_sender_[kOtherSenders] += n;
   }
+}
+
+std::size_t RejectionCounts::of_sender(const std::string& sender) const {
+  const auto it = by_sender_.find(sender);
+  return it == by_sender_.end() ? 0 : it->second;
 }
 
 std::string RejectionCounts::Summary(std::size_t kinds) const {
@@ -43,11 +48,11 @@ void RejectionCounts::Restore(std::size_t total, std::map<std::string, std::size
     return std::accumulate(m.begin(), m.end(), std::size_t{0}, [](std::size_t s, const auto& e) { return s + e.second; });
   };
   if (sum(by_kind) != total || sum(by_sender) > total ||
-      by_sender.size() - by_sender.count(kOtherSenders) > kMaxSenders) {
+      by_sender.size() - by_sender.count(kOtherSenders) > max_senders_) {
     throw std::invalid_argument(fmt::format("rejected samples: {} in all, {} by kind and {} by sender ({} senders): "
                                             "the kinds must add up to the total, the senders to at most it, and at "
                                             "most {} senders be named",
-                                            total, sum(by_kind), sum(by_sender), by_sender.size(), kMaxSenders));
+                                            total, sum(by_kind), sum(by_sender), by_sender.size(), max_senders_));
   }
   total_ = total;
   by_kind_ = std::move(by_kind);

@@ -7,7 +7,7 @@
 namespace sage::server {
 
 SenderLimits::SenderLimits(double per_second, double burst, std::size_t max_senders)
-    : per_second_(per_second), burst_(burst), max_senders_(max_senders) {
+    : per_second_(per_second), burst_(burst), max_senders_(max_senders), refusals_(max_senders) {
   if (!(per_second > 0.0) || !std::isfinite(per_second) || !(burst >= 1.0) || !std::isfinite(burst) || max_senders < 1) {
     throw std::invalid_argument("SenderLimits: need a rate > 0, a burst >= 1 and room for one sender");
   }
@@ -31,17 +31,10 @@ bool SenderLimits::Allow(const std::string& sender, double time_s) {
     b.tokens -= 1.0;
     return true;
   }
-  ++refused_;
   // Counted by name for as many senders as are tracked; beyond, together (a flood of made-up
   // names must not grow this either).
-  const bool known = refused_by_sender_.count(sender) > 0 || refused_by_sender_.size() < max_senders_;
-  ++refused_by_sender_[known ? sender : std::string(kOtherSenders)];
+  refusals_.Count("over the rate limit", sender);
   return false;
-}
-
-std::uint64_t SenderLimits::refused(const std::string& sender) const {
-  const auto it = refused_by_sender_.find(sender);
-  return it == refused_by_sender_.end() ? 0 : it->second;
 }
 
 }  // namespace sage::server

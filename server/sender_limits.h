@@ -7,6 +7,8 @@
 #include <map>
 #include <string>
 
+#include "server/rejections.h"
+
 namespace sage::server {
 
 /// A token bucket per sender: `burst` requests at once, then `per_second` a second. Time is the
@@ -16,7 +18,7 @@ namespace sage::server {
 class SenderLimits {
  public:
   /// Where refusals of senders beyond the first max_senders refused are counted.
-  static constexpr const char* kOtherSenders = "(other senders)";
+  static constexpr const char* kOtherSenders = RejectionCounts::kOtherSenders;
 
   SenderLimits(double per_second, double burst, std::size_t max_senders = 1024);
 
@@ -25,10 +27,10 @@ class SenderLimits {
   bool Allow(const std::string& sender, double time_s);
 
   /// Requests refused so far, of every sender and of one.
-  std::uint64_t refused() const { return refused_; }
-  std::uint64_t refused(const std::string& sender) const;
+  std::uint64_t refused() const { return refusals_.total(); }
+  std::uint64_t refused(const std::string& sender) const { return refusals_.of_sender(sender); }
   /// Senders with at least one refusal and how many (at most max_senders + 1 entries).
-  const std::map<std::string, std::uint64_t>& refused_by_sender() const { return refused_by_sender_; }
+  const std::map<std::string, std::uint64_t>& refused_by_sender() const { return refusals_.by_sender(); }
 
   double per_second() const { return per_second_; }
   double burst() const { return burst_; }
@@ -41,8 +43,7 @@ class SenderLimits {
   double per_second_, burst_;
   std::size_t max_senders_;
   std::map<std::string, Bucket> buckets_;
-  std::map<std::string, std::uint64_t> refused_by_sender_;  // kept after the bucket is forgotten
-  std::uint64_t refused_ = 0;
+  RejectionCounts refusals_;  // kept after the bucket is forgotten
 };
 
 }  // namespace sage::server
