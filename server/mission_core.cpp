@@ -550,6 +550,14 @@ void MissionCore::AssignRegions(const std::vector<int>& alive, CycleOutput& out)
   }
 }
 
+RejectionCounts MissionCore::rejections() const {
+  RejectionCounts all = rejected_;
+  if (const std::size_t refused = metrics_.refused_samples(); refused > 0) {
+    all.Count("sample not after its vehicle's last", "", refused);
+  }
+  return all;
+}
+
 MissionMetrics MissionCore::Metrics(double end_s) const {
   MissionMetrics metrics = metrics_.Result(std::max(end_s, 1.0 / scenario_.control_rate_hz));
   metrics.events = fleet_.responses();

@@ -154,9 +154,11 @@ class MissionCore {
   double ergodic_metric() const { return metrics_.latest_metric(); }
   /// Metrics of [0, end_s] as they stand; events answered (time to next visit, intervals).
   MissionMetrics Metrics(double end_s) const;
-  std::size_t rejected_samples() const { return rejected_.total(); }
-  /// The inputs refused at the door, per kind and per sender.
-  const RejectionCounts& rejections() const { return rejected_; }
+  /// Every input refused: at the door (per kind and per sender), and the samples the metrics
+  /// refused (not after their vehicle's last; by kind only). What metrics.json and the progress
+  /// line report.
+  RejectionCounts rejections() const;
+  std::size_t rejected_samples() const { return rejected_.total() + metrics_.refused_samples(); }
 
   MissionCheckpoint Checkpoint() const;
   /// Takes a checkpoint's state. Throws maps::ScenarioError if it is of another scenario.

@@ -259,12 +259,10 @@ RunInfo RunDirectory::Info(const MissionCore& core, bool complete, bool stopped_
   info.complete = complete;
   info.planned_duration_s = scenario_.duration_s;
   info.stopped_early = stopped_early;
-  info.rejected_samples = core.rejected_samples() + core.metrics_accumulator().refused_samples();
-  info.rejected_by_kind = core.rejections().by_kind();
-  info.rejected_by_sender = core.rejections().by_sender();
-  if (const std::size_t refused = core.metrics_accumulator().refused_samples(); refused > 0) {
-    info.rejected_by_kind["sample not after its vehicle's last"] += refused;
-  }
+  const RejectionCounts refused = core.rejections();
+  info.rejected_samples = refused.total();
+  info.rejected_by_kind = refused.by_kind();
+  info.rejected_by_sender = refused.by_sender();
   info.transport = options_.transport;
   info.resumes = options_.resumes;
   info.rate_limited_risk_updates = core.risk_limits().refused();
