@@ -3,7 +3,6 @@
 #include <algorithm>
 #include <cmath>
 #include <map>
-#include <memory>
 #include <stdexcept>
 #include <string>
 #include <utility>
@@ -204,11 +203,10 @@ void MetricsAccumulator::SettleCoverage() const {
 
 void MetricsAccumulator::CoverageBacklog::Launch(const maps::SpectralBasis& basis, Eigen::VectorXd& sums) {
   Wait();
-  auto batch = std::make_shared<std::vector<std::pair<Eigen::Vector2d, double>>>(std::move(queued_));
-  queued_.clear();
-  job_ = std::async(std::launch::async, [batch, &basis, &sums] {
-           for (const auto& [x, dt] : *batch) basis.AddScaled(x, dt, sums);
+  job_ = std::async(std::launch::async, [batch = std::move(queued_), &basis, &sums] {
+           for (const auto& [x, dt] : batch) basis.AddScaled(x, dt, sums);
          }).share();
+  queued_.clear();  // moved from: empty it for certain
 }
 
 void MetricsAccumulator::CoverageBacklog::Settle(const maps::SpectralBasis& basis, Eigen::VectorXd& sums) const {
