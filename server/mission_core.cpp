@@ -256,10 +256,7 @@ void MissionCore::RecordSamples() {
   for (const TrajectorySample& s : samples_) metrics_.Add(s);
   metrics_.LaunchCoverage();  // the fleet's coverage figure, on a helper thread while vehicles move
   if (recorder_ != nullptr && !samples_.empty()) {
-    const std::map<int, Roster::Member>& members = roster_.members();
-    std::vector<const std::string*> names(members.size(), nullptr);
-    for (const auto& [id, m] : members) names[m.index] = &m.name;
-    recorder_->OnSamples(samples_, names);
+    recorder_->OnSamples(samples_, roster_.names_by_index());
   }
   samples_.clear();
 }
@@ -287,7 +284,7 @@ CycleOutput MissionCore::Cycle(std::int64_t cycle) {
   // Every risk change since the last cycle (operators' and the profile's) is measured on the
   // first live vehicle: unknown (NaN, null in metrics.json) until its answer arrives.
   const std::uint64_t snapshot_cycle = static_cast<std::uint64_t>(cycle) + 1;
-  const std::vector<int> alive = roster_.alive();
+  const std::vector<int>& alive = roster_.alive();
   const bool risk_changed = fleet_.responses().size() > risk_measured_;
   for (; risk_measured_ < fleet_.responses().size(); ++risk_measured_) {
     fleet_.responses()[risk_measured_].heading_change_rad = kUnknown;
