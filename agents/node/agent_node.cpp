@@ -170,23 +170,34 @@ int RunAgentNode(const maps::Scenario& scenario, const AgentNodeOptions& options
       std::this_thread::sleep_for(std::chrono::milliseconds(100));  // let the disposes go out
       return 0;
     }
-    const auto take_server_words = [&] {
+    const auto take_targets = [&] {
       // Every host sees every vehicle's assignment (one topic); each takes its own.
       while (targets.TakeEach([&](const proto::ErgodicTarget& m, const dds_sample_info_t& info) {
         if (info.valid_data && m.server_instance == clock.instance) mission.OnAssignment(wire::FromWire(m));
       }, 1024) == 1024) {
       }
+    };
+    const auto take_server_words = [&] {
+      take_targets();
+      bool snapshot = false;
       fleet.TakeEach([&](const proto::FleetCoverage& m, const dds_sample_info_t& info) {
         if (!info.valid_data || m.server_instance != clock.instance) return;
         if (mission.OnFleetSnapshot(wire::FromWire(m))) {
+          snapshot = true;
           last_heard = std::chrono::steady_clock::now();
           last_snapshot_at = Clock::now();
         }
       });
+      // A cycle's targets are written before its snapshot, but on another topic: when the two
+      // come together (after a long server cycle, such as taking a 1,000-valve split) the targets
+      // may land between the two takes. Taken again, they steer this cycle as they do in-process.
+      if (snapshot) take_targets();
     };
     take_server_words();
-    // Lockstep where it can be: cycle k steers on the server's word of cycle k - 1, as in the
-    // in-process mission; it waits up to 0.45 of a period for it, then goes on (counted). A server
+    // Lockstep where it can be: cycle k steers on the server's word of cycle k - 1 (its snapshot
+    // numbered k), as in the in-process mission; it waits up to 0.45 of a period for it, then goes
+    // on (counted). (It had waited only for the word of cycle k - 2: unseen while the server is
+    // quick, but after a long server cycle every vehicle steered a cycle on its old target.) A server
     // heard within kSlowServerWait is waited for that long: a long cycle of its own (splitting a
     // 1,000-vehicle field into regions took 0.8 s) is not a silence. The host then catches up
     // with the clock; a server gone silent costs that wait once.
@@ -195,7 +206,7 @@ int RunAgentNode(const maps::Scenario& scenario, const AgentNodeOptions& options
     // moved from the second cycle in sage run.
     if (last_snapshot_at == Clock::time_point{}) last_snapshot_at = Clock::now();
     const auto behind_server = [&] {
-      return mission.has_snapshot() ? mission.snapshot_cycle() + 1 < static_cast<std::uint64_t>(std::max<std::int64_t>(k, 1))
+      return mission.has_snapshot() ? mission.snapshot_cycle() < static_cast<std::uint64_t>(std::max<std::int64_t>(k, 1))
                                     : k > own_first_cycle;
     };
     if (behind_server()) {
