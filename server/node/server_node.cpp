@@ -371,9 +371,11 @@ int RunServerNode(const maps::Scenario& scenario, const ServerNodeOptions& optio
       const std::uint64_t limited = core.risk_limits().refused(sender);
       const OperatorAnswer a = core.OnRiskUpdate(std::string(AsStringView(r.valve)), r.weight, source, sender);
       const bool newly_limited = core.risk_limits().refused(sender) > limited;
-      // A flood's refusals are logged at 1, 10, 100, ... per sender, not each.
+      // A flood's refusals are logged and answered at 1, 10, 100, ... per sender, not each: its
+      // answers would crowd out other operators' answers on the shared result topic.
       const auto decade = [](std::uint64_t n) { while (n % 10 == 0 && n > 1) n /= 10; return n == 1; };
-      if (!a.accepted && (!newly_limited || decade(core.risk_limits().refused(sender)))) {
+      if (newly_limited && !decade(core.risk_limits().refused(sender))) return;
+      if (!a.accepted) {
         spdlog::warn("server: ignored a risk update from {}: {}{}", sender, a.reason,
                      newly_limited ? fmt::format(" ({} refused so far)", core.risk_limits().refused(sender)) : "");
       }
