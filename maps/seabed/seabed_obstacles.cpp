@@ -1,0 +1,105 @@
+// The seabed model's obstacles for Box2D and the checks on them (see seabed_obstacles.h).
+#include "maps/seabed/seabed_obstacles.h"
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+
+#include <fmt/format.h>
+
+#include "maps/seabed_map.h"
+
+namespace sage::maps {
+
+OccupancyGrid TerrainObstacles(const OccupancyGrid& obstacles, const std::vector<ChristmasTree>& structures) {
+  OccupancyGrid terrain = obstacles;
+  const double r = obstacles.resolution_m();
+  for (const ChristmasTree& structure : structures) {
+    const Eigen::Vector2d lo = structure.center_m - structure.size_m / 2, hi = structure.center_m + structure.size_m / 2;
+    const int i0 = std::max(0, static_cast<int>(std::floor(lo.x() / r - 0.5)) - 1);
+    const int i1 = std::min(terrain.cols() - 1, static_cast<int>(std::ceil(hi.x() / r - 0.5)) + 1);
+    const int j0 = std::max(0, static_cast<int>(std::floor(lo.y() / r - 0.5)) - 1);
+    const int j1 = std::min(terrain.rows() - 1, static_cast<int>(std::ceil(hi.y() / r - 0.5)) + 1);
+    for (int i = i0; i <= i1; ++i) {
+      for (int j = j0; j <= j1; ++j) {
+        const Eigen::Vector2d c = terrain.CenterOf({i, j});
+        if ((c.array() >= lo.array()).all() && (c.array() <= hi.array()).all()) terrain.SetOccupied(i, j, false);
+      }
+    }
+  }
+  return terrain;
+}
+
+std::vector<CellRectangle> MergeIntoRectangles(const OccupancyGrid& grid) {
+  const int cols = grid.cols(), rows = grid.rows();
+  std::vector<unsigned char> taken(static_cast<std::size_t>(cols) * rows, 0);
+  const auto free_to_take = [&](int i, int j) {
+    return grid.InBounds(i, j) && grid.Occupied(i, j) && !taken[static_cast<std::size_t>(i) * rows + j];
+  };
+  const double r = grid.resolution_m();
+  std::vector<CellRectangle> rectangles;
+  for (int i = 0; i < cols; ++i) {
+    for (int j = 0; j < rows; ++j) {
+      if (!free_to_take(i, j)) continue;
+      int j1 = j;
+      while (free_to_take(i, j1 + 1)) ++j1;
+      int i1 = i;
+      const auto column_free = [&](int column) {
+        for (int b = j; b <= j1; ++b) {
+          if (!free_to_take(column, b)) return false;
+        }
+        return true;
+      };
+      while (column_free(i1 + 1)) ++i1;
+      for (int a = i; a <= i1; ++a) {
+        for (int b = j; b <= j1; ++b) taken[static_cast<std::size_t>(a) * rows + b] = 1;
+      }
+      rectangles.push_back({Eigen::Vector2d(i * r, j * r), Eigen::Vector2d((i1 + 1) * r, (j1 + 1) * r)});
+    }
+  }
+  return rectangles;
+}
+
+void CheckOnOpenSeabed(const Scenario& scenario, const OccupancyGrid& terrain) {
+  const std::string file = scenario.source_path.empty() ? "<scenario>" : scenario.source_path;
+  const auto point = [](const Eigen::Vector2d& p) { return fmt::format("[{}, {}]", p.x(), p.y()); };
+  const auto blocked = [&](const Eigen::Vector2d& p) {
+    const Eigen::Vector2i cell = terrain.CellOf(p);
+    return terrain.Occupied(cell.x(), cell.y());
+  };
+  for (std::size_t i = 0; i < scenario.structures.size(); ++i) {
+    for (std::size_t j = 0; j < scenario.structures[i].valves.size(); ++j) {
+      const Valve& valve = scenario.structures[i].valves[j];
+      if (blocked(valve.position_m)) {
+        throw ScenarioError(fmt::format("{}: structures[{}].valves[{}].position_m = {}: {} lies on blocked seabed (the "
+                                        "terrain, a boulder or a flowline rises into the vehicles' altitude band there)",
+                                        file, i, j, point(valve.position_m), valve.name));
+      }
+    }
+  }
+  // A start: no blocked cell's centre within the jitter and a hull's clearance of it.
+  const double reach = scenario.start_jitter_m + kVehicleClearance_m, r = terrain.resolution_m();
+  const auto start_clear = [&](const Eigen::Vector2d& p) {
+    const Eigen::Vector2i lo = terrain.CellOf(p - Eigen::Vector2d::Constant(reach + r));
+    const Eigen::Vector2i hi = terrain.CellOf(p + Eigen::Vector2d::Constant(reach + r));
+    for (int i = lo.x(); i <= hi.x(); ++i) {
+      for (int j = lo.y(); j <= hi.y(); ++j) {
+        if (terrain.Occupied(i, j) && (terrain.CenterOf({i, j}) - p).norm() <= reach) return false;
+      }
+    }
+    return true;
+  };
+  const auto check_start = [&](const std::string& field, const VehicleSpec& vehicle) {
+    if (start_clear(vehicle.start_m)) return;
+    throw ScenarioError(fmt::format("{}: {}.start_m = {}: {} starts within {} m (start jitter and hull) of blocked seabed",
+                                    file, field, point(vehicle.start_m), vehicle.name, reach));
+  };
+  for (std::size_t i = 0; i < scenario.vehicles.size(); ++i) check_start(fmt::format("vehicles[{}]", i), scenario.vehicles[i]);
+  for (std::size_t i = 0; i < scenario.fleet_events.size(); ++i) {
+    if (scenario.fleet_events[i].kind == FleetEvent::Kind::kJoin) {
+      check_start(fmt::format("fleet_events[{}].join", i), scenario.fleet_events[i].vehicle);
+    }
+  }
+}
+
+}  // namespace sage::maps
