@@ -102,4 +102,10 @@ void CheckOnOpenSeabed(const Scenario& scenario, const OccupancyGrid& terrain) {
   }
 }
 
+void CheckSeabedModel(const Scenario& scenario) {
+  if (!scenario.HasSeabedModel()) return;
+  const SeabedMap seabed(scenario, scenario.astar.grid_resolution_m);
+  CheckOnOpenSeabed(scenario, TerrainObstacles(seabed.OperatingSlice(), scenario.structures));
+}
+
 }  // namespace sage::maps

@@ -34,4 +34,9 @@ std::vector<CellRectangle> MergeIntoRectangles(const OccupancyGrid& grid);
 /// begin inside the rock).
 void CheckOnOpenSeabed(const Scenario& scenario, const OccupancyGrid& terrain);
 
+/// Everything World's construction refuses about a seabed model, without the rest of the world:
+/// the map read and checked, the model voxelised, no valve or start on blocked seabed. For a
+/// launcher to refuse a bad map before it starts any process; nothing to do on a flat seabed.
+void CheckSeabedModel(const Scenario& scenario);
+
 }  // namespace sage::maps
