@@ -33,9 +33,10 @@ inline constexpr double kOperatingDepthMax_m = 1.5;
 /// field puts no coverage inside it.
 inline constexpr double kVehicleClearance_m = 0.4;
 
-/// Columns (grid cells) a seabed model may have: its voxelisation costs about a microsecond a
-/// voxel, in every process of a mission.
-inline constexpr double kMaxSeabedColumns = 16e6;
+/// Columns (grid cells) a seabed model may have: every process of a mission builds it, and 4
+/// million (a 200 m square at 0.1 m, 1 km at 0.5 m) took 6.8 s of CPU and 615 MB there
+/// (tests/bench/seabed_bench.cpp; 16 million: 27 s and 2.3 GB).
+inline constexpr double kMaxSeabedColumns = 4e6;
 
 class SeabedMap {
  public:

@@ -89,6 +89,11 @@ TEST(SeabedFile, BadRastersAreRefusedInOneLine) {
   testing::WriteGeoTiff(cliff, dir.File("cliff.tif"));
   ExpectRefused(OnMap(dir.File("cliff.tif")), "OctoMap's keys hold at most 32767");
 
+  // A seabed model of more columns than every process of a mission should voxelise.
+  Scenario wide = OnMap(dir.File("good.tif"));
+  wide.workspace = {250.0, 200.0};
+  ExpectRefused(wide, "the workspace has 5000000 cells at astar.grid_resolution_m = 0.1 m; a seabed model at most 4 million");
+
   // A gridded XYZ file with one node missing is refused (GDAL reads the gap as no-data, or not at all).
   testing::WriteXyz(good, dir.File("gap.xyz"), /*skip_one=*/true);
   ExpectRefused(OnMap(dir.File("gap.xyz")), "");

@@ -257,7 +257,9 @@ TEST(SeabedMap, FlowlineFootprintIsTheDiscsAlongItsAxis) {
       } else {
         // Outside: the seabed, or the XT's column.
         const bool xt = std::abs((i + 0.5) * r - 6.5) <= 0.5 && std::abs((j + 0.5) * r - 1.5) <= 0.5;
-        if (!xt) ASSERT_EQ(top, ground) << i << ", " << j;
+        if (!xt) {
+          ASSERT_EQ(top, ground) << i << ", " << j;
+        }
       }
     }
   }
