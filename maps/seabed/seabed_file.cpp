@@ -39,7 +39,7 @@ class MapErrors {
   std::string prefix_;
 };
 
-std::string Coordinates(double x, double y) { return fmt::format("({:.6g}, {:.6g})", x, y); }
+std::string Coordinates(double x, double y) { return fmt::format("({:.10g}, {:.10g})", x, y); }
 
 // The workspace placed on the map: its corner (0, 0) at `origin`, which must lie in [lo, hi].
 void CheckCovers(const MapErrors& errors, const Scenario& s, const Eigen::Vector2d& origin, const Eigen::Vector2d& lo,
@@ -48,8 +48,8 @@ void CheckCovers(const MapErrors& errors, const Scenario& s, const Eigen::Vector
   // A hair of tolerance for coordinates written in decimal (a corner given as the map's own edge).
   const double tolerance = 1e-9 * std::max({1.0, lo.cwiseAbs().maxCoeff(), hi.cwiseAbs().maxCoeff()});
   if ((origin.array() >= lo.array() - tolerance).all() && (far.array() <= hi.array() + tolerance).all()) return;
-  errors.Fail(fmt::format("covers x in [{:.6g}, {:.6g}], y in [{:.6g}, {:.6g}] (map coordinates); the workspace at "
-                          "origin {} needs x in [{:.6g}, {:.6g}], y in [{:.6g}, {:.6g}]: the map must cover the workspace",
+  errors.Fail(fmt::format("covers x in [{:.10g}, {:.10g}], y in [{:.10g}, {:.10g}] (map coordinates); the workspace at "
+                          "origin {} needs x in [{:.10g}, {:.10g}], y in [{:.10g}, {:.10g}]: the map must cover the workspace",
                           lo.x(), hi.x(), lo.y(), hi.y(), Coordinates(origin.x(), origin.y()), origin.x(), far.x(),
                           origin.y(), far.y()));
 }
