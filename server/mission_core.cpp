@@ -423,6 +423,14 @@ void MissionCore::AssignRegions(const std::vector<int>& alive, CycleOutput& out)
   constexpr double kGuardLaps = 2.0;  // measured against 2.5: shorter worst gaps, the same revisit intervals
   constexpr int kMinOrder = 8, kMaxOrder = 20;
   constexpr double kFirstPlanWait_s = 2.0, kSettle_s = 0.5;
+  // Each valve's target narrowed to half the visit radius, and a share's coverage forgotten over
+  // kForgettingLaps laps of its tour (or the scenario's forgetting, if shorter): over the ten
+  // graded fields of the README, three seeds each, these took the risk-weighted revisit interval
+  // from 0.94-1.04x the tours' to 0.88-0.97x and the worst longest gap from 2.05x to 1.78x (the
+  // valves' own Gaussians, sigma 0.25-0.35 m, spent time in tails outside the 0.3 m visit radius;
+  // with forgetting of 60 s to none, a vehicle wandered from its valves on old coverage).
+  const double kTargetSigma_m = 0.5 * scenario_.visit_radius_m;
+  constexpr double kForgettingLaps = 2.0;
   RegionPlan& plan = region_plan_;
   if (alive.empty()) return;
   if (plan.first_join_s < 0.0) plan.first_join_s = time_s_;
@@ -465,7 +473,7 @@ void MissionCore::AssignRegions(const std::vector<int>& alive, CycleOutput& out)
       std::vector<maps::GaussianComponent> components;
       for (int i : share.valves) {
         points.push_back(valves[i].position_m);
-        components.push_back({valves[i].position_m, valves[i].covariance_m2});
+        components.push_back(maps::NarrowedTo({valves[i].position_m, valves[i].covariance_m2}, kTargetSigma_m));
       }
       const maps::RegionBox box =
           maps::RegionAround(points, scenario_.workspace, kMargin_m, kMinSide_m, kResolution_m, kMinOrder, kMaxOrder);
@@ -545,6 +553,7 @@ void MissionCore::AssignRegions(const std::vector<int>& alive, CycleOutput& out)
     a.region_origin_m = share.field->box().origin_m;
     a.region_size_m = share.field->box().size_m;
     a.region_order = share.field->box().order;
+    a.region_forgetting_s = std::min(scenario_.ergodic.forgetting_time_s, kForgettingLaps * std::max(share.lap_time_s, 1.0));
     out.assignments.push_back(std::move(a));
     m.target_sent = true;
   }
