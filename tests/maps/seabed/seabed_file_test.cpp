@@ -174,8 +174,11 @@ boulders:
   Scenario moved = s;
   moved.seabed->map = "copy.xyz";
   EXPECT_EQ(VehicleFingerprint(ParseScenario(EmitScenario(moved), dir.File("x.yaml"))), VehicleFingerprint(s));
+  const Scenario before = ParseScenario(EmitScenario(moved), dir.File("x.yaml"));
   std::ofstream(dir.File("copy.xyz"), std::ios::app) << "\n";
-  EXPECT_NE(VehicleFingerprint(ParseScenario(EmitScenario(moved), dir.File("x.yaml"))), VehicleFingerprint(s));
+  const Scenario after = ParseScenario(EmitScenario(moved), dir.File("x.yaml"));
+  EXPECT_NE(VehicleFingerprint(after), VehicleFingerprint(s));
+  EXPECT_NE(ScenarioHash(after), ScenarioHash(before)) << "a checkpoint is not resumed over a changed map";
 
   const auto refused = [&](const std::string& from, const std::string& to, const std::string& message) {
     std::string text = yaml;
