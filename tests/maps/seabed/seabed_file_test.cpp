@@ -7,6 +7,7 @@
 #include <string>
 
 #include <gtest/gtest.h>
+#include <octomap/ColorOcTree.h>
 #include <octomap/OcTree.h>
 
 #include "maps/seabed/seabed_file.h"
@@ -108,14 +109,17 @@ TEST(SeabedFile, BadRastersAreRefusedInOneLine) {
 TEST(SeabedFile, OctoMapSeabedIsTheTopOfItsVoxels) {
   ScratchDir dir("sage_seabed_octomap");
   const double res = 0.2;
-  octomap::OcTree tree(res);
   // A terrace: z top -40.0 west of x = 6, -38.0 east of it, three voxels thick, 13 x 9 m.
-  for (int i = 0; i < 65; ++i) {
-    for (int j = 0; j < 45; ++j) {
-      const int top = (i + 0.5) * res < 6.0 ? -201 : -191;  // voxel k spans [k r, (k + 1) r)
-      for (int k = top - 2; k <= top; ++k) tree.updateNode(octomap::OcTreeKey(i + 32768, j + 32768, k + 32768), true);
+  const auto terrace = [&](auto& tree) {
+    for (int i = 0; i < 65; ++i) {
+      for (int j = 0; j < 45; ++j) {
+        const int top = (i + 0.5) * res < 6.0 ? -201 : -191;  // voxel k spans [k r, (k + 1) r)
+        for (int k = top - 2; k <= top; ++k) tree.updateNode(octomap::OcTreeKey(i + 32768, j + 32768, k + 32768), true);
+      }
     }
-  }
+  };
+  octomap::OcTree tree(res);
+  terrace(tree);
   ASSERT_TRUE(tree.writeBinary(dir.File("terrace.bt")));
   Scenario s = OnMap(dir.File("terrace.bt"));
   const HeightGrid heights = ReadSeabedHeights(s, 0.1);
@@ -126,6 +130,16 @@ TEST(SeabedFile, OctoMapSeabedIsTheTopOfItsVoxels) {
   }
   const SeabedMap map(s, 0.1);
   EXPECT_GT(map.OperatingSlice().OccupiedCount(), 100 + 10 * 10) << "the terrace's upper edge blocks, and the XT";
+  // The same seabed as an .ot file (OctoMap's full format, read by its type name), and as a
+  // ColorOcTree (a coloured seabed survey): the same heights.
+  ASSERT_TRUE(tree.write(dir.File("terrace.ot")));
+  octomap::ColorOcTree coloured(res);
+  terrace(coloured);
+  ASSERT_TRUE(coloured.write(dir.File("coloured.ot")));
+  for (const char* name : {"terrace.ot", "coloured.ot"}) {
+    const HeightGrid again = ReadSeabedHeights(OnMap(dir.File(name)), 0.1);
+    ASSERT_EQ(again.values(), heights.values()) << name;
+  }
 
   for (int k = -193; k <= -191; ++k) tree.deleteNode(octomap::OcTreeKey(30 + 32768, 20 + 32768, k + 32768));
   ASSERT_TRUE(tree.writeBinary(dir.File("hole.bt")));
