@@ -14,6 +14,7 @@
 
 #include <fmt/format.h>
 #include <gdal.h>
+#include <ogr_srs_api.h>
 #include <octomap/ColorOcTree.h>
 #include <octomap/OcTree.h>
 #include <octomap/OcTreeStamped.h>
@@ -104,6 +105,20 @@ HeightGrid ReadRaster(const Scenario& s, const SeabedSettings& seabed, SeabedMap
   if (GDALGetGeoTransform(dataset.get(), gt) != CE_None) {
     errors.Fail("has no georeferencing (geotransform): a seabed map must say where its pixels lie");
   }
+  // Coordinates in metres: a raster in latitude and longitude (GEBCO, EMODnet) has pixels of a
+  // few millionths of a degree and a workspace in metres would land anywhere on it. A raster
+  // without a reference system (an XYZ file) is taken to be in metres.
+  if (OGRSpatialReferenceH srs = GDALGetSpatialRef(dataset.get())) {
+    char* unit_name = nullptr;
+    if (OSRIsGeographic(srs)) {
+      errors.Fail("is in geographic coordinates (degrees): a seabed map must be in a projected reference system in "
+                  "metres (e.g. gdalwarp -t_srs EPSG:32631 for UTM zone 31N)");
+    }
+    if (const double metres = OSRGetLinearUnits(srs, &unit_name); OSRIsProjected(srs) && std::abs(metres - 1.0) > 1e-9) {
+      errors.Fail(fmt::format("is in {} ({} m each): a seabed map's coordinates must be in metres",
+                              unit_name ? unit_name : "a unit other than metres", metres));
+    }
+  }
   if (gt[2] != 0.0 || gt[4] != 0.0) {
     errors.Fail(fmt::format("geotransform rotation = ({:.6g}, {:.6g}): must be a north-up raster (rotation 0)", gt[2], gt[4]));
   }
@@ -142,8 +157,10 @@ HeightGrid ReadRaster(const Scenario& s, const SeabedSettings& seabed, SeabedMap
                    GDT_Float64, 0, 0) != CE_None) {
     errors.Fail("cannot read its pixels: " + messages.Last());
   }
-  int has_nodata = 0;
+  int has_nodata = 0, has_scale = 0, has_offset = 0;
   const double nodata = GDALGetRasterNoDataValue(band, &has_nodata);
+  // Integer rasters often store metres as value * scale + offset (decimetres in an Int16 band).
+  const double scale = GDALGetRasterScale(band, &has_scale), offset = GDALGetRasterOffset(band, &has_offset);
   const double sign = seabed.values == SeabedValues::kDepth ? -1.0 : 1.0;
   for (int row = 0; row < window_rows; ++row) {
     for (int col = 0; col < window_cols; ++col) {
@@ -156,6 +173,7 @@ HeightGrid ReadRaster(const Scenario& s, const SeabedSettings& seabed, SeabedMap
         errors.Fail(fmt::format("{} is no-data ({}): the map must cover the workspace without holes", where(),
                                 std::isfinite(value) ? fmt::format("{:.6g}", value) : std::string("not a number")));
       }
+      if (has_scale || has_offset) value = value * (has_scale ? scale : 1.0) + (has_offset ? offset : 0.0);
       if (std::abs(value) > kMaxSeabedElevation_m) {
         errors.Fail(fmt::format("{} = {:.6g} m: a seabed lies within {:.0f} m of the surface (an undeclared no-data value?)",
                                 where(), value, kMaxSeabedElevation_m));

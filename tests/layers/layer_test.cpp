@@ -63,6 +63,7 @@ const std::map<std::string, std::set<std::string>>& ExternalRules() {
       {"octomap/", {"maps"}},
       {"gdal", {"maps"}},                                       // GDAL: the seabed map files
       {"cpl_", {"maps"}},
+      {"ogr_", {"maps"}},
       {"box2d/", {"agents"}},
       {"yaml-cpp/", {"scenario"}},
       {"openssl/", {"security"}},                               // OpenSSL: the security files

@@ -77,6 +77,12 @@ TEST(SeabedFile, BadRastersAreRefusedInOneLine) {
   testing::WriteGeoTiff(undeclared, dir.File("undeclared.tif"));
   ExpectRefused(OnMap(dir.File("undeclared.tif")), "= -32767 m: a seabed lies within 12000 m of the surface");
 
+  testing::WriteGeoTiff(good, dir.File("utm.tif"), true, nullptr, 0.0, 32631);  // UTM 31N, metres: fine
+  EXPECT_NO_THROW(SeabedMap(OnMap(dir.File("utm.tif")), 0.1));
+  testing::WriteGeoTiff(good, dir.File("degrees.tif"), true, nullptr, 0.0, 4326);
+  ExpectRefused(OnMap(dir.File("degrees.tif")), "is in geographic coordinates (degrees)");
+  testing::WriteGeoTiff(good, dir.File("feet.tif"), true, nullptr, 0.0, 2263);  // NY Long Island, US feet
+  ExpectRefused(OnMap(dir.File("feet.tif")), "a seabed map's coordinates must be in metres");
   testing::WriteGeoTiff(good, dir.File("plain.tif"), /*georeferenced=*/false);
   ExpectRefused(OnMap(dir.File("plain.tif")), "has no georeferencing");
   testing::WriteGeoTiff(good, dir.File("rotated.tif"), true, nullptr, 0.01);

@@ -11,6 +11,7 @@
 #include <vector>
 
 #include <gdal.h>
+#include <ogr_srs_api.h>
 
 #include "maps/scenario/scenario.h"
 
@@ -80,13 +81,19 @@ inline void WriteXyz(const Raster& r, const std::string& path, bool skip_one = f
 
 // A Float32 GeoTIFF; a geotransform unless `georeferenced` is false; `nodata` declared if given.
 inline void WriteGeoTiff(const Raster& r, const std::string& path, bool georeferenced = true,
-                         const double* nodata = nullptr, double rotation = 0.0) {
+                         const double* nodata = nullptr, double rotation = 0.0, int epsg = 0) {
   GDALAllRegister();
   GDALDriverH driver = GDALGetDriverByName("GTiff");
   GDALDatasetH ds = GDALCreate(driver, path.c_str(), r.cols, r.rows, 1, GDT_Float32, nullptr);
   if (georeferenced) {
     double gt[6] = {r.x0, r.pixel_m, rotation, r.y0 + r.rows * r.pixel_m, 0.0, -r.pixel_m};
     GDALSetGeoTransform(ds, gt);
+  }
+  if (epsg != 0) {
+    OGRSpatialReferenceH srs = OSRNewSpatialReference(nullptr);
+    OSRImportFromEPSG(srs, epsg);
+    GDALSetSpatialRef(ds, srs);
+    OSRDestroySpatialReference(srs);
   }
   GDALRasterBandH band = GDALGetRasterBand(ds, 1);
   if (nodata) GDALSetRasterNoDataValue(band, *nodata);
