@@ -110,6 +110,29 @@ TEST(SeabedFile, BadRastersAreRefusedInOneLine) {
   ExpectRefused(OnMap(dir.File("words.csv")), "cannot be read as a gridded XYZ file");
 }
 
+// A band's scale and offset are applied (heights stored as value * scale + offset), before the
+// check against 12,000 m: raw values of 1,000-1,200 are depths of -50 to -150 m here.
+TEST(SeabedFile, ScaleAndOffsetAreApplied) {
+  ScratchDir dir("sage_seabed_scaled");
+  const Raster raw = MakeRaster(96, 64, 0.125, 0.0, 0.0, [](double x, double y) { return 1000.0 + 2.0 * x + y; });
+  testing::WriteGeoTiff(raw, dir.File("scaled.tif"));
+  GDALDatasetH ds = GDALOpen(dir.File("scaled.tif").c_str(), GA_Update);
+  ASSERT_NE(ds, nullptr);
+  GDALSetRasterScale(GDALGetRasterBand(ds, 1), -0.5);
+  GDALSetRasterOffset(GDALGetRasterBand(ds, 1), 450.0);
+  GDALClose(ds);
+  Scenario s = SmallScenario(12.0, 8.0, 0.125);
+  SeabedSettings seabed;
+  seabed.map = dir.File("scaled.tif");
+  s.seabed = seabed;
+  const HeightGrid heights = ReadSeabedHeights(s, 0.125);
+  for (int i = 0; i < heights.cols(); ++i) {
+    for (int j = 0; j < heights.rows(); ++j) {
+      ASSERT_DOUBLE_EQ(heights.at(i, j), -0.5 * raw.at(i, raw.rows - 1 - j) + 450.0) << i << ", " << j;
+    }
+  }
+}
+
 // An OctoMap seabed: its occupied voxels' top in each column is the seabed; a column with no
 // voxel is a hole and refused; a file that is no tree is refused.
 TEST(SeabedFile, OctoMapSeabedIsTheTopOfItsVoxels) {
