@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <string>
 
 #include <fmt/format.h>
@@ -77,20 +78,9 @@ void CheckOnOpenSeabed(const Scenario& scenario, const OccupancyGrid& terrain) {
       }
     }
   }
-  // A start: no blocked cell's centre within the jitter and a hull's clearance of it.
-  const double reach = scenario.start_jitter_m + kVehicleClearance_m, r = terrain.resolution_m();
-  const auto start_clear = [&](const Eigen::Vector2d& p) {
-    const Eigen::Vector2i lo = terrain.CellOf(p - Eigen::Vector2d::Constant(reach + r));
-    const Eigen::Vector2i hi = terrain.CellOf(p + Eigen::Vector2d::Constant(reach + r));
-    for (int i = lo.x(); i <= hi.x(); ++i) {
-      for (int j = lo.y(); j <= hi.y(); ++j) {
-        if (terrain.Occupied(i, j) && (terrain.CenterOf({i, j}) - p).norm() <= reach) return false;
-      }
-    }
-    return true;
-  };
+  const double reach = scenario.start_jitter_m + kVehicleClearance_m;
   const auto check_start = [&](const std::string& field, const VehicleSpec& vehicle) {
-    if (start_clear(vehicle.start_m)) return;
+    if (StartIsClear(terrain, vehicle.start_m, scenario.start_jitter_m)) return;
     throw ScenarioError(fmt::format("{}: {}.start_m = {}: {} starts within {} m (start jitter and hull) of blocked seabed",
                                     file, field, point(vehicle.start_m), vehicle.name, reach));
   };
@@ -100,6 +90,71 @@ void CheckOnOpenSeabed(const Scenario& scenario, const OccupancyGrid& terrain) {
       check_start(fmt::format("fleet_events[{}].join", i), scenario.fleet_events[i].vehicle);
     }
   }
+}
+
+bool StartIsClear(const OccupancyGrid& terrain, const Eigen::Vector2d& start, double jitter_m) {
+  const double reach = jitter_m + kVehicleClearance_m, r = terrain.resolution_m();
+  const Eigen::Vector2i lo = terrain.CellOf(start - Eigen::Vector2d::Constant(reach + r));
+  const Eigen::Vector2i hi = terrain.CellOf(start + Eigen::Vector2d::Constant(reach + r));
+  for (int i = lo.x(); i <= hi.x(); ++i) {
+    for (int j = lo.y(); j <= hi.y(); ++j) {
+      if (terrain.Occupied(i, j) && (terrain.CenterOf({i, j}) - start).norm() <= reach) return false;
+    }
+  }
+  return true;
+}
+
+int MoveStartsOffBlockedSeabed(Scenario& scenario, std::size_t first) {
+  if (!scenario.HasSeabedModel() || first >= scenario.vehicles.size()) return 0;
+  const SeabedMap seabed(scenario, scenario.astar.grid_resolution_m);
+  const OccupancyGrid terrain = TerrainObstacles(seabed.OperatingSlice(), scenario.structures);
+  constexpr double kStep_m = 0.25, kEdge_m = 0.5, kFootprint_m = 0.5, kApart_m = 1.0;
+  const Eigen::Vector2d box(scenario.workspace.width_m, scenario.workspace.height_m);
+  const auto others_clear = [&](const Eigen::Vector2d& p, std::size_t self) {
+    for (std::size_t k = 0; k < scenario.vehicles.size(); ++k) {
+      if (k != self && (scenario.vehicles[k].start_m - p).norm() < kApart_m) return false;
+    }
+    for (const FleetEvent& e : scenario.fleet_events) {
+      if (e.kind == FleetEvent::Kind::kJoin && (e.vehicle.start_m - p).norm() < kApart_m) return false;
+    }
+    return true;
+  };
+  const auto usable = [&](const Eigen::Vector2d& p, std::size_t self) {
+    if ((p.array() < kEdge_m).any() || (p.array() > box.array() - kEdge_m).any()) return false;
+    for (const ChristmasTree& t : scenario.structures) {
+      if ((((p - t.center_m).cwiseAbs() - t.size_m / 2).array() < kFootprint_m).all()) return false;
+    }
+    return StartIsClear(terrain, p, scenario.start_jitter_m) && others_clear(p, self);
+  };
+  int moved = 0;
+  for (std::size_t v = first; v < scenario.vehicles.size(); ++v) {
+    VehicleSpec& vehicle = scenario.vehicles[v];
+    if (StartIsClear(terrain, vehicle.start_m, scenario.start_jitter_m)) continue;
+    // Rings of lattice points ever farther out (Chebyshev distance k steps), the nearest usable
+    // point of the first ring that has one (ties: the first met).
+    const int rings = static_cast<int>(std::ceil(box.maxCoeff() / kStep_m));
+    bool found = false;
+    for (int k = 1; k <= rings && !found; ++k) {
+      double best = std::numeric_limits<double>::infinity();
+      Eigen::Vector2d best_point = vehicle.start_m;
+      for (int a = -k; a <= k; ++a) {
+        for (int b = -k; b <= k; ++b) {
+          if (std::max(std::abs(a), std::abs(b)) != k) continue;
+          const Eigen::Vector2d p = vehicle.start_m + kStep_m * Eigen::Vector2d(a, b);
+          const double d = (p - vehicle.start_m).norm();
+          if (d < best && usable(p, v)) best = d, best_point = p;
+        }
+      }
+      if (std::isfinite(best)) vehicle.start_m = best_point, found = true;
+    }
+    if (!found) {
+      throw ScenarioError(fmt::format("{}: vehicles[{}].start_m: no clear seabed for {} in the workspace",
+                                      scenario.source_path.empty() ? "<scenario>" : scenario.source_path, v,
+                                      vehicle.name));
+    }
+    ++moved;
+  }
+  return moved;
 }
 
 void CheckSeabedModel(const Scenario& scenario) {

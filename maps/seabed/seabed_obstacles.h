@@ -34,6 +34,18 @@ std::vector<CellRectangle> MergeIntoRectangles(const OccupancyGrid& grid);
 /// begin inside the rock).
 void CheckOnOpenSeabed(const Scenario& scenario, const OccupancyGrid& terrain);
 
+/// True if a vehicle may start at `start`: no blocked cell's centre of `terrain` within its start
+/// jitter plus kVehicleClearance_m (CheckOnOpenSeabed's rule for starts).
+bool StartIsClear(const OccupancyGrid& terrain, const Eigen::Vector2d& start, double jitter_m);
+
+/// Moves the starts of vehicles[first..] (placed by WithVehicleCount, for --vehicles or `sage
+/// vehicle add`, without looking at the seabed) off blocked seabed: a start that is not clear goes
+/// to the nearest clear point of a 0.25 m lattice that is 0.5 m inside the workspace, 0.5 m off
+/// every footprint and 1 m from every other start (the scenario's, the joins' and those placed
+/// before it). Deterministic. Returns how many moved; nothing to do on a flat seabed (it builds the
+/// seabed map otherwise). Throws ScenarioError if a start has nowhere to go.
+int MoveStartsOffBlockedSeabed(Scenario& scenario, std::size_t first);
+
 /// Everything World's construction refuses about a seabed model, without the rest of the world:
 /// the map read and checked, the model voxelised, no valve or start on blocked seabed. For a
 /// launcher to refuse a bad map before it starts any process; nothing to do on a flat seabed.

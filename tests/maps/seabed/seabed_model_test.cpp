@@ -364,5 +364,33 @@ TEST(SeabedObstacles, WorldRefusesAValveOnBlockedSeabed) {
   EXPECT_THROW(World{s}, ScenarioError);
 }
 
+// Vehicles added along the south edge (--vehicles, sage vehicle add) that land on a boulder move
+// to the nearest clear start; the rest stay; the world then builds, and the same input moves the
+// same way.
+TEST(SeabedObstacles, AddedStartsMoveOffBlockedSeabed) {
+  Scenario s = SmallScenario(8.0, 6.0, 0.1, {3.0, 3.5}, {7.0, 5.0});
+  Boulder rock;
+  rock.center_m = {4.0, 0.6};
+  rock.diameter_m = 2.4;
+  rock.height_m = 1.5;
+  s.boulders = {rock};
+  Scenario grown = WithVehicleCount(s, 6);  // five more along y = 0.5, one of them near x = 4
+  const Scenario before = grown;
+  const int moved = MoveStartsOffBlockedSeabed(grown, 1);
+  EXPECT_GE(moved, 1);
+  const World world(grown);  // throws if a start were still on blocked seabed
+  const OccupancyGrid terrain = TerrainObstacles(world.obstacles(), grown.structures);
+  for (std::size_t v = 0; v < grown.vehicles.size(); ++v) {
+    EXPECT_TRUE(StartIsClear(terrain, grown.vehicles[v].start_m, grown.start_jitter_m)) << v;
+    if (StartIsClear(terrain, before.vehicles[v].start_m, grown.start_jitter_m)) {
+      EXPECT_EQ(grown.vehicles[v].start_m, before.vehicles[v].start_m) << "a clear start stays";
+    }
+    for (std::size_t w = 0; w < v; ++w) EXPECT_GE((grown.vehicles[v].start_m - grown.vehicles[w].start_m).norm(), 1.0 - 1e-9);
+  }
+  Scenario again = before;
+  MoveStartsOffBlockedSeabed(again, 1);
+  for (std::size_t v = 0; v < grown.vehicles.size(); ++v) EXPECT_EQ(again.vehicles[v].start_m, grown.vehicles[v].start_m);
+}
+
 }  // namespace
 }  // namespace sage::maps
