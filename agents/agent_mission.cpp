@@ -202,9 +202,10 @@ AgentMission::CycleOutput AgentMission::Step(std::int64_t cycle) {
     if (const std::optional<VehicleTarget> target = TargetOf(id, member, t)) host_.SetTarget(id, *target);
   }
   host_.Step(t);
+  auto member = members_.cbegin();  // the states are in the members' order
   for (StateReport& s : out.states) {
     s.command_mps = host_.LastCommand(s.id);
-    s.target_cycle = members_.at(s.id).steered_cycle;
+    s.target_cycle = (member++)->second.steered_cycle;
   }
   // Every coverage period on the mission clock (cycles 1, 1 + P, 1 + 2P, ...: the first cycle
   // that steers is 1), the same cycles for every host however late it joined, so that a fleet
