@@ -163,7 +163,7 @@ struct AgentHost::Impl {
         basis(w.basis()),
         clearance(w.clearance()),
         grid(w.astar_grid()),
-        world(s.workspace, s.structures, {}, host_detail::PhysicsShards(s)) {
+        world(s.workspace, s.structures, {}, host_detail::PhysicsShards(s), w.terrain_blocks()) {
     control_dt = 1.0 / s.control_rate_hz;
     physics_substeps = std::max(1, static_cast<int>(std::lround(s.physics_rate_hz / s.control_rate_hz)));
     valves = s.ValvePositions();

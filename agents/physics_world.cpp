@@ -52,7 +52,8 @@ struct PhysicsWorld::Vehicle {
 };
 
 PhysicsWorld::PhysicsWorld(const maps::Workspace& /*workspace*/,
-                           const std::vector<maps::ChristmasTree>& structures, BlueRov2Params rov_params, int shards)
+                           const std::vector<maps::ChristmasTree>& structures, BlueRov2Params rov_params, int shards,
+                           const std::vector<maps::CellRectangle>& terrain)
     : rov_params_(rov_params) {
   if (shards < 1) throw std::invalid_argument("PhysicsWorld: shards = " + std::to_string(shards) + ": must be >= 1");
   for (int k = 0; k < shards; ++k) {
@@ -73,6 +74,20 @@ PhysicsWorld::PhysicsWorld(const maps::Workspace& /*workspace*/,
       b2PolygonShape box;
       box.SetAsBox(static_cast<float>(0.5 * tree.size_m.x()), static_cast<float>(0.5 * tree.size_m.y()));
       body->CreateFixture(&box, 0.0f);
+    }
+    // The blocked seabed: one static body, a box fixture per rectangle of blocked cells (a
+    // vehicle glances off the rock as off a structure).
+    if (!terrain.empty()) {
+      b2BodyDef def;
+      def.type = b2_staticBody;
+      b2Body* body = world->CreateBody(&def);
+      for (const maps::CellRectangle& block : terrain) {
+        const Eigen::Vector2d center = (block.min_m + block.max_m) / 2, half = (block.max_m - block.min_m) / 2;
+        b2PolygonShape box;
+        box.SetAsBox(static_cast<float>(half.x()), static_cast<float>(half.y()),
+                     b2Vec2(static_cast<float>(center.x()), static_cast<float>(center.y())), 0.0f);
+        body->CreateFixture(&box, 0.0f);
+      }
     }
     worlds_.push_back(std::move(world));
   }

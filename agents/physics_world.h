@@ -1,6 +1,6 @@
 #pragma once
-// Box2D world of a mission: zero gravity, the XT structures as static bodies, one body per
-// vehicle. Every vehicle's motion goes through Box2D:
+// Box2D world of a mission: zero gravity, the XT structures and the seabed's blocked terrain as
+// static bodies, one body per vehicle. Every vehicle's motion goes through Box2D:
 //  - single_integrator: a kinematic body whose velocity is set to the command (x' = u exactly,
 //    passes through structures like the paper's point model);
 //  - bluerov2: a dynamic body with the BlueROV2 Heavy rigid-body + added mass, body-frame linear
@@ -13,6 +13,7 @@
 
 #include "agents/vehicle_controller.h"
 #include "maps/scenario/scenario.h"
+#include "maps/seabed/seabed_obstacles.h"
 
 class b2World;
 class b2Body;
@@ -47,8 +48,10 @@ class PhysicsWorld {
   /// holding every structure. Vehicles of one shard collide with each other; vehicles of
   /// different shards pass through each other (guidance keeps them apart, as it keeps apart the
   /// vehicles of different agent hosts), so the shards can be stepped on different threads.
+  /// `terrain`: the seabed's obstacles that are not structures (maps::World::terrain_blocks()),
+  /// one static box fixture each, in every shard.
   PhysicsWorld(const maps::Workspace& workspace, const std::vector<maps::ChristmasTree>& structures,
-               BlueRov2Params rov_params = {}, int shards = 1);
+               BlueRov2Params rov_params = {}, int shards = 1, const std::vector<maps::CellRectangle>& terrain = {});
   ~PhysicsWorld();
   PhysicsWorld(const PhysicsWorld&) = delete;
   PhysicsWorld& operator=(const PhysicsWorld&) = delete;

@@ -7,6 +7,7 @@
 #include <cstdint>
 #include <limits>
 #include <map>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <utility>
@@ -182,6 +183,71 @@ struct FleetEvent {
   VehicleSpec vehicle;  ///< join: the whole spec (a new unique name); lose/leave: only the name matters
 };
 
+/// A flowline (or a spool, jumper or umbilical): a pipe lying on the seabed along a polyline. It is
+/// part of the seabed map: a vehicle's altitude band clears a pipe lower than the band's floor,
+/// and a pipe that rises into the band blocks it like a structure.
+struct Flowline {
+  std::string name;                       ///< unique among flowlines, e.g. "FL-A"
+  std::vector<Eigen::Vector2d> points_m;  ///< the pipe's axis: >= 2 vertices in the workspace, no two consecutive equal
+  double diameter_m = 0.25;               ///< outer diameter (m), in (0, kMaxFlowlineDiameter_m]
+  /// Length of the axis (m).
+  double Length_m() const;
+  /// The point of the axis s_m along it (m, from its first vertex), s_m in [0, Length_m()].
+  Eigen::Vector2d PointAt(double s_m) const;
+};
+
+/// A boulder on the seabed: half an ellipsoid standing on the seabed at its centre.
+struct Boulder {
+  Eigen::Vector2d center_m = Eigen::Vector2d::Zero();  ///< inside the workspace
+  double diameter_m = 1.0;  ///< across (m), in (0, kMaxBoulderSize_m]
+  double height_m = 0.6;    ///< above the seabed at its centre (m), in (0, kMaxBoulderSize_m]
+};
+
+/// What the numbers of a seabed map mean: heights (up) or depths (down).
+enum class SeabedValues { kElevation, kDepth };
+
+/// The seabed the vehicles fly over, when it is more than today's flat plane (the `seabed:`
+/// section). The vehicles keep an altitude band above the local seabed: the plane fitted to the
+/// bare seabed within trend_radius_m of a point (a vehicle's depth follows the seabed's trend,
+/// not each rock); whatever rises from there into the band (terrain, boulders, pipes,
+/// structures) blocks them like a structure.
+struct SeabedSettings {
+  /// The seabed map: a GeoTIFF (.tif, .tiff), a gridded XYZ/CSV (.xyz, .csv: x y z, one line a
+  /// grid node) or an OctoMap (.bt, .ot: the top of its occupied voxels in each column). Written
+  /// relative to the scenario file's folder; LoadScenario resolves it to an absolute path. Empty:
+  /// a flat seabed (boulders and flowlines still stand on it).
+  std::string map;
+  /// The map's coordinates (m) of the workspace's corner (0, 0); none = the map's south-west
+  /// corner. The workspace's x runs east, y north.
+  std::optional<Eigen::Vector2d> origin_m;
+  SeabedValues values = SeabedValues::kElevation;  ///< depth: the map holds depths (positive down)
+  double altitude_min_m = 0.5;  ///< the vehicles' altitude band above the local seabed (m): floor
+  double altitude_max_m = 1.5;  ///< ... and ceiling, > floor by at least the A* grid resolution
+  double trend_radius_m = 2.5;  ///< the local seabed is the plane fitted within +- this (m) of a point
+  /// FNV-1a of the map file's bytes, read when the scenario is loaded (not written in YAML): a
+  /// server and an agent host, or a checkpoint and its resume, that see different maps disagree.
+  std::uint64_t map_fnv1a = 0;
+};
+
+/// The kinds of seabed map file, told by the file name's extension (any case).
+enum class SeabedMapFormat {
+  kUnknown,
+  kGeoTiff,  ///< .tif, .tiff (read through GDAL)
+  kXyz,      ///< .xyz, .csv: a gridded x y z file (read through GDAL's XYZ driver)
+  kOctoMap,  ///< .bt (OctoMap binary) or .ot (OctoMap full: OcTree, ColorOcTree, OcTreeStamped)
+};
+SeabedMapFormat SeabedMapFormatOf(const std::string& path);
+
+/// Bounds on the seabed's objects (each broken one is a one-line error).
+inline constexpr double kMaxFlowlineDiameter_m = 5.0;
+inline constexpr double kMaxBoulderSize_m = 20.0;
+inline constexpr std::size_t kMaxFlowlinePoints = 100000;  ///< over all flowlines
+inline constexpr std::size_t kMaxBoulders = 100000;
+/// A seabed map file is read only up to this size (a 4,000 x 4,000 float GeoTIFF is 64 MB).
+inline constexpr std::size_t kMaxSeabedMapBytes = std::size_t{256} << 20;
+/// The altitude band lies within this of the local seabed (m).
+inline constexpr double kMaxAltitude_m = 100.0;
+
 struct Scenario {
   std::string name;                         ///< from the file name or `name:` field
   std::string source_path;                  ///< file it was loaded from (for messages)
@@ -204,6 +270,11 @@ struct Scenario {
   AstarSettings astar;
   FleetSettings fleet;
   std::vector<FleetEvent> fleet_events;     ///< sorted by time on load
+  /// The seabed (the `seabed:`, `flowlines:` and `boulders:` sections); none of the three: the
+  /// flat seabed with the XTs alone, as before there were maps.
+  std::optional<SeabedSettings> seabed;
+  std::vector<Flowline> flowlines;
+  std::vector<Boulder> boulders;
 
   /// All valves in file order (P1..Pn), structure after structure.
   std::vector<Valve> AllValves() const;
@@ -222,6 +293,14 @@ struct Scenario {
   const RiskProfile& ProfileOrThrow(const std::string& name) const;
   /// A profile's raw weights in AllValves() order (before its events).
   Eigen::VectorXd ProfileWeights(const RiskProfile& profile) const;
+  /// True if the seabed is more than the flat plane with the XTs alone: a seabed section, a
+  /// flowline or a boulder (SeabedMap then builds the terrain).
+  bool HasSeabedModel() const { return seabed.has_value() || !flowlines.empty() || !boulders.empty(); }
+  /// The seabed's settings: the scenario's, or the defaults (a flat seabed, the 0.5-1.5 m band).
+  SeabedSettings SeabedOrDefault() const { return seabed.value_or(SeabedSettings{}); }
+  /// The point s_m (m) along the axis of the flowline named `flowline` (a leak "at FL-A, 12 m"):
+  /// throws ScenarioError naming the flowlines, or the length, if there is no such point.
+  Eigen::Vector2d FlowlinePoint(const std::string& flowline, double s_m) const;
   /// Throws ScenarioError for the first field that breaks a rule.
   void Validate() const;
 };
@@ -260,6 +339,7 @@ std::uint64_t ScenarioHash(const Scenario& scenario);
 
 const char* ToString(MotionModel model);
 const char* ToString(FleetAssignment assignment);
+const char* ToString(SeabedValues values);
 /// Throws ScenarioError unless text is "shared" or "partition"; `where` starts the message.
 FleetAssignment ParseFleetAssignment(const std::string& text, const std::string& where);
 /// Throws ScenarioError if `text` is not "single_integrator" or "bluerov2"; `where` starts the

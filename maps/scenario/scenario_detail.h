@@ -43,4 +43,9 @@ inline const char* EventKey(FleetEvent::Kind kind) {
   return "unknown";
 }
 
+// ParseScenario's step for a seabed map: the path resolved against the folder of `source` (the
+// scenario file) to an absolute one, the file checked at the door (a known kind, a regular file
+// of at most kMaxSeabedMapBytes) and its bytes hashed into map_fnv1a. Throws ScenarioError.
+void ResolveSeabedMap(SeabedSettings& seabed, const std::string& source);
+
 }  // namespace sage::maps::detail

@@ -107,6 +107,40 @@ std::string EmitScenario(const Scenario& s) {
     out << YAML::EndMap;
   }
   out << YAML::EndSeq;
+  // The seabed sections only when the scenario has them: a flat scenario writes what it always did.
+  if (s.seabed) {
+    const SeabedSettings& b = *s.seabed;
+    key("seabed") << YAML::Flow << YAML::BeginMap;
+    if (!b.map.empty()) key("map") << b.map;
+    if (b.origin_m) { key("origin_m"); vector(*b.origin_m); }
+    key("values") << ToString(b.values);
+    key("altitude_band_m"); vector(Eigen::Vector2d(b.altitude_min_m, b.altitude_max_m));
+    number("trend_radius_m", b.trend_radius_m);
+    out << YAML::EndMap;
+  }
+  if (!s.flowlines.empty()) {
+    key("flowlines") << YAML::BeginSeq;
+    for (const Flowline& f : s.flowlines) {
+      out << YAML::Flow << YAML::BeginMap;
+      key("name") << f.name;
+      number("diameter_m", f.diameter_m);
+      key("points_m") << YAML::BeginSeq;
+      for (const Eigen::Vector2d& p : f.points_m) vector(p);
+      out << YAML::EndSeq << YAML::EndMap;
+    }
+    out << YAML::EndSeq;
+  }
+  if (!s.boulders.empty()) {
+    key("boulders") << YAML::BeginSeq;
+    for (const Boulder& b : s.boulders) {
+      out << YAML::Flow << YAML::BeginMap;
+      key("center_m"); vector(b.center_m);
+      number("diameter_m", b.diameter_m);
+      number("height_m", b.height_m);
+      out << YAML::EndMap;
+    }
+    out << YAML::EndSeq;
+  }
   key("default_profile") << s.default_profile;
   key("profiles") << YAML::BeginMap;
   for (const RiskProfile& profile : s.profiles) {

@@ -198,9 +198,18 @@ std::uint64_t VehicleFingerprint(const Scenario& scenario) {
   vehicles_only.astar = AstarSettings{};
   vehicles_only.fleet.assignment = FleetAssignment::kShared;
   vehicles_only.fleet_events.clear();
+  // The seabed map by its content, not its path: two processes reading the same map from
+  // different folders fly the same world, and the same path holding another map does not.
+  if (vehicles_only.seabed && !vehicles_only.seabed->map.empty()) {
+    vehicles_only.seabed->map = "fnv1a-" + std::to_string(vehicles_only.seabed->map_fnv1a) + ".bt";
+  }
   return Fnv1a(EmitScenario(vehicles_only));
 }
 
-std::uint64_t ScenarioHash(const Scenario& scenario) { return Fnv1a(EmitScenario(scenario)); }
+std::uint64_t ScenarioHash(const Scenario& scenario) {
+  std::string text = EmitScenario(scenario);
+  if (scenario.seabed && !scenario.seabed->map.empty()) text += "# map_fnv1a " + std::to_string(scenario.seabed->map_fnv1a);
+  return Fnv1a(text);
+}
 
 }  // namespace sage::maps

@@ -219,6 +219,69 @@ FleetEvent ReadFleetEvent(const Reader& r, const YAML::Node& node, const std::st
   return event;
 }
 
+// The seabed: {map: FILE, origin_m: [x, y], values: elevation|depth, altitude_band_m: [floor,
+// ceiling], trend_radius_m: R}, every key optional. The map's path is resolved and its file
+// checked by ParseScenario (ResolveSeabedMap), once the whole file has been read.
+SeabedSettings ReadSeabed(const Reader& r, const YAML::Node& node, const std::string& path) {
+  r.ExpectMap(node, path, {"map", "origin_m", "values", "altitude_band_m", "trend_radius_m"});
+  SeabedSettings seabed;
+  r.Optional(node, "map", path, [&](const YAML::Node& n, const std::string& p) { seabed.map = r.Text(n, p); });
+  r.Optional(node, "origin_m", path,
+             [&](const YAML::Node& n, const std::string& p) { seabed.origin_m = r.Vector(n, p); });
+  r.Optional(node, "values", path, [&](const YAML::Node& n, const std::string& p) {
+    const std::string text = r.Text(n, p);
+    if (text == "elevation") seabed.values = SeabedValues::kElevation;
+    else if (text == "depth") seabed.values = SeabedValues::kDepth;
+    else r.Fail(p, n, "must be elevation (heights, up) or depth (depths, down)");
+  });
+  r.Optional(node, "altitude_band_m", path, [&](const YAML::Node& n, const std::string& p) {
+    if (!n.IsSequence() || n.size() != 2) r.Fail(p, n, "must be [floor, ceiling] in m above the local seabed");
+    seabed.altitude_min_m = r.Number(n[0], p + "[0]");
+    seabed.altitude_max_m = r.Number(n[1], p + "[1]");
+  });
+  r.OptionalNumber(node, "trend_radius_m", path, seabed.trend_radius_m);
+  return seabed;
+}
+
+Flowline ReadFlowline(const Reader& r, const YAML::Node& node, const std::string& path) {
+  r.ExpectMap(node, path, {"name", "diameter_m", "points_m"});
+  Flowline flowline;
+  flowline.name = r.Text(r.Require(node, "name", path), path + ".name");
+  r.OptionalNumber(node, "diameter_m", path, flowline.diameter_m);
+  const YAML::Node points = r.Require(node, "points_m", path);
+  r.ExpectList(points, path + ".points_m");
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    flowline.points_m.push_back(r.Vector(points[i], path + ".points_m[" + std::to_string(i) + "]"));
+  }
+  return flowline;
+}
+
+Boulder ReadBoulder(const Reader& r, const YAML::Node& node, const std::string& path) {
+  r.ExpectMap(node, path, {"center_m", "diameter_m", "height_m"});
+  Boulder boulder;
+  boulder.center_m = r.Vector(r.Require(node, "center_m", path), path + ".center_m");
+  r.OptionalNumber(node, "diameter_m", path, boulder.diameter_m);
+  r.OptionalNumber(node, "height_m", path, boulder.height_m);
+  return boulder;
+}
+
+// The seabed's three sections, each optional: the seabed itself, and what lies on it.
+void ReadSeabedSections(const Reader& r, const YAML::Node& root, Scenario& s) {
+  r.Optional(root, "seabed", "", [&](const YAML::Node& n, const std::string& p) { s.seabed = ReadSeabed(r, n, p); });
+  r.Optional(root, "flowlines", "", [&](const YAML::Node& list, const std::string& p) {
+    r.ExpectList(list, p);
+    for (std::size_t i = 0; i < list.size(); ++i) {
+      s.flowlines.push_back(ReadFlowline(r, list[i], p + "[" + std::to_string(i) + "]"));
+    }
+  });
+  r.Optional(root, "boulders", "", [&](const YAML::Node& list, const std::string& p) {
+    r.ExpectList(list, p);
+    for (std::size_t i = 0; i < list.size(); ++i) {
+      s.boulders.push_back(ReadBoulder(r, list[i], p + "[" + std::to_string(i) + "]"));
+    }
+  });
+}
+
 RiskProfile ReadProfile(const Reader& r, const std::string& name, const YAML::Node& node, const std::string& path) {
   r.ExpectMap(node, path, {"weights", "events"});
   RiskProfile profile;
@@ -248,7 +311,8 @@ Scenario ReadScenario(const Reader& r, const YAML::Node& root, const std::string
   if (!root.IsMap()) r.Fail("scenario", root, "must be a YAML map of sections (workspace, structures, ...)");
   r.ExpectMap(root, "", {"name", "workspace", "duration_s", "control_rate_hz", "physics_rate_hz",
                          "visit_radius_m", "rearm_radius_m", "seed", "start_jitter_m", "ergodic", "guard", "astar",
-                         "structures", "vehicles", "default_profile", "profiles", "fleet", "fleet_events"});
+                         "structures", "vehicles", "default_profile", "profiles", "fleet", "fleet_events",
+                         "seabed", "flowlines", "boulders"});
   Scenario s;
   s.source_path = source;
   s.name = source.empty() ? "scenario" : std::filesystem::path(source).stem().string();
@@ -328,6 +392,7 @@ Scenario ReadScenario(const Reader& r, const YAML::Node& root, const std::string
       s.fleet_events.push_back(ReadFleetEvent(r, list[i], p + "[" + std::to_string(i) + "]"));
     }
   });
+  ReadSeabedSections(r, root, s);
   return s;
 }
 
@@ -349,6 +414,7 @@ Scenario ParseScenario(const std::string& yaml_text, const std::string& source) 
     // Safety net: ReadScenario checks types itself, so yaml-cpp should not throw past it.
     throw ScenarioError(OneLine(source + ": " + Position(e.mark) + "cannot read: " + e.msg));
   }
+  if (scenario.seabed && !scenario.seabed->map.empty()) detail::ResolveSeabedMap(*scenario.seabed, source);
   scenario.Validate();
   for (RiskProfile& profile : scenario.profiles) {
     std::stable_sort(profile.events.begin(), profile.events.end(),

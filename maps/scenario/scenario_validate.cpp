@@ -136,6 +136,86 @@ void CheckFleetEvents(const Checker& c, const std::vector<FleetEvent>& events, c
   }
 }
 
+// The seabed sections: the map's kind and frame, the altitude band, the flowlines and boulders
+// (in the workspace, sizes bounded). Whether a valve or a start lies on blocked seabed needs the
+// map itself: maps/seabed checks that when it builds the world.
+void CheckSeabed(const Checker& c, const Scenario& s, const std::string& workspace_text) {
+  const Eigen::Vector2d workspace_max(s.workspace.width_m, s.workspace.height_m);
+  const double grid = s.astar.grid_resolution_m;
+  if (s.seabed) {
+    const SeabedSettings& b = *s.seabed;
+    const SeabedMapFormat format = SeabedMapFormatOf(b.map);
+    if (!b.map.empty() && format == SeabedMapFormat::kUnknown) {
+      c.Fail("seabed.map", b.map, "must end in .tif or .tiff (GeoTIFF), .xyz or .csv (gridded x y z) or .bt or .ot (OctoMap)");
+    }
+    if (b.origin_m) {
+      c.Finite("seabed.origin_m", *b.origin_m);
+      if (b.map.empty()) c.Fail("seabed.origin_m", FormatVector(*b.origin_m), "places a map: give seabed.map too");
+    }
+    if (b.values != SeabedValues::kElevation && b.values != SeabedValues::kDepth) {
+      c.Fail("seabed.values", std::to_string(static_cast<int>(b.values)), "must be elevation or depth");
+    }
+    if (b.values == SeabedValues::kDepth && format == SeabedMapFormat::kOctoMap) {
+      c.Fail("seabed.values", "depth", "an OctoMap holds heights (z up): leave values out or give elevation");
+    }
+    const std::string band = FormatVector(Eigen::Vector2d(b.altitude_min_m, b.altitude_max_m));
+    if (!std::isfinite(b.altitude_min_m) || !std::isfinite(b.altitude_max_m) || b.altitude_min_m < 0 ||
+        b.altitude_max_m > kMaxAltitude_m) {
+      c.Fail("seabed.altitude_band_m", band, "must lie in [0, " + FormatNumber(kMaxAltitude_m) + "] m above the seabed");
+    }
+    // A band thinner than a voxel could hold no voxel centre: nothing would ever block.
+    if (!(b.altitude_max_m - b.altitude_min_m >= grid)) {
+      c.Fail("seabed.altitude_band_m", band,
+             "the ceiling must exceed the floor by at least astar.grid_resolution_m = " + FormatNumber(grid) +
+                 " m (the seabed map's voxel)");
+    }
+    c.Positive("seabed.trend_radius_m", b.trend_radius_m);
+    if (b.trend_radius_m < grid || b.trend_radius_m > 1000.0) {
+      c.Fail("seabed.trend_radius_m", FormatNumber(b.trend_radius_m),
+             "must be in [astar.grid_resolution_m = " + FormatNumber(grid) + ", 1000] m");
+    }
+  }
+  std::size_t points = 0;
+  for (const Flowline& f : s.flowlines) points += f.points_m.size();
+  if (points > kMaxFlowlinePoints) {
+    c.Fail("flowlines", std::to_string(points) + " points", "must hold at most " + std::to_string(kMaxFlowlinePoints));
+  }
+  std::map<std::string, std::string> names;
+  for (std::size_t i = 0; i < s.flowlines.size(); ++i) {
+    const Flowline& f = s.flowlines[i];
+    const std::string path = "flowlines[" + std::to_string(i) + "]";
+    c.UniqueName(names, path + ".name", f.name);
+    c.Positive(path + ".diameter_m", f.diameter_m);
+    c.AtMost(path + ".diameter_m", f.diameter_m, kMaxFlowlineDiameter_m, "m");
+    if (f.points_m.size() < 2) c.Fail(path + ".points_m", "must list at least 2 points (the pipe's axis)");
+    for (std::size_t k = 0; k < f.points_m.size(); ++k) {
+      const std::string field = path + ".points_m[" + std::to_string(k) + "]";
+      c.Finite(field, f.points_m[k]);
+      if (!InsideBox(f.points_m[k], Eigen::Vector2d::Zero(), workspace_max)) {
+        c.Fail(field, FormatVector(f.points_m[k]), "must be inside the workspace " + workspace_text);
+      }
+      if (k > 0 && f.points_m[k] == f.points_m[k - 1]) {
+        c.Fail(field, FormatVector(f.points_m[k]), "repeats the point before it");
+      }
+    }
+  }
+  if (s.boulders.size() > kMaxBoulders) {
+    c.Fail("boulders", std::to_string(s.boulders.size()), "must hold at most " + std::to_string(kMaxBoulders));
+  }
+  for (std::size_t i = 0; i < s.boulders.size(); ++i) {
+    const Boulder& b = s.boulders[i];
+    const std::string path = "boulders[" + std::to_string(i) + "]";
+    c.Finite(path + ".center_m", b.center_m);
+    if (!InsideBox(b.center_m, Eigen::Vector2d::Zero(), workspace_max)) {
+      c.Fail(path + ".center_m", FormatVector(b.center_m), "must be inside the workspace " + workspace_text);
+    }
+    c.Positive(path + ".diameter_m", b.diameter_m);
+    c.AtMost(path + ".diameter_m", b.diameter_m, kMaxBoulderSize_m, "m");
+    c.Positive(path + ".height_m", b.height_m);
+    c.AtMost(path + ".height_m", b.height_m, kMaxBoulderSize_m, "m");
+  }
+}
+
 }  // namespace
 
 void Scenario::Validate() const {
@@ -344,6 +424,7 @@ void Scenario::Validate() const {
     for (const RiskProfile& profile : profiles) list += (list.empty() ? "" : ", ") + profile.name;
     c.Fail("default_profile", default_profile.empty() ? "\"\"" : default_profile, "must name a profile (" + list + ")");
   }
+  CheckSeabed(c, *this, workspace_text);
 }
 
 }  // namespace sage::maps

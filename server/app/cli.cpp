@@ -303,7 +303,7 @@ int RunCli(int argc, char** argv) {
 
   maps::FieldOptions field_options;
   std::string field_out;
-  CLI::App* field = app.add_subcommand("field", "Synthetic subsea fields for scale runs");
+  CLI::App* field = app.add_subcommand("field", "Synthetic subsea fields: of any size for scale runs, and the example seabed");
   field->require_subcommand(1);
   CLI::App* generate = field->add_subcommand(
       "generate", "Write a realistic scenario of any size: XTs in manifold clusters, valves at the inspection "
@@ -319,6 +319,18 @@ int RunCli(int argc, char** argv) {
       ->capture_default_str();
   generate->add_option("--name", field_options.name, "The scenario's name (default: field_<xts>xt_<valves>v_<vehicles>rov_s<seed>)");
   generate->add_option("--out,-o", field_out, "Scenario file to write")->required();
+  std::uint64_t seabed_seed = 7;
+  std::string seabed_name = "manifold_slope", seabed_out;
+  CLI::App* seabed = field->add_subcommand(
+      "seabed", "Write the example seabed field: a manifold, four XTs, their jumpers, an export line and an "
+                "umbilical on a slope with sand waves, a rock ridge, a scarp, a pockmark and boulders, flown by three "
+                "BlueROV2s 0.8-2.0 m above the local seabed; the bathymetry (gridded XYZ depths) is written beside "
+                "the scenario as NAME.xyz. The same seed gives the same files (scenarios/manifold_slope.yaml is seed 7)");
+  seabed->add_option("--seed", seabed_seed, "Moves the boulders, the sand waves and the risk; also the mission's seed")
+      ->check(MustBeWholeNumber)
+      ->capture_default_str();
+  seabed->add_option("--name", seabed_name, "The scenario's name and its map's file name (NAME.xyz)")->capture_default_str();
+  seabed->add_option("--out,-o", seabed_out, "Scenario file to write (the map goes in the same folder)")->required();
 
   BenchScaleCommand bench_cmd;
   CLI::App* bench = app.add_subcommand("bench", "Benchmarks of the whole system");
@@ -408,6 +420,7 @@ int RunCli(int argc, char** argv) {
     if (*stop) return StopMission(FindMission(op.mission_dir), op.insecure);
     if (*security_init) return CmdSecurityInit(security_cmd);
     if (*generate) return CmdFieldGenerate(field_options, field_out);
+    if (*seabed) return CmdFieldSeabed(seabed_seed, seabed_name, seabed_out);
     if (*bench_scale) return CmdBenchScale(bench_cmd);
   } catch (const maps::ScenarioError& e) {
     std::cerr << "sage: error: " << e.what() << "\n";

@@ -7,6 +7,8 @@
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
 
+#include "maps/seabed/seabed_obstacles.h"
+
 namespace sage::server {
 
 namespace {
@@ -52,7 +54,12 @@ maps::Scenario LoadWithOverrides(const ScenarioOverrides& o) {
   if (!o.profile.empty()) scenario.ProfileOrThrow(o.profile);  // before anything starts, naming the user's file
   if (o.vehicles) {
     const std::vector<maps::FleetEvent> events = scenario.fleet_events;
+    const std::size_t own = scenario.vehicles.size();
     scenario = maps::WithVehicleCount(scenario, *o.vehicles);
+    // Added starts were placed without the seabed's terrain: those on blocked seabed move off it.
+    if (const int moved = maps::MoveStartsOffBlockedSeabed(scenario, own); moved > 0) {
+      spdlog::info("--vehicles = {}: {} added start(s) moved off blocked seabed", *o.vehicles, moved);
+    }
     // Losing or removing a vehicle the smaller fleet does not have is dropped; say so.
     for (const maps::FleetEvent& e : events) {
       const bool kept = std::any_of(scenario.fleet_events.begin(), scenario.fleet_events.end(), [&](const auto& k) {

@@ -1,9 +1,13 @@
 #include "server/app/field_command.h"
 
+#include <algorithm>
+#include <cctype>
 #include <chrono>
+#include <filesystem>
 
 #include <spdlog/spdlog.h>
 
+#include "maps/scenario/seabed_example.h"
 #include "server/report/mission_file.h"
 
 namespace sage::server {
@@ -21,6 +25,32 @@ int CmdFieldGenerate(const maps::FieldOptions& options, const std::string& out_p
                out_path, field.structures.size(), field.ValveCount(), field.vehicles.size(),
                field.workspace.width_m, field.workspace.height_m, field.ergodic.basis_order,
                field.astar.grid_resolution_m,
+               std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(), out_path, out_path);
+  return 0;
+}
+
+int CmdFieldSeabed(std::uint64_t seed, const std::string& name, const std::string& out_path) {
+  // The name is also the map's file name, beside the scenario.
+  const bool plain = !name.empty() && name.size() <= maps::kMaxNameLength &&
+                     std::all_of(name.begin(), name.end(), [](unsigned char c) {
+                       return std::isalnum(c) || c == '_' || c == '-' || c == '.';
+                     }) && name.front() != '.';
+  if (!plain) {
+    throw maps::ScenarioError("--name = " + name + ": must be 1-64 letters, digits, '_', '-' or '.' (it names the map file)");
+  }
+  const auto start = std::chrono::steady_clock::now();
+  const maps::SeabedExample field = maps::GenerateSeabedExample(seed, name);
+  const std::string map_path = (std::filesystem::path(out_path).parent_path() / (name + ".xyz")).string();
+  try {
+    WriteFilesTogether({{map_path, field.map_xyz}, {out_path, field.yaml}});
+  } catch (const std::runtime_error& e) {
+    throw maps::ScenarioError(std::string("--out: ") + e.what());
+  }
+  spdlog::info("wrote {} and its seabed {}: {} structures, {} valves, {} flowlines, {} boulders, {} vehicles on "
+               "{:.0f} x {:.0f} m in {:.2f} s; run it with sage run {} or sage launch {}",
+               out_path, map_path, field.scenario.structures.size(), field.scenario.ValveCount(),
+               field.scenario.flowlines.size(), field.scenario.boulders.size(), field.scenario.vehicles.size(),
+               field.scenario.workspace.width_m, field.scenario.workspace.height_m,
                std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(), out_path, out_path);
   return 0;
 }

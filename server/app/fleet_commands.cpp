@@ -6,6 +6,7 @@
 #include <fmt/format.h>
 
 #include "agents/node/agent_node.h"
+#include "maps/seabed/seabed_obstacles.h"
 #include "server/app/resume_plan.h"
 #include "server/app/security_command.h"
 #include "server/node/server_node.h"
@@ -99,7 +100,8 @@ int CmdAgents(const AgentsCommand& c) {
     if (!c.first_id) throw maps::ScenarioError("--add: give --first-id (the ids the server issued; sage vehicle add does)");
     // Free starts as --vehicles would place them, after the scenario's own vehicles; names as the
     // server issues them (rov<id + 1>).
-    const maps::Scenario grown = maps::WithVehicleCount(scenario, static_cast<int>(scenario.vehicles.size()) + c.add);
+    maps::Scenario grown = maps::WithVehicleCount(scenario, static_cast<int>(scenario.vehicles.size()) + c.add);
+    maps::MoveStartsOffBlockedSeabed(grown, scenario.vehicles.size());  // as --vehicles does
     for (int k = 0; k < c.add; ++k) {
       maps::VehicleSpec spec = grown.vehicles[scenario.vehicles.size() + k];
       spec.name = "rov" + std::to_string(*c.first_id + k + 1);

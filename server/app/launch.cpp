@@ -16,6 +16,7 @@
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
 
+#include "maps/seabed/seabed_obstacles.h"
 #include "proto/dds_config.h"
 #include "proto/dds_endpoints.h"
 #include "proto/messages.h"
@@ -116,6 +117,7 @@ int Launch(const LaunchCommand& c) {
     mission.resumes = previous.resumes + 1;
   } else {
     scenario = LoadWithOverrides(c.scenario);
+    maps::CheckSeabedModel(scenario);  // a bad seabed map is refused here, naming the user's file, not by the server
     out_dir = c.out_dir.empty() ? (fs::path("runs") / (scenario.name + "_launch")).string() : c.out_dir;
     CheckRunDirectoryFree(out_dir);
     PrepareRunDirectory(out_dir);

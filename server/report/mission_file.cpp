@@ -77,6 +77,11 @@ void WriteScenarioTo(const std::string& path, const maps::Scenario& scenario) {
   detail::WriteAtomically(path, maps::EmitScenario(scenario));
 }
 
+void WriteFilesTogether(const std::vector<std::pair<std::string, std::string>>& files) {
+  for (const auto& [path, text] : files) detail::WriteTemporary(path, text);
+  for (const auto& [path, text] : files) detail::CommitTemporary(path);
+}
+
 RecordSummary ReadRecordSummary(const std::string& dir) {
   RecordSummary s;
   const fs::path trajectory = fs::path(dir) / "trajectory.csv";

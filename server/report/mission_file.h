@@ -3,6 +3,8 @@
 // that operators' commands find it (sage risk set, vehicle add, stop) and `sage launch
 // --resume` can bring it back: its DDS domain, scenario, clock pace, controller and profile.
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "maps/scenario/scenario.h"
 
@@ -31,6 +33,9 @@ void WriteScenarioFile(const std::string& dir, const maps::Scenario& scenario);
 
 /// Writes a scenario file at `path` atomically. Throws std::runtime_error naming the file.
 void WriteScenarioTo(const std::string& path, const maps::Scenario& scenario);
+/// Writes each (path, text) as a temporary first, then renames them all: a generated scenario and
+/// the map beside it appear together or not at all. Throws std::runtime_error naming the file.
+void WriteFilesTogether(const std::vector<std::pair<std::string, std::string>>& files);
 
 /// How far a run directory's record goes.
 struct RecordSummary {

@@ -88,7 +88,8 @@ std::string PlotSvg(const maps::Scenario& scenario, const Eigen::VectorXd& weigh
   };
   // Legend entries below the plot, wrapped into rows of kPerRow.
   constexpr int kPerRow = 4;
-  const int legend_items = static_cast<int>(paths.size()) + 2;
+  const bool seabed_objects = !scenario.flowlines.empty() || !scenario.boulders.empty();
+  const int legend_items = static_cast<int>(paths.size()) + 2 + (seabed_objects ? 1 : 0);
   const double legend_y = kTop + plot_h + 26.0;
   const double height_px = legend_y + 20.0 * ((legend_items + kPerRow - 1) / kPerRow) + 6.0;
 
@@ -128,6 +129,17 @@ std::string PlotSvg(const maps::Scenario& scenario, const Eigen::VectorXd& weigh
   }
   put("</g>\n");
 
+  // What lies on the seabed: flowlines at their diameter (at least 1.5 px), boulders across theirs.
+  for (const maps::Flowline& f : scenario.flowlines) {
+    put("<polyline fill=\"none\" stroke=\"#b8860b\" stroke-opacity=\"0.8\" stroke-linejoin=\"round\" "
+        "stroke-width=\"{:.1f}\" points=\"", std::max(1.5, f.diameter_m * scale));
+    for (const Eigen::Vector2d& p : f.points_m) put("{:.1f},{:.1f} ", px(p.x()), py(p.y()));
+    put("\"><title>{} ({} m)</title></polyline>\n", XmlEscape(f.name), f.diameter_m);
+  }
+  for (const maps::Boulder& b : scenario.boulders) {
+    put("<circle cx=\"{:.1f}\" cy=\"{:.1f}\" r=\"{:.1f}\" fill=\"#8a8a8a\" stroke=\"#505050\"/>\n", px(b.center_m.x()),
+        py(b.center_m.y()), std::max(1.0, 0.5 * b.diameter_m * scale));
+  }
   for (const maps::ChristmasTree& xt : scenario.structures) {
     const Eigen::Vector2d lo = xt.center_m - 0.5 * xt.size_m;
     put("<rect x=\"{:.1f}\" y=\"{:.1f}\" width=\"{:.1f}\" height=\"{:.1f}\" fill=\"#404040\"/>\n",
@@ -180,6 +192,13 @@ std::string PlotSvg(const maps::Scenario& scenario, const Eigen::VectorXd& weigh
   auto [tx, ty] = slot();
   put("<rect x=\"{:.1f}\" y=\"{:.1f}\" width=\"22\" height=\"10\" fill=\"#404040\"/>\n", tx, ty - 9.0);
   put("<text x=\"{:.1f}\" y=\"{:.1f}\" font-size=\"12\">XT footprint</text>\n", tx + 28.0, ty);
+  if (seabed_objects) {
+    auto [sx, sy] = slot();
+    put("<line x1=\"{:.1f}\" y1=\"{:.1f}\" x2=\"{:.1f}\" y2=\"{:.1f}\" stroke=\"#b8860b\" stroke-width=\"3\"/>\n", sx,
+        sy - 4.0, sx + 12.0, sy - 4.0);
+    put("<circle cx=\"{:.1f}\" cy=\"{:.1f}\" r=\"4.5\" fill=\"#8a8a8a\" stroke=\"#505050\"/>\n", sx + 18.0, sy - 4.0);
+    put("<text x=\"{:.1f}\" y=\"{:.1f}\" font-size=\"12\">flowline, boulder</text>\n", sx + 28.0, sy);
+  }
   put("</svg>\n");
   return std::string(out.data(), out.size());
 }

@@ -141,6 +141,39 @@ TEST(PhysicsWorld, BlueRov2DoesNotPenetrateStructure) {
   EXPECT_GT(max_x, touching_x - 0.05);  // it did reach the structure
 }
 
+// Blocked seabed as rectangles of cells (a ridge's stair-stepped edge): a BlueROV2 driven into
+// it and then along it for 20 s never overlaps any rectangle by more than 0.02 m and is held at
+// it; a point vehicle passes through, as through a structure.
+TEST(PhysicsWorld, BlueRov2IsHeldByBlockedTerrain) {
+  const BlueRov2Params p;
+  std::vector<maps::CellRectangle> ridge;
+  for (int k = 0; k < 8; ++k) {  // steps 0.5 m wide rising 0.2 m each along x
+    ridge.push_back({Eigen::Vector2d(3.0 + 0.5 * k, 5.0 + 0.2 * k), Eigen::Vector2d(3.5 + 0.5 * k, 7.0)});
+  }
+  PhysicsWorld world({}, {}, {}, 1, ridge);
+  const VehicleId rov = world.AddVehicle(Spec(maps::MotionModel::kBlueRov2, {4.0, 3.5}, std::numbers::pi / 2));
+  const VehicleId point = world.AddVehicle(Spec(maps::MotionModel::kSingleIntegrator, {5.0, 3.0}));
+  world.SetVelocityCommand(point, {0.0, 0.5});
+  double deepest = -1.0, highest_y = 0.0;
+  for (int n = 0; n < 1000; ++n) {
+    // Into the ridge for 5 s, then along it (east and a little into it) for 15 s.
+    world.SetVelocityCommand(rov, n < 250 ? Eigen::Vector2d(0.0, 0.6) : Eigen::Vector2d(0.6, 0.15));
+    world.Step(kDt);
+    const auto hull = Hull(world.State(rov), p);
+    for (const maps::CellRectangle& box : ridge) {
+      const std::array<Eigen::Vector2d, 4> corners = {box.min_m, Eigen::Vector2d(box.max_m.x(), box.min_m.y()), box.max_m,
+                                                      Eigen::Vector2d(box.min_m.x(), box.max_m.y())};
+      deepest = std::max(deepest, Penetration(hull, corners));
+    }
+    if (n == 249) highest_y = world.State(rov).position_m.y();
+  }
+  EXPECT_LT(deepest, 0.02);
+  EXPECT_GT(deepest, -0.05) << "it did reach the ridge";
+  EXPECT_LT(highest_y, 5.2) << "held below the ridge's edge at y = 5.2 there";
+  EXPECT_GT(world.State(rov).position_m.x(), 6.0) << "it slid along the ridge";
+  EXPECT_GT(world.State(point).position_m.y(), 12.0) << "the point model passes through";
+}
+
 // Two BlueROV2s driven at each other (slightly offset) never overlap by more than 0.02 m.
 TEST(PhysicsWorld, BlueRov2sDoNotOverlap) {
   PhysicsWorld world({}, {});

@@ -61,6 +61,9 @@ const std::map<std::string, std::set<std::string>>& ExternalRules() {
       {"CLI/", {"app"}},                                        // CLI11: the command line
       {"nlohmann/", {"report"}},                                // JSON/CBOR: the run files
       {"octomap/", {"maps"}},
+      {"gdal", {"maps"}},                                       // GDAL: the seabed map files
+      {"cpl_", {"maps"}},
+      {"ogr_", {"maps"}},
       {"box2d/", {"agents"}},
       {"yaml-cpp/", {"scenario"}},
       {"openssl/", {"security"}},                               // OpenSSL: the security files
