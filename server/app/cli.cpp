@@ -19,6 +19,7 @@
 #include "server/app/run_commands.h"
 #include "server/app/security_command.h"
 #include "proto/dds_config.h"
+#include "proto/mission_clock.h"
 
 namespace sage::server {
 namespace {
@@ -35,6 +36,16 @@ std::string MustBePositive(const std::string& text) {
   } catch (const std::exception&) {
     return "must be a number > 0";
   }
+}
+
+// A mission clock every agent host follows (proto::PlausibleClock refuses any other).
+std::string MustBeTimeScale(const std::string& text) {
+  try {
+    const double scale = std::stod(text);
+    if (scale >= proto::kMinTimeScale && scale <= proto::kMaxTimeScale) return {};
+  } catch (const std::exception&) {
+  }
+  return "must be a number in 0.001..1000";
 }
 
 // CLI11 reads "-3" into an unsigned option as 2^64 - 3; a seed is a whole number as typed.
@@ -190,7 +201,7 @@ int RunCli(int argc, char** argv) {
                        /*scenario_required=*/false);
   AddController(*launch, launch_cmd.controller);
   launch->add_option("--time-scale", launch_cmd.time_scale, "Mission seconds per wall second (1 = real time)")
-      ->check(MustBePositive)
+      ->check(MustBeTimeScale)
       ->capture_default_str();
   launch->add_option("--out,-o", launch_cmd.out_dir, "Run directory (default: runs/<scenario>_launch)");
   launch->add_option("--hosts", launch_cmd.hosts, "Agent host processes (default: one per 250 vehicles)")->check(MustBePositive);
@@ -218,7 +229,7 @@ int RunCli(int argc, char** argv) {
   AddScenarioOverrides(*server, server_cmd.scenario, OverrideSet::kMission, "scenarios/fleet_field.yaml");
   AddController(*server, server_cmd.controller);
   server->add_option("--time-scale", server_cmd.time_scale, "Mission seconds per wall second (1 = real time)")
-      ->check(MustBePositive)
+      ->check(MustBeTimeScale)
       ->capture_default_str();
   server->add_option("--out,-o", server_cmd.out_dir, "Run directory (default: runs/<scenario>_server)");
   server->add_option("--domain", server_cmd.domain, "DDS domain id 0..232")->required();
