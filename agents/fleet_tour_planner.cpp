@@ -647,7 +647,7 @@ class Search {
       Candidate merged = Of(s, u);
       for (int v : s.order[t]) merged = Edit(std::move(merged), -1, v);
       if (splits.empty()) make_splits();
-      const auto best = std::min_element(splits.begin(), splits.end(), [&](const auto& x, const auto& y) {
+      const auto best = std::min_element(splits.begin(), splits.end(), [&, t = t](const auto& x, const auto& y) {
         return std::max(Lap(a, x.first), Lap(t, x.second)) < std::max(Lap(a, y.first), Lap(t, y.second));
       });
       if (Try(s, {a, t, u}, {best->first, best->second, merged})) {

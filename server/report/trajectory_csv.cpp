@@ -87,11 +87,14 @@ void WriteTrajectoryCsv(const std::string& path, const Trajectory& trajectory) {
 }
 
 Trajectory ReadTrajectoryCsv(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw maps::ScenarioError(fmt::format("{}: cannot read: {}", path, std::strerror(errno)));
+  return ParseTrajectoryCsv(in, path);
+}
+
+Trajectory ParseTrajectoryCsv(std::istream& in, const std::string& path) {
   using maps::ScenarioError;
   constexpr int kMaxVehicleId = 65535;  // ids index per-vehicle arrays downstream
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw ScenarioError(fmt::format("{}: cannot read: {}", path, std::strerror(errno)));
-
   std::string text;
   int line_number = 0;
   std::vector<std::string> header;
@@ -207,6 +210,33 @@ Trajectory ReadTrajectoryCsv(const std::string& path) {
     return a.time_s != b.time_s ? a.time_s < b.time_s : a.vehicle < b.vehicle;
   });
   return trajectory;
+}
+
+std::vector<WeightChange> ProfileSchedule(const maps::Scenario& scenario, const maps::RiskProfile& profile) {
+  std::vector<WeightChange> schedule;
+  Eigen::VectorXd raw = scenario.ProfileWeights(profile);
+  schedule.push_back({0.0, raw / raw.sum()});
+  for (const maps::RiskEvent& e : profile.events) {
+    raw[scenario.ValveIndex(e.valve)] = e.weight;
+    schedule.push_back({e.time_s, raw / raw.sum()});
+  }
+  return schedule;
+}
+
+MissionMetrics EvaluateRecorded(const Trajectory& trajectory, const maps::Scenario& scenario,
+                                const maps::RiskProfile& profile, std::optional<double> duration_s,
+                                const std::string& source, double max_checkpoints) {
+  if (trajectory.samples.empty()) throw maps::ScenarioError(source + ": no samples");
+  const std::vector<WeightChange> schedule = ProfileSchedule(scenario, profile);
+  const double last = trajectory.samples.back().time_s;
+  const double duration = duration_s.value_or(last > 0.0 ? last : 1.0 / scenario.control_rate_hz);
+  if (!(duration > 0.0) || !std::isfinite(duration)) {
+    throw maps::ScenarioError(fmt::format("--duration = {}: must be a finite number > 0", duration));
+  }
+  MetricsOptions options;
+  options.profile = profile.name;
+  options.metric_sample_period_s = std::max(1.0, duration / max_checkpoints);
+  return ComputeMetrics(trajectory, scenario, schedule, duration, options);
 }
 
 }  // namespace sage::server
