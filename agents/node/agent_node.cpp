@@ -12,6 +12,7 @@
 #include <spdlog/spdlog.h>
 
 #include "agents/node/host_door.h"
+#include "agents/node/network.h"
 #include "agents/node/wire.h"
 #include "maps/world.h"
 #include "proto/dds_config.h"
@@ -35,9 +36,8 @@ int RunAgentNode(const maps::Scenario& scenario, const AgentNodeOptions& options
     const VehicleResume* resume = i < options.resume.size() && options.resume[i] ? &*options.resume[i] : nullptr;
     mission.AddVehicle(static_cast<VehicleId>(options.ids[i]), options.vehicles[i], resume);
   }
-  proto::Participant participant(options.domain_id, proto::LocalhostConfigXml(proto::kMaxLocalParticipants,
-                                                                             proto::LoopbackDiscovery::kUnicastPeers,
-                                                                             options.security));
+  proto::Participant participant(
+      options.domain_id, proto::CycloneConfigXml(NetworkOf(scenario.network), proto::kMaxLocalParticipants, options.security));
   const auto lease = std::chrono::milliseconds(std::lround(scenario.fleet.liveliness_lease_s * 1000.0));
   proto::Writer<proto::VehicleState> states(participant, proto::VehicleStateWriterQos(lease));
   proto::Writer<proto::VehicleCoverage> coverage(participant, proto::VehicleCoverageQos());

@@ -198,9 +198,15 @@ std::uint64_t VehicleFingerprint(const Scenario& scenario) {
   vehicles_only.astar = AstarSettings{};
   vehicles_only.fleet.assignment = FleetAssignment::kShared;
   vehicles_only.fleet_events.clear();
+  vehicles_only.network = {};  // each machine has its own
   return Fnv1a(EmitScenario(vehicles_only));
 }
 
-std::uint64_t ScenarioHash(const Scenario& scenario) { return Fnv1a(EmitScenario(scenario)); }
+std::uint64_t ScenarioHash(const Scenario& scenario) {
+  if (scenario.network == NetworkSettings{}) return Fnv1a(EmitScenario(scenario));
+  Scenario same = scenario;
+  same.network = {};
+  return Fnv1a(EmitScenario(same));
+}
 
 }  // namespace sage::maps

@@ -248,7 +248,7 @@ Scenario ReadScenario(const Reader& r, const YAML::Node& root, const std::string
   if (!root.IsMap()) r.Fail("scenario", root, "must be a YAML map of sections (workspace, structures, ...)");
   r.ExpectMap(root, "", {"name", "workspace", "duration_s", "control_rate_hz", "physics_rate_hz",
                          "visit_radius_m", "rearm_radius_m", "seed", "start_jitter_m", "ergodic", "guard", "astar",
-                         "structures", "vehicles", "default_profile", "profiles", "fleet", "fleet_events"});
+                         "structures", "vehicles", "default_profile", "profiles", "fleet", "fleet_events", "network"});
   Scenario s;
   s.source_path = source;
   s.name = source.empty() ? "scenario" : std::filesystem::path(source).stem().string();
@@ -327,6 +327,15 @@ Scenario ReadScenario(const Reader& r, const YAML::Node& root, const std::string
     for (std::size_t i = 0; i < list.size(); ++i) {
       s.fleet_events.push_back(ReadFleetEvent(r, list[i], p + "[" + std::to_string(i) + "]"));
     }
+  });
+  r.Optional(root, "network", "", [&](const YAML::Node& n, const std::string& p) {
+    r.ExpectMap(n, p, {"interface", "peers", "multicast"});
+    r.Optional(n, "interface", p, [&](const YAML::Node& v, const std::string& q) { s.network.interface_name = r.Text(v, q); });
+    r.Optional(n, "peers", p, [&](const YAML::Node& list, const std::string& q) {
+      r.ExpectList(list, q);
+      for (std::size_t i = 0; i < list.size(); ++i) s.network.peers.push_back(r.Text(list[i], q + "[" + std::to_string(i) + "]"));
+    });
+    r.Optional(n, "multicast", p, [&](const YAML::Node& v, const std::string& q) { s.network.multicast = r.Bool(v, q); });
   });
   return s;
 }

@@ -15,6 +15,7 @@
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
 
+#include "agents/node/network.h"
 #include "agents/node/wire.h"
 #include "maps/world.h"
 #include "proto/dds_config.h"
@@ -124,9 +125,9 @@ int RunServerNode(const maps::Scenario& scenario, const ServerNodeOptions& optio
                                      checkpoint.time_s, core.time_s(), tail.samples.size()));
   }
 
-  proto::Participant participant(options.domain_id, proto::LocalhostConfigXml(proto::kMaxLocalParticipants,
-                                                                             proto::LoopbackDiscovery::kUnicastPeers,
-                                                                             options.security));
+  proto::Participant participant(options.domain_id,
+                                 proto::CycloneConfigXml(agents::NetworkOf(scenario.network), proto::kMaxLocalParticipants,
+                                                         options.security));
   {
     // Two servers on one domain would both adopt the same vehicles and clocks: refuse to be the
     // second. Asked before this server's own status writer exists; discovery on loopback takes
@@ -137,6 +138,7 @@ int RunServerNode(const maps::Scenario& scenario, const ServerNodeOptions& optio
                                             options.domain_id));
     }
   }
+  if (options.on_started) options.on_started();
   proto::Reader<proto::VehicleState> states(participant, proto::VehicleStateRecordQos());
   proto::Reader<proto::VehicleCoverage> coverage(participant, proto::VehicleCoverageQos());
   proto::Reader<proto::RiskUpdate> risk_updates(participant, proto::RiskUpdateQos());
