@@ -34,11 +34,6 @@ std::string SenderName(int vehicle_id, std::uint64_t writer) {
   return writer == 0 ? fmt::format("vehicle {}", vehicle_id) : fmt::format("vehicle {} (writer {:x})", vehicle_id, writer);
 }
 
-double MeanInterval(const std::vector<double>& times) {
-  if (times.size() < 2) return kUnknown;
-  return (times.back() - times.front()) / static_cast<double>(times.size() - 1);
-}
-
 }  // namespace
 
 const char* ToString(ControllerKind kind) { return kind == ControllerKind::kErgodic ? "ergodic" : "astar"; }
@@ -52,18 +47,6 @@ ControllerKind ParseControllerKind(const std::string& text) {
 double HeadingChange(const Eigen::Vector2d& before_mps, const Eigen::Vector2d& after_mps) {
   if (before_mps.norm() < 1e-12 || after_mps.norm() < 1e-12) return 0.0;
   return std::acos(std::clamp(before_mps.dot(after_mps) / (before_mps.norm() * after_mps.norm()), -1.0, 1.0));
-}
-
-void FillEventResponses(const maps::Scenario& scenario, MissionMetrics& metrics) {
-  for (EventResponse& response : metrics.events) {
-    const int valve = scenario.ValveIndex(response.valve);
-    const std::vector<double>& times = metrics.valves[valve].visit_times_s;
-    std::vector<double> before, after;
-    for (double v : times) (v < response.time_s ? before : after).push_back(v);
-    response.time_to_next_visit_s = after.empty() ? kUnknown : after.front() - response.time_s;
-    response.interval_before_s = MeanInterval(before);
-    response.interval_after_s = MeanInterval(after);
-  }
 }
 
 int FirstFreeVehicleId(const maps::Scenario& scenario) {
@@ -310,6 +293,8 @@ CycleOutput MissionCore::Cycle(std::int64_t cycle) {
   const std::vector<int> alive = roster_.alive();
   const bool risk_changed = fleet_.responses().size() > risk_measured_;
   for (; risk_measured_ < fleet_.responses().size(); ++risk_measured_) {
+    const EventResponse& response = fleet_.responses()[risk_measured_];
+    metrics_.WatchVisits(scenario_.ValveIndex(response.valve), response.time_s);  // how it was answered
     fleet_.responses()[risk_measured_].heading_change_rad = kUnknown;
     if (!alive.empty()) pending_heading_changes_.push_back({risk_measured_, snapshot_cycle, alive.front()});
   }
@@ -581,7 +566,7 @@ RejectionCounts MissionCore::rejections() const {
 MissionMetrics MissionCore::Metrics(double end_s) const {
   MissionMetrics metrics = metrics_.Result(std::max(end_s, 1.0 / scenario_.control_rate_hz));
   metrics.events = fleet_.responses();
-  FillEventResponses(scenario_, metrics);
+  FillEventResponses(metrics_.visits(), metrics);
   return metrics;
 }
 
@@ -597,7 +582,8 @@ MissionCheckpoint MissionCore::Checkpoint() const {
   c.roster = roster_.Checkpoint();
   c.metrics = metrics_.state();
   c.disarmed = metrics_.visits().disarmed();
-  c.visit_times = metrics_.visits().visit_times();
+  c.visits = metrics_.visits().visits();
+  c.visit_watches = metrics_.visits().watches();
   c.rejected_samples = rejected_.total();
   c.rejected_by_kind = rejected_.by_kind();
   c.rejected_by_sender = rejected_.by_sender();
@@ -616,8 +602,12 @@ void MissionCore::Restore(const MissionCheckpoint& c) {
     fleet_.Restore(c.fleet);
     roster_.Restore(c.roster);
     VisitTracker visits = metrics_.visits();
-    visits.Restore(c.disarmed, c.visit_times);
+    visits.Restore(c.disarmed, c.visits, c.visit_watches);
     metrics_.Restore(c.metrics, std::move(visits));
+    // A checkpoint of before the watches: each risk event's watched from what the record holds.
+    if (c.visit_watches.empty()) {
+      for (const EventResponse& r : fleet_.responses()) metrics_.WatchVisits(scenario_.ValveIndex(r.valve), r.time_s);
+    }
   } catch (const std::invalid_argument& e) {
     throw maps::ScenarioError(std::string("checkpoint: does not fit the scenario: ") + e.what());
   }

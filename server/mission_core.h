@@ -94,7 +94,8 @@ struct MissionCheckpoint {
   Roster::State roster;
   MetricsAccumulator::State metrics;
   std::vector<std::vector<int>> disarmed;            ///< valves each vehicle has disarmed [vehicle] (ascending)
-  std::vector<std::vector<double>> visit_times;       ///< [valve]
+  std::vector<VisitTracker::ValveVisits> visits;      ///< [valve]
+  std::vector<VisitTracker::EventWatch> visit_watches;  ///< one per risk event (fleet.responses), in order
   std::size_t rejected_samples = 0;
   std::map<std::string, std::size_t> rejected_by_kind, rejected_by_sender;  ///< RejectionCounts' parts
 };
@@ -260,10 +261,6 @@ class MissionCore {
 /// Angle (rad, 0..pi) between two commanded velocities; 0 if either is (near) zero. The
 /// heading change of a risk event (EventResponse::heading_change_rad).
 double HeadingChange(const Eigen::Vector2d& before_mps, const Eigen::Vector2d& after_mps);
-
-/// Fills each risk event's time to the valve's next visit and its revisit interval before and
-/// after, from the visit times in `metrics`.
-void FillEventResponses(const maps::Scenario& scenario, MissionMetrics& metrics);
 
 /// The first id the server issues to vehicles added at runtime: after the scenario's vehicles
 /// (ids 0..N-1) and its fleet_events joins (N, N+1, ... in order).
