@@ -151,12 +151,12 @@ int RunAgentNode(const maps::Scenario& scenario, const AgentNodeOptions& options
     const auto take_server_words = [&] {
       // Every host sees every vehicle's assignment (one topic); each takes its own.
       while (targets.TakeEach([&](const proto::ErgodicTarget& m, const dds_sample_info_t& info) {
-        if (info.valid_data) door.TakeTarget(m);
+        if (info.valid_data) door.TakeTarget(m, k);
       }, 1024) == 1024) {
       }
       fleet.TakeEach([&](const proto::FleetCoverage& m, const dds_sample_info_t& info) {
         if (!info.valid_data) return;
-        if (door.TakeSnapshot(m)) {
+        if (door.TakeSnapshot(m, k)) {
           last_heard = std::chrono::steady_clock::now();
           last_snapshot_at = Clock::now();
         }
@@ -259,10 +259,12 @@ int RunAgentNode(const maps::Scenario& scenario, const AgentNodeOptions& options
                  "lockstep), the first at t = {:.1f} s",
                  cycles_not_in_step, cycles_run, first_not_in_step_s);
   }
-  if (mission.rejected() > 0 || door.bad_neighbours() > 0 || door.bad_statuses() > 0) {
-    spdlog::warn("agents: refused {} message(s) from the server, {} status(es) with a clock that cannot be and {} "
-                 "neighbour state(s) with no finite position (or beyond {} vehicles)",
-                 mission.rejected(), door.bad_statuses(), door.bad_neighbours(), HostDoor::kMaxOthers);
+  if (mission.rejected() > 0 || door.bad_neighbours() > 0 || door.bad_statuses() > 0 || door.ahead_of_the_clock() > 0) {
+    spdlog::warn("agents: refused {} message(s) from the server, {} more stamped over {:.0f} s ahead of the clock, {} "
+                 "status(es) with a clock that cannot be and {} neighbour state(s) with no finite position (or beyond "
+                 "{} vehicles)",
+                 mission.rejected(), door.ahead_of_the_clock(), HostDoor::kMaxLead_s, door.bad_statuses(),
+                 door.bad_neighbours(), HostDoor::kMaxOthers);
   }
   std::this_thread::sleep_for(std::chrono::milliseconds(100));  // let the disposes go out
   return 0;

@@ -1,5 +1,8 @@
 #include "agents/node/host_door.h"
 
+#include <algorithm>
+#include <cmath>
+
 #include <spdlog/spdlog.h>
 
 #include "agents/node/wire.h"
@@ -41,15 +44,29 @@ std::optional<VehicleId> HostDoor::TakeCommand(const proto::FleetCommand& c) con
   return id;
 }
 
-bool HostDoor::TakeTarget(const proto::ErgodicTarget& m) {
+bool HostDoor::Ahead(std::uint64_t cycle, double time_s, std::int64_t now_cycle) const {
+  const double period = mission_.control_period_s();
+  const double latest = (static_cast<double>(std::max<std::int64_t>(now_cycle, 0)) + std::ceil(kMaxLead_s / period)) * period;
+  return static_cast<double>(cycle) * period > latest || !(time_s <= latest);
+}
+
+bool HostDoor::TakeTarget(const proto::ErgodicTarget& m, std::int64_t now_cycle) {
   if (m.server_instance != clock_.instance || clock_.instance == 0) return false;
   // Only this host's vehicles' assignments are converted (every host reads every vehicle's).
   if (!mission_.Contains(static_cast<VehicleId>(m.vehicle_id))) return false;
+  if (Ahead(m.cycle, 0.0, now_cycle)) {
+    ++ahead_;
+    return false;
+  }
   return mission_.OnAssignment(wire::FromWire(m));
 }
 
-bool HostDoor::TakeSnapshot(const proto::FleetCoverage& m) {
+bool HostDoor::TakeSnapshot(const proto::FleetCoverage& m, std::int64_t now_cycle) {
   if (m.server_instance != clock_.instance || clock_.instance == 0) return false;
+  if (Ahead(m.cycle, m.mission_time_s, now_cycle)) {
+    ++ahead_;
+    return false;
+  }
   return mission_.OnFleetSnapshot(wire::FromWire(m));
 }
 

@@ -54,10 +54,18 @@ class HostDoor {
   /// The server's order to retire one of this host's vehicles: its id, or none if the command is
   /// not the current server's "retire" of a vehicle of this host.
   std::optional<VehicleId> TakeCommand(const proto::FleetCommand& c) const;
-  /// A vehicle's assignment (every host sees every vehicle's; each takes its own).
-  bool TakeTarget(const proto::ErgodicTarget& m);
+  /// A vehicle's assignment (every host sees every vehicle's; each takes its own). `now_cycle`:
+  /// the host's control cycle; a word of the server stamped more than kMaxLead_s of mission time
+  /// past it is refused (counted in ahead_of_the_clock()): taken, it would have made every real
+  /// one after it look old (the probe's snapshot of mission time 1e300).
+  bool TakeTarget(const proto::ErgodicTarget& m, std::int64_t now_cycle);
   /// The server's fleet snapshot; true if the mission took it (the newest of its server).
-  bool TakeSnapshot(const proto::FleetCoverage& m);
+  bool TakeSnapshot(const proto::FleetCoverage& m, std::int64_t now_cycle);
+  /// How far ahead of a host's clock the server's words may be: a host that fell behind catches
+  /// up within a few cycles; the server's are never seconds ahead.
+  static constexpr double kMaxLead_s = 5.0;
+  /// The server's words refused for being ahead of the clock.
+  std::uint64_t ahead_of_the_clock() const { return ahead_; }
 
   /// Another host's vehicle's state: `alive` false for a lost or left one (a dispose, a lapsed
   /// lease), which is forgotten. A state of this host's own vehicles is ignored; one with no
@@ -88,8 +96,12 @@ class HostDoor {
   bool other_world_ = false;
   bool ended_elsewhere_ = false;
   std::map<std::uint32_t, std::deque<std::pair<std::int64_t, Eigen::Vector2d>>> others_;
+  // True if a word of cycle `cycle` (and mission time `time_s`) is past now_cycle + kMaxLead_s.
+  bool Ahead(std::uint64_t cycle, double time_s, std::int64_t now_cycle) const;
+
   std::uint64_t bad_neighbours_ = 0;
   std::uint64_t bad_statuses_ = 0;
+  std::uint64_t ahead_ = 0;
 };
 
 }  // namespace sage::agents

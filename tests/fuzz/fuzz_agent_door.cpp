@@ -68,14 +68,14 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
         Decoded<proto::ErgodicTarget> m(r.payload);
         if (!m.ok() || !r.valid_data()) break;
         if (r.stamp_instance()) m.get().server_instance = door.clock().instance;
-        door.TakeTarget(m.get());
+        door.TakeTarget(m.get(), k);
         break;
       }
       case kSnapshot: {
         Decoded<proto::FleetCoverage> m(r.payload);
         if (!m.ok() || !r.valid_data()) break;
         if (r.stamp_instance()) m.get().server_instance = door.clock().instance;
-        door.TakeSnapshot(m.get());
+        door.TakeSnapshot(m.get(), k);
         break;
       }
       case kRetire: {

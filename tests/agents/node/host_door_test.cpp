@@ -107,23 +107,23 @@ TEST_F(HostDoorTest, TakesTheServersWordsOnlyFromItsServer) {
   proto::FleetCoverage snapshot{};
   snapshot.server_instance = kServer;
   snapshot.cycle = 3;
-  EXPECT_FALSE(door_.TakeSnapshot(snapshot)) << "taken before any server was followed";
+  EXPECT_FALSE(door_.TakeSnapshot(snapshot, 3)) << "taken before any server was followed";
   ASSERT_TRUE(door_.TakeStatus(Status(kServer)));
   snapshot.server_instance = kServer + 1;
-  EXPECT_FALSE(door_.TakeSnapshot(snapshot));
+  EXPECT_FALSE(door_.TakeSnapshot(snapshot, 3));
   snapshot.server_instance = kServer;
-  EXPECT_TRUE(door_.TakeSnapshot(snapshot));
+  EXPECT_TRUE(door_.TakeSnapshot(snapshot, 3));
   EXPECT_EQ(mission_.snapshot_cycle(), 3u);
   proto::ErgodicTarget target{};
   target.server_instance = kServer;
   target.vehicle_id = 9;  // another host's vehicle
   target.shared = true;
-  EXPECT_FALSE(door_.TakeTarget(target));
+  EXPECT_FALSE(door_.TakeTarget(target, 10));
   target.vehicle_id = 1;
-  EXPECT_TRUE(door_.TakeTarget(target));
+  EXPECT_TRUE(door_.TakeTarget(target, 10));
   target.server_instance = kServer + 1;
   target.cycle = 10;
-  EXPECT_FALSE(door_.TakeTarget(target));
+  EXPECT_FALSE(door_.TakeTarget(target, 10));
 }
 
 // Other hosts' vehicles: the last few states each, none with no finite position (counted), not
@@ -142,6 +142,34 @@ TEST_F(HostDoorTest, KeepsTheLastStatesOfOtherHostsVehicles) {
   EXPECT_EQ(door_.others().count(6), 0u);
   door_.TakeNeighbour(Neighbour(5, 5, 1.0), true, false);  // lost
   EXPECT_TRUE(door_.others().empty());
+}
+
+// The probe's forged snapshot of mission time 1e300 (and one of cycle 2^64 - 1) from the followed
+// server's instance: refused as ahead of the host's clock, so the real ones after it are taken.
+TEST_F(HostDoorTest, WordsStampedFarAheadOfTheClockAreRefused) {
+  ASSERT_TRUE(door_.TakeStatus(Status(kServer)));
+  proto::FleetCoverage snapshot{};
+  snapshot.server_instance = kServer;
+  snapshot.cycle = 12;
+  snapshot.mission_time_s = 1e300;
+  EXPECT_FALSE(door_.TakeSnapshot(snapshot, 10));
+  snapshot.mission_time_s = 1.1;
+  snapshot.cycle = std::numeric_limits<std::uint64_t>::max();
+  EXPECT_FALSE(door_.TakeSnapshot(snapshot, 10));
+  proto::ErgodicTarget target{};
+  target.server_instance = kServer;
+  target.vehicle_id = 1;
+  target.shared = true;
+  target.cycle = 10 + 1000;
+  EXPECT_FALSE(door_.TakeTarget(target, 10));
+  EXPECT_EQ(door_.ahead_of_the_clock(), 3u);
+  snapshot.cycle = 11;
+  EXPECT_TRUE(door_.TakeSnapshot(snapshot, 10));
+  snapshot.cycle = 12;
+  snapshot.mission_time_s = 1.2;
+  EXPECT_TRUE(door_.TakeSnapshot(snapshot, 11)) << "a real snapshot after the forged ones";
+  target.cycle = 11;
+  EXPECT_TRUE(door_.TakeTarget(target, 10));
 }
 
 }  // namespace
