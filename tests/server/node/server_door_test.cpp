@@ -8,7 +8,9 @@
 #include <cmath>
 #include <deque>
 #include <limits>
+#include <span>
 #include <string>
+#include <vector>
 
 #include "maps/world.h"
 
@@ -124,6 +126,26 @@ TEST_F(ServerDoorTest, RiskUpdatesAreLimitedPerWriter) {
   EXPECT_EQ(refused, 500 - static_cast<int>(MissionCore::kRiskUpdateBurst));
   EXPECT_TRUE(door_.TakeRiskUpdate(r, 0xf2).accepted) << "another writer of the same name was starved";
   EXPECT_EQ(core_.risk_limits().refused("operator (writer f1)"), static_cast<std::uint64_t>(refused));
+}
+
+// The probe's coverage report with seq = 2^64 - 1 had frozen its vehicle's coverage: every real
+// report after it looked older. A later stamp wins (a restarted vehicle counts from 1 again).
+TEST_F(ServerDoorTest, ACoverageReportOfTheLargestSeqFreezesNothing) {
+  ASSERT_TRUE(door_.TakeState(State(0, 0), 1));
+  std::vector<double> sums(static_cast<std::size_t>(core_.fleet().basis().size()), 0.01);
+  proto::VehicleCoverage c{};
+  c.vehicle_id = 0;
+  c.sums = proto::BorrowSequence(std::span<const double>(sums));
+  c.seq = std::numeric_limits<std::uint64_t>::max();
+  c.mission_time_s = 0.1;
+  c.time_s = 0.1;
+  EXPECT_TRUE(door_.TakeCoverage(c, 1));
+  c.seq = 2;
+  c.mission_time_s = 0.6;
+  c.time_s = 0.6;
+  EXPECT_TRUE(door_.TakeCoverage(c, 1)) << "the vehicle's real report after the forged one was refused";
+  core_.SetClock(0.6);
+  EXPECT_EQ(core_.Cycle(6).snapshot.coverage.accounted_seq.at(0), 2u);
 }
 
 TEST(ServerDoor, LogSafeKeepsOneShortLine) {
