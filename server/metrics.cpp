@@ -90,19 +90,20 @@ void VisitTracker::ValveVisits::Add(double time_s) {
   }
 }
 
+void VisitTracker::EventWatch::Count(double visit_s) {
+  if (visit_s < time_s) {
+    ++before;
+    last_before_s = std::max(last_before_s, visit_s);
+  } else {
+    ++after;
+    first_after_s = std::min(first_after_s, visit_s);
+    last_after_s = std::max(last_after_s, visit_s);
+  }
+}
+
 void VisitTracker::Record(int valve, double time_s) {
   visits_[valve].Add(time_s);
-  for (const std::size_t i : watches_of_[valve]) {
-    EventWatch& w = watches_[i];
-    if (time_s < w.time_s) {
-      ++w.before;
-      w.last_before_s = std::max(w.last_before_s, time_s);
-    } else {
-      ++w.after;
-      w.first_after_s = std::min(w.first_after_s, time_s);
-      w.last_after_s = std::max(w.last_after_s, time_s);
-    }
-  }
+  for (const std::size_t i : watches_of_[valve]) watches_[i].Count(time_s);
 }
 
 // The valves this vehicle had disarmed are re-armed once it is past rearm_radius of them; the
@@ -134,16 +135,7 @@ void VisitTracker::WatchAround(int valve, double time_s) {
   // an event when it happens, long before 64 later visits).
   w.before = v.count - v.recent.size();
   w.last_before_s = v.folded_last_s;
-  for (const double t : v.recent) {
-    if (t < time_s) {
-      ++w.before;
-      w.last_before_s = std::max(w.last_before_s, t);
-    } else {
-      ++w.after;
-      w.first_after_s = std::min(w.first_after_s, t);
-      w.last_after_s = std::max(w.last_after_s, t);
-    }
-  }
+  for (const double t : v.recent) w.Count(t);
   watches_of_[static_cast<std::size_t>(valve)].push_back(watches_.size());
   watches_.push_back(w);
 }

@@ -57,6 +57,7 @@ class VisitTracker {
     double last_before_s = -std::numeric_limits<double>::infinity();
     double first_after_s = std::numeric_limits<double>::infinity();
     double last_after_s = -std::numeric_limits<double>::infinity();
+    void Count(double visit_s);  ///< one more visit of the valve, at visit_s
     bool operator==(const EventWatch&) const = default;
   };
 

@@ -24,6 +24,7 @@ extern "C" {
 }
 
 #include "proto/messages.h"
+#include "tests/fuzz/fuzz_support.h"
 
 namespace sage::fuzz {
 
@@ -138,12 +139,6 @@ inline void AppendRecord(std::vector<std::uint8_t>& input, std::uint8_t op, std:
   input.push_back(static_cast<std::uint8_t>(length & 0xff));
   input.push_back(static_cast<std::uint8_t>(length >> 8));
   input.insert(input.end(), payload.begin(), payload.begin() + static_cast<std::ptrdiff_t>(length));
-}
-
-/// Stops the fuzzer with a message: a property of the door does not hold (libFuzzer saves the input).
-[[noreturn]] inline void Broken(const char* what) {
-  std::fprintf(stderr, "door property broken: %s\n", what);
-  std::abort();
 }
 
 }  // namespace sage::fuzz

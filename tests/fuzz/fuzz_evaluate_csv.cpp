@@ -6,27 +6,14 @@
 // bound is 100,000) so that an input stays within milliseconds.
 #include <cmath>
 #include <cstdint>
-#include <cstdio>
-#include <cstdlib>
 #include <sstream>
 #include <string>
 
 #include "maps/scenario/scenario.h"
 #include "server/report/report.h"
+#include "tests/fuzz/fuzz_support.h"
 
 namespace {
-
-[[noreturn]] void Broken(const std::string& what) {
-  std::fprintf(stderr, "evaluate property broken: %s\n", what.c_str());
-  std::abort();
-}
-
-bool OneLine(const std::string& message) {
-  for (const char c : message) {
-    if (static_cast<unsigned char>(c) < 0x20 || c == 0x7f) return false;
-  }
-  return !message.empty();
-}
 
 const sage::maps::Scenario& TwoXt() {
   static const sage::maps::Scenario scenario =
@@ -51,15 +38,15 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
         trajectory, scenario, scenario.ProfileOrThrow("leak_injection"), std::nullopt, "fuzz.csv", 2000.0);
     if (!std::isfinite(m.duration_s) || !std::isfinite(m.time_outside_s) || !std::isfinite(m.time_pinned_s) ||
         !std::isfinite(m.expected_detection_delay_s) || !std::isfinite(m.risk_weighted_interval_s)) {
-      Broken("a figure of a trajectory read is not finite");
+      fuzz::Broken("a figure of a trajectory read is not finite");
     }
     for (const server::ValveMetrics& v : m.valves) {
       if (!std::isfinite(v.time_near_s) || !std::isfinite(v.max_gap_s) || !std::isfinite(v.longest_unwatched_s)) {
-        Broken("a valve's figure is not finite");
+        fuzz::Broken("a valve's figure is not finite");
       }
     }
   } catch (const maps::ScenarioError& e) {
-    if (!OneLine(e.what())) Broken(std::string("an error that is not one line: ") + e.what());
+    if (!fuzz::PrintableLine(e.what())) fuzz::Broken(std::string("an error that is not one line: ") + e.what());
   }
   return 0;
 }

@@ -6,26 +6,13 @@
 // in-process under one controller, so that the bounds of every field that drives cost are tried
 // for real.
 #include <cstdint>
-#include <cstdio>
-#include <cstdlib>
 #include <string>
 
 #include "maps/scenario/scenario.h"
 #include "server/mission.h"
+#include "tests/fuzz/fuzz_support.h"
 
 namespace {
-
-[[noreturn]] void Broken(const std::string& what) {
-  std::fprintf(stderr, "scenario reader property broken: %s\n", what.c_str());
-  std::abort();
-}
-
-bool OneLine(const std::string& message) {
-  for (const char c : message) {
-    if (static_cast<unsigned char>(c) < 0x20 || c == 0x7f) return false;
-  }
-  return !message.empty();
-}
 
 bool SmallEnoughToFly(const sage::maps::Scenario& s) {
   const double cells = (s.workspace.width_m / s.astar.grid_resolution_m) * (s.workspace.height_m / s.astar.grid_resolution_m);
@@ -45,7 +32,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   try {
     scenario = maps::ParseScenario(text, "fuzz.yaml");
   } catch (const maps::ScenarioError& e) {
-    if (!OneLine(e.what())) Broken(std::string("an error that is not one line: ") + e.what());
+    if (!fuzz::PrintableLine(e.what())) fuzz::Broken(std::string("an error that is not one line: ") + e.what());
     return 0;
   }
   // One input in four that loads is written back and read again, and flown if it is small (its
@@ -58,9 +45,9 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   const std::string emitted = maps::EmitScenario(scenario);
   try {
     const maps::Scenario again = maps::ParseScenario(emitted, "emitted.yaml");
-    if (maps::ScenarioHash(again) != maps::ScenarioHash(scenario)) Broken("emitted scenario loads as another:\n" + emitted);
+    if (maps::ScenarioHash(again) != maps::ScenarioHash(scenario)) fuzz::Broken("emitted scenario loads as another:\n" + emitted);
   } catch (const maps::ScenarioError& e) {
-    Broken(std::string("emitted scenario does not load: ") + e.what() + "\n" + emitted);
+    fuzz::Broken(std::string("emitted scenario does not load: ") + e.what() + "\n" + emitted);
   }
   if (!SmallEnoughToFly(scenario)) return 0;
   {
@@ -75,7 +62,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
       }
     } catch (const maps::ScenarioError& e) {
       // A scenario may still be refused when its world is built (a start inside a structure).
-      if (!OneLine(e.what())) Broken(std::string("an error that is not one line: ") + e.what());
+      if (!fuzz::PrintableLine(e.what())) fuzz::Broken(std::string("an error that is not one line: ") + e.what());
     }
   }
   return 0;
