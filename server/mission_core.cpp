@@ -28,9 +28,10 @@ std::string SafeName(const std::string& name, int id) {
   return out.empty() || numeric ? fmt::format("vehicle{}", id) : out;
 }
 
-double MeanInterval(const std::vector<double>& times) {
-  if (times.size() < 2) return kUnknown;
-  return (times.back() - times.front()) / static_cast<double>(times.size() - 1);
+// Who sent a refused report: the vehicle it names and, over DDS, the writer that sent it (a report
+// can name any vehicle, but not another writer).
+std::string SenderName(int vehicle_id, std::uint64_t writer) {
+  return writer == 0 ? fmt::format("vehicle {}", vehicle_id) : fmt::format("vehicle {} (writer {:x})", vehicle_id, writer);
 }
 
 }  // namespace
@@ -46,18 +47,6 @@ ControllerKind ParseControllerKind(const std::string& text) {
 double HeadingChange(const Eigen::Vector2d& before_mps, const Eigen::Vector2d& after_mps) {
   if (before_mps.norm() < 1e-12 || after_mps.norm() < 1e-12) return 0.0;
   return std::acos(std::clamp(before_mps.dot(after_mps) / (before_mps.norm() * after_mps.norm()), -1.0, 1.0));
-}
-
-void FillEventResponses(const maps::Scenario& scenario, MissionMetrics& metrics) {
-  for (EventResponse& response : metrics.events) {
-    const int valve = scenario.ValveIndex(response.valve);
-    const std::vector<double>& times = metrics.valves[valve].visit_times_s;
-    std::vector<double> before, after;
-    for (double v : times) (v < response.time_s ? before : after).push_back(v);
-    response.time_to_next_visit_s = after.empty() ? kUnknown : after.front() - response.time_s;
-    response.interval_before_s = MeanInterval(before);
-    response.interval_after_s = MeanInterval(after);
-  }
 }
 
 int FirstFreeVehicleId(const maps::Scenario& scenario) {
@@ -96,20 +85,23 @@ MissionCore::MissionCore(maps::World& world, const maps::Scenario& scenario, con
   schedule_seen_ = 1;
 }
 
-bool MissionCore::OnState(const agents::StateReport& s) {
+bool MissionCore::OnState(const agents::StateReport& s, std::uint64_t writer) {
   const bool finite = s.state.position_m.allFinite() && s.state.velocity_mps.allFinite() &&
                       std::isfinite(s.state.heading_rad) && s.command_mps.allFinite() && std::isfinite(s.time_s);
+  const Roster::Member* known = roster_.Find(s.id);
+  const bool joins = known == nullptr || known->status != Roster::Status::kAlive;
   const char* refusal = !finite                                                      ? "state not finite"
                         : s.id < 0                                                     ? "state of no vehicle (id < 0)"
+                        : s.id > kMaxVehicleId                                         ? "state of no vehicle (id too large)"
                         : s.time_s < 0.0                                               ? "state before the mission"
                         : s.time_s > std::max(time_s_, clock_s_) + kMaxStateLead_s ? "state ahead of the clock"
+                        : joins && roster_.alive_count() >= Room()                     ? "state of a vehicle beyond the workspace's room"
                                                                                        : nullptr;
   if (refusal != nullptr) {
-    rejected_.Count(refusal, fmt::format("vehicle {}", s.id));
+    rejected_.Count(refusal, SenderName(s.id, writer));
     return false;
   }
-  const Roster::Member* known = roster_.Find(s.id);
-  if (known == nullptr || known->status != Roster::Status::kAlive) {
+  if (joins) {
     // Names reach logs and CSV files: made safe, and unique (another vehicle's name gets its id).
     std::string name = known != nullptr ? known->name : SafeName(s.name, s.id);
     if (known == nullptr) {
@@ -153,7 +145,7 @@ void MissionCore::OnVehicleGone(int id, bool lost) {
   Record(event);
 }
 
-bool MissionCore::OnCoverage(const agents::CoverageMessage& c) {
+bool MissionCore::OnCoverage(const agents::CoverageMessage& c, std::uint64_t writer) {
   const maps::CoverageReport& r = c.report;
   const char* refusal =
       !r.sums.allFinite() || !std::isfinite(r.kernel_time_s) || !std::isfinite(r.stamp_s) ? "coverage not finite"
@@ -161,7 +153,7 @@ bool MissionCore::OnCoverage(const agents::CoverageMessage& c) {
       : r.stamp_s > std::max(time_s_, clock_s_) + kMaxStateLead_s                     ? "coverage ahead of the clock"
                                                                                          : nullptr;
   if (refusal != nullptr) {
-    rejected_.Count(refusal, fmt::format("vehicle {}", c.id));
+    rejected_.Count(refusal, SenderName(c.id, writer));
     return false;
   }
   return fleet_.OnCoverage(c.id, r.seq, r.stamp_s, r.kernel_time_s, r.sums);
@@ -221,8 +213,7 @@ OperatorAnswer MissionCore::ReserveIds(int count) {
   }
   // The fleet must still fit the workspace as a scenario's must (maps::kMinAreaPerBlueRov2_m2):
   // a probe's `sage vehicle add --count 100000` on a 12 x 9.5 m field had taken the server to 20 GB.
-  const double area_m2 = scenario_.workspace.width_m * scenario_.workspace.height_m;
-  const std::size_t room = static_cast<std::size_t>(std::floor(area_m2 / maps::kMinAreaPerBlueRov2_m2));
+  const std::size_t room = Room();
   const std::size_t alive = roster_.alive_count();
   if (alive + static_cast<std::size_t>(count) > room) {
     answer.reason = fmt::format("count = {}: the {} x {} m workspace holds {} vehicles ({} m^2 each) and {} are in the mission",
@@ -230,9 +221,21 @@ OperatorAnswer MissionCore::ReserveIds(int count) {
                                 maps::kMinAreaPerBlueRov2_m2, alive);
     return answer;
   }
+  if (roster_.next_id() > kMaxVehicleId + 1 - count) {
+    answer.reason = fmt::format("count = {}: the mission has issued ids up to {} of 0..{}", count, roster_.next_id() - 1,
+                                kMaxVehicleId);
+    return answer;
+  }
   answer.accepted = true;
   answer.first_id = roster_.ReserveIds(count);
   return answer;
+}
+
+std::size_t MissionCore::Room() const {
+  const double area_m2 = scenario_.workspace.width_m * scenario_.workspace.height_m;
+  const auto bluerov2s = static_cast<std::size_t>(std::floor(area_m2 / maps::kMinAreaPerBlueRov2_m2));
+  // A scenario of point vehicles may hold more than BlueROV2s would; its own fleet always fits.
+  return std::max(bluerov2s, static_cast<std::size_t>(FirstFreeVehicleId(scenario_)));
 }
 
 void MissionCore::Record(const FleetEventRecord* event) {
@@ -287,6 +290,8 @@ CycleOutput MissionCore::Cycle(std::int64_t cycle) {
   const std::vector<int>& alive = roster_.alive();
   const bool risk_changed = fleet_.responses().size() > risk_measured_;
   for (; risk_measured_ < fleet_.responses().size(); ++risk_measured_) {
+    const EventResponse& response = fleet_.responses()[risk_measured_];
+    metrics_.WatchVisits(scenario_.ValveIndex(response.valve), response.time_s);  // how it was answered
     fleet_.responses()[risk_measured_].heading_change_rad = kUnknown;
     if (!alive.empty()) pending_heading_changes_.push_back({risk_measured_, snapshot_cycle, alive.front()});
   }
@@ -597,7 +602,7 @@ RejectionCounts MissionCore::rejections() const {
 MissionMetrics MissionCore::Metrics(double end_s) const {
   MissionMetrics metrics = metrics_.Result(std::max(end_s, 1.0 / scenario_.control_rate_hz));
   metrics.events = fleet_.responses();
-  FillEventResponses(scenario_, metrics);
+  FillEventResponses(metrics_.visits(), metrics);
   return metrics;
 }
 
@@ -613,7 +618,8 @@ MissionCheckpoint MissionCore::Checkpoint() const {
   c.roster = roster_.Checkpoint();
   c.metrics = metrics_.state();
   c.disarmed = metrics_.visits().disarmed();
-  c.visit_times = metrics_.visits().visit_times();
+  c.visits = metrics_.visits().visits();
+  c.visit_watches = metrics_.visits().watches();
   c.rejected_samples = rejected_.total();
   c.rejected_by_kind = rejected_.by_kind();
   c.rejected_by_sender = rejected_.by_sender();
@@ -632,8 +638,12 @@ void MissionCore::Restore(const MissionCheckpoint& c) {
     fleet_.Restore(c.fleet);
     roster_.Restore(c.roster);
     VisitTracker visits = metrics_.visits();
-    visits.Restore(c.disarmed, c.visit_times);
+    visits.Restore(c.disarmed, c.visits, c.visit_watches);
     metrics_.Restore(c.metrics, std::move(visits));
+    // A checkpoint of before the watches: each risk event's watched from what the record holds.
+    if (c.visit_watches.empty()) {
+      for (const EventResponse& r : fleet_.responses()) metrics_.WatchVisits(scenario_.ValveIndex(r.valve), r.time_s);
+    }
   } catch (const std::invalid_argument& e) {
     throw maps::ScenarioError(std::string("checkpoint: does not fit the scenario: ") + e.what());
   }

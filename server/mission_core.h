@@ -95,7 +95,8 @@ struct MissionCheckpoint {
   Roster::State roster;
   MetricsAccumulator::State metrics;
   std::vector<std::vector<int>> disarmed;            ///< valves each vehicle has disarmed [vehicle] (ascending)
-  std::vector<std::vector<double>> visit_times;       ///< [valve]
+  std::vector<VisitTracker::ValveVisits> visits;      ///< [valve]
+  std::vector<VisitTracker::EventWatch> visit_watches;  ///< one per risk event (fleet.responses), in order
   std::size_t rejected_samples = 0;
   std::map<std::string, std::size_t> rejected_by_kind, rejected_by_sender;  ///< RejectionCounts' parts
 };
@@ -115,12 +116,17 @@ class MissionCore {
 
   // ---- from the vehicles ----
   /// A vehicle's state of one of its cycles. The first state of an unknown (or gone) vehicle
-  /// joins it. Refused (counted, false) if not finite, older than its last, or from the future.
-  bool OnState(const agents::StateReport& state);
+  /// joins it. Refused (counted, false) if not finite, of an id outside 0..kMaxVehicleId, from
+  /// the future, or joining one vehicle more than the workspace's Room(); ignored if older than
+  /// its last.
+  /// `writer`: the transport's handle of whoever sent it (the DDS writer; 0 = none), which a
+  /// refusal is counted under beside the vehicle the state names.
+  bool OnState(const agents::StateReport& state, std::uint64_t writer = 0);
   /// The vehicle was lost (lost = true: its liveliness lapsed) or left cleanly.
   void OnVehicleGone(int id, bool lost);
-  /// A vehicle's running coverage; false if stale, of an unknown vehicle, or malformed.
-  bool OnCoverage(const agents::CoverageMessage& coverage);
+  /// A vehicle's running coverage; false if stale, of an unknown vehicle, or malformed (counted
+  /// as OnState's refusals are).
+  bool OnCoverage(const agents::CoverageMessage& coverage, std::uint64_t writer = 0);
 
   // ---- from operators ----
   /// An operator's (or a sensor's) change of a valve's risk: applied unless `sender` (who sent
@@ -137,6 +143,12 @@ class MissionCore {
   OperatorAnswer RemoveRequest(int id) const;
   /// Issues `count` new ids (1..10000) for vehicles an operator adds; names are rov<id + 1>.
   OperatorAnswer ReserveIds(int count);
+  /// Largest vehicle id a state may name (2^24 - 1): ids index nothing by value, but the next id
+  /// issued follows the largest heard and must stay far from overflow.
+  static constexpr int kMaxVehicleId = (1 << 24) - 1;
+  /// Vehicles the mission holds alive at once: the workspace's room at 1 m^2 a BlueROV2 (the
+  /// scenario's own fleet always fits). A state that would join one more is refused at the door.
+  std::size_t Room() const;
 
   /// One server cycle at mission time cycle / control rate: the states and coverage received
   /// are taken into the record, risk events and the guard applied, and the fleet's snapshot and
@@ -258,10 +270,6 @@ class MissionCore {
 /// Angle (rad, 0..pi) between two commanded velocities; 0 if either is (near) zero. The
 /// heading change of a risk event (EventResponse::heading_change_rad).
 double HeadingChange(const Eigen::Vector2d& before_mps, const Eigen::Vector2d& after_mps);
-
-/// Fills each risk event's time to the valve's next visit and its revisit interval before and
-/// after, from the visit times in `metrics`.
-void FillEventResponses(const maps::Scenario& scenario, MissionMetrics& metrics);
 
 /// The first id the server issues to vehicles added at runtime: after the scenario's vehicles
 /// (ids 0..N-1) and its fleet_events joins (N, N+1, ... in order).

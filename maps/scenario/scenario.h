@@ -174,6 +174,27 @@ struct FleetSettings {
   double risk_share = 0.5;
 };
 
+/// Where a mission's DDS traffic goes, so that agent hosts (and operators) on other machines can
+/// join it. The default is this machine alone: the loopback interface, no multicast. A process
+/// on another machine takes the same scenario with its own interface (--interface).
+struct NetworkSettings {
+  /// A network interface by name ("eth0") or by one of its IPv4 addresses; "lo" = this machine.
+  std::string interface_name = "lo";
+  /// IPv4 addresses or host names of the mission's other machines: without multicast, where
+  /// discovery looks for the other processes (this machine's own address is always looked at).
+  std::vector<std::string> peers;
+  /// Discovery by multicast on the interface (no peers needed on a network that carries it).
+  bool multicast = false;
+  bool operator==(const NetworkSettings&) const = default;
+};
+/// Peers a network may list.
+inline constexpr std::size_t kMaxPeers = 32;
+/// Empty if `network` is well formed, else one line "WHERE: FIELD = VALUE: RULE" (`where` is
+/// e.g. the scenario file or "command line"): an interface name of 1-15 characters of
+/// [A-Za-z0-9_.:-] or an IPv4 address; peers IPv4 addresses or host names (1-253 characters of
+/// [A-Za-z0-9.-]), at most kMaxPeers.
+std::string NetworkProblem(const NetworkSettings& network, const std::string& where);
+
 /// A change of the fleet during a mission: a vehicle joins, is lost (dies without a word), or
 /// leaves cleanly.
 struct FleetEvent {
@@ -275,6 +296,7 @@ struct Scenario {
   std::optional<SeabedSettings> seabed;
   std::vector<Flowline> flowlines;
   std::vector<Boulder> boulders;
+  NetworkSettings network;                  ///< where its DDS traffic goes (not part of ScenarioHash)
 
   /// All valves in file order (P1..Pn), structure after structure.
   std::vector<Valve> AllValves() const;
@@ -333,8 +355,8 @@ Eigen::Vector2d JitteredStart(const VehicleSpec& spec, std::uint64_t seed, int i
 /// coverage assignment or fleet events, which only the server uses. A server and an agent host
 /// that disagree on it would fly vehicles in a different world than the one accounted.
 std::uint64_t VehicleFingerprint(const Scenario& scenario);
-/// A hash (FNV-1a) of the whole scenario as EmitScenario writes it: a checkpoint is resumed
-/// only by the scenario it was taken of.
+/// A hash (FNV-1a) of the whole scenario as EmitScenario writes it, but its network (the same
+/// mission may be resumed on another): a checkpoint is resumed only by the scenario it was taken of.
 std::uint64_t ScenarioHash(const Scenario& scenario);
 
 const char* ToString(MotionModel model);

@@ -141,6 +141,16 @@ std::string EmitScenario(const Scenario& s) {
     }
     out << YAML::EndSeq;
   }
+  // Only when set: a mission on this machine alone writes what it always wrote.
+  if (!(s.network == NetworkSettings{})) {
+    key("network") << YAML::Flow << YAML::BeginMap;
+    key("interface") << s.network.interface_name;
+    key("peers") << YAML::Flow << YAML::BeginSeq;
+    for (const std::string& peer : s.network.peers) out << peer;
+    out << YAML::EndSeq;
+    key("multicast") << s.network.multicast;
+    out << YAML::EndMap;
+  }
   key("default_profile") << s.default_profile;
   key("profiles") << YAML::BeginMap;
   for (const RiskProfile& profile : s.profiles) {

@@ -312,7 +312,7 @@ Scenario ReadScenario(const Reader& r, const YAML::Node& root, const std::string
   r.ExpectMap(root, "", {"name", "workspace", "duration_s", "control_rate_hz", "physics_rate_hz",
                          "visit_radius_m", "rearm_radius_m", "seed", "start_jitter_m", "ergodic", "guard", "astar",
                          "structures", "vehicles", "default_profile", "profiles", "fleet", "fleet_events",
-                         "seabed", "flowlines", "boulders"});
+                         "seabed", "flowlines", "boulders", "network"});
   Scenario s;
   s.source_path = source;
   s.name = source.empty() ? "scenario" : std::filesystem::path(source).stem().string();
@@ -393,6 +393,15 @@ Scenario ReadScenario(const Reader& r, const YAML::Node& root, const std::string
     }
   });
   ReadSeabedSections(r, root, s);
+  r.Optional(root, "network", "", [&](const YAML::Node& n, const std::string& p) {
+    r.ExpectMap(n, p, {"interface", "peers", "multicast"});
+    r.Optional(n, "interface", p, [&](const YAML::Node& v, const std::string& q) { s.network.interface_name = r.Text(v, q); });
+    r.Optional(n, "peers", p, [&](const YAML::Node& list, const std::string& q) {
+      r.ExpectList(list, q);
+      for (std::size_t i = 0; i < list.size(); ++i) s.network.peers.push_back(r.Text(list[i], q + "[" + std::to_string(i) + "]"));
+    });
+    r.Optional(n, "multicast", p, [&](const YAML::Node& v, const std::string& q) { s.network.multicast = r.Bool(v, q); });
+  });
   return s;
 }
 

@@ -19,6 +19,7 @@
 #include "server/app/run_commands.h"
 #include "server/app/security_command.h"
 #include "proto/dds_config.h"
+#include "proto/mission_clock.h"
 
 namespace sage::server {
 namespace {
@@ -35,6 +36,16 @@ std::string MustBePositive(const std::string& text) {
   } catch (const std::exception&) {
     return "must be a number > 0";
   }
+}
+
+// A mission clock every agent host follows (proto::PlausibleClock refuses any other).
+std::string MustBeTimeScale(const std::string& text) {
+  try {
+    const double scale = std::stod(text);
+    if (scale >= proto::kMinTimeScale && scale <= proto::kMaxTimeScale) return {};
+  } catch (const std::exception&) {
+  }
+  return "must be a number in 0.001..1000";
 }
 
 // CLI11 reads "-3" into an unsigned option as 2^64 - 3; a seed is a whole number as typed.
@@ -95,6 +106,19 @@ void AddScenarioOverrides(CLI::App& cmd, ScenarioOverrides& o, OverrideSet set, 
   }
 }
 
+// Where the process's DDS traffic goes: agent hosts and operators on other machines.
+void AddNetwork(CLI::App& cmd, NetworkOverrides& n, const std::string& default_from) {
+  cmd.add_option("--interface", n.interface_name,
+                 "Network interface for DDS, by name or IPv4 address (default: " + default_from +
+                     "; lo = this machine only)");
+  cmd.add_option("--peer", n.peers,
+                 "IPv4 address or host name of another machine of the mission (repeat for each); discovery without "
+                 "multicast looks there (default: " + default_from + ")");
+  cmd.add_option("--multicast", n.multicast, "DDS discovery by multicast on the interface: on|off (default: " +
+                                                 default_from + ", off)")
+      ->check(CLI::IsMember({"on", "off"}));
+}
+
 void AddController(CLI::App& cmd, std::string& controller) {
   cmd.add_option("--controller,-c", controller, "ergodic (SMC) or astar (the fixed inspection tour)")
       ->check(CLI::IsMember({"ergodic", "astar"}))
@@ -103,6 +127,7 @@ void AddController(CLI::App& cmd, std::string& controller) {
 
 void AddMissionDir(CLI::App& cmd, OperatorCommand& o) {
   cmd.add_option("--mission", o.mission_dir, "Run directory of the mission (default: $SAGE_MISSION or runs/latest)");
+  AddNetwork(cmd, o.network, "the mission's, in mission.json");
   cmd.add_flag("--insecure", o.insecure,
                "Plain DDS instead of the mission's operator identity (mission.json security_dir); a secured mission "
                "does not hear such a command");
@@ -188,9 +213,10 @@ int RunCli(int argc, char** argv) {
                                                   "processes on a private loopback-only domain; Ctrl-C stops cleanly");
   AddScenarioOverrides(*launch, launch_cmd.scenario, OverrideSet::kMission, "scenarios/fleet_field.yaml",
                        /*scenario_required=*/false);
+  AddNetwork(*launch, launch_cmd.scenario.network, "the scenario's network");
   AddController(*launch, launch_cmd.controller);
   launch->add_option("--time-scale", launch_cmd.time_scale, "Mission seconds per wall second (1 = real time)")
-      ->check(MustBePositive)
+      ->check(MustBeTimeScale)
       ->capture_default_str();
   launch->add_option("--out,-o", launch_cmd.out_dir, "Run directory (default: runs/<scenario>_launch)");
   launch->add_option("--hosts", launch_cmd.hosts, "Agent host processes (default: one per 250 vehicles)")->check(MustBePositive);
@@ -216,13 +242,15 @@ int RunCli(int argc, char** argv) {
   ServerCommand server_cmd;
   CLI::App* server = app.add_subcommand("server", "The mission server alone (sage launch starts it for you)");
   AddScenarioOverrides(*server, server_cmd.scenario, OverrideSet::kMission, "scenarios/fleet_field.yaml");
+  AddNetwork(*server, server_cmd.scenario.network, "the scenario's network");
   AddController(*server, server_cmd.controller);
   server->add_option("--time-scale", server_cmd.time_scale, "Mission seconds per wall second (1 = real time)")
-      ->check(MustBePositive)
+      ->check(MustBeTimeScale)
       ->capture_default_str();
   server->add_option("--out,-o", server_cmd.out_dir, "Run directory (default: runs/<scenario>_server)");
   server->add_option("--domain", server_cmd.domain, "DDS domain id 0..232")->required();
   server->add_flag("--quiet", server_cmd.quiet, "No progress lines");
+  server->add_flag("--launched", server_cmd.launched, "Started by sage launch (which writes mission.json)")->group("");
   server->add_option("--security", server_cmd.security_dir,
                      "DDS Security directory (sage security init): the server's identity there (default: plain DDS)");
   server->add_flag("--resume", server_cmd.resume,
@@ -238,6 +266,7 @@ int RunCli(int argc, char** argv) {
   CLI::App* agents = app.add_subcommand("agents", "An agent host: several BlueROV2s in one Box2D world (sage launch "
                                                   "starts them)");
   AddScenarioOverrides(*agents, agents_cmd.scenario, OverrideSet::kVehicles, "scenarios/fleet_field.yaml");
+  AddNetwork(*agents, agents_cmd.scenario.network, "the scenario's network");
   AddController(*agents, agents_cmd.controller);
   agents->add_option("--domain", agents_cmd.domain, "DDS domain id 0..232")->required();
   agents->add_option("--security", agents_cmd.security_dir,
@@ -414,10 +443,16 @@ int RunCli(int argc, char** argv) {
     }
     if (*server) return CmdServer(server_cmd);
     if (*agents) return CmdAgents(agents_cmd);
-    if (*vehicle_add) return AddVehicles(FindMission(op.mission_dir), op.add_count, op.insecure);
-    if (*vehicle_remove) return RemoveVehicle(FindMission(op.mission_dir), op.remove_id, op.insecure);
-    if (*risk_set) return SetRisk(FindMission(op.mission_dir), op.valve, op.weight, op.source, op.insecure);
-    if (*stop) return StopMission(FindMission(op.mission_dir), op.insecure);
+    // The mission as mission.json says, on this machine's network as the options say.
+    const auto mission = [&] {
+      MissionFile m = FindMission(op.mission_dir);
+      m.network = op.network.Applied(m.network);
+      return m;
+    };
+    if (*vehicle_add) return AddVehicles(mission(), op.add_count, op.insecure);
+    if (*vehicle_remove) return RemoveVehicle(mission(), op.remove_id, op.insecure);
+    if (*risk_set) return SetRisk(mission(), op.valve, op.weight, op.source, op.insecure);
+    if (*stop) return StopMission(mission(), op.insecure);
     if (*security_init) return CmdSecurityInit(security_cmd);
     if (*generate) return CmdFieldGenerate(field_options, field_out);
     if (*seabed) return CmdFieldSeabed(seabed_seed, seabed_name, seabed_out);

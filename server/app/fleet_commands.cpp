@@ -1,6 +1,7 @@
 #include "server/app/fleet_commands.h"
 
 #include <csignal>
+#include <filesystem>
 #include <string>
 
 #include <fmt/format.h>
@@ -10,9 +11,12 @@
 #include "server/app/resume_plan.h"
 #include "server/app/security_command.h"
 #include "server/node/server_node.h"
+#include "server/report/mission_file.h"
 
 namespace sage::server {
 namespace {
+
+namespace fs = std::filesystem;
 
 std::atomic<bool> g_stop{false};
 std::atomic<int> g_stop_signal{0};
@@ -55,6 +59,24 @@ int CmdServer(const ServerCommand& c) {
   options.start_in_s = c.resume ? 0.0 : c.start_in_s;
   options.show_progress = !c.quiet;
   options.stop = stop;
+  options.on_started = [&] {
+    const std::string security_dir =
+        c.security_dir.empty() ? std::string() : fs::absolute(c.security_dir).lexically_normal().string();
+    WriteDdsConfigFiles(options.out_dir, scenario.network, c.domain, security_dir);
+    if (c.launched || c.resume) return;
+    // A server started by hand says where its mission is, as sage launch does, so that the
+    // operators' commands (sage risk set, vehicle add, stop --mission DIR) find it.
+    MissionFile mission;
+    mission.domain_id = c.domain;
+    mission.scenario_path = (fs::absolute(options.out_dir) / "scenario.yaml").string();
+    mission.run_dir = fs::absolute(options.out_dir).string();
+    mission.time_scale = c.time_scale;
+    mission.controller = c.controller;
+    mission.profile = c.scenario.profile;
+    mission.security_dir = security_dir;
+    mission.network = scenario.network;
+    WriteMissionFile(options.out_dir, mission);
+  };
   return RunServerNode(scenario, options);
 }
 

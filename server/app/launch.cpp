@@ -17,6 +17,7 @@
 #include <spdlog/spdlog.h>
 
 #include "maps/seabed/seabed_obstacles.h"
+#include "agents/node/network.h"
 #include "proto/dds_config.h"
 #include "proto/dds_endpoints.h"
 #include "proto/messages.h"
@@ -112,6 +113,7 @@ int Launch(const LaunchCommand& c) {
     const RecordSummary record = ReadRecordSummary(out_dir);
     if (record.complete) throw maps::ScenarioError(fmt::format("--resume = {}: the mission there is complete", out_dir));
     scenario = maps::LoadScenario((fs::path(out_dir) / "scenario.yaml").string());
+    scenario.network = c.scenario.network.Applied(scenario.network);  // resumed on this machine's network
     to_resume = VehiclesToResume(scenario, out_dir);  // reads the checkpoint: fails here if there is none
     mission = previous;
     mission.resumes = previous.resumes + 1;
@@ -174,8 +176,8 @@ int Launch(const LaunchCommand& c) {
   // The launcher is the operator's own process: it reads status and states and sends the stop.
   const std::optional<proto::SecurityIdentity> identity =
       MissionIdentity(mission.security_dir, proto::SecurityRole::kOperator, domain, resume ? "mission.json security_dir" : "--security");
-  proto::Participant participant(domain, proto::LocalhostConfigXml(proto::kMaxLocalParticipants,
-                                                                   proto::LoopbackDiscovery::kUnicastPeers, identity));
+  proto::Participant participant(
+      domain, proto::CycloneConfigXml(agents::NetworkOf(scenario.network), proto::kMaxLocalParticipants, identity));
   {
     // The reservation keeps other launches off this domain, not a server started by hand.
     proto::Reader<proto::MissionStatus> servers(participant, proto::MissionStatusQos());
@@ -193,6 +195,7 @@ int Launch(const LaunchCommand& c) {
   mission.scenario_path = scenario_file;
   mission.run_dir = fs::absolute(out_dir).string();
   mission.launcher_pid = getpid();
+  mission.network = scenario.network;
   try {
     if (!resume) WriteScenarioFile(out_dir, scenario);
     WriteMissionFile(out_dir, mission);
@@ -202,10 +205,13 @@ int Launch(const LaunchCommand& c) {
   if (c.point_latest) PointLatestAt(out_dir);
 
   std::vector<std::string> common = {"--domain", std::to_string(domain), "--controller", mission.controller};
+  // Every process on the mission's network (the scenario's, or a resumed mission's new --interface).
+  const std::vector<std::string> network_args = NetworkArgs(scenario.network);
+  common.insert(common.end(), network_args.begin(), network_args.end());
   // Each process takes its own role's identity from the mission's directory.
   if (secured) common.insert(common.end(), {"--security", mission.security_dir});
   std::vector<std::string> server_args = {"server", scenario_file, "--out", out_dir, "--time-scale",
-                                          Number(mission.time_scale), "--quiet"};
+                                          Number(mission.time_scale), "--quiet", "--launched"};
   if (!mission.profile.empty()) server_args.insert(server_args.end(), {"--profile", mission.profile});
   if (resume) {
     server_args.insert(server_args.end(), {"--resume", "--resumes", std::to_string(mission.resumes)});

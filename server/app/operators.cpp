@@ -7,6 +7,7 @@
 
 #include <fmt/format.h>
 
+#include "agents/node/network.h"
 #include "proto/dds_config.h"
 #include "proto/dds_endpoints.h"
 #include "proto/messages.h"
@@ -40,8 +41,8 @@ proto::Participant OperatorParticipant(const MissionFile& mission, bool insecure
       insecure ? std::nullopt
                : MissionIdentity(mission.security_dir, proto::SecurityRole::kOperator, mission.domain_id,
                                  "mission.json security_dir");
-  return proto::Participant(mission.domain_id, proto::LocalhostConfigXml(proto::kMaxLocalParticipants,
-                                                                         proto::LoopbackDiscovery::kUnicastPeers, identity));
+  return proto::Participant(mission.domain_id, proto::CycloneConfigXml(agents::NetworkOf(mission.network),
+                                                                       proto::kMaxLocalParticipants, identity));
 }
 
 struct CommandAnswer {
@@ -115,6 +116,9 @@ int AddVehicles(const MissionFile& mission, int count, bool insecure) {
                                    mission.controller};
   // The new host joins a secured mission with the mission's agent-host identity, as launch's own do.
   if (!mission.security_dir.empty()) args.insert(args.end(), {"--security", mission.security_dir});
+  // ... and on this machine's network (a vehicle may join from another machine than the server's).
+  const std::vector<std::string> network = NetworkArgs(mission.network);
+  args.insert(args.end(), network.begin(), network.end());
   const pid_t pid = Spawn(args, log, /*detach=*/true);
   std::printf("started agent host pid %d with %d vehicle(s): rov%d..rov%d, ids %d..%d (log: %s)\n", pid, count,
               first + 1, first + count, first, first + count - 1, log.c_str());

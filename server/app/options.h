@@ -55,6 +55,7 @@ struct ServerCommand {
   int resumes = 0;
   double start_in_s = 0.0;       ///< wall seconds from start-up to the mission's t = 0 (a fresh mission)
   std::string security_dir;      ///< DDS Security directory: the server's identity there (empty: plain DDS)
+  bool launched = false;         ///< started by sage launch, whose mission.json it is (else the server writes one)
 };
 
 /// sage agents
@@ -93,6 +94,7 @@ struct OperatorCommand {
   double weight = 0.0;
   std::string source = "operator";
   bool insecure = false;         ///< plain DDS even if the mission is secured (its server will not hear it)
+  NetworkOverrides network;      ///< where this machine's DDS traffic goes (default: mission.json's)
 };
 
 /// sage security init

@@ -6,7 +6,6 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
-#include <deque>
 #include <filesystem>
 #include <iostream>
 #include <map>
@@ -16,6 +15,7 @@
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
 
+#include "agents/node/network.h"
 #include "agents/node/wire.h"
 #include "maps/world.h"
 #include "proto/dds_config.h"
@@ -26,39 +26,18 @@
 #include "proto/wire_size.h"
 #include "server/report/checkpoint.h"
 #include "server/report/report.h"
+#include "server/node/server_door.h"
 #include "server/report/run_directory.h"
 
 namespace sage::server {
 namespace {
 
-// Text from outside as it may appear in a log line: at most 64 characters, control characters
-// (newline, escape) as '?', so a sender cannot forge or break lines.
-std::string LogSafe(std::string_view text) {
-  std::string out(text.substr(0, 64));
-  for (char& c : out) {
-    if (static_cast<unsigned char>(c) < 0x20 || c == 0x7f) c = '?';
-  }
-  return text.size() > 64 ? out + "..." : out;
-}
-
-using proto::AsStringView;
 using proto::BorrowString;
 using proto::NowRealtimeNs;
 using SteadyClock = std::chrono::steady_clock;
 
 // Up to this many joins of one cycle are logged by name; more are summed up in one line.
 constexpr std::size_t kJoinsNamed = 5;
-
-// An operator's command the server executed, kept to answer its repeats (an operator sends a
-// command again, same stamp, until it is answered). Far more than a few seconds of commands.
-struct AnsweredCommand {
-  std::int64_t stamp_ns = 0;
-  std::string verb;
-  std::uint32_t count = 0;
-  std::uint32_t vehicle_id = 0;
-  OperatorAnswer answer;
-};
-constexpr std::size_t kAnsweredKept = 256;
 
 // The record, and the log lines an operator reads: joins, losses and risk changes as they
 // happen (joins of one cycle summed up when many).
@@ -146,9 +125,9 @@ int RunServerNode(const maps::Scenario& scenario, const ServerNodeOptions& optio
                                      checkpoint.time_s, core.time_s(), tail.samples.size()));
   }
 
-  proto::Participant participant(options.domain_id, proto::LocalhostConfigXml(proto::kMaxLocalParticipants,
-                                                                             proto::LoopbackDiscovery::kUnicastPeers,
-                                                                             options.security));
+  proto::Participant participant(options.domain_id,
+                                 proto::CycloneConfigXml(agents::NetworkOf(scenario.network), proto::kMaxLocalParticipants,
+                                                         options.security));
   {
     // Two servers on one domain would both adopt the same vehicles and clocks: refuse to be the
     // second. Asked before this server's own status writer exists; discovery on loopback takes
@@ -159,6 +138,7 @@ int RunServerNode(const maps::Scenario& scenario, const ServerNodeOptions& optio
                                             options.domain_id));
     }
   }
+  if (options.on_started) options.on_started();
   proto::Reader<proto::VehicleState> states(participant, proto::VehicleStateRecordQos());
   proto::Reader<proto::VehicleCoverage> coverage(participant, proto::VehicleCoverageQos());
   proto::Reader<proto::RiskUpdate> risk_updates(participant, proto::RiskUpdateQos());
@@ -166,7 +146,6 @@ int RunServerNode(const maps::Scenario& scenario, const ServerNodeOptions& optio
   proto::Reader<proto::FleetCommand> commands(participant, proto::FleetCommandQos());
   proto::Writer<proto::FleetCommand> retire(participant, proto::FleetCommandQos());
   proto::Writer<proto::FleetCommandResult> command_results(participant, proto::FleetCommandResultQos());
-  std::deque<AnsweredCommand> answered;
   proto::Writer<proto::ErgodicTarget> targets(participant, proto::ErgodicTargetQos());
   proto::Writer<proto::FleetCoverage> fleet_coverage(participant, proto::FleetCoverageQos());
   proto::Writer<proto::MissionStatus> status(participant, proto::MissionStatusQos());
@@ -174,6 +153,7 @@ int RunServerNode(const maps::Scenario& scenario, const ServerNodeOptions& optio
   const double rate = scenario.control_rate_hz;
   const std::int64_t cycles_total = std::llround(scenario.duration_s * rate);
   const std::uint64_t instance = NewServerInstance();
+  ServerDoor door(core, instance, scenario.control_rate_hz);
   const std::uint32_t order = static_cast<std::uint32_t>(scenario.ergodic.basis_order);
   // The mission clock: cycle k is at mission time k / rate; a fresh mission's t = 0 is start_in_s
   // from now, a resumed mission's clock is set so that its first cycle is now. Vehicles step at
@@ -275,7 +255,7 @@ int RunServerNode(const maps::Scenario& scenario, const ServerNodeOptions& optio
         // sample of this mission's time line; the host follows this server within a cycle.
         if (m.server_instance != instance) return;
         heard_cycle[id] = m.cycle;
-        core.OnState(agents::wire::FromWire(m, rate));
+        door.TakeState(m, info.publication_handle);
         // A dispose or a lapsed lease that arrives while the vehicle's last state is still
         // unread comes as that (valid) sample with a not-alive instance state.
         if (info.instance_state == DDS_ALIVE_INSTANCE_STATE) return;
@@ -359,26 +339,16 @@ int RunServerNode(const maps::Scenario& scenario, const ServerNodeOptions& optio
       ++messages_in;
       if (!info.valid_data) return;
       bytes_in += proto::WireBytes(m);
-      core.OnCoverage(agents::wire::FromWire(m));
+      door.TakeCoverage(m, info.publication_handle);
     });
     risk_updates.TakeEach([&](const proto::RiskUpdate& r, const dds_sample_info_t& info) {
       ++messages_in;
       if (!info.valid_data) return;
       bytes_in += proto::WireBytes(r);
       // The sender is the DDS writer (its instance handle), which an update cannot name falsely.
-      const std::string source(AsStringView(r.source));
-      const std::string sender = fmt::format("{} (writer {:x})", LogSafe(source), info.publication_handle);
-      const std::uint64_t limited = core.risk_limits().refused(sender);
-      const OperatorAnswer a = core.OnRiskUpdate(std::string(AsStringView(r.valve)), r.weight, source, sender);
-      const bool newly_limited = core.risk_limits().refused(sender) > limited;
-      // A flood's refusals are logged and answered at 1, 10, 100, ... per sender, not each: its
-      // answers would crowd out other operators' answers on the shared result topic.
-      const auto decade = [](std::uint64_t n) { while (n % 10 == 0 && n > 1) n /= 10; return n == 1; };
-      if (newly_limited && !decade(core.risk_limits().refused(sender))) return;
-      if (!a.accepted) {
-        spdlog::warn("server: ignored a risk update from {}: {}{}", sender, a.reason,
-                     newly_limited ? fmt::format(" ({} refused so far)", core.risk_limits().refused(sender)) : "");
-      }
+      const std::optional<OperatorAnswer> answer = door.TakeRiskUpdate(r, info.publication_handle);
+      if (!answer) return;  // a flood's refusal, answered only at its 1st, 10th, 100th, ...
+      const OperatorAnswer& a = *answer;
       proto::RiskUpdateResult result{};
       result.update_stamp_ns = r.stamp_ns;
       result.valve = r.valve;
@@ -394,45 +364,21 @@ int RunServerNode(const maps::Scenario& scenario, const ServerNodeOptions& optio
       ++messages_in;
       if (!info.valid_data) return;
       bytes_in += proto::WireBytes(c);
-      const std::string_view verb = AsStringView(c.verb);
-      // An operator sends a command again until answered: a repeat is answered, not executed.
-      const auto repeat = std::find_if(answered.begin(), answered.end(), [&](const AnsweredCommand& done) {
-        return done.stamp_ns == c.stamp_ns && done.verb == verb && done.count == c.count &&
-               done.vehicle_id == c.vehicle_id;
-      });
-      if (repeat != answered.end()) {
-        answer_command(c, repeat->answer);
-        return;
+      const CommandOutcome done = door.TakeCommand(c);
+      if (done.ignored) return;
+      stop_requested = stop_requested || done.stop;
+      if (done.retire) {
+        proto::FleetCommand order{};
+        order.stamp_ns = NowRealtimeNs();
+        order.server_instance = instance;
+        std::string retire_verb = "retire";
+        order.verb = BorrowString(retire_verb);
+        order.vehicle_id = c.vehicle_id;
+        retire.Write(order);
+        ++messages_out;
+        bytes_out += proto::WireBytes(order);
       }
-      const auto remember = [&](const OperatorAnswer& a) {
-        answered.push_back({c.stamp_ns, std::string(verb), c.count, c.vehicle_id, a});
-        if (answered.size() > kAnsweredKept) answered.pop_front();
-      };
-      if (verb == "stop") {
-        const OperatorAnswer a{true, "", 0.0, -1};
-        remember(a);
-        stop_requested = true;
-        answer_command(c, a);
-      } else if (verb == "remove") {
-        const OperatorAnswer a = core.RemoveRequest(static_cast<int>(c.vehicle_id));
-        remember(a);
-        if (a.accepted) {
-          proto::FleetCommand order{};
-          order.stamp_ns = NowRealtimeNs();
-          order.server_instance = instance;
-          std::string retire_verb = "retire";
-          order.verb = BorrowString(retire_verb);
-          order.vehicle_id = c.vehicle_id;
-          retire.Write(order);
-          ++messages_out;
-          bytes_out += proto::WireBytes(order);
-        }
-        answer_command(c, a);
-      } else if (verb == "reserve") {
-        const OperatorAnswer a = core.ReserveIds(static_cast<int>(c.count));
-        remember(a);
-        answer_command(c, a);
-      }
+      answer_command(c, done.answer);
     });
 
     const CycleOutput out = core.Cycle(cycle);

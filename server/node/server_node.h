@@ -8,6 +8,7 @@
 // leases of that moment for losses: a vehicle heard again within two leases was never lost.
 // With `resume` it starts from the run directory's checkpoint and the record written after it.
 #include <atomic>
+#include <functional>
 #include <string>
 
 #include <optional>
@@ -34,6 +35,9 @@ struct ServerNodeOptions {
   double checkpoint_period_s = 2.0;  ///< wall seconds between checkpoints
   bool show_progress = true;       ///< a progress line on stderr
   const std::atomic<bool>* stop = nullptr;  ///< set (e.g. by SIGINT) to end the mission early
+  /// Called once the server knows it is the mission's only server (no other on its domain),
+  /// before the mission starts: where the sage command writes the files other tools join by.
+  std::function<void()> on_started;
 };
 
 /// Runs the mission to its end (or a stop) with the record in out_dir. Returns 0 on success.

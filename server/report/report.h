@@ -3,8 +3,10 @@
 // (trajectory over the risk field with XTs and valves, like the SAGE paper's Fig. 1), and the
 // terminal table in the layout of the paper's Table 1.
 #include <cstdint>
+#include <iosfwd>
 #include <limits>
 #include <map>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -56,6 +58,19 @@ void WriteTrajectoryCsv(const std::string& path, const Trajectory& trajectory);
 /// vehicle column may hold integers or names. Throws maps::ScenarioError with one line naming
 /// the file, the line and the problem.
 Trajectory ReadTrajectoryCsv(const std::string& path);
+/// The same from a stream; `path` names it in the errors.
+Trajectory ParseTrajectoryCsv(std::istream& in, const std::string& path);
+/// The normalised weights of a profile over time, as a mission without operators would have them:
+/// the profile's at t = 0, then after each of its timed events.
+std::vector<WeightChange> ProfileSchedule(const maps::Scenario& scenario, const maps::RiskProfile& profile);
+/// What `sage evaluate` computes: the metrics of a recorded trajectory (a vehicle's log, or ours)
+/// against `profile` of the scenario and its timed events, over [0, duration_s] (default: to the
+/// last sample), with at most max_checkpoints samples of the ergodic metric over time (a log of
+/// hours gets one every few seconds). Throws maps::ScenarioError (one line) for an empty
+/// trajectory or a duration that is not finite and > 0. `source` names the trajectory.
+MissionMetrics EvaluateRecorded(const Trajectory& trajectory, const maps::Scenario& scenario,
+                                const maps::RiskProfile& profile, std::optional<double> duration_s,
+                                const std::string& source, double max_checkpoints = 1e5);
 
 /// SVG of the risk field (weights = normalised weights to draw), XT footprints, valves with
 /// their names and visit circles, and each vehicle's path in its own colour.

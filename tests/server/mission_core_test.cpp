@@ -326,7 +326,8 @@ TEST(MissionCore, ResumeReplaysTheRecordToTheSameState) {
   EXPECT_EQ(resumed.Replay(samples, fleet, risk), original.core().cycle());
 
   const MissionCore& a = original.core();
-  EXPECT_EQ(resumed.metrics_accumulator().visits().visit_times(), a.metrics_accumulator().visits().visit_times());
+  EXPECT_EQ(resumed.metrics_accumulator().visits().visits(), a.metrics_accumulator().visits().visits());
+  EXPECT_EQ(resumed.metrics_accumulator().visits().watches(), a.metrics_accumulator().visits().watches());
   const MetricsAccumulator::State& ma = a.metrics_accumulator().state();
   const MetricsAccumulator::State& mb = resumed.metrics_accumulator().state();
   EXPECT_EQ(mb.sum_f, ma.sum_f);
