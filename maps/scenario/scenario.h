@@ -14,6 +14,8 @@
 
 #include <Eigen/Core>
 
+#include "maps/scenario/perception.h"
+
 namespace sage::maps {
 
 /// Bad user input (scenario file, CLI value). what() is one line meant for the user:
@@ -204,6 +206,11 @@ struct Scenario {
   AstarSettings astar;
   FleetSettings fleet;
   std::vector<FleetEvent> fleet_events;     ///< sorted by time on load
+  // Leak sensing (maps/scenario/perception.h): none of it by default, and then a mission flies
+  // exactly as without.
+  std::vector<SensorSpec> sensors;          ///< every vehicle carries each
+  std::vector<LeakSpec> leaks;              ///< hidden from the server; sorted by start on load
+  FusionSettings fusion;
 
   /// All valves in file order (P1..Pn), structure after structure.
   std::vector<Valve> AllValves() const;
@@ -233,8 +240,8 @@ Scenario ParseScenario(const std::string& yaml_text, const std::string& source);
 /// Writes YAML that LoadScenario reads back to an equal Scenario.
 std::string EmitScenario(const Scenario& scenario);
 
-/// A copy that lasts `duration_s`; risk and fleet events after the new end are dropped (they
-/// would never happen).
+/// A copy that lasts `duration_s`; risk and fleet events and leaks after the new end are dropped
+/// (they would never happen).
 Scenario WithDuration(const Scenario& scenario, double duration_s);
 
 /// A copy with exactly `count` vehicles (>= 1): the first `count` of the file's, or all of them

@@ -43,4 +43,8 @@ inline const char* EventKey(FleetEvent::Kind kind) {
   return "unknown";
 }
 
+// The rules on sensors, leaks and fusion (scenario_perception.cpp); Scenario::Validate calls it
+// last. `file` starts each message.
+void ValidatePerception(const Scenario& scenario, const std::string& file);
+
 }  // namespace sage::maps::detail

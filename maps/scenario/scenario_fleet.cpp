@@ -198,6 +198,7 @@ std::uint64_t VehicleFingerprint(const Scenario& scenario) {
   vehicles_only.astar = AstarSettings{};
   vehicles_only.fleet.assignment = FleetAssignment::kShared;
   vehicles_only.fleet_events.clear();
+  vehicles_only.fusion = FusionSettings{};  // the server's alone (the sensors and the leaks are the vehicles' world)
   return Fnv1a(EmitScenario(vehicles_only));
 }
 

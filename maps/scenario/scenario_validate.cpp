@@ -344,6 +344,7 @@ void Scenario::Validate() const {
     for (const RiskProfile& profile : profiles) list += (list.empty() ? "" : ", ") + profile.name;
     c.Fail("default_profile", default_profile.empty() ? "\"\"" : default_profile, "must name a profile (" + list + ")");
   }
+  detail::ValidatePerception(*this, source_path.empty() ? "<scenario>" : source_path);
 }
 
 }  // namespace sage::maps
