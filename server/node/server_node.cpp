@@ -10,6 +10,7 @@
 #include <filesystem>
 #include <iostream>
 #include <map>
+#include <optional>
 #include <random>
 #include <thread>
 
@@ -161,6 +162,9 @@ int RunServerNode(const maps::Scenario& scenario, const ServerNodeOptions& optio
   }
   proto::Reader<proto::VehicleState> states(participant, proto::VehicleStateRecordQos());
   proto::Reader<proto::VehicleCoverage> coverage(participant, proto::VehicleCoverageQos());
+  // The vehicles' leak-sensor scans (issue 9), where the scenario gives them sensors.
+  std::optional<proto::Reader<proto::Detection>> detections;
+  if (!scenario.sensors.empty()) detections.emplace(participant, proto::DetectionQos());
   proto::Reader<proto::RiskUpdate> risk_updates(participant, proto::RiskUpdateQos());
   proto::Writer<proto::RiskUpdateResult> risk_results(participant, proto::RiskUpdateResultQos());
   proto::Reader<proto::FleetCommand> commands(participant, proto::FleetCommandQos());
@@ -361,6 +365,15 @@ int RunServerNode(const maps::Scenario& scenario, const ServerNodeOptions& optio
       bytes_in += proto::WireBytes(m);
       core.OnCoverage(agents::wire::FromWire(m));
     });
+    if (detections) {
+      take_all(*detections, [&](const proto::Detection& m, const dds_sample_info_t& info) {
+        ++messages_in;
+        if (!info.valid_data) return;
+        bytes_in += proto::WireBytes(m);
+        if (m.server_instance != instance) return;  // on another server's clock, as states
+        core.OnScan(agents::wire::FromWire(m, rate));
+      });
+    }
     risk_updates.TakeEach([&](const proto::RiskUpdate& r, const dds_sample_info_t& info) {
       ++messages_in;
       if (!info.valid_data) return;
