@@ -61,7 +61,9 @@ struct FusionSettings {
   /// true: the vehicles steer on the posterior (the Bayesian loop); false: the scans are fused and
   /// scored but the vehicles keep to the profile's weights (the paper's fixed profiles).
   bool steer = true;
-  double prior_probability = 0.01;   ///< of a leak in one leaf before anyone looked, (0, 0.5)
+  /// Of a leak in one leaf (0.2 m) before anyone looked, (0, 0.5): 1e-3 is about one leak in
+  /// 40 m^2 of seabed, so one detection raises an alarm and a second one confirms it.
+  double prior_probability = 1e-3;
   double relax_time_s = 60.0;        ///< back to the prior with this time constant (s), > 0 (.inf: never)
   double confirm_probability = 0.9;  ///< a leak is confirmed when a leaf's posterior reaches this, (prior, 1)
   double alarm_probability = 0.5;    ///< an alarm is raised at this posterior, cleared below half of it, (prior, confirm]

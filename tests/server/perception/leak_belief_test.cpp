@@ -40,7 +40,7 @@ class LeakBeliefTest : public ::testing::Test {
 // by ln((1 - p) + p N / kappa), a leaf in view a metre off by ln(1 - p + p N' / kappa) (a miss,
 // nearly), one behind the vehicle not at all. 1e-12 relative.
 TEST_F(LeakBeliefTest, ScanUpdateMatchesHandComputation) {
-  EXPECT_NEAR(belief_.prior_log_odds(), Logit(0.01), 1e-12);
+  EXPECT_NEAR(belief_.prior_log_odds(), Logit(scenario_.fusion.prior_probability), 1e-12);
   const Eigen::Vector2d pose(2.0, 2.9);
   const LeakBelief::Cell leak = belief_.CellOf({2.0, 3.45});
   const Eigen::Vector2d c = belief_.CentreOf(leak);
@@ -51,7 +51,7 @@ TEST_F(LeakBeliefTest, ScanUpdateMatchesHandComputation) {
   EXPECT_GT(updated, 10);
   const double expected = std::log((1 - P((c - pose).norm())) + P((c - pose).norm()) * Gauss(z, c) / Kappa());
   EXPECT_NEAR(belief_.Evidence(leak, 10.0), expected, 1e-12 * std::abs(expected));
-  EXPECT_GT(belief_.Probability(leak, 10.0), 0.9);
+  EXPECT_GT(belief_.Probability(leak, 10.0), scenario_.fusion.alarm_probability) << "one detection raises an alarm";
 
   const LeakBelief::Cell side = belief_.CellOf({1.5, 3.7});
   const Eigen::Vector2d cs = belief_.CentreOf(side);
@@ -78,8 +78,9 @@ TEST_F(LeakBeliefTest, ClampsAndRelaxation) {
   EXPECT_NEAR(belief_.Evidence(leak, 1.0 + tau), scenario_.fusion.min_evidence / std::exp(1.0), 1e-12);
   // The valve's factor P / P0 < 1 while the evidence is negative.
   const Eigen::VectorXd factors = belief_.ValveFactors(1.0);
-  const double p = 1.0 / (1.0 + std::exp(-(Logit(0.01) + scenario_.fusion.min_evidence)));
-  EXPECT_NEAR(factors[0], p / 0.01, 1e-12);
+  const double p0 = scenario_.fusion.prior_probability;
+  const double p = 1.0 / (1.0 + std::exp(-(Logit(p0) + scenario_.fusion.min_evidence)));
+  EXPECT_NEAR(factors[0], p / p0, 1e-12);
   EXPECT_EQ(factors[2], 1.0) << "P3 was not looked at";
   for (int k = 0; k < 10; ++k) belief_.Fuse(0, pose, M_PI / 2, {belief_.CentreOf(leak)}, 2.0);
   EXPECT_NEAR(belief_.LogOdds(leak, 2.0), scenario_.fusion.max_log_odds, 1e-12);

@@ -130,11 +130,18 @@ TEST(RiskLoop, ADetectionRaisesTheLayerAtOnce) {
   EXPECT_GT(core.risk_layer().excess_mass(), 0.5);
   EXPECT_GT(DensityOf(world.basis(), hit.snapshot.phi, p3), 2.0 * before);
   EXPECT_EQ(hit.snapshot.phi, core.risk_layer().coefficients());
-  const MissionMetrics m = core.Metrics(0.4);
+  // After a look that saw nothing there, one detection is not yet an alarm; a second one is (one
+  // alarm: they are at the same place).
+  EXPECT_EQ(core.Metrics(0.4).false_alarms.raised, 0);
+  ASSERT_TRUE(core.OnState(State(0, 6, at, -M_PI / 2)));
+  ASSERT_TRUE(core.OnScan(Scan(0, 6, at, -M_PI / 2, {p3 + Eigen::Vector2d(0.02, 0.0)})));
+  core.Cycle(6);
+  const MissionMetrics m = core.Metrics(0.6);
   ASSERT_EQ(m.leaks.size(), 1u);
   EXPECT_TRUE(std::isnan(m.leaks[0].detected_s)) << "the scenario's leak at P3 starts at 120 s: this is a false alarm";
-  EXPECT_EQ(m.false_alarms.detections, 1);
+  EXPECT_EQ(m.false_alarms.detections, 2);
   EXPECT_EQ(m.false_alarms.raised, 1);
+  EXPECT_EQ(m.scans, 3u);
 }
 
 // Partition and regions get the layer's leaves too: the share or region holding P3 sees its
