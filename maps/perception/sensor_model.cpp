@@ -20,13 +20,23 @@ SensorModel::SensorModel(const SensorSpec& spec, const OccupancyGrid& obstacles,
 }
 
 bool SensorModel::InSector(const Eigen::Vector2d& from, double heading_rad, const Eigen::Vector2d& y) const {
+  return InSectorAlong(from, Eigen::Vector2d(std::cos(heading_rad), std::sin(heading_rad)), y);
+}
+
+bool SensorModel::InSectorAlong(const Eigen::Vector2d& from, const Eigen::Vector2d& heading_unit,
+                                const Eigen::Vector2d& y) const {
   const Eigen::Vector2d d = y - from;
   const double r2 = d.squaredNorm();
   if (r2 > spec_.range_m * spec_.range_m) return false;
   if (spec_.fov_deg >= 360.0 || r2 == 0.0) return true;
   // The bearing within half the opening of the heading: cos(angle) >= cos(half fov).
-  const double along = d.x() * std::cos(heading_rad) + d.y() * std::sin(heading_rad);
-  return along >= cos_half_fov_ * std::sqrt(r2);
+  return d.dot(heading_unit) >= cos_half_fov_ * std::sqrt(r2);
+}
+
+bool SensorModel::ClearAround(const Eigen::Vector2d& from) const {
+  const Eigen::Vector2d reach = Eigen::Vector2d::Constant(spec_.range_m);
+  const Eigen::Vector2i lo = obstacles_.CellOf(from - reach), hi = obstacles_.CellOf(from + reach);
+  return obstacles_.RectangleFree(lo, hi);
 }
 
 bool SensorModel::LineOfSight(const Eigen::Vector2d& from, const Eigen::Vector2d& to) const {

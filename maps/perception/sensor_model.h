@@ -41,6 +41,11 @@ class SensorModel {
   bool InView(const Eigen::Vector2d& from, double heading_rad, const Eigen::Vector2d& y) const {
     return InSector(from, heading_rad, y) && LineOfSight(from, y);
   }
+  /// InSector with the heading as a unit vector (cos, sin), for many points of one scan.
+  bool InSectorAlong(const Eigen::Vector2d& from, const Eigen::Vector2d& heading_unit, const Eigen::Vector2d& y) const;
+  /// No obstacle cell at all in the box around the sensor's reach (from +- range): every point in
+  /// the sector is in view, no line of sight to walk.
+  bool ClearAround(const Eigen::Vector2d& from) const;
   /// p(d) above; 0 beyond the range. strength > 0 (1 = nominal).
   double DetectionProbability(double distance_m, double strength = 1.0) const;
   /// Area (m^2) of the view's sector, occlusion ignored.

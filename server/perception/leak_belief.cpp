@@ -66,12 +66,15 @@ int LeakBelief::Fuse(int sensor, const Eigen::Vector2d& position_m, double headi
   const int i1 = std::min(cells_x_ - 1, static_cast<int>(std::floor((position_m.x() + range) / r)));
   const int j0 = std::max(0, static_cast<int>(std::floor((position_m.y() - range) / r)));
   const int j1 = std::min(cells_y_ - 1, static_cast<int>(std::floor((position_m.y() + range) / r)));
+  const Eigen::Vector2d along(std::cos(heading_rad), std::sin(heading_rad));
+  // Off the workspace's edge the grid counts as occupied: a box that reaches past it walks the lines.
+  const bool clear = model.ClearAround(position_m);
   int updated = 0;
   for (int i = i0; i <= i1; ++i) {
     for (int j = j0; j <= j1; ++j) {
       const Cell c{i, j};
       const Eigen::Vector2d centre = CentreOf(c);
-      if (!model.InView(position_m, heading_rad, centre)) continue;
+      if (!model.InSectorAlong(position_m, along, centre) || (!clear && !model.LineOfSight(position_m, centre))) continue;
       const double p = model.DetectionProbability((centre - position_m).norm());
       double near = 0.0;
       for (const Eigen::Vector2d& z : detections_m) near += model.PositionDensity(z, centre);

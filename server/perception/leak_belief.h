@@ -55,6 +55,7 @@ class LeakBelief {
            const std::vector<Eigen::Vector2d>& detections_m, double time_s);
 
   Cell CellOf(const Eigen::Vector2d& x_m) const;
+  bool OnGrid(Cell c) const { return c.i >= 0 && c.j >= 0 && c.i < cells_x_ && c.j < cells_y_; }
   Eigen::Vector2d CentreOf(Cell c) const;
   /// l - l0 of a leaf at time_s (0: the prior).
   double Evidence(Cell c, double time_s) const;

@@ -18,6 +18,8 @@ constexpr double kScanTimeSlack_s = 1e-6;
 constexpr double kScanPoseSlack = 1e-6;
 // A host may run at most this far ahead of the server's clock (s), as for states.
 constexpr double kScanMaxLead_s = 5.0;
+// Evidence of a leak worth less risk than this (the valves' prior holds 1) is not written to the layer.
+constexpr double kNegligibleMass = 1e-5;
 
 }  // namespace
 
@@ -117,50 +119,74 @@ void RiskLoop::UpdateLayer(double time_s) {
   belief_.DropRelaxed(time_s);
   const double r = belief_.resolution_m();
   const double p0 = scenario_.fusion.prior_probability;
-  const double sigma = scenario_.fusion.spread_m;
+  if (kernel_.empty()) {
+    // The spread's offsets and Gaussian weights, once (leaves within 3 sigma; the leaf alone at sigma 0).
+    const double sigma = scenario_.fusion.spread_m;
+    const int reach = sigma > 0.0 ? static_cast<int>(std::ceil(3.0 * sigma / r)) : 0;
+    for (int di = -reach; di <= reach; ++di) {
+      for (int dj = -reach; dj <= reach; ++dj) {
+        const double d2 = (di * di + dj * dj) * r * r;
+        if (sigma > 0.0 && d2 > 9.0 * sigma * sigma) continue;
+        kernel_.push_back({di, dj, sigma > 0.0 ? std::exp(-0.5 * d2 / (sigma * sigma)) : 1.0});
+      }
+    }
+  }
   const maps::OccupancyGrid& blocked = world_.blocked();
-  const auto reachable = [&](const Eigen::Vector2d& x) {
-    const Eigen::Vector2i in_grid = blocked.CellOf(x);
-    return !blocked.Occupied(in_grid.x(), in_grid.y());
+  const auto reachable = [&](const LeakBelief::Cell& c) {
+    const std::uint64_t key = CellKey(c);
+    const auto known = reachable_.find(key);
+    if (known != reachable_.end()) return known->second;
+    const Eigen::Vector2i in_grid = blocked.CellOf(belief_.CentreOf(c));
+    return reachable_[key] = !blocked.Occupied(in_grid.x(), in_grid.y());
   };
   // Each leaf's evidence of a leak as a mass, spread as a Gaussian over the reachable leaves
   // around it (no risk where no hull can be: SMC would push into the structure).
-  std::map<LeakBelief::Cell, double> mass;
-  const int reach = sigma > 0.0 ? static_cast<int>(std::ceil(3.0 * sigma / r)) : 0;
-  std::vector<std::pair<LeakBelief::Cell, double>> kernel;
+  std::unordered_map<std::uint64_t, double> mass;
+  std::vector<std::pair<LeakBelief::Cell, double>> spread;
   for (const LeakBelief::Cell& c : belief_.positive()) {
     const double m = scenario_.fusion.leak_mass * (belief_.Probability(c, time_s) - p0);
-    if (!(m > 0.0)) continue;
-    const Eigen::Vector2d centre = belief_.CentreOf(c);
-    kernel.clear();
+    // A leaf a hundred thousandth of the prior's mass above it steers nobody (and a false alarm's
+    // leaves take ten relaxation times to fall below the belief's own threshold).
+    if (!(m > kNegligibleMass)) continue;
+    spread.clear();
     double total = 0.0;
-    for (int di = -reach; di <= reach; ++di) {
-      for (int dj = -reach; dj <= reach; ++dj) {
-        const LeakBelief::Cell n{c.i + di, c.j + dj};
-        if (belief_.CellOf(belief_.CentreOf(n)) != n) continue;  // off the grid
-        const Eigen::Vector2d x = belief_.CentreOf(n);
-        const double d2 = (x - centre).squaredNorm();
-        if ((sigma > 0.0 && d2 > 9.0 * sigma * sigma) || !reachable(x)) continue;
-        const double w = sigma > 0.0 ? std::exp(-0.5 * d2 / (sigma * sigma)) : 1.0;
-        kernel.emplace_back(n, w);
-        total += w;
-      }
+    for (const Offset& k : kernel_) {
+      const LeakBelief::Cell n{c.i + k.di, c.j + k.dj};
+      if (!belief_.OnGrid(n) || !reachable(n)) continue;
+      spread.emplace_back(n, k.weight);
+      total += k.weight;
     }
-    for (const auto& [n, w] : kernel) mass[n] += m * w / total;
+    for (const auto& [n, w] : spread) mass[CellKey(n)] += m * w / total;
   }
-  std::map<LeakBelief::Cell, float> now;
-  for (const auto& [c, m] : mass) {
+  // Into the layer, in a fixed order; a leaf is written again only when its excess moved by
+  // more than kRewrite of itself (relaxation moves every raised leaf a little every cycle, and
+  // each write costs the layer O(K^2)).
+  constexpr double kRewrite = 0.02;
+  std::vector<std::pair<std::uint64_t, float>> now;
+  now.reserve(mass.size());
+  for (const auto& [key, m] : mass) {
     const float stored = static_cast<float>(m / (r * r));  // density (1/m^2); edge leaves are a little smaller
-    if (stored != 0.0f) now[c] = stored;
+    if (stored != 0.0f) now.emplace_back(key, stored);
   }
-  for (const auto& [c, value] : written_) {
-    if (now.count(c) == 0) layer_.SetExcess(belief_.CentreOf(c), 0.0);
+  std::sort(now.begin(), now.end());
+  std::vector<std::uint64_t> gone;
+  for (const auto& [key, value] : written_) {
+    if (!std::binary_search(now.begin(), now.end(), std::pair<std::uint64_t, float>(key, -std::numeric_limits<float>::infinity()),
+                            [](const auto& a, const auto& b) { return a.first < b.first; })) {
+      gone.push_back(key);
+    }
   }
-  for (const auto& [c, value] : now) {
-    const auto was = written_.find(c);
-    if (was == written_.end() || was->second != value) layer_.SetExcess(belief_.CentreOf(c), value);
+  std::sort(gone.begin(), gone.end());
+  for (const std::uint64_t key : gone) {
+    layer_.SetExcess(belief_.CentreOf(KeyCell(key)), 0.0);
+    written_.erase(key);
   }
-  written_ = std::move(now);
+  for (const auto& [key, value] : now) {
+    const auto was = written_.find(key);
+    if (was != written_.end() && std::abs(value - was->second) <= kRewrite * std::abs(was->second)) continue;
+    layer_.SetExcess(belief_.CentreOf(KeyCell(key)), value);
+    written_[key] = value;
+  }
 }
 
 void RiskLoop::Score(const std::vector<agents::ScanReport>& fused, double time_s) {
@@ -282,7 +308,8 @@ RiskLoop::State RiskLoop::Checkpoint() const {
   s.alarms = alarms_;
   s.false_detections = false_detections_;
   s.scans = scans_;
-  for (const auto& [c, v] : written_) s.written.emplace_back(c, v);
+  for (const auto& [key, v] : written_) s.written.emplace_back(KeyCell(key), v);
+  std::sort(s.written.begin(), s.written.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
   return s;
 }
 
@@ -301,7 +328,7 @@ void RiskLoop::Restore(const State& s) {
   false_detections_ = s.false_detections;
   scans_ = s.scans;
   written_.clear();
-  for (const auto& [c, v] : s.written) written_[c] = v;
+  for (const auto& [c, v] : s.written) written_[CellKey(c)] = v;
 }
 
 }  // namespace sage::server

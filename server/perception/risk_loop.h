@@ -17,6 +17,7 @@
 #include <set>
 #include <string>
 #include <tuple>
+#include <unordered_map>
 #include <utility>
 #include <vector>
 
@@ -114,7 +115,19 @@ class RiskLoop {
   std::vector<Alarm> alarms_;
   int false_detections_ = 0;
   std::uint64_t scans_ = 0;
-  std::map<LeakBelief::Cell, float> written_;  // leaves of the layer this loop set, and to what
+  std::unordered_map<std::uint64_t, float> written_;  // leaves of the layer this loop set (CellKey), and to what
+  struct Offset {
+    int di, dj;
+    double weight;
+  };
+  std::vector<Offset> kernel_;                         // the spread (fusion.spread_m), made at first use
+  std::unordered_map<std::uint64_t, bool> reachable_;  // leaves whose centre a hull can reach, as asked
+  static std::uint64_t CellKey(const LeakBelief::Cell& c) {
+    return (static_cast<std::uint64_t>(static_cast<std::uint32_t>(c.i)) << 32) | static_cast<std::uint32_t>(c.j);
+  }
+  static LeakBelief::Cell KeyCell(std::uint64_t key) {
+    return {static_cast<int>(static_cast<std::uint32_t>(key >> 32)), static_cast<int>(static_cast<std::uint32_t>(key))};
+  }
 };
 
 }  // namespace sage::server
