@@ -347,10 +347,12 @@ void AgentHost::SetTour(VehicleId id, const std::vector<int>& valves, const Eige
   v.tour_valves = valves;
 }
 
-void AgentHost::SetRegion(VehicleId id, const maps::RegionBox& box) {
+void AgentHost::SetRegion(VehicleId id, const maps::RegionBox& box, double forgetting_time_s) {
   Impl::Vehicle& v = impl_->Find(id);
   if (!v.ergodic) return;
-  if (v.region && v.region->origin_m == box.origin_m && v.region->size_m == box.size_m && v.region->order == box.order) {
+  const double forgetting_s = forgetting_time_s > 0.0 ? forgetting_time_s : impl_->scenario.ergodic.forgetting_time_s;
+  if (v.region && v.region->origin_m == box.origin_m && v.region->size_m == box.size_m && v.region->order == box.order &&
+      v.ergodic->coverage().forgetting_time_s() == forgetting_s) {
     return;  // the same region: the controller keeps its coverage
   }
   if (!(box.size_m.array() > 0.0).all() || box.order < 1 || box.order > maps::SpectralBasis::kMaxOrder) {
@@ -359,7 +361,7 @@ void AgentHost::SetRegion(VehicleId id, const maps::RegionBox& box) {
   // A new basis, and a controller on it (coverage on another basis means nothing here).
   v.region = box;
   v.region_basis = std::make_unique<maps::SpectralBasis>(box.size_m.x(), box.size_m.y(), box.order);
-  v.ergodic = std::make_unique<ErgodicController>(*v.region_basis, v.speed_mps, impl_->scenario.ergodic.forgetting_time_s,
+  v.ergodic = std::make_unique<ErgodicController>(*v.region_basis, v.speed_mps, forgetting_s,
                                                   impl_->scenario.ergodic.min_turn_radius_m);
   v.transit = std::make_unique<GridFlight>(impl_->grid, v.speed_mps);
   v.escaping = false;

@@ -48,9 +48,10 @@ class AgentHost {
   /// vehicle's basis: the field's, or its region's (SetRegion).
   void SetTarget(VehicleId id, const VehicleTarget& target);
   /// Gives an SMC vehicle a region: it flies there (a grid path) if outside, then steers on the
-  /// region's own basis and stays in the box. The same region again changes nothing; another
-  /// one starts a new controller. Throws std::invalid_argument for an empty box or bad order.
-  void SetRegion(VehicleId id, const maps::RegionBox& box);
+  /// region's own basis and stays in the box, its coverage forgotten with forgetting_time_s (s;
+  /// 0 = the scenario's). The same region again changes nothing; another one (or another
+  /// forgetting) starts a new controller. Throws std::invalid_argument for an empty box or bad order.
+  void SetRegion(VehicleId id, const maps::RegionBox& box, double forgetting_time_s = 0.0);
   /// The size of the basis the vehicle's targets are on.
   int BasisSize(VehicleId id) const;
   /// Positions (m) of the fleet's vehicles simulated elsewhere (other hosts), as last heard;

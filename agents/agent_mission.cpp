@@ -72,6 +72,9 @@ std::string AgentMission::Refusal(const Assignment& a) const {
     if (a.region_order < 1 || a.region_order > maps::SpectralBasis::kMaxOrder) {
       return who + fmt::format(": region basis order {} is outside 1..{}", a.region_order, maps::SpectralBasis::kMaxOrder);
     }
+    if (std::isnan(a.region_forgetting_s) || a.region_forgetting_s < 0.0) {
+      return who + fmt::format(": region forgetting time {} s is not >= 0 (0 = the scenario's)", a.region_forgetting_s);
+    }
     if (a.phi.size() != 0 && a.phi.size() != a.region_order * a.region_order) {
       return who + fmt::format(": phi has {} coefficients, its region's basis {}", a.phi.size(),
                                a.region_order * a.region_order);
@@ -125,7 +128,8 @@ bool AgentMission::OnAssignment(const Assignment& assignment) {
   m.own_applied = false;
   m.in_region = assignment.region_order > 0;
   if (m.in_region) {
-    host_.SetRegion(assignment.id, {assignment.region_origin_m, assignment.region_size_m, assignment.region_order});
+    host_.SetRegion(assignment.id, {assignment.region_origin_m, assignment.region_size_m, assignment.region_order},
+                    assignment.region_forgetting_s);
   }
   if (!assignment.tour.empty()) host_.SetTour(assignment.id, assignment.tour, assignment.tour_weights);
   return true;

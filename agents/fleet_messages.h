@@ -75,6 +75,9 @@ struct Assignment {
   Eigen::Vector2d region_origin_m = Eigen::Vector2d::Zero();
   Eigen::Vector2d region_size_m = Eigen::Vector2d::Zero();
   int region_order = 0;
+  /// Regions: the time constant (s) of the coverage forgetting the vehicle steers with in its
+  /// region; 0 = the scenario's ergodic.forgetting_time_s.
+  double region_forgetting_s = 0.0;
 };
 
 }  // namespace sage::agents

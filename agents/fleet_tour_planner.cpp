@@ -851,6 +851,12 @@ FleetTourPlan Plan(const maps::OccupancyGrid& grid, const Points& valves_m, cons
       const int from = order[q], to = order[(q + 1) % size];
       out.tour.order.push_back(static_cast<int>(std::lower_bound(out.valves.begin(), out.valves.end(), from) -
                                                 out.valves.begin()));
+      if (!options.legs) {  // the lap as the search priced it
+        const double d = from == to ? 0.0 : dist(from, to);
+        out.tour.ok = out.tour.ok && d < kUnreachable;
+        out.tour.length_m += d;
+        continue;
+      }
       out.tour.legs.push_back(LegPath(grid, valves_m[from], valves_m[to], dist(from, to)));
       out.tour.ok = out.tour.ok && !out.tour.legs.back().empty();
       out.tour.length_m += PathLength(out.tour.legs.back());

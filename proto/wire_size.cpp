@@ -65,7 +65,7 @@ std::size_t WireBytes(const ErgodicTarget& m) {
   c.Primitive<std::uint32_t>().Primitive<bool>();
   c.Sequence<double>(m.phi._length).Sequence<std::int32_t>(m.tour._length).Sequence<double>(m.tour_weights._length);
   for (int i = 0; i < 4; ++i) c.Primitive<double>();  // the region's box
-  c.Primitive<std::uint32_t>();
+  c.Primitive<std::uint32_t>().Primitive<double>();  // its order, its forgetting
   return c.Total();
 }
 

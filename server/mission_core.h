@@ -24,6 +24,7 @@
 #include "server/metrics.h"
 #include "server/perception/risk_loop.h"
 #include "server/roster.h"
+#include "server/region_split.h"
 #include "server/rejections.h"
 #include "server/sender_limits.h"
 #include "server/trajectory.h"
@@ -199,8 +200,11 @@ class MissionCore {
   void AssignTargets(const std::vector<int>& alive, bool risk_changed, CycleOutput& out);
   void AssignTours(const std::vector<int>& alive, bool risk_changed, CycleOutput& out);
   void AssignRegions(const std::vector<int>& alive, CycleOutput& out);
+  // The live vehicles as the planners see them: where each last reported (or its start), its speed.
+  std::vector<agents::FleetVehicle> FleetVehicles(const std::vector<int>& alive) const;
   // The valves split among the live vehicles, balanced on travel (the fleet's tours).
-  agents::FleetTourPlan PlanShares(const std::vector<int>& alive, double weight_exponent, double risk_share = 0.0) const;
+  agents::FleetTourPlan PlanShares(const std::vector<int>& alive, double weight_exponent) const;
+  void TakeSplit(RegionSplit split);
   double next_time_s() const;  // the mission time of the coming cycle, when input takes effect
   double RiskMass(const std::vector<int>& valves) const;
   // A partition share's phi_k with the layer's leaves nearest its valves (the share alone when none).
@@ -226,6 +230,8 @@ class MissionCore {
   std::size_t risk_recorded_ = 0;  // risk changes handed to the recorder
   std::size_t risk_measured_ = 0;  // risk changes whose heading change is being measured
   std::size_t schedule_seen_ = 0;  // weight schedule entries handed to the metrics
+  Eigen::VectorXd tour_weights_;   // the snapshot's valve_weights (tours), as of
+  std::size_t tour_weights_for_ = 0;  // this many weight schedule entries
   RejectionCounts rejected_;
   SenderLimits risk_limits_{kRiskUpdatesPerSecond, kRiskUpdateBurst};
   std::int64_t cycle_ = -1;
@@ -259,6 +265,9 @@ class MissionCore {
     double first_join_s = -1.0;
     std::size_t risk_seen = 0;  // schedule entries looked at for a re-split
     std::map<int, RegionShare> shares;
+    std::unique_ptr<PendingRegionSplit> pending;  // a split being planned, taken at its due cycle
+    double pending_started_s = 0.0;
+    std::size_t pending_risk_seen = 0;            // schedule entries when it started
   };
   RegionPlan region_plan_;
 };

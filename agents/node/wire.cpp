@@ -57,6 +57,7 @@ Assignment FromWire(const proto::ErgodicTarget& m) {
   a.region_origin_m = {m.region_x_m, m.region_y_m};
   a.region_size_m = {m.region_width_m, m.region_height_m};
   a.region_order = static_cast<int>(m.region_order);
+  a.region_forgetting_s = m.region_forgetting_s;
   return a;
 }
 
@@ -160,6 +161,7 @@ proto::ErgodicTarget ToWire(const Assignment& a, std::uint64_t server_instance, 
   m.region_width_m = a.region_size_m.x();
   m.region_height_m = a.region_size_m.y();
   m.region_order = static_cast<std::uint32_t>(a.region_order);
+  m.region_forgetting_s = a.region_forgetting_s;
   return m;
 }
 

@@ -60,6 +60,17 @@ TEST_F(AgentMissionDoor, RefusesMalformedAssignments) {
          a.region_order = 65, a.region_size_m = {2.0, 2.0}, a.phi.resize(0);
        },
        "outside 1..64"},
+      {"region forgetting",
+       [](Assignment& a) {
+         a.region_order = 8, a.region_size_m = {2.0, 2.0}, a.phi.resize(0), a.region_forgetting_s = -5.0;
+       },
+       "forgetting time -5 s is not >= 0"},
+      {"region forgetting NaN",
+       [](Assignment& a) {
+         a.region_order = 8, a.region_size_m = {2.0, 2.0}, a.phi.resize(0);
+         a.region_forgetting_s = std::numeric_limits<double>::quiet_NaN();
+       },
+       "forgetting time"},
       {"region phi size",
        [](Assignment& a) {
          a.region_order = 8, a.region_size_m = {2.0, 2.0}, a.phi = Eigen::VectorXd::Ones(63);

@@ -90,9 +90,9 @@ TEST(WireBytes, ErgodicTargetMatchesCyclone) {
   const std::vector<int32_t> tour_odd = {3, 1, 4}, tour_even = {2, 7};
   const std::vector<double> waits_odd = {0.2, 0.3, 0.5}, waits_even = {0.5, 0.5};
   std::vector<ErgodicTarget> samples = {
-      {0, 1, 2, 3, 20, true, BorrowSequence(phi), {}, {}, 1, 2, 3, 4, 0},
-      {1, 1, 2, 3, 20, false, BorrowSequence(none), BorrowSequence(tour_odd), BorrowSequence(waits_odd), 1, 2, 3, 4, 12},
-      {2, 1, 2, 3, 20, false, BorrowSequence(phi), BorrowSequence(tour_even), BorrowSequence(waits_even), 1, 2, 3, 4, 12},
+      {0, 1, 2, 3, 20, true, BorrowSequence(phi), {}, {}, 1, 2, 3, 4, 0, 0},
+      {1, 1, 2, 3, 20, false, BorrowSequence(none), BorrowSequence(tour_odd), BorrowSequence(waits_odd), 1, 2, 3, 4, 12, 40.5},
+      {2, 1, 2, 3, 20, false, BorrowSequence(phi), BorrowSequence(tour_even), BorrowSequence(waits_even), 1, 2, 3, 4, 12, 0},
   };
   ExpectSizesMatch(samples, &ErgodicTargetQos);
 }

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <limits>
 #include <map>
+#include <set>
 #include <string>
 
 #include <gtest/gtest.h>
@@ -228,6 +229,29 @@ TEST(MissionCore, RegionsSplitAgainWhenALeakMovesTheRisk) {
   EXPECT_GT(moved, 0) << "the same boxes after the split";
   ASSERT_TRUE(m.core.OnRiskUpdate("P3", 44.0, "test").accepted);  // 10 % more: its region's mass moves < 1.5x
   EXPECT_EQ(m.Cycle().size(), 1u) << "a 10 % change split the field again";
+}
+
+// A region's vehicle forgets its coverage over two laps of its region's tour, unless the
+// scenario forgets faster: without forgetting in the scenario every region gets a finite time of
+// its own (at least 2 s; not all alike, the regions' laps differ); with a scenario forgetting of
+// 1 s, shorter than any two laps, every region gets exactly that.
+TEST(MissionCore, RegionsForgetOverTwoLapsOfTheirTour) {
+  ParkedRegions m(1.0, 0.5);
+  m.s.ergodic.forgetting_time_s = std::numeric_limits<double>::infinity();
+  for (int i = 0; i < 30; ++i) m.Cycle();
+  ASSERT_EQ(m.last.size(), 4u);
+  std::set<double> times;
+  for (const auto& [id, a] : m.last) {
+    ASSERT_GT(a.region_order, 0) << "vehicle " << id << " has no region yet";
+    EXPECT_TRUE(std::isfinite(a.region_forgetting_s)) << id;
+    EXPECT_GE(a.region_forgetting_s, 2.0) << id;
+    times.insert(a.region_forgetting_s);
+  }
+  EXPECT_GT(times.size(), 1u) << "every region forgets alike";
+  ParkedRegions fast(1.0, 0.5);
+  fast.s.ergodic.forgetting_time_s = 1.0;
+  for (int i = 0; i < 30; ++i) fast.Cycle();
+  for (const auto& [id, a] : fast.last) EXPECT_EQ(a.region_forgetting_s, 1.0) << id;
 }
 
 // Age weighting (fleet.age_weighting_laps): valves that all wait alike keep their proportions, so
