@@ -83,9 +83,12 @@ maps::Scenario LoadWithOverrides(const ScenarioOverrides& o) {
   }
   // Drawn last, from the effective seed and duration, so `sage run DIR/scenario.yaml` (which holds
   // them) and agent hosts given the same options meet the same leaks.
-  if (o.random_leaks || o.leak_sites) {
+  if (o.leak_sites && !o.random_leaks) {
+    throw maps::ScenarioError("--leak-sites = " + *o.leak_sites + ": says where --random-leaks N draws its leaks; give N");
+  }
+  if (o.random_leaks) {
     const maps::LeakSites sites = maps::ParseLeakSites(o.leak_sites.value_or("valves"), "--leak-sites");
-    scenario = maps::WithRandomLeaks(scenario, o.random_leaks.value_or(1), sites);
+    scenario = maps::WithRandomLeaks(scenario, *o.random_leaks, sites);
   }
   if (o.model) {
     const maps::MotionModel model = maps::ParseMotionModel(*o.model, "--model");

@@ -39,6 +39,9 @@ TEST(LeakOverrides, RandomLeaksFromTheEffectiveSeedAndSteer) {
   for (const maps::LeakSpec& leak : LoadWithOverrides(o).leaks) EXPECT_TRUE(leak.valve.empty());
   o.steer = "maybe";
   EXPECT_THROW(LoadWithOverrides(o), maps::ScenarioError);
+  o.steer.reset();
+  o.random_leaks.reset();
+  EXPECT_THROW(LoadWithOverrides(o), maps::ScenarioError) << "--leak-sites without --random-leaks";
 }
 
 TEST(BenchLeaks, EveryConfigurationMeetsTheSameLeaks) {
