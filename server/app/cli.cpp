@@ -79,7 +79,7 @@ void AddScenarioOverrides(CLI::App& cmd, ScenarioOverrides& o, OverrideSet set, 
       ->check(MustBeWholeNumber);
   cmd.add_option("--random-leaks", o.random_leaks,
                  "Hide N random leaks from the server, drawn from the seed (onsets uniform in [0.1, 0.9] of the "
-                 "mission), replacing the scenario's leaks: (the vehicles' sensors see them)")
+                 "mission), replacing the scenario's leaks: the vehicles' sensors can see them, the server is not told")
       ->check(CLI::Range(0, 1000));
   cmd.add_option("--leak-sites", o.leak_sites,
                  "Where random leaks are: valves (by the default profile's risk), valves-even or seabed (open water "
