@@ -20,7 +20,7 @@ constexpr std::size_t kReportsKept = 8;
 }  // namespace
 
 AgentMission::AgentMission(const maps::World& world, const maps::Scenario& scenario, Guidance guidance)
-    : scenario_(scenario), host_(world, scenario, guidance) {}
+    : scenario_(scenario), host_(world, scenario, guidance), sensors_(world, scenario) {}
 
 void AgentMission::AddVehicle(VehicleId id, const maps::VehicleSpec& spec, const VehicleResume* resume) {
   maps::VehicleSpec placed = spec;
@@ -195,6 +195,10 @@ AgentMission::CycleOutput AgentMission::Step(std::int64_t cycle) {
     s.state = host_.State(id);
     reported_.emplace_back(id, s.state.position_m);
     out.states.push_back(std::move(s));
+  }
+  // The sensors look from the states just reported (vehicles holding still look too).
+  if (sensors_.any()) {
+    for (const StateReport& s : out.states) sensors_.Scan(s.id, cycle, s.state, out.scans);
   }
   // Vehicles hold still until the server's first word.
   if (!snapshot_.has_value()) return out;

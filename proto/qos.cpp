@@ -121,6 +121,18 @@ Qos RiskUpdateQos() {
 
 Qos FleetCommandResultQos() { return RiskUpdateResultQos(); }
 
+Qos DetectionQos() {
+  Qos qos;
+  // Reliable: each scan is evidence of its own (a lost scan that saw a leak is a leak seen later),
+  // unlike states and coverage, which the next sample supersedes. Keep-last 32 per vehicle: a few
+  // seconds of scans at the usual rates, so a server that stalls briefly still gets them, and a
+  // vehicle is never held back by a slow server for long.
+  SetReliable(qos);
+  SetKeepLast(qos, 32);
+  dds_qset_durability(qos.get(), DDS_DURABILITY_VOLATILE);
+  return qos;
+}
+
 Qos RiskUpdateResultQos() {
   Qos qos;
   // Transient-local: the operator's command may be matched by the server's writer a moment after

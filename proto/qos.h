@@ -73,4 +73,8 @@ Qos FleetCommandQos();
 /// keep-last 256, like RiskUpdateResult.
 Qos FleetCommandResultQos();
 
+/// Detection (vehicles' sensor scans -> server), keyed by vehicle: reliable, volatile, keep-last
+/// 32 per vehicle.
+Qos DetectionQos();
+
 }  // namespace sage::proto

@@ -136,6 +136,35 @@ struct EventResponse {
   double heading_change_rad = 0.0;
 };
 
+/// One hidden leak, as the mission met it (issue 9's headline metric): from its onset, when a
+/// vehicle's sensor first reported it and when the server's posterior confirmed it.
+struct LeakMetrics {
+  std::string where;                  ///< its valve ("P3") or "seabed (x, y)"
+  Eigen::Vector2d position_m = Eigen::Vector2d::Zero();
+  int valve = -1;                     ///< its valve's index, or -1 on open seabed
+  double start_s = 0.0;
+  double strength = 1.0;
+  /// Mission time of the first detection within the association radius after the onset; NaN if never.
+  double detected_s = std::numeric_limits<double>::quiet_NaN();
+  /// Mission time the posterior of a leaf within the association radius first reached
+  /// fusion.confirm_probability after the onset; NaN if never.
+  double confirmed_s = std::numeric_limits<double>::quiet_NaN();
+  int detections = 0;                 ///< detections associated with it
+  /// A valve's leak: visits to the valve per minute from its detection to the end (NaN if undetected).
+  double visits_per_min_after_detection = std::numeric_limits<double>::quiet_NaN();
+};
+
+/// Alarms the posterior raised where no leak was (a leaf reaching fusion.alarm_probability away
+/// from every leak that had started), and how they went.
+struct FalseAlarmMetrics {
+  int detections = 0;     ///< detections associated with no leak that had started
+  int raised = 0;
+  int cleared = 0;        ///< fell back below half the alarm probability before the end
+  int confirmed = 0;      ///< reached the confirmation probability: a leak reported where there is none
+  double mean_time_to_clear_s = std::numeric_limits<double>::quiet_NaN();
+  double max_time_to_clear_s = std::numeric_limits<double>::quiet_NaN();
+};
+
 struct MissionMetrics {
   std::string controller;            ///< "ergodic", "astar", or "recorded"
   std::string profile;
@@ -165,6 +194,12 @@ struct MissionMetrics {
   double longest_gap_median_s = 0.0;  ///< over valves, of each valve's longest unwatched stretch (s)
   double longest_gap_p90_s = 0.0;
   double longest_gap_max_s = 0.0;
+
+  // Leak sensing (server/perception): empty / all zero when the scenario has no sensors.
+  bool sensing = false;               ///< the vehicles carried leak sensors
+  std::vector<LeakMetrics> leaks;
+  FalseAlarmMetrics false_alarms;
+  std::uint64_t scans = 0;            ///< scans fused
 };
 
 struct MetricsOptions {

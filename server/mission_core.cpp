@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <sstream>
 #include <stdexcept>
 
 #include <fmt/format.h>
@@ -77,6 +78,9 @@ MissionCore::MissionCore(maps::World& world, const maps::Scenario& scenario, con
       controller_(controller),
       recorder_(recorder),
       fleet_(world, scenario, profile),
+      layer_(maps::RiskLayer::OverWorld(world, maps::RiskLayerOptions::Fitting(scenario.workspace.width_m,
+                                                                              scenario.workspace.height_m))),
+      loop_(scenario, world, layer_),
       metrics_(scenario, world.basis(), world.risk(),
                MetricsOptions{ToString(controller), fleet_.profile().name}),
       roster_(FirstFreeVehicleId(scenario)) {
@@ -157,6 +161,18 @@ bool MissionCore::OnCoverage(const agents::CoverageMessage& c, std::uint64_t wri
     return false;
   }
   return fleet_.OnCoverage(c.id, r.seq, r.stamp_s, r.kernel_time_s, r.sums);
+}
+
+bool MissionCore::OnScan(const agents::ScanReport& scan) {
+  if (!loop_.sensing()) {
+    rejected_.Count("scan in a mission without sensors", fmt::format("vehicle {}", scan.id));
+    return false;
+  }
+  if (const char* refusal = loop_.Take(scan, std::max(time_s_, clock_s_))) {
+    rejected_.Count(refusal, fmt::format("vehicle {}", scan.id));
+    return false;
+  }
+  return true;
 }
 
 OperatorAnswer MissionCore::OnRiskUpdate(const std::string& valve, double weight, const std::string& source,
@@ -269,8 +285,16 @@ CycleOutput MissionCore::Cycle(std::int64_t cycle) {
   time_s_ = static_cast<double>(cycle) / scenario_.control_rate_hz;
   RecordSamples();
 
+  // The Bayesian loop (no-op without sensors): this cycle's scans into the belief, its evidence
+  // into the weights and the layer the vehicles steer on.
+  loop_.Fuse(cycle, time_s_, roster_, rejected_);
+  if (loop_.steers()) fleet_.SetWeightFactors(loop_.ValveFactors(time_s_));
   CycleOutput out;
   out.risk_events = fleet_.Cycle(time_s_);
+  const std::int64_t leaves_before = layer_.nonzero_leaves();
+  const double mass_before = layer_.excess_mass();
+  loop_.UpdateLayer(time_s_);
+  layer_changed_ = layer_.nonzero_leaves() != leaves_before || layer_.excess_mass() != mass_before;
   // The profile's events of this cycle (operators' were recorded as they came).
   for (; risk_recorded_ < fleet_.responses().size(); ++risk_recorded_) {
     const EventResponse& r = fleet_.responses()[risk_recorded_];
@@ -301,7 +325,7 @@ CycleOutput MissionCore::Cycle(std::int64_t cycle) {
   // regions and tours leave it out (at 35,000 valves it is 143 Mflop a cycle, 32 kB a host).
   const bool field_phi = controller_ == ControllerKind::kErgodic &&
                          scenario_.fleet.assignment != maps::FleetAssignment::kRegions;
-  if (field_phi) out.snapshot.phi = fleet_.phi();
+  if (field_phi) out.snapshot.phi = layer_.coefficients();  // the field's phi_k itself while no leaf is raised
   out.snapshot.coverage = fleet_.coverage();
   // What tours split their waits by; the ergodic fleet does not read it. Worked out again only
   // when the risk changes: at 35,000 valves the power of every weight was a millisecond a cycle.
@@ -337,7 +361,8 @@ void MissionCore::AssignTargets(const std::vector<int>& alive, bool risk_changed
   const Eigen::VectorXd& weights = fleet_.effective_weights();
   const bool reweighted = weights.size() != last_weights_.size() ||
                           (weights.size() > 0 && (weights - last_weights_).cwiseAbs().maxCoeff() > 0.0);
-  const bool reassigned = partition && (fleet_.assignment() != last_assignment_ || reweighted || risk_changed);
+  const bool reassigned =
+      partition && (fleet_.assignment() != last_assignment_ || reweighted || risk_changed || layer_changed_);
   if (reassigned) {
     last_assignment_ = fleet_.assignment();
     last_weights_ = weights;
@@ -348,7 +373,7 @@ void MissionCore::AssignTargets(const std::vector<int>& alive, bool risk_changed
     agents::Assignment a;
     a.id = id;
     a.cycle = out.snapshot.cycle;
-    a.phi = partition ? fleet_.ShareOf(id) : Eigen::VectorXd();
+    a.phi = partition ? ShareOfLayer(id) : Eigen::VectorXd();
     a.shared = a.phi.size() == 0;
     out.assignments.push_back(std::move(a));
     m.target_sent = true;
@@ -419,6 +444,28 @@ agents::FleetTourPlan MissionCore::PlanShares(const std::vector<int>& alive, dou
                                 vehicles, scenario_.astar.wait_per_lap_s, options);
 }
 
+Eigen::VectorXd MissionCore::ShareOfLayer(int id) const {
+  Eigen::VectorXd phi = fleet_.ShareOf(id);
+  if (phi.size() == 0 || layer_.nonzero_leaves() == 0) return phi;
+  // The share's leaves: those whose nearest valve is one of its valves.
+  const std::vector<int>& mine = fleet_.vehicles().at(id).valves;
+  const std::vector<Eigen::Vector2d> valves = scenario_.ValvePositions();
+  const auto nearest_is_mine = [&](const Eigen::Vector2d& x) {
+    std::size_t best = 0;
+    for (std::size_t i = 1; i < valves.size(); ++i)
+      if ((valves[i] - x).squaredNorm() < (valves[best] - x).squaredNorm()) best = i;
+    return std::find(mine.begin(), mine.end(), static_cast<int>(best)) != mine.end();
+  };
+  double mass = 0.0;
+  const Eigen::VectorXd excess = layer_.ExcessOn(world_.basis(), Eigen::Vector2d::Zero(), nearest_is_mine, mass);
+  if (mass == 0.0) return phi;
+  // The share's phi holds mass 1 for its valves' weight W of the field's; the excess is in the
+  // field's units (the valves' prior holds 1).
+  double own = 0.0;
+  for (int i : mine) own += fleet_.effective_weights()[i];
+  return (own * phi + excess) / (own + mass);
+}
+
 // The share of the field's current risk (the operators' and the profile's weights) these valves hold.
 double MissionCore::RiskMass(const std::vector<int>& valves) const {
   const Eigen::VectorXd& w = fleet_.schedule().back().weights;
@@ -482,6 +529,8 @@ void MissionCore::TakeSplit(RegionSplit split) {
 // background and the split taken when due (region_split.h), the fleet flying on meanwhile.
 void MissionCore::AssignRegions(const std::vector<int>& alive, CycleOutput& out) {
   constexpr double kFirstPlanWait_s = 2.0, kSettle_s = 0.5;
+  // A target goes again when the layer's excess in its box moved by more than this share of its mass.
+  constexpr double kSameProportionOfExcess = 0.05;
   RegionPlan& plan = region_plan_;
   if (plan.pending && cycle_ >= plan.pending->due_cycle()) {
     TakeSplit(plan.pending->Take());
@@ -559,23 +608,41 @@ void MissionCore::AssignRegions(const std::vector<int>& alive, CycleOutput& out)
       }
     }
     if (!(own.sum() > 0.0)) own.setOnes();  // a share whose valves all weigh zero is still watched, evenly
+    // Its weight in the field's units, for the layer's leaves in its box (below).
+    double share_weight = 0.0;
+    for (int i : share.valves) share_weight += weights[i];
     own /= own.sum();  // the target is the share's mixture: only the weights' proportions count
+    double excess_mass = 0.0;
+    Eigen::VectorXd excess;
+    if (layer_.nonzero_leaves() > 0) {
+      const maps::RegionBox& box = share.field->box();
+      excess = layer_.ExcessOn(share.field->basis(), box.origin_m,
+                               [&](const Eigen::Vector2d& x) { return box.Contains(x); }, excess_mass);
+    }
+    // The layer's leaves in its box moved (a detection, or one relaxing): the target goes again.
+    const bool excess_moved = std::abs(excess_mass - share.sent_excess) >
+                              kSameProportionOfExcess * (share_weight + std::max(excess_mass, share.sent_excess));
     // The field's weights are normalised over all valves and the guard's floor is absolute, so a
     // boost anywhere nudges every share's proportions a little (at 1,000 vehicles: ~430 targets a
     // cycle, 11 MB/s), and age weighting moves them all the time. A share's target is sent again
     // when one of its proportions has moved by more than 5 % of itself since it was sent: a visit
     // to one of its valves, its own guard boosts, risk changes, operators'.
     constexpr double kSameProportion = 0.05;
-    if (m.target_sent && own.size() == share.sent_weights.size() &&
+    if (m.target_sent && !excess_moved && own.size() == share.sent_weights.size() &&
         ((own - share.sent_weights).array().abs() <= kSameProportion * share.sent_weights.array()).all()) {
       continue;
     }
     share.sent_weights = own;
+    share.sent_excess = excess_mass;
     agents::Assignment a;
     a.id = id;
     a.cycle = out.snapshot.cycle;
     a.shared = false;
     a.phi = share.field->Coefficients(own);
+    if (excess_mass > 0.0) {
+      const double w = share_weight > 0.0 ? share_weight : 1.0;
+      a.phi = (w * a.phi + excess) / (w + excess_mass);
+    }
     a.region_origin_m = share.field->box().origin_m;
     a.region_size_m = share.field->box().size_m;
     a.region_order = share.field->box().order;
@@ -603,6 +670,7 @@ MissionMetrics MissionCore::Metrics(double end_s) const {
   MissionMetrics metrics = metrics_.Result(std::max(end_s, 1.0 / scenario_.control_rate_hz));
   metrics.events = fleet_.responses();
   FillEventResponses(metrics_.visits(), metrics);
+  loop_.Fill(metrics, std::max(end_s, 1.0 / scenario_.control_rate_hz));
   return metrics;
 }
 
@@ -623,6 +691,8 @@ MissionCheckpoint MissionCore::Checkpoint() const {
   c.rejected_samples = rejected_.total();
   c.rejected_by_kind = rejected_.by_kind();
   c.rejected_by_sender = rejected_.by_sender();
+  if (layer_.nonzero_leaves() > 0) c.risk_layer_ot = layer_.OtBytes();
+  c.risk_loop = loop_.Checkpoint();
   return c;
 }
 
@@ -644,6 +714,13 @@ void MissionCore::Restore(const MissionCheckpoint& c) {
     if (c.visit_watches.empty()) {
       for (const EventResponse& r : fleet_.responses()) metrics_.WatchVisits(scenario_.ValveIndex(r.valve), r.time_s);
     }
+    loop_.Restore(c.risk_loop);
+    if (!c.risk_layer_ot.empty()) {
+      std::istringstream ot(c.risk_layer_ot);
+      layer_.LoadExcess(ot, "checkpoint: risk layer");
+    }
+  } catch (const std::runtime_error& e) {  // the layer's .ot bytes
+    throw maps::ScenarioError(std::string("checkpoint: ") + e.what());
   } catch (const std::invalid_argument& e) {
     throw maps::ScenarioError(std::string("checkpoint: does not fit the scenario: ") + e.what());
   }

@@ -17,10 +17,12 @@
 #include "agents/fleet_messages.h"
 #include "agents/fleet_tour_planner.h"
 #include "maps/region.h"
+#include "maps/risk_layer.h"
 #include "maps/scenario/scenario.h"
 #include "maps/world.h"
 #include "server/fleet_server.h"
 #include "server/metrics.h"
+#include "server/perception/risk_loop.h"
 #include "server/roster.h"
 #include "server/region_split.h"
 #include "server/rejections.h"
@@ -99,6 +101,8 @@ struct MissionCheckpoint {
   std::vector<VisitTracker::EventWatch> visit_watches;  ///< one per risk event (fleet.responses), in order
   std::size_t rejected_samples = 0;
   std::map<std::string, std::size_t> rejected_by_kind, rejected_by_sender;  ///< RejectionCounts' parts
+  std::string risk_layer_ot;        ///< the risk layer's excess as OctoMap .ot bytes (empty: none set)
+  RiskLoop::State risk_loop;        ///< the leak belief, its scoring and the scans waiting for their cycle
 };
 
 class MissionCore {
@@ -127,6 +131,9 @@ class MissionCore {
   /// A vehicle's running coverage; false if stale, of an unknown vehicle, or malformed (counted
   /// as OnState's refusals are).
   bool OnCoverage(const agents::CoverageMessage& coverage, std::uint64_t writer = 0);
+  /// One of a vehicle's leak-sensor scans, fused at the server cycle of its own cycle (RiskLoop).
+  /// Refused (counted, false) if malformed, off its sensor's schedule, stale, or from the future.
+  bool OnScan(const agents::ScanReport& scan);
 
   // ---- from operators ----
   /// An operator's (or a sensor's) change of a valve's risk: applied unless `sender` (who sent
@@ -163,6 +170,10 @@ class MissionCore {
   const FleetServer& fleet() const { return fleet_; }
   const Roster& roster() const { return roster_; }
   const MetricsAccumulator& metrics_accumulator() const { return metrics_; }
+  /// The mission's risk layer: the valves' field as its prior (the vehicles' phi_k come from it)
+  /// and the leaves the risk loop raised; risk.ot is it.
+  const maps::RiskLayer& risk_layer() const { return layer_; }
+  const RiskLoop& risk_loop() const { return loop_; }
   /// The ergodic metric of the record so far (the same number metrics.json gives).
   double ergodic_metric() const { return metrics_.latest_metric(); }
   /// Metrics of [0, end_s] as they stand; events answered (time to next visit, intervals).
@@ -208,6 +219,8 @@ class MissionCore {
   void TakeSplit(RegionSplit split);
   double next_time_s() const;  // the mission time of the coming cycle, when input takes effect
   double RiskMass(const std::vector<int>& valves) const;
+  // A partition share's phi_k with the layer's leaves nearest its valves (the share alone when none).
+  Eigen::VectorXd ShareOfLayer(int id) const;
 
   const maps::World& world_;
   const maps::Scenario& scenario_;
@@ -217,6 +230,9 @@ class MissionCore {
   ControllerKind controller_;
   MissionRecorder* recorder_;
   FleetServer fleet_;
+  maps::RiskLayer layer_;  // over world_'s live field: the fleet server's weights are its prior's
+  RiskLoop loop_;
+  bool layer_changed_ = false;  // the loop changed the layer's excess this cycle
   MetricsAccumulator metrics_;
   Roster roster_;
   std::vector<TrajectorySample> samples_;  // received since the last cycle
@@ -252,6 +268,7 @@ class MissionCore {
     Eigen::VectorXd sent_weights;  // proportions of the share's valve weights its target was made from
     double lap_time_s = 0.0;       // of its tour: the age weighting's and the guard's clock
     double split_mass = 0.0;       // its share of the field's risk when the field was split
+    double sent_excess = 0.0;      // the layer's excess in its box its target was made with
   };
   struct RegionPlan {
     std::vector<int> planned_for;

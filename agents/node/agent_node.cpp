@@ -7,6 +7,7 @@
 #include <csignal>
 #include <limits>
 #include <map>
+#include <optional>
 #include <thread>
 
 #include <spdlog/spdlog.h>
@@ -41,6 +42,10 @@ int RunAgentNode(const maps::Scenario& scenario, const AgentNodeOptions& options
   const auto lease = std::chrono::milliseconds(std::lround(scenario.fleet.liveliness_lease_s * 1000.0));
   proto::Writer<proto::VehicleState> states(participant, proto::VehicleStateWriterQos(lease));
   proto::Writer<proto::VehicleCoverage> coverage(participant, proto::VehicleCoverageQos());
+  // The leak sensors' scans, where the scenario gives the vehicles sensors.
+  std::optional<proto::Writer<proto::Detection>> detections;
+  if (!scenario.sensors.empty()) detections.emplace(participant, proto::DetectionQos());
+  std::vector<double> detections_scratch;
   proto::Reader<proto::ErgodicTarget> targets(participant, proto::ErgodicTargetQos());
   proto::Reader<proto::FleetCoverage> fleet(participant, proto::FleetCoverageQos());
   proto::Reader<proto::MissionStatus> status(participant, proto::MissionStatusQos());
@@ -108,6 +113,7 @@ int RunAgentNode(const maps::Scenario& scenario, const AgentNodeOptions& options
   // before discovery is done is lost (a join started ahead has seconds for it).
   states.WaitForReaders(1, std::chrono::milliseconds(2000));
   coverage.WaitForReaders(1, std::chrono::milliseconds(2000));
+  if (detections) detections->WaitForReaders(1, std::chrono::milliseconds(2000));
   const std::int64_t first_cycle = scenario.CycleAt(options.start_at_s);
   const std::int64_t end_cycle =
       std::isfinite(options.end_at_s) ? scenario.CycleAt(options.end_at_s) : std::numeric_limits<std::int64_t>::max();
@@ -259,9 +265,12 @@ int RunAgentNode(const maps::Scenario& scenario, const AgentNodeOptions& options
     const AgentMission::CycleOutput out = mission.Step(k);
     ++cycles_run;
     const long long stamp = proto::NowRealtimeNs();
-    // Coverage first: the server waits for the states of the cycle, and by then a report sent
-    // before them is in as well.
+    // Coverage and scans first: the server waits for the states of the cycle, and by then a
+    // report sent before them is in as well.
     for (const CoverageMessage& c : out.coverage) coverage.Write(wire::ToWire(c, stamp));
+    if (detections) {
+      for (const ScanReport& scan : out.scans) detections->Write(wire::ToWire(scan, clock.instance, stamp, detections_scratch));
+    }
     for (const StateReport& s : out.states) states.Write(wire::ToWire(s, clock.instance, stamp));
   }
   for (const VehicleId id : mission.ids()) leave(id);

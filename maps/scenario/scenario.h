@@ -15,6 +15,8 @@
 
 #include <Eigen/Core>
 
+#include "maps/scenario/perception.h"
+
 namespace sage::maps {
 
 /// Bad user input (scenario file, CLI value). what() is one line meant for the user:
@@ -297,6 +299,11 @@ struct Scenario {
   std::vector<Flowline> flowlines;
   std::vector<Boulder> boulders;
   NetworkSettings network;                  ///< where its DDS traffic goes (not part of ScenarioHash)
+  // Leak sensing (maps/scenario/perception.h): none of it by default, and then a mission flies
+  // exactly as without.
+  std::vector<SensorSpec> sensors;          ///< every vehicle carries each
+  std::vector<LeakSpec> leaks;              ///< hidden from the server; sorted by start on load
+  FusionSettings fusion;
 
   /// All valves in file order (P1..Pn), structure after structure.
   std::vector<Valve> AllValves() const;
@@ -334,8 +341,8 @@ Scenario ParseScenario(const std::string& yaml_text, const std::string& source);
 /// Writes YAML that LoadScenario reads back to an equal Scenario.
 std::string EmitScenario(const Scenario& scenario);
 
-/// A copy that lasts `duration_s`; risk and fleet events after the new end are dropped (they
-/// would never happen).
+/// A copy that lasts `duration_s`; risk and fleet events and leaks after the new end are dropped
+/// (they would never happen).
 Scenario WithDuration(const Scenario& scenario, double duration_s);
 
 /// A copy with exactly `count` vehicles (>= 1): the first `count` of the file's, or all of them

@@ -54,4 +54,8 @@ inline const char* EventKey(FleetEvent::Kind kind) {
 // of at most kMaxSeabedMapBytes) and its bytes hashed into map_fnv1a. Throws ScenarioError.
 void ResolveSeabedMap(SeabedSettings& seabed, const std::string& source);
 
+// The rules on sensors, leaks and fusion (scenario_perception.cpp); Scenario::Validate calls it
+// last. `file` starts each message.
+void ValidatePerception(const Scenario& scenario, const std::string& file);
+
 }  // namespace sage::maps::detail

@@ -204,6 +204,7 @@ std::uint64_t VehicleFingerprint(const Scenario& scenario) {
     vehicles_only.seabed->map = "fnv1a-" + std::to_string(vehicles_only.seabed->map_fnv1a) + ".bt";
   }
   vehicles_only.network = {};  // each machine has its own
+  vehicles_only.fusion = FusionSettings{};  // the server's alone (the sensors and the leaks are the vehicles' world)
   return Fnv1a(EmitScenario(vehicles_only));
 }
 

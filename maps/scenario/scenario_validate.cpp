@@ -479,6 +479,7 @@ void Scenario::Validate() const {
     c.Fail("default_profile", default_profile.empty() ? "\"\"" : default_profile, "must name a profile (" + list + ")");
   }
   CheckSeabed(c, *this, workspace_text);
+  detail::ValidatePerception(*this, source_path.empty() ? "<scenario>" : source_path);
 }
 
 }  // namespace sage::maps

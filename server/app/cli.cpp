@@ -10,6 +10,7 @@
 #include <CLI/CLI.hpp>
 #include <spdlog/spdlog.h>
 
+#include "server/app/bench_leaks.h"
 #include "server/app/bench_scale.h"
 #include "server/app/field_command.h"
 #include "server/app/fleet_commands.h"
@@ -87,6 +88,21 @@ void AddScenarioOverrides(CLI::App& cmd, ScenarioOverrides& o, OverrideSet set, 
   }
   cmd.add_option("--seed", o.seed, "Seed of the start-pose jitter; the same seed gives the same mission")
       ->check(MustBeWholeNumber);
+  cmd.add_option("--random-leaks", o.random_leaks,
+                 "Hide N random leaks from the server, drawn from the seed (onsets uniform in [0.1, 0.9] of the "
+                 "mission), replacing the scenario's leaks: the vehicles' sensors can see them, the server is not told")
+      ->check(CLI::Range(0, 1000));
+  cmd.add_option("--leak-sites", o.leak_sites,
+                 "Where random leaks are: valves (by the default profile's risk), valves-even or seabed (open water "
+                 "1 m from every valve); default valves")
+      ->check(CLI::IsMember({"valves", "valves-even", "seabed"}));
+  if (mission) {
+    cmd.add_option("--steer", o.steer,
+                   "posterior: vehicles steer on the risk layer the sensors' scans update (the Bayesian loop, the "
+                   "default where the scenario has sensors); prior: on the profile's weights alone, the scans only "
+                   "scored (the paper's fixed profiles)")
+        ->check(CLI::IsMember({"posterior", "prior"}));
+  }
   cmd.add_option("--start-jitter", o.start_jitter_m,
                  "Radius (m) within which each vehicle starts around its start_m, drawn from the seed (default: the "
                  "scenario's, 0.2; 0 = exactly at start_m)");
@@ -395,6 +411,40 @@ int RunCli(int argc, char** argv) {
       ->check(MustBeWholeNumber)
       ->capture_default_str();
 
+  BenchLeaksCommand leaks_cmd;
+  CLI::App* bench_leaks = bench->add_subcommand(
+      "leaks", "How long a leak the server is not told of goes unnoticed: a Monte Carlo over seeds, each run hiding "
+               "random leaks (drawn from its seed) from the server and flying the same mission under each "
+               "configuration (the ergodic fleet on the Bayesian risk loop, the A* tours, the ergodic fleet on each "
+               "fixed profile); the time from onset to first detection and to confirmation, revisits after it and "
+               "false alarms. Writes DIR/leaks.md, leaks.json and leaks.svg (the distribution of detection times) and "
+               "prints the table; progress on stderr. The scenario's vehicles need sensors (see "
+               "scenarios/two_xt_leaks.yaml)");
+  bench_leaks->add_option("scenario", leaks_cmd.scenario.scenario_path, "Scenario YAML with sensors")->required();
+  bench_leaks->add_option("--runs", leaks_cmd.runs, "Monte Carlo runs (seeds --seed, --seed + 1, ...)")->capture_default_str();
+  bench_leaks->add_option("--leaks", leaks_cmd.leaks, "Hidden leaks per run (onsets uniform in [0.1, 0.9] of the mission)")
+      ->capture_default_str();
+  bench_leaks
+      ->add_option("--sites", leaks_cmd.sites,
+                   "Where the leaks are: valves (by the default profile's risk), valves-even or seabed (open water 1 m "
+                   "from every valve)")
+      ->check(CLI::IsMember({"valves", "valves-even", "seabed"}))
+      ->capture_default_str();
+  bench_leaks->add_option("--seed", leaks_cmd.first_seed, "Seed of the first run")->check(MustBeWholeNumber)->capture_default_str();
+  bench_leaks
+      ->add_option("--configs", leaks_cmd.configs,
+                   "What flies each run, comma-separated: bayes (ergodic on the Bayesian loop), astar (the tours), fixed "
+                   "(ergodic on each of the scenario's profiles, the loop not steering)")
+      ->capture_default_str();
+  bench_leaks->add_option("--profile,-p", leaks_cmd.scenario.profile,
+                          "Profile of bayes and astar (default: the scenario's default_profile)");
+  bench_leaks->add_option("--duration", leaks_cmd.scenario.duration_s, "Mission length in seconds (default: the scenario's)");
+  bench_leaks->add_option("--vehicles,-n", leaks_cmd.scenario.vehicles, "Fleet size (default: the scenario's)");
+  bench_leaks->add_option("--assignment", leaks_cmd.scenario.assignment, "Fleet coverage of the ergodic runs")
+      ->check(CLI::IsMember({"shared", "partition", "regions"}));
+  bench_leaks->add_option("--jobs,-j", leaks_cmd.jobs, "Missions flown at once (each on one thread)")->capture_default_str();
+  bench_leaks->add_option("--out,-o", leaks_cmd.out_dir, "Output directory (default: runs/bench_leaks_<scenario>)");
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {
@@ -457,6 +507,7 @@ int RunCli(int argc, char** argv) {
     if (*generate) return CmdFieldGenerate(field_options, field_out);
     if (*seabed) return CmdFieldSeabed(seabed_seed, seabed_name, seabed_out);
     if (*bench_scale) return CmdBenchScale(bench_cmd);
+    if (*bench_leaks) return CmdBenchLeaks(leaks_cmd);
   } catch (const maps::ScenarioError& e) {
     std::cerr << "sage: error: " << e.what() << "\n";
     return 2;

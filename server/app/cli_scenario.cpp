@@ -93,6 +93,21 @@ maps::Scenario LoadWithOverrides(const ScenarioOverrides& o) {
   if (o.forgetting_time_s) scenario.ergodic.forgetting_time_s = *o.forgetting_time_s;
   if (o.basis_order) scenario.ergodic.basis_order = *o.basis_order;
   if (o.min_turn_radius_m) scenario.ergodic.min_turn_radius_m = *o.min_turn_radius_m;
+  if (o.steer) {
+    if (*o.steer != "posterior" && *o.steer != "prior") {
+      throw maps::ScenarioError("--steer = " + *o.steer + ": must be posterior (the Bayesian loop) or prior");
+    }
+    scenario.fusion.steer = *o.steer == "posterior";
+  }
+  // Drawn last, from the effective seed and duration, so `sage run DIR/scenario.yaml` (which holds
+  // them) and agent hosts given the same options meet the same leaks.
+  if (o.leak_sites && !o.random_leaks) {
+    throw maps::ScenarioError("--leak-sites = " + *o.leak_sites + ": says where --random-leaks N draws its leaks; give N");
+  }
+  if (o.random_leaks) {
+    const maps::LeakSites sites = maps::ParseLeakSites(o.leak_sites.value_or("valves"), "--leak-sites");
+    scenario = maps::WithRandomLeaks(scenario, *o.random_leaks, sites);
+  }
   if (o.model) {
     const maps::MotionModel model = maps::ParseMotionModel(*o.model, "--model");
     for (maps::VehicleSpec& v : scenario.vehicles) v.model = model;

@@ -41,6 +41,10 @@ struct ScenarioOverrides {
   std::optional<double> age_weighting_laps;  // regions
   std::optional<double> risk_share;          // regions
   NetworkOverrides network;                  // launch, server, agents
+  // Leak sensing (issue 9): random hidden leaks drawn by seed, and whether vehicles steer on the posterior.
+  std::optional<int> random_leaks;
+  std::optional<std::string> leak_sites;     // valves | valves-even | seabed
+  std::optional<std::string> steer;          // posterior | prior
 };
 
 /// Loads the scenario and applies the overrides; each bad value is a maps::ScenarioError naming

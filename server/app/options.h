@@ -85,6 +85,18 @@ struct BenchScaleCommand {
   std::uint64_t seed = 1;                  ///< the fields' and missions' seed
 };
 
+/// sage bench leaks
+struct BenchLeaksCommand {
+  ScenarioOverrides scenario;              ///< the path, and --profile, --duration, --vehicles, --assignment
+  int runs = 100;                          ///< Monte Carlo runs (seeds first_seed, first_seed + 1, ...)
+  int leaks = 1;                           ///< hidden leaks per run
+  std::string sites = "valves";            ///< valves | valves-even | seabed
+  std::uint64_t first_seed = 1;
+  std::string configs = "bayes,astar,fixed";  ///< what flies each run (see CmdBenchLeaks)
+  std::string out_dir;                     ///< default runs/bench_leaks_<scenario>
+  int jobs = 1;                            ///< missions flown at once
+};
+
 /// The operators' commands on a running mission.
 struct OperatorCommand {
   std::string mission_dir;       ///< default: $SAGE_MISSION, else runs/latest

@@ -9,6 +9,7 @@
 #include <filesystem>
 #include <iostream>
 #include <map>
+#include <optional>
 #include <random>
 #include <thread>
 
@@ -141,6 +142,9 @@ int RunServerNode(const maps::Scenario& scenario, const ServerNodeOptions& optio
   if (options.on_started) options.on_started();
   proto::Reader<proto::VehicleState> states(participant, proto::VehicleStateRecordQos());
   proto::Reader<proto::VehicleCoverage> coverage(participant, proto::VehicleCoverageQos());
+  // The vehicles' leak-sensor scans (issue 9), where the scenario gives them sensors.
+  std::optional<proto::Reader<proto::Detection>> detections;
+  if (!scenario.sensors.empty()) detections.emplace(participant, proto::DetectionQos());
   proto::Reader<proto::RiskUpdate> risk_updates(participant, proto::RiskUpdateQos());
   proto::Writer<proto::RiskUpdateResult> risk_results(participant, proto::RiskUpdateResultQos());
   proto::Reader<proto::FleetCommand> commands(participant, proto::FleetCommandQos());
@@ -341,6 +345,15 @@ int RunServerNode(const maps::Scenario& scenario, const ServerNodeOptions& optio
       bytes_in += proto::WireBytes(m);
       door.TakeCoverage(m, info.publication_handle);
     });
+    if (detections) {
+      take_all(*detections, [&](const proto::Detection& m, const dds_sample_info_t& info) {
+        ++messages_in;
+        if (!info.valid_data) return;
+        bytes_in += proto::WireBytes(m);
+        if (m.server_instance != instance) return;  // on another server's clock, as states
+        core.OnScan(agents::wire::FromWire(m, rate));
+      });
+    }
     risk_updates.TakeEach([&](const proto::RiskUpdate& r, const dds_sample_info_t& info) {
       ++messages_in;
       if (!info.valid_data) return;

@@ -1,5 +1,6 @@
 #include "server/report/checkpoint.h"
 
+#include <cmath>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -237,6 +238,69 @@ std::vector<VisitTracker::EventWatch> ToWatches(const Json& j) {
   return out;
 }
 
+// The risk loop: the leak belief's leaves, the scans waiting for their cycle, the scoring.
+Json RiskLoopJson(const RiskLoop::State& r) {
+  Json belief = Json::array();
+  for (const LeakBelief::Entry& e : r.belief) belief.push_back({e.cell.i, e.cell.j, e.evidence, e.time_s});
+  Json held = Json::array();
+  for (const agents::ScanReport& scan : r.held) {
+    std::vector<double> xy;
+    for (const Eigen::Vector2d& z : scan.detections_m) xy.insert(xy.end(), {z.x(), z.y()});
+    held.push_back({{"id", scan.id}, {"cycle", scan.cycle}, {"t", scan.time_s}, {"sensor", scan.sensor},
+                    {"p", Vec2(scan.position_m)}, {"h", scan.heading_rad}, {"z", Doubles(xy)}});
+  }
+  Json last = Json::array();
+  for (const auto& [key, cycle] : r.last_fused) last.push_back({key.first, key.second, cycle});
+  Json leaks = Json::array();
+  for (const RiskLoop::LeakTrack& l : r.leaks) {
+    leaks.push_back({std::isnan(l.detected_s) ? Json(nullptr) : Json(l.detected_s),
+                     std::isnan(l.confirmed_s) ? Json(nullptr) : Json(l.confirmed_s), l.detections});
+  }
+  Json alarms = Json::array();
+  for (const RiskLoop::Alarm& a : r.alarms) {
+    alarms.push_back({{"p", Vec2(a.anchor_m)}, {"raised", a.raised_s}, {"cleared", a.cleared_s},
+                      {"confirmed", a.confirmed}, {"leak", a.leak}});
+  }
+  Json written = Json::array();
+  for (const auto& [cell, value] : r.written) written.push_back({cell.i, cell.j, value});
+  return {{"belief", belief}, {"held", held}, {"last_fused", last}, {"leaks", leaks}, {"alarms", alarms},
+          {"false_detections", r.false_detections}, {"scans", r.scans}, {"written", written}};
+}
+RiskLoop::State ToRiskLoop(const Json& j) {
+  RiskLoop::State r;
+  for (const Json& e : j.at("belief")) {
+    r.belief.push_back({{e.at(0).get<int>(), e.at(1).get<int>()}, e.at(2).get<double>(), e.at(3).get<double>()});
+  }
+  for (const Json& h : j.at("held")) {
+    agents::ScanReport scan;
+    scan.id = h.at("id").get<int>();
+    scan.cycle = h.at("cycle").get<std::int64_t>();
+    scan.time_s = h.at("t").get<double>();
+    scan.sensor = h.at("sensor").get<int>();
+    scan.position_m = ToVec2(h.at("p"));
+    scan.heading_rad = h.at("h").get<double>();
+    const std::vector<double> xy = ToDoubles(h.at("z"));
+    for (std::size_t k = 0; k + 1 < xy.size(); k += 2) scan.detections_m.emplace_back(xy[k], xy[k + 1]);
+    r.held.push_back(std::move(scan));
+  }
+  for (const Json& l : j.at("last_fused")) r.last_fused[{l.at(0).get<int>(), l.at(1).get<int>()}] = l.at(2).get<std::int64_t>();
+  const auto time_or_nan = [](const Json& t) { return t.is_null() ? std::nan("") : t.get<double>(); };
+  for (const Json& l : j.at("leaks")) r.leaks.push_back({time_or_nan(l.at(0)), time_or_nan(l.at(1)), l.at(2).get<int>()});
+  for (const Json& a : j.at("alarms")) {
+    RiskLoop::Alarm alarm;
+    alarm.anchor_m = ToVec2(a.at("p"));
+    alarm.raised_s = a.at("raised").get<double>();
+    alarm.cleared_s = a.at("cleared").get<double>();
+    alarm.confirmed = a.at("confirmed").get<bool>();
+    alarm.leak = a.at("leak").get<int>();
+    r.alarms.push_back(alarm);
+  }
+  r.false_detections = j.at("false_detections").get<int>();
+  r.scans = j.at("scans").get<std::uint64_t>();
+  for (const Json& w : j.at("written")) r.written.push_back({{w.at(0).get<int>(), w.at(1).get<int>()}, w.at(2).get<float>()});
+  return r;
+}
+
 }  // namespace
 
 std::vector<std::uint8_t> EncodeCheckpoint(const MissionCheckpoint& c) {
@@ -245,7 +309,9 @@ std::vector<std::uint8_t> EncodeCheckpoint(const MissionCheckpoint& c) {
                   {"fleet", FleetJson(c.fleet)}, {"roster", RosterJson(c.roster)}, {"metrics", MetricsStateJson(c.metrics)},
                   {"disarmed", c.disarmed}, {"visits", VisitsJson(c.visits)},
                   {"visit_watches", WatchesJson(c.visit_watches)}, {"rejected", c.rejected_samples},
-                  {"rejected_by_kind", c.rejected_by_kind}, {"rejected_by_sender", c.rejected_by_sender}};
+                  {"rejected_by_kind", c.rejected_by_kind}, {"rejected_by_sender", c.rejected_by_sender},
+                  {"risk_layer_ot", Json::binary(std::vector<std::uint8_t>(c.risk_layer_ot.begin(), c.risk_layer_ot.end()))},
+                  {"risk_loop", RiskLoopJson(c.risk_loop)}};
   return Json::to_cbor(j);
 }
 
@@ -280,6 +346,11 @@ MissionCheckpoint DecodeCheckpoint(const std::vector<std::uint8_t>& bytes, const
     if (j.contains("rejected_by_kind")) {  // older checkpoints have the total only
       c.rejected_by_kind = j.at("rejected_by_kind").get<std::map<std::string, std::size_t>>();
       c.rejected_by_sender = j.at("rejected_by_sender").get<std::map<std::string, std::size_t>>();
+    }
+    if (j.contains("risk_loop")) {  // older checkpoints: no risk loop, the layer the prior alone
+      const auto& ot = j.at("risk_layer_ot").get_binary();
+      c.risk_layer_ot.assign(ot.begin(), ot.end());
+      c.risk_loop = ToRiskLoop(j.at("risk_loop"));
     }
     return c;
   } catch (const std::exception& e) {  // nlohmann's parse, type and out-of-range errors

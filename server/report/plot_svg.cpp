@@ -89,7 +89,8 @@ std::string PlotSvg(const maps::Scenario& scenario, const Eigen::VectorXd& weigh
   // Legend entries below the plot, wrapped into rows of kPerRow.
   constexpr int kPerRow = 4;
   const bool seabed_objects = !scenario.flowlines.empty() || !scenario.boulders.empty();
-  const int legend_items = static_cast<int>(paths.size()) + 2 + (seabed_objects ? 1 : 0);
+  const int legend_items =
+      static_cast<int>(paths.size()) + 2 + (seabed_objects ? 1 : 0) + (scenario.leaks.empty() ? 0 : 1);
   const double legend_y = kTop + plot_h + 26.0;
   const double height_px = legend_y + 20.0 * ((legend_items + kPerRow - 1) / kPerRow) + 6.0;
 
@@ -156,6 +157,18 @@ std::string PlotSvg(const maps::Scenario& scenario, const Eigen::VectorXd& weigh
         "paint-order=\"stroke\">{} ({:.2f})</text>\n", x + 6.0, y - 6.0, XmlEscape(valves[i].name), w[i]);
   }
 
+  // The hidden leaks (the scenario's; the server never knew them), a red cross each with its onset.
+  const auto cross = [&](double x, double y, double r) {
+    put("<path d=\"M{:.1f},{:.1f} L{:.1f},{:.1f} M{:.1f},{:.1f} L{:.1f},{:.1f}\" stroke=\"#d00\" stroke-width=\"3\"/>\n", x - r,
+        y - r, x + r, y + r, x - r, y + r, x + r, y - r);
+  };
+  for (const maps::LeakSpec& leak : scenario.leaks) {
+    const Eigen::Vector2d at = maps::LeakPosition(scenario, leak);
+    cross(px(at.x()), py(at.y()), 6.0);
+    put("<text x=\"{:.1f}\" y=\"{:.1f}\" font-size=\"11\" fill=\"#d00\" stroke=\"white\" stroke-width=\"3\" "
+        "paint-order=\"stroke\">leak from {:.0f} s</text>\n", px(at.x()) + 8.0, py(at.y()) + 14.0, leak.start_s);
+  }
+
   int colour = 0;
   for (const auto& [vehicle, points] : paths) {
     const char* stroke = kPalette[colour++ % std::size(kPalette)];
@@ -198,6 +211,11 @@ std::string PlotSvg(const maps::Scenario& scenario, const Eigen::VectorXd& weigh
         sy - 4.0, sx + 12.0, sy - 4.0);
     put("<circle cx=\"{:.1f}\" cy=\"{:.1f}\" r=\"4.5\" fill=\"#8a8a8a\" stroke=\"#505050\"/>\n", sx + 18.0, sy - 4.0);
     put("<text x=\"{:.1f}\" y=\"{:.1f}\" font-size=\"12\">flowline, boulder</text>\n", sx + 28.0, sy);
+  }
+  if (!scenario.leaks.empty()) {
+    auto [lx, ly] = slot();
+    cross(lx + 11.0, ly - 4.0, 5.0);
+    put("<text x=\"{:.1f}\" y=\"{:.1f}\" font-size=\"12\">hidden leak</text>\n", lx + 28.0, ly);
   }
   put("</svg>\n");
   return std::string(out.data(), out.size());

@@ -21,8 +21,12 @@ namespace sage::server {
 /// "--out = DIR: cannot write there: REASON".
 void PrepareRunDirectory(const std::string& dir);
 
-/// Table 1 layout: Valve | Weight | for each run: visits, interval; then corr and metric rows.
+/// Table 1 layout: Valve | Weight | for each run: visits, interval; then corr and metric rows;
+/// then, for runs with leak sensors or hidden leaks, FormatLeaks.
 std::string FormatTable(const std::vector<MissionMetrics>& runs);
+/// One line per hidden leak of each run (onset, first detection, confirmation, revisits after it)
+/// and its false alarms; empty when no run sensed or hid a leak.
+std::string FormatLeaks(const std::vector<MissionMetrics>& runs);
 
 /// How a run stands, for metrics.json: whether it is complete, and how it came to be.
 struct RunInfo {

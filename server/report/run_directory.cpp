@@ -113,12 +113,6 @@ std::vector<std::pair<int, std::string>> Lines(const std::string& path) {
   return lines;
 }
 
-// The risk layer no mission feeds yet: the valves' prior with no leaf changed.
-std::string PriorLayerBytes(const maps::World& world) {
-  return maps::RiskLayer::PriorOnlyOtBytes(
-      maps::RiskLayerOptions::Fitting(world.basis().width_m(), world.basis().height_m()));
-}
-
 }  // namespace
 
 RunDirectory::RunDirectory(std::string dir, const maps::Scenario& scenario, RunDirectoryOptions options)
@@ -321,7 +315,7 @@ void RunDirectory::Finish(const MissionCore& core, const maps::World& world, dou
                   core.fleet().profile().name, core.roster().members().size(), end_s);
   const std::string contents[] = {PlotSvg(scenario_, core.fleet().schedule().back().weights, plot_, title),
                                   world.seabed().BinaryBytes(),
-                                  risk_layer ? risk_layer->OtBytes() : PriorLayerBytes(world),
+                                  (risk_layer ? *risk_layer : core.risk_layer()).OtBytes(),
                                   maps::EmitScenario(ran),
                                   MetricsJson(core.Metrics(end_s), &info)};
   std::vector<std::string> paths;

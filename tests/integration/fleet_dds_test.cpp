@@ -1348,3 +1348,49 @@ TEST_F(FleetDds, LaunchOfALargeFieldFliesTheInProcessMission) {
 
 }  // namespace
 }  // namespace sage
+
+namespace sage {
+namespace {
+
+// 13. Leak detections over DDS (rt/sage/detection) are the ones the in-process mission hands over:
+// two_xt with its camera and a leak at P3 from 5 s, two vehicles, 40 s; the same trajectory, the
+// same scans fused, the leak detected and confirmed at the same times, the same false alarms.
+TEST_F(FleetDds, DetectionsOverDdsAreTheInProcessOnes) {
+  std::string text = ReadFile(Scenario("two_xt_leaks.yaml"));
+  const std::string from = "start_s: 120";
+  const auto at = text.find(from);
+  ASSERT_NE(at, std::string::npos);
+  text.replace(at, from.size(), "start_s: 5");
+  const fs::path scenario = run_dir_ / "two_xt_leak_soon.yaml";
+  std::ofstream(scenario) << text;
+  const fs::path in_process = run_dir_ / "run", over_dds = run_dir_ / "launch";
+  const std::vector<std::string> common = {"--duration", "40", "-n", "2", "--seed", "5"};
+  std::vector<std::string> run_args = {"run", scenario.string(), "--out", in_process.string()};
+  run_args.insert(run_args.end(), common.begin(), common.end());
+  ChildProcess& run = Start("run", run_args);
+  ASSERT_EQ(run.WaitExit(60s), std::optional<int>(0));
+  std::vector<std::string> launch_args = {scenario.string(), "--time-scale", Num(kTimeScale), "--no-latest"};
+  launch_args.insert(launch_args.end(), common.begin(), common.end());
+  ChildProcess& launch = StartLaunch("launch", launch_args, over_dds, FreeDomainForLaunch(), run_dir_);
+  ASSERT_EQ(WaitMissionEnd(launch, 40.0), std::optional<int>(0));
+  const Json ma = ReadJson(in_process / "metrics.json"), mb = ReadJson(over_dds / "metrics.json");
+  ASSERT_EQ(ma.at("leaks").size(), 1u);
+  EXPECT_TRUE(ma["leaks"][0].at("detected_s").is_number()) << "P3's leak is found in 35 s by two vehicles";
+  EXPECT_GT(ma.at("scans").get<int>(), 300);
+  EXPECT_EQ(ma.at("scans"), mb.at("scans"));
+  EXPECT_EQ(ma.at("leaks"), mb.at("leaks"));
+  EXPECT_EQ(ma.at("false_alarms"), mb.at("false_alarms"));
+  EXPECT_EQ(mb.at("rejected_samples"), 0);
+  const auto rows = [](const fs::path& csv) {
+    std::istringstream in(ReadFile(csv));
+    std::vector<std::string> out;
+    for (std::string line; std::getline(in, line);)
+      if (line.rfind("t,", 0) != 0 && line.rfind("0,", 0) != 0) out.push_back(line);  // t = 0: only in-process
+    std::sort(out.begin(), out.end());
+    return out;
+  };
+  EXPECT_EQ(rows(in_process / "trajectory.csv"), rows(over_dds / "trajectory.csv"));
+}
+
+}  // namespace
+}  // namespace sage

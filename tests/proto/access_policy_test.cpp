@@ -121,20 +121,20 @@ TEST(AccessPolicy, EveryMissionTopicHasOneRule) {
 
 // The roles as designed: only the server publishes targets, coverage, status and answers; only
 // operators publish risk updates; fleet commands come from operators and the server; agent hosts
-// publish states and coverage; the viewer reads every topic and publishes none.
+// publish states, coverage and their sensors' scans; the viewer reads every topic and publishes none.
 TEST(AccessPolicy, RolesPublishAndReadWhatTheMissionNeeds) {
   EXPECT_EQ(Set(TopicsPublishedBy(SecurityRole::kServer)),
             (std::set<std::string>{kErgodicTargetTopic, kFleetCoverageTopic, kRiskUpdateResultTopic, kMissionStatusTopic,
                                    kFleetCommandTopic, kFleetCommandResultTopic}));
   EXPECT_EQ(Set(TopicsPublishedBy(SecurityRole::kOperator)), (std::set<std::string>{kRiskUpdateTopic, kFleetCommandTopic}));
   EXPECT_EQ(Set(TopicsPublishedBy(SecurityRole::kAgentHost)),
-            (std::set<std::string>{kVehicleStateTopic, kVehicleCoverageTopic}));
+            (std::set<std::string>{kVehicleStateTopic, kVehicleCoverageTopic, kDetectionTopic}));
   EXPECT_TRUE(TopicsPublishedBy(SecurityRole::kViewer).empty());
   EXPECT_EQ(TopicsSubscribedBy(SecurityRole::kViewer).size(), kMissionTopics.size());
   // What each process reads (server_node, agent_node, launch, operators).
   EXPECT_EQ(Set(TopicsSubscribedBy(SecurityRole::kServer)),
             (std::set<std::string>{kVehicleStateTopic, kVehicleCoverageTopic, kRiskUpdateTopic, kMissionStatusTopic,
-                                   kFleetCommandTopic}));
+                                   kFleetCommandTopic, kDetectionTopic}));
   EXPECT_EQ(Set(TopicsSubscribedBy(SecurityRole::kAgentHost)),
             (std::set<std::string>{kVehicleStateTopic, kErgodicTargetTopic, kFleetCoverageTopic, kMissionStatusTopic,
                                    kFleetCommandTopic}));
