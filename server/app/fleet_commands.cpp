@@ -1,11 +1,14 @@
 #include "server/app/fleet_commands.h"
 
+#include <charconv>
 #include <csignal>
+#include <filesystem>
 #include <string>
 
 #include <fmt/format.h>
 
 #include "agents/node/agent_node.h"
+#include "server/app/operators.h"
 #include "server/app/resume_plan.h"
 #include "server/app/security_command.h"
 #include "server/node/server_node.h"
@@ -36,6 +39,16 @@ const std::atomic<bool>* StopOnSignals() {
 
 int StopSignal() { return g_stop_signal.load(); }
 
+std::optional<int> PortOption(const std::string& flag, const std::string& text) {
+  if (text == "off") return std::nullopt;
+  int port = -1;
+  const auto [end, error] = std::from_chars(text.data(), text.data() + text.size(), port);
+  if (error != std::errc() || end != text.data() + text.size() || port < 0 || port > 65535) {
+    throw maps::ScenarioError(fmt::format("{} = {}: must be a port in 0..65535 (0: any free one) or off", flag, text));
+  }
+  return port;
+}
+
 int CmdServer(const ServerCommand& c) {
   const std::atomic<bool>* stop = StopOnSignals();
   const maps::Scenario scenario = LoadWithOverrides(c.scenario);
@@ -54,6 +67,17 @@ int CmdServer(const ServerCommand& c) {
   options.start_in_s = c.resume ? 0.0 : c.start_in_s;
   options.show_progress = !c.quiet;
   options.stop = stop;
+  options.http_port = PortOption("--http", c.http);
+  options.foxglove_port = PortOption("--foxglove", c.foxglove);
+  // Vehicles added from the live view join as `sage vehicle add`'s do: a detached agent host on
+  // the mission's domain, with its identity, flying the run's effective scenario.
+  MissionFile mission;
+  mission.domain_id = c.domain;
+  mission.run_dir = std::filesystem::absolute(options.out_dir).string();
+  mission.scenario_path = (std::filesystem::path(mission.run_dir) / "scenario.yaml").string();
+  mission.controller = c.controller;
+  mission.security_dir = c.security_dir.empty() ? std::string() : std::filesystem::absolute(c.security_dir).string();
+  options.start_added_vehicles = [mission](int first_id, int count) { return StartAddedHost(mission, first_id, count); };
   return RunServerNode(scenario, options);
 }
 

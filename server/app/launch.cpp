@@ -21,6 +21,7 @@
 #include "proto/messages.h"
 #include "proto/mission_clock.h"
 #include "proto/qos.h"
+#include "server/app/fleet_commands.h"
 #include "server/app/processes.h"
 #include "server/app/resume_plan.h"
 #include "server/app/security_command.h"
@@ -96,6 +97,9 @@ std::string WhatWasKept(const std::string& dir) {
 }  // namespace
 
 int Launch(const LaunchCommand& c) {
+  // The live view's ports, checked before anything starts.
+  PortOption("--http", c.http);
+  PortOption("--foxglove", c.foxglove);
   const bool resume = !c.resume_dir.empty();
   maps::Scenario scenario;
   std::string out_dir;
@@ -214,6 +218,8 @@ int Launch(const LaunchCommand& c) {
     const double lead_s = 1.0 + 0.001 * static_cast<double>(scenario.vehicles.size());
     server_args.insert(server_args.end(), {"--start-in", Number(lead_s)});
   }
+  // The live view: the server prints its addresses (with the mission's token).
+  server_args.insert(server_args.end(), {"--http", c.http, "--foxglove", c.foxglove});
   server_args.insert(server_args.end(), common.begin(), common.end());
   int server_stdout = -1;
   const pid_t server = Spawn(server_args, "", false, &server_stdout);

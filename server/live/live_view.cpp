@@ -1,0 +1,240 @@
+#include "server/live/live_view.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "server/live/foxglove_bridge.h"
+
+namespace sage::live {
+namespace {
+
+constexpr std::size_t kLogKept = 200;      // events kept for pages that open late
+constexpr std::size_t kLogPerFrame = 50;   // the latest events each frame carries
+// The page waits this long for the server's loop to carry out its request (a removal waits
+// for the vehicle to leave, up to 5 s, as `sage vehicle remove` does).
+constexpr auto kActionWait = std::chrono::seconds(15);
+// The heat map is made again when a share moved, at most this often.
+constexpr auto kHeatPeriod = std::chrono::milliseconds(500);
+
+}  // namespace
+
+void PendingAction::Answer(bool accepted, std::string line) {
+  if (answered_) return;
+  answered_ = true;
+  promise_.set_value({accepted, std::move(line)});
+}
+
+LiveView::LiveView(LiveScene scene, LiveViewOptions options)
+    : scene_(std::move(scene)), options_(std::move(options)) {
+  scene_.mode = "live";
+  scene_.actions = true;
+  scene_json_ = live::SceneJson(scene_);
+  publisher_ = std::thread([this] { PublisherLoop(); });
+  try {
+    if (options_.http_port) {
+      ViewServerOptions http;
+      http.port = *options_.http_port;
+      http.token = options_.token;
+      http_ = std::make_unique<ViewServer>(*this, http);
+    }
+    if (options_.foxglove_port) foxglove_ = std::make_unique<FoxgloveBridge>(scene_, *options_.foxglove_port, options_.token);
+  } catch (...) {
+    http_.reset();
+    {
+      std::lock_guard lock(mailbox_mutex_);
+      stop_ = true;
+    }
+    mailbox_cv_.notify_all();
+    publisher_.join();
+    throw;
+  }
+}
+
+LiveView::~LiveView() {
+  Close("the mission has ended");
+  {
+    std::lock_guard lock(mailbox_mutex_);
+    stop_ = true;
+  }
+  mailbox_cv_.notify_all();
+  published_cv_.notify_all();
+  http_.reset();
+  foxglove_.reset();
+  if (publisher_.joinable()) publisher_.join();
+}
+
+std::string LiveView::PageUrl() const { return http_ ? http_->Url() : std::string(); }
+std::string LiveView::FoxgloveUrl() const { return foxglove_ ? foxglove_->Url() : std::string(); }
+int LiveView::http_port() const { return http_ ? http_->port() : -1; }
+int LiveView::foxglove_port() const { return foxglove_ ? foxglove_->port() : -1; }
+
+bool LiveView::FrameDue() const {
+  std::lock_guard lock(mailbox_mutex_);
+  return std::chrono::steady_clock::now() - last_publish_ >= std::chrono::duration<double>(options_.frame_period_s);
+}
+
+void LiveView::Publish(LiveFrame frame) {
+  {
+    std::lock_guard lock(mailbox_mutex_);
+    if (pending_frame_) ++skipped_;
+    pending_frame_ = std::move(frame);
+    last_publish_ = std::chrono::steady_clock::now();
+  }
+  mailbox_cv_.notify_one();
+}
+
+void LiveView::OnEvent(EventView event) {
+  std::lock_guard lock(mailbox_mutex_);
+  pending_events_.push_back(std::move(event));
+}
+
+std::vector<std::shared_ptr<PendingAction>> LiveView::TakeActions() {
+  std::lock_guard lock(actions_mutex_);
+  std::vector<std::shared_ptr<PendingAction>> out;
+  out.swap(actions_);
+  return out;
+}
+
+void LiveView::Close(const std::string& why) {
+  std::lock_guard lock(actions_mutex_);
+  if (!closed_) closed_ = why;
+  for (const auto& a : actions_) a->Answer(false, why);
+  actions_.clear();
+}
+
+ActionAnswer LiveView::Act(const ActionRequest& request) {
+  auto action = std::make_shared<PendingAction>(request);
+  std::future<ActionAnswer> answer = action->future();
+  {
+    std::lock_guard lock(actions_mutex_);
+    if (closed_) return {false, *closed_};
+    actions_.push_back(action);
+  }
+  if (answer.wait_for(kActionWait) != std::future_status::ready) {
+    // Still queued or carried out later: the answer then goes nowhere, as a command's whose
+    // operator gave up.
+    return {false, "the server did not answer within 15 s"};
+  }
+  return answer.get();
+}
+
+std::uint64_t LiveView::frames_published() const {
+  std::lock_guard lock(published_mutex_);
+  return seq_;
+}
+
+std::shared_ptr<const std::string> LiveView::NextFrame(std::uint64_t after_seq, bool with_trails,
+                                                       std::chrono::milliseconds wait, std::uint64_t* seq) {
+  std::unique_lock lock(published_mutex_);
+  published_cv_.wait_for(lock, wait, [&] { return seq_ > after_seq || stop_; });
+  if (seq_ <= after_seq || !frame_) return nullptr;
+  *seq = seq_;
+  if (!with_trails) return frame_json_;
+  if (!frame_json_trails_) {
+    const std::vector<LoggedEvent> events(log_.begin(), log_.end());
+    frame_json_trails_ = std::make_shared<const std::string>(
+        live::FrameJson(*frame_, seq_, events, events_total_, heat_seq_, /*with_trails=*/true));
+  }
+  return frame_json_trails_;
+}
+
+std::string LiveView::FrameJson(std::optional<double>) {
+  std::uint64_t seq = 0;
+  const std::shared_ptr<const std::string> frame = NextFrame(0, true, std::chrono::milliseconds(0), &seq);
+  return frame ? *frame : std::string("{\"seq\":0}");
+}
+
+std::string LiveView::HeatJson(std::optional<double>) {
+  std::lock_guard lock(published_mutex_);
+  return heat_json_ ? *heat_json_ : std::string("{\"seq\":0,\"nx\":0,\"ny\":0}");
+}
+
+// Trails: a point each trail_s / trail_points mission seconds, the last trail_points kept.
+void LiveView::Digest(LiveFrame& frame, std::vector<EventView>& events) {
+  const double step = options_.trail_s / std::max(1, options_.trail_points);
+  const std::size_t kept = 2 * static_cast<std::size_t>(std::max(1, options_.trail_points));
+  frame.trails.resize(frame.vehicles.size());
+  for (std::size_t i = 0; i < frame.vehicles.size(); ++i) {
+    const VehicleView& v = frame.vehicles[i];
+    Trail& trail = trails_[v.id];
+    if (v.status != VehicleStatus::kLost && v.status != VehicleStatus::kLeft && frame.time_s - trail.last_s >= step) {
+      trail.points.push_back(v.x_m);
+      trail.points.push_back(v.y_m);
+      trail.last_s = frame.time_s;
+      while (trail.points.size() > kept) trail.points.pop_front();
+    }
+    frame.trails[i].assign(trail.points.begin(), trail.points.end());
+  }
+  std::vector<double> shares(frame.valves.size());
+  for (std::size_t i = 0; i < shares.size(); ++i) shares[i] = frame.valves[i].share;
+  const auto now = std::chrono::steady_clock::now();
+  std::shared_ptr<const HeatGrid> heat;
+  if (shares != heat_shares_ && now - last_heat_ >= kHeatPeriod) {
+    heat_shares_ = shares;
+    last_heat_ = now;
+    heat = std::make_shared<const HeatGrid>(RiskDensityGrid(scene_, shares));
+  }
+
+  // The log and the sequence numbers under the lock; the JSON is written outside it, so readers
+  // wait only for pointers to change.
+  std::vector<LoggedEvent> recent;
+  std::uint64_t seq = 0, events_total = 0, heat_seq = 0;
+  {
+    std::lock_guard lock(published_mutex_);
+    for (EventView& e : events) {
+      log_.push_back({++events_total_, std::move(e)});
+      if (log_.size() > kLogKept) log_.pop_front();
+    }
+    const std::size_t from = log_.size() > kLogPerFrame ? log_.size() - kLogPerFrame : 0;
+    recent.assign(log_.begin() + static_cast<long>(from), log_.end());
+    seq = seq_ + 1;
+    events_total = events_total_;
+    heat_seq = heat_seq_ + (heat ? 1 : 0);
+  }
+  auto shared = std::make_shared<const LiveFrame>(std::move(frame));
+  auto json = std::make_shared<const std::string>(
+      live::FrameJson(*shared, seq, recent, events_total, heat_seq, /*with_trails=*/false));
+  std::shared_ptr<const std::string> heat_json;
+  if (heat) heat_json = std::make_shared<const std::string>(live::HeatJson(*heat, heat_seq));
+  std::lock_guard lock(published_mutex_);
+  if (heat) {
+    heat_ = std::move(heat);
+    heat_json_ = std::move(heat_json);
+    heat_seq_ = heat_seq;
+  }
+  seq_ = seq;
+  frame_ = std::move(shared);
+  frame_json_ = std::move(json);
+  frame_json_trails_.reset();
+}
+
+void LiveView::PublisherLoop() {
+  while (true) {
+    LiveFrame frame;
+    std::vector<EventView> events;
+    {
+      std::unique_lock lock(mailbox_mutex_);
+      mailbox_cv_.wait(lock, [&] { return stop_ || pending_frame_.has_value(); });
+      if (!pending_frame_) return;  // stopping, nothing left
+      frame = std::move(*pending_frame_);
+      pending_frame_.reset();
+      events.swap(pending_events_);
+    }
+    Digest(frame, events);
+    published_cv_.notify_all();
+    if (foxglove_) {
+      std::shared_ptr<const LiveFrame> latest;
+      std::shared_ptr<const HeatGrid> heat;
+      std::uint64_t heat_seq = 0;
+      {
+        std::lock_guard lock(published_mutex_);
+        latest = frame_;
+        heat = heat_;
+        heat_seq = heat_seq_;
+      }
+      foxglove_->Publish(*latest, heat.get(), heat_seq);
+    }
+  }
+}
+
+}  // namespace sage::live
