@@ -26,7 +26,7 @@ HeatGrid RiskDensityGrid(const LiveScene& scene, const std::vector<double>& shar
   for (std::size_t v = 0; v < n; ++v) {
     const double w = std::max(0.0, shares[v]) / total;
     if (w <= 0.0) continue;
-    const Eigen::Matrix2d cov = scene.valves[v].covariance_m2 + 0.25 * c * c * Eigen::Matrix2d::Identity();
+    const Eigen::Matrix2d cov = scene.valves[v].covariance_m2 + 0.5 * c * c * Eigen::Matrix2d::Identity();
     const Eigen::Matrix2d inv = cov.inverse();
     const double norm = w / (2.0 * std::numbers::pi * std::sqrt(cov.determinant()));
     const Eigen::Vector2d mu = scene.valves[v].position_m;

@@ -1,5 +1,7 @@
 #include "server/live/view_server.h"
 
+#include <sys/socket.h>
+
 #include <cerrno>
 #include <charconv>
 #include <cmath>
@@ -66,6 +68,12 @@ ViewServer::ViewServer(ViewSource& source, ViewServerOptions options)
   http_->set_read_timeout(5, 0);
   http_->set_write_timeout(5, 0);
   http_->set_keep_alive_max_count(1000);
+  // SO_REUSEADDR only: cpp-httplib's default also sets SO_REUSEPORT, with which a second server
+  // binds the same port and takes half its requests.
+  http_->set_socket_options([](socket_t sock) {
+    int yes = 1;
+    setsockopt(sock, SOL_SOCKET, SO_REUSEADDR, &yes, sizeof yes);
+  });
   Routes();
   if (options_.port < 0 || options_.port > 65535) {
     throw maps::ScenarioError(fmt::format("--http = {}: must be a port in 0..65535 (0: any free one) or off", options_.port));
