@@ -2,7 +2,11 @@
 // same for the commands and the live view's buttons.
 #include "server/operator_requests.h"
 
+#include <cmath>
+
 #include <gtest/gtest.h>
+
+#include "maps/scenario/field_generator.h"
 
 namespace sage::server {
 namespace {
