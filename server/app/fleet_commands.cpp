@@ -1,7 +1,14 @@
 #include "server/app/fleet_commands.h"
 
+#include <arpa/inet.h>
+#include <netinet/in.h>
+#include <sys/socket.h>
+#include <unistd.h>
+
+#include <cerrno>
 #include <charconv>
 #include <csignal>
+#include <cstring>
 #include <filesystem>
 #include <string>
 
@@ -47,6 +54,25 @@ std::optional<int> PortOption(const std::string& flag, const std::string& text) 
     throw maps::ScenarioError(fmt::format("{} = {}: must be a port in 0..65535 (0: any free one) or off", flag, text));
   }
   return port;
+}
+
+void CheckPortFree(const std::string& flag, int port) {
+  if (port <= 0) return;  // any free port
+  const int fd = socket(AF_INET, SOCK_STREAM | SOCK_CLOEXEC, 0);
+  if (fd < 0) return;  // the server will say
+  sockaddr_in address{};
+  address.sin_family = AF_INET;
+  address.sin_port = htons(static_cast<std::uint16_t>(port));
+  address.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  int yes = 1;
+  setsockopt(fd, SOL_SOCKET, SO_REUSEADDR, &yes, sizeof yes);
+  const bool bound = bind(fd, reinterpret_cast<const sockaddr*>(&address), sizeof address) == 0;
+  const int error = errno;
+  close(fd);
+  if (!bound) {
+    throw maps::ScenarioError(fmt::format("{} = {}: cannot listen on 127.0.0.1:{}: {} (0 takes any free port)", flag,
+                                          port, port, std::strerror(error)));
+  }
 }
 
 int CmdServer(const ServerCommand& c) {

@@ -98,8 +98,8 @@ std::string WhatWasKept(const std::string& dir) {
 
 int Launch(const LaunchCommand& c) {
   // The live view's ports, checked before anything starts.
-  PortOption("--http", c.http);
-  PortOption("--foxglove", c.foxglove);
+  CheckPortFree("--http", PortOption("--http", c.http).value_or(0));
+  CheckPortFree("--foxglove", PortOption("--foxglove", c.foxglove).value_or(0));
   const bool resume = !c.resume_dir.empty();
   maps::Scenario scenario;
   std::string out_dir;

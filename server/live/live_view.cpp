@@ -70,7 +70,9 @@ int LiveView::foxglove_port() const { return foxglove_ ? foxglove_->port() : -1;
 
 bool LiveView::FrameDue() const {
   std::lock_guard lock(mailbox_mutex_);
-  return std::chrono::steady_clock::now() - last_publish_ >= std::chrono::duration<double>(options_.frame_period_s);
+  // Within 80 % of the period: the loop asks once a cycle, and cycles a period apart that come a
+  // little early would otherwise make every other one wait (five frames a second, not ten).
+  return std::chrono::steady_clock::now() - last_publish_ >= std::chrono::duration<double>(0.8 * options_.frame_period_s);
 }
 
 void LiveView::Publish(LiveFrame frame) {

@@ -13,6 +13,7 @@ import fs from "node:fs";
 import os from "node:os";
 import path from "node:path";
 import { chromium } from "playwright-core";
+import { execSync } from "node:child_process";
 import { CHROMIUM_FLAGS, freshDir, liveEndpoints, parseArgs, run, sleep } from "./common.mjs";
 
 const args = parseArgs(process.argv);
@@ -23,6 +24,14 @@ const runs = Number(args.runs || 1);
 const configs = (args.configs || "off,idle,viewer").split(",");
 const extra = args.vehicles ? ["-n", args.vehicles] : [];
 const load = () => os.loadavg().map((x) => x.toFixed(2)).join(" ");
+// CPU seconds used so far by every chromium process (user + system).
+const chromiumCpu = () => {
+  try {
+    return Number(execSync("ps -C chromium -o cputimes= | awk '{s+=$1} END {print s+0}'").toString());
+  } catch (e) {
+    return NaN;
+  }
+};
 
 function serverFigures(output) {
   const cycle = output.match(/server cycle ([0-9.]+) ms mean, ([0-9.]+) ms p99/);
@@ -54,6 +63,7 @@ async function once(config, k) {
     await page.goto(`http://127.0.0.1:${live.http_port}/#token=${live.token}`);
     await page.waitForFunction(() => window.sageView && window.sageView.ready, null, { timeout: 120000 });
     // One sample a second while the mission runs (the page's counters are over its last second).
+    const cpu0 = chromiumCpu(), wall0 = Date.now();
     while (launch.exitCode === null) {
       await sleep(1000);
       try {
@@ -64,6 +74,7 @@ async function once(config, k) {
         break;
       }
     }
+    result.chromium_cores = (chromiumCpu() - cpu0) / ((Date.now() - wall0) / 1000);
     await page.screenshot({ path: path.join(out, `viewer_${k}.png`) }).catch(() => {});
   }
   const exit = await launch.exited;
@@ -94,12 +105,13 @@ fs.writeFileSync(path.join(out, "live_view_bench.json"), JSON.stringify({ field,
 const rows = results.map((r) =>
   `| ${r.config} | ${r.run} | ${r.cycle_mean_ms} / ${r.cycle_p99_ms} | ${r.real_time_factor}x | ${r.lockstep} | ` +
   `${r.fps_median === undefined ? "-" : `${r.fps_min.toFixed(1)} / ${r.fps_median.toFixed(1)}`} | ` +
-  `${r.updates_median === undefined ? "-" : `${r.updates_min.toFixed(1)} / ${r.updates_median.toFixed(1)}`} | ${r.load_before} -> ${r.load_after} |`);
+  `${r.updates_median === undefined ? "-" : `${r.updates_min.toFixed(1)} / ${r.updates_median.toFixed(1)}`} | ` +
+  `${r.chromium_cores === undefined ? "-" : r.chromium_cores.toFixed(2)} | ${r.load_before} -> ${r.load_after} |`);
 const table = [
   `${field}, ${duration} s per run`,
   "",
-  "| live view | run | server cycle mean / p99 (ms) | real time | cycles in lockstep | page frames/s min / median | updates/s min / median | load average before -> after |",
-  "|---|---:|---:|---:|---:|---:|---:|---|",
+  "| live view | run | server cycle mean / p99 (ms) | real time | cycles in lockstep | page frames/s min / median | updates/s min / median | chromium (cores) | load average before -> after |",
+  "|---|---:|---:|---:|---:|---:|---:|---:|---|",
   ...rows,
 ].join("\n");
 fs.writeFileSync(path.join(out, "live_view_bench.md"), table + "\n");

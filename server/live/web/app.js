@@ -11,7 +11,10 @@
   const STATUS = ["alive", "stale", "lost", "left"];
   const HULL_M = 0.3;          // nose to centre: a BlueROV2 is 0.46 x 0.58 m
   const TABLE_ROWS = 100;      // valves listed at once (the filter finds the others)
-  const TABLE_PERIOD_MS = 500; // the table and the log are rewritten at most this often
+  const TABLE_PERIOD_MS = 1000; // the table and the log are rewritten at most this often
+  // Redraws a second at most: frames come ten a second and vehicles move smoothly between them at
+  // 30; more would only take CPU from the mission on the same machine.
+  const MAX_FPS = 30;
 
   // What the page counts, for people (the panel) and for tests (window.sageView).
   const view = {
@@ -25,6 +28,10 @@
     time: 0,
     ready: false,        // the scene and a first frame are in
     lastAnswer: null,    // the last operator answer {accepted, line}
+    drawMs: 0,           // a redraw's script time, and a frame's and the tables' (moving averages)
+    takeMs: 0,
+    tableMs: 0,
+    seabedMs: 0, blitMs: 0, overlayMs: 0, vehiclesMs: 0,  // the redraw's parts
   };
   window.sageView = view;
 
@@ -119,6 +126,13 @@
   // ---------- frames ----------
   function takeFrame(next) {
     const now = performance.now();
+    try {
+      takeFrameAt(next, now);
+    } finally {
+      view.takeMs = average(view.takeMs, performance.now() - now);
+    }
+  }
+  function takeFrameAt(next, now) {
     if (lastFrameAt > 0) frameInterval = Math.min(1000, Math.max(20, 0.7 * frameInterval + 0.3 * (now - lastFrameAt)));
     lastFrameAt = now;
     const moved = new Map();
@@ -174,8 +188,13 @@
     view.ready = true;
     if (next.heat_seq !== heatSeq) loadHeat(next.heat_seq, next.t);
     tableDirty = true;
-    updateStats();
+    // The panel's figures at most five times a second: each change lays the panel out again.
+    if (now - lastStats >= 200 || next.finished || scene.mode !== "live") {
+      lastStats = now;
+      updateStats();
+    }
   }
+  let lastStats = 0;
 
   function interpolate(p, now) {
     const a = Math.min(1, Math.max(0, (now - p.at) / frameInterval));
@@ -277,19 +296,33 @@
     if (Math.abs(event.clientX - drag.x) + Math.abs(event.clientY - drag.y) > 3) drag.moved = true;
   });
   window.addEventListener("mouseup", (event) => {
-    if (drag && !drag.moved && scene) pickValve(event.offsetX, event.offsetY);
+    if (drag && !drag.moved && scene && event.target === canvas) pick(event.offsetX, event.offsetY);
     drag = null;
     canvas.classList.remove("dragging");
   });
   canvas.addEventListener("dblclick", () => { zoom = 1; panX = 0; panY = 0; });
+  $("heat-mode").addEventListener("change", () => { seabedKey = ""; });
 
-  function pickValve(px, py) {
-    let best = -1, bestD = 12;
+  // A click takes the nearest vehicle (its id into the remove form) or valve (into the risk form).
+  function pick(px, py) {
+    let vehicle = null, best = -1, bestD = 12;
+    for (const v of frame ? frame.v : []) {
+      const p = positions.get(v[0]);
+      if (!p) continue;
+      const d = Math.hypot(sx(p.x1) - px, sy(p.y1) - py);
+      if (d < bestD) { bestD = d; vehicle = v; }
+    }
     scene.valves.forEach((v, i) => {
       const d = Math.hypot(sx(v[2]) - px, sy(v[3]) - py);
-      if (d < bestD) { bestD = d; best = i; }
+      if (d < bestD) { bestD = d; best = i; vehicle = null; }
     });
-    if (best >= 0) selectValve(best);
+    if (vehicle) {
+      $("remove-id").value = vehicle[0];
+      showAnswer({ accepted: true, line: `${vehicle[1]} (id ${vehicle[0]}) ${STATUS[vehicle[5]]} at ` +
+                                         `(${vehicle[2].toFixed(1)}, ${vehicle[3].toFixed(1)}) m` });
+    } else if (best >= 0) {
+      selectValve(best);
+    }
   }
 
   function selectValve(i) {
@@ -299,98 +332,166 @@
     tableDirty = true;
   }
 
+  // Three layers, so that a redraw is cheap with a thousand vehicles: the seabed (workspace,
+  // heat map, XTs, valves and their labels) drawn again only when the view moves or the risk or
+  // the labels change; the trails and the longest-waiting valves drawn again when a frame
+  // comes; the vehicles, moving between frames, every redraw.
+  const seabed = document.createElement("canvas");
+  const overlay = document.createElement("canvas");
+  let seabedKey = "", overlayKey = "";
+
+  function layer(canvasLayer) {
+    if (canvasLayer.width !== canvas.width || canvasLayer.height !== canvas.height) {
+      canvasLayer.width = canvas.width;
+      canvasLayer.height = canvas.height;
+    }
+    const g = canvasLayer.getContext("2d");
+    g.setTransform(1, 0, 0, 1, 0, 0);
+    g.clearRect(0, 0, canvasLayer.width, canvasLayer.height);
+    g.setTransform(dpr, 0, 0, dpr, 0, 0);
+    g.font = "11px system-ui, sans-serif";
+    g.textAlign = "center";
+    g.textBaseline = "middle";
+    return g;
+  }
+
+  const valveRadius = (s) => Math.max(3, scene.visit_radius_m * s);
+
+  function drawSeabed(s, labels) {
+    const g = layer(seabed);
+    g.fillStyle = "#0e2233";
+    g.fillRect(sx(0), sy(scene.height_m), scene.width_m * s, scene.height_m * s);
+    if (heat && $("heat-mode").value === "risk") {
+      g.imageSmoothingEnabled = true;
+      g.drawImage(heat.canvas, sx(0), sy(heat.ny * heat.cell_m), heat.nx * heat.cell_m * s, heat.ny * heat.cell_m * s);
+    }
+    g.strokeStyle = "#2c4a66";
+    g.lineWidth = 1;
+    g.strokeRect(sx(0), sy(scene.height_m), scene.width_m * s, scene.height_m * s);
+    g.fillStyle = "#4e5a68";
+    g.beginPath();
+    for (const [, cx, cy, w, h] of scene.structures) g.rect(sx(cx - w / 2), sy(cy + h / 2), w * s, h * s);
+    g.fill();
+    if (labels && scene.structures.length < 400) {
+      g.fillStyle = "#c9d3dc";
+      for (const [name, cx, cy, , h] of scene.structures) g.fillText(name, sx(cx), sy(cy + h / 2) - 7);
+    }
+    if (!frame) return;
+    // Valves coloured by their share of the risk against the largest, in 16 steps (a path each).
+    let largest = 0;
+    for (const v of frame.valves) largest = Math.max(largest, v[1]);
+    const radius = valveRadius(s);
+    const buckets = Array.from({ length: 16 }, () => []);
+    frame.valves.forEach((v, i) => {
+      const u = largest > 0 ? v[1] / largest : 0;
+      buckets[Math.min(15, Math.floor(u * 16))].push(i);
+    });
+    buckets.forEach((list, b) => {
+      if (!list.length) return;
+      g.fillStyle = riskColor((b + 0.5) / 16);
+      g.beginPath();
+      for (const i of list) {
+        const x = sx(scene.valves[i][2]), y = sy(scene.valves[i][3]);
+        g.moveTo(x + radius, y);
+        g.arc(x, y, radius, 0, 2 * Math.PI);
+      }
+      g.fill();
+    });
+    if (labels && scene.valves.length < 1500) {
+      g.fillStyle = "#ffffff";
+      frame.valves.forEach((v, i) => {
+        const wait = v[2] === null ? "never" : `${Math.round(frame.t - v[2])} s`;
+        g.fillText(`${scene.valves[i][0]} · ${wait}`, sx(scene.valves[i][2]), sy(scene.valves[i][3]) + radius + 8);
+      });
+    }
+  }
+
+  const WAITING_RINGS = 5;  // the valves that have waited longest, ringed
+  function drawOverlay(s) {
+    const g = layer(overlay);
+    const radius = valveRadius(s);
+    // Trails: one path for those flying, one for the greyed.
+    const status = new Map();
+    for (const v of frame.v) status.set(v[0], v[5]);
+    // A large fleet's trails with every other point: a thousand trails of sixteen were the
+    // costliest part of a redraw.
+    const step = frame.v.length > 300 ? 4 : 2;
+    for (const grey of [false, true]) {
+      g.strokeStyle = grey ? "rgba(140,150,160,0.4)" : "rgba(255,180,90,0.75)";
+      g.lineWidth = 1;
+      g.beginPath();
+      for (const [id, trail] of trails) {
+        if ((status.get(id) !== 0) !== grey || trail.length < 4) continue;
+        g.moveTo(sx(trail[0]), sy(trail[1]));
+        for (let k = step; k < trail.length; k += step) g.lineTo(sx(trail[k]), sy(trail[k + 1]));
+        const n = trail.length;
+        if ((n - 2) % step !== 0) g.lineTo(sx(trail[n - 2]), sy(trail[n - 1]));
+      }
+      g.stroke();
+    }
+    const waits = [];
+    frame.valves.forEach((v, i) => waits.push([v[2] === null ? Infinity : frame.t - v[2], i]));
+    waits.sort((a, b) => b[0] - a[0]);
+    g.strokeStyle = "#ff9c33";
+    g.lineWidth = 2;
+    g.setLineDash([4, 3]);
+    g.beginPath();
+    for (const [, i] of waits.slice(0, WAITING_RINGS)) {
+      const x = sx(scene.valves[i][2]), y = sy(scene.valves[i][3]);
+      g.moveTo(x + radius + 5, y);
+      g.arc(x, y, radius + 5, 0, 2 * Math.PI);
+    }
+    g.stroke();
+    g.setLineDash([]);
+    if (selectedValve >= 0) {
+      g.strokeStyle = "#ffffff";
+      g.beginPath();
+      g.arc(sx(scene.valves[selectedValve][2]), sy(scene.valves[selectedValve][3]), radius + 9, 0, 2 * Math.PI);
+      g.stroke();
+    }
+  }
+
   function draw() {
     const now = performance.now();
-    ctx.setTransform(dpr, 0, 0, dpr, 0, 0);
+    ctx.setTransform(1, 0, 0, 1, 0, 0);
     ctx.fillStyle = "#0a1622";
-    ctx.fillRect(0, 0, width, height);
+    ctx.fillRect(0, 0, canvas.width, canvas.height);
     if (!scene) return;
     const s = scale();
-    // The workspace and the heat map.
-    ctx.fillStyle = "#0e2233";
-    ctx.fillRect(sx(0), sy(scene.height_m), scene.width_m * s, scene.height_m * s);
-    if (heat && $("heat-mode").value === "risk") {
-      ctx.imageSmoothingEnabled = true;
-      ctx.drawImage(heat.canvas, sx(0), sy(heat.ny * heat.cell_m), heat.nx * heat.cell_m * s, heat.ny * heat.cell_m * s);
-    }
-    ctx.strokeStyle = "#2c4a66";
-    ctx.lineWidth = 1;
-    ctx.strokeRect(sx(0), sy(scene.height_m), scene.width_m * s, scene.height_m * s);
-    // XTs.
-    ctx.fillStyle = "#4e5a68";
-    ctx.beginPath();
-    for (const [, cx, cy, w, h] of scene.structures) ctx.rect(sx(cx - w / 2), sy(cy + h / 2), w * s, h * s);
-    ctx.fill();
     const labels = s > 12;
-    ctx.font = "11px system-ui, sans-serif";
-    ctx.textAlign = "center";
-    ctx.textBaseline = "middle";
-    if (labels && scene.structures.length < 400) {
-      ctx.fillStyle = "#c9d3dc";
-      for (const [name, cx, cy, , h] of scene.structures) ctx.fillText(name, sx(cx), sy(cy + h / 2) - 7);
+    const viewKey = `${canvas.width}x${canvas.height}|${zoom}|${panX}|${panY}`;
+    // Labels carry the time since each visit: the seabed again each second while they show.
+    const key = `${viewKey}|${frame ? frame.heat_seq : -1}|${heatSeq}|${$("heat-mode").value}|` +
+                `${labels && frame ? Math.floor(frame.t) : ""}|${frame ? 1 : 0}`;
+    if (key !== seabedKey) {
+      drawSeabed(s, labels);
+      seabedKey = key;
+      view.seabedMs = average(view.seabedMs, performance.now() - now);
     }
-    // Valves, coloured by share in 16 steps (one path a colour).
+    const t1 = performance.now();
+    ctx.drawImage(seabed, 0, 0);
+    view.blitMs = average(view.blitMs, performance.now() - t1);
     if (frame) {
-      let largest = 0;
-      for (const v of frame.valves) largest = Math.max(largest, v[1]);
-      const radius = Math.max(3, scene.visit_radius_m * s);
-      const buckets = Array.from({ length: 16 }, () => []);
-      frame.valves.forEach((v, i) => {
-        const u = largest > 0 ? v[1] / largest : 0;
-        buckets[Math.min(15, Math.floor(u * 16))].push(i);
-      });
-      buckets.forEach((list, b) => {
-        if (!list.length) return;
-        ctx.fillStyle = riskColor((b + 0.5) / 16);
-        ctx.beginPath();
-        for (const i of list) {
-          const x = sx(scene.valves[i][2]), y = sy(scene.valves[i][3]);
-          ctx.moveTo(x + radius, y);
-          ctx.arc(x, y, radius, 0, 2 * Math.PI);
-        }
-        ctx.fill();
-      });
-      if (labels && scene.valves.length < 1500) {
-        ctx.fillStyle = "#ffffff";
-        frame.valves.forEach((v, i) => {
-          const wait = v[2] === null ? "never" : `${Math.round(frame.t - v[2])} s`;
-          ctx.fillText(`${scene.valves[i][0]} · ${wait}`, sx(scene.valves[i][2]), sy(scene.valves[i][3]) + radius + 8);
-        });
+      const okey = `${viewKey}|${view.updates}|${selectedValve}`;
+      if (okey !== overlayKey) {
+        const t2 = performance.now();
+        drawOverlay(s);
+        overlayKey = okey;
+        view.overlayMs = average(view.overlayMs, performance.now() - t2);
       }
-      if (selectedValve >= 0) {
-        ctx.strokeStyle = "#ffffff";
-        ctx.lineWidth = 2;
-        ctx.beginPath();
-        ctx.arc(sx(scene.valves[selectedValve][2]), sy(scene.valves[selectedValve][3]), radius + 4, 0, 2 * Math.PI);
-        ctx.stroke();
-      }
-      drawFleet(now, s);
+      ctx.drawImage(overlay, 0, 0);
+      ctx.setTransform(dpr, 0, 0, dpr, 0, 0);
+      const t3 = performance.now();
+      drawVehicles(now, s);
+      view.vehiclesMs = average(view.vehiclesMs, performance.now() - t3);
     }
+    ctx.setTransform(dpr, 0, 0, dpr, 0, 0);
     drawScaleBar(s);
     view.frames++;
   }
 
-  function drawFleet(now, s) {
-    const status = new Map();
-    for (const v of frame.v) status.set(v[0], v[5]);
-    // Trails: one path for the live ones, one for the greyed.
-    for (const grey of [false, true]) {
-      ctx.strokeStyle = grey ? "rgba(140,150,160,0.4)" : "rgba(255,180,90,0.75)";
-      ctx.lineWidth = 1.2;
-      ctx.beginPath();
-      for (const [id, trail] of trails) {
-        if ((status.get(id) !== 0) !== grey || trail.length < 4) continue;
-        ctx.moveTo(sx(trail[0]), sy(trail[1]));
-        for (let k = 2; k < trail.length; k += 2) ctx.lineTo(sx(trail[k]), sy(trail[k + 1]));
-        const p = positions.get(id);
-        if (p && !grey) {
-          const [x, y] = interpolate(p, now);
-          ctx.lineTo(sx(x), sy(y));
-        }
-      }
-      ctx.stroke();
-    }
-    // Vehicles: a triangle along the heading, at least 6 px; alive orange, the others grey.
+  // Vehicles: a triangle along the heading, at least 6 px; flying ones orange, the others grey.
+  function drawVehicles(now, s) {
     const size = Math.max(6, HULL_M * s);
     const paths = [new Path2D(), new Path2D(), new Path2D(), new Path2D()];
     for (const v of frame.v) {
@@ -411,6 +512,8 @@
       ctx.fill(paths[k]);
     }
     if (s > 20 && frame.v.length <= 300) {
+      ctx.font = "11px system-ui, sans-serif";
+      ctx.textBaseline = "middle";
       ctx.fillStyle = "#ffe2bf";
       ctx.textAlign = "left";
       for (const v of frame.v) {
@@ -419,7 +522,6 @@
         const [x, y] = v[5] === 0 ? interpolate(p, now) : [p.x1, p.y1];
         ctx.fillText(v[5] === 0 ? v[1] : `${v[1]} (${STATUS[v[5]]})`, sx(x) + size + 2, sy(y));
       }
-      ctx.textAlign = "center";
     }
   }
 
@@ -433,16 +535,24 @@
     ctx.beginPath();
     ctx.moveTo(x, y - 4); ctx.lineTo(x, y); ctx.lineTo(x + metres * s, y); ctx.lineTo(x + metres * s, y - 4);
     ctx.stroke();
+    ctx.font = "11px system-ui, sans-serif";
+    ctx.textBaseline = "middle";
     ctx.fillStyle = "#d7e2ec";
     ctx.textAlign = "left";
     ctx.fillText(`${metres >= 1 ? metres : metres.toFixed(2)} m`, x + metres * s + 6, y - 2);
-    ctx.textAlign = "center";
   }
 
   // The page's own frame counter: every redraw counts; frames/s over the last second.
   let countFrom = performance.now(), countedFrames = 0, countedUpdates = 0;
+  const average = (old, x) => (old === 0 ? x : 0.9 * old + 0.1 * x);
+  let lastDraw = 0;
   function loop() {
-    draw();
+    const drawStart = performance.now();
+    if (drawStart - lastDraw >= 1000 / MAX_FPS - 2) {
+      lastDraw = drawStart;
+      draw();
+      view.drawMs = average(view.drawMs, performance.now() - drawStart);
+    }
     const now = performance.now();
     if (now - countFrom >= 1000) {
       view.fps = (view.frames - countedFrames) * 1000 / (now - countFrom);
@@ -454,7 +564,10 @@
       $("rate").textContent = view.updateRate.toFixed(1);
     }
     if (scene && scene.mode !== "live") advanceReplay(now);
-    if (tableDirty && now - lastTable >= TABLE_PERIOD_MS) renderTables(now);
+    if (tableDirty && now - lastTable >= TABLE_PERIOD_MS) {
+      renderTables(now);
+      view.tableMs = average(view.tableMs, performance.now() - now);
+    }
     requestAnimationFrame(loop);
   }
 
@@ -501,7 +614,7 @@
     if (scene.mode !== "live" && !sliding) $("slider").value = f.t;
   }
 
-  let lastTable = 0;
+  let lastTable = 0, eventsShown = -1, eventsListed = -1;
   function renderTables(now) {
     lastTable = now;
     tableDirty = false;
@@ -540,7 +653,10 @@
     }
     body.textContent = "";
     body.appendChild(fragment);
-    // The log, newest first.
+    // The log, newest first (written again only when it grew).
+    if (eventsSeen === eventsShown && events.length === eventsListed) return;
+    eventsShown = eventsSeen;
+    eventsListed = events.length;
     const list = $("events");
     const items = document.createDocumentFragment();
     for (let k = events.length - 1; k >= 0 && k >= events.length - 200; k--) {
