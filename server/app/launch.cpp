@@ -352,6 +352,10 @@ int Launch(const LaunchCommand& c) {
                            "remove ID | ") +
                (c.point_latest ? std::string("sage stop (they find this mission through runs/latest)")
                                : fmt::format("sage stop, each with --mission {}", out_dir)));
+  if (c.http != "off") {
+    terminal.Log("launch: or in a browser on this machine, at the address of the server's 'live view' line (its token "
+                 "is also in " + (fs::path(out_dir) / "live_token").string() + ")");
+  }
 
   std::size_t next_event = 0;
   while (next_event < scenario.fleet_events.size() && scenario.fleet_events[next_event].time_s <= resumed_at) ++next_event;

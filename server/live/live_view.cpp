@@ -52,15 +52,22 @@ LiveView::LiveView(LiveScene scene, LiveViewOptions options)
 
 LiveView::~LiveView() {
   Close("the mission has ended");
+  // The last frame (the mission's end) is published first, and the pages' streams get a moment
+  // to send it before the servers stop.
   {
     std::lock_guard lock(mailbox_mutex_);
     stop_ = true;
   }
   mailbox_cv_.notify_all();
+  if (publisher_.joinable()) publisher_.join();
+  {
+    std::lock_guard lock(published_mutex_);
+    closed_streams_ = true;
+  }
   published_cv_.notify_all();
+  std::this_thread::sleep_for(std::chrono::milliseconds(200));
   http_.reset();
   foxglove_.reset();
-  if (publisher_.joinable()) publisher_.join();
 }
 
 std::string LiveView::PageUrl() const { return http_ ? http_->Url() : std::string(); }
@@ -120,6 +127,11 @@ ActionAnswer LiveView::Act(const ActionRequest& request) {
   return answer.get();
 }
 
+bool LiveView::closed() const {
+  std::lock_guard lock(published_mutex_);
+  return closed_streams_;
+}
+
 std::uint64_t LiveView::frames_published() const {
   std::lock_guard lock(published_mutex_);
   return seq_;
@@ -128,7 +140,7 @@ std::uint64_t LiveView::frames_published() const {
 std::shared_ptr<const std::string> LiveView::NextFrame(std::uint64_t after_seq, bool with_trails,
                                                        std::chrono::milliseconds wait, std::uint64_t* seq) {
   std::unique_lock lock(published_mutex_);
-  published_cv_.wait_for(lock, wait, [&] { return seq_ > after_seq || stop_; });
+  published_cv_.wait_for(lock, wait, [&] { return seq_ > after_seq || closed_streams_; });
   if (seq_ <= after_seq || !frame_) return nullptr;
   *seq = seq_;
   if (!with_trails) return frame_json_;

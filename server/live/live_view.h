@@ -87,6 +87,7 @@ class LiveView final : public ViewSource {
   std::string HeatJson(std::optional<double> t) override;
   ActionAnswer Act(const ActionRequest& request) override;
   bool live() const override { return true; }
+  bool closed() const override;
 
   /// Frames published, and frames the publisher skipped because a newer one came first.
   std::uint64_t frames_published() const;
@@ -131,6 +132,7 @@ class LiveView final : public ViewSource {
   std::shared_ptr<const std::string> heat_json_;
   std::shared_ptr<const HeatGrid> heat_;
   std::uint64_t skipped_ = 0;
+  bool closed_streams_ = false;  // the last frame is out: streams end
 
   std::thread publisher_;
   std::unique_ptr<ViewServer> http_;

@@ -183,6 +183,10 @@ void ViewServer::Routes() {
                      std::uint64_t seq = 0;
                      const std::shared_ptr<const std::string> frame =
                          source_.NextFrame(*last, *last == 0, std::chrono::milliseconds(1000), &seq);
+                     if (!frame && source_.closed()) {
+                       sink.done();
+                       return true;
+                     }
                      if (!frame) {
                        // A comment line: keeps the connection and finds a page that went away.
                        static constexpr char kKeepAlive[] = ": waiting for the mission\n\n";

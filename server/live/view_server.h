@@ -58,6 +58,8 @@ class ViewSource {
   virtual ActionAnswer Act(const ActionRequest& request) = 0;
   /// Live sources stream frames; a replay answers /api/frame?t= instead.
   virtual bool live() const = 0;
+  /// No frame will come any more (the mission has ended): streams end.
+  virtual bool closed() const { return false; }
 };
 
 struct ViewServerOptions {

@@ -183,7 +183,20 @@ int RunServerNode(const maps::Scenario& scenario, const ServerNodeOptions& optio
     live::LiveScene scene = live::SceneOf(scenario);
     scene.controller = ToString(options.controller);
     scene.profile = options.profile.empty() ? scenario.default_profile : options.profile;
-    live = std::make_unique<live::LiveView>(std::move(scene), view);
+    // A resumed mission listens where it listened (open pages reconnect by themselves), if it can.
+    const std::optional<LiveEndpoints> before = options.resume ? ReadLiveEndpoints(options.out_dir) : std::nullopt;
+    if (before && view.http_port == 0 && before->http_port > 0) view.http_port = before->http_port;
+    if (before && view.foxglove_port == 0 && before->foxglove_port > 0) view.foxglove_port = before->foxglove_port;
+    try {
+      live = std::make_unique<live::LiveView>(scene, view);
+    } catch (const maps::ScenarioError& e) {
+      if (!before) throw;
+      spdlog::warn("server: the live view cannot listen where it did before the outage ({}); it takes free ports",
+                   e.what());
+      view.http_port = options.http_port;
+      view.foxglove_port = options.foxglove_port;
+      live = std::make_unique<live::LiveView>(scene, view);
+    }
     record.ShowIn(live.get());
     WriteLiveEndpoints(options.out_dir, live->http_port(), live->foxglove_port());
     if (options.http_port) spdlog::info("server: live view: {}", live->PageUrl());

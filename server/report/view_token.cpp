@@ -8,9 +8,11 @@
 #include <cerrno>
 #include <cstring>
 #include <filesystem>
+#include <fstream>
 #include <stdexcept>
 
 #include <fmt/format.h>
+#include <nlohmann/json.hpp>
 
 #include "maps/scenario/scenario.h"
 #include "server/report/atomic_write.h"
@@ -96,6 +98,18 @@ std::string MissionToken(const std::string& dir, bool reuse) {
     throw maps::ScenarioError(fmt::format("{}: cannot write: {}", path, std::strerror(why)));
   }
   return token;
+}
+
+std::optional<LiveEndpoints> ReadLiveEndpoints(const std::string& dir) {
+  std::ifstream in(fs::path(dir) / "live.json");
+  const nlohmann::json j = nlohmann::json::parse(in, nullptr, /*allow_exceptions=*/false);
+  if (!j.is_object()) return std::nullopt;
+  const auto port = [&](const char* key) {
+    return j.contains(key) && j[key].is_number_integer() && j[key].get<int>() > 0 && j[key].get<int>() <= 65535
+               ? j[key].get<int>()
+               : -1;
+  };
+  return LiveEndpoints{port("http_port"), port("foxglove_port")};
 }
 
 void WriteLiveEndpoints(const std::string& dir, int http_port, int foxglove_port) {

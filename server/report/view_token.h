@@ -4,6 +4,7 @@
 // RUN_DIR/live_token with mode 0600, written by the server at a new mission's start and read
 // again by a resumed one (an open page goes on working). RUN_DIR/live.json (no secret in it)
 // says where the servers listen, for scripts and tests.
+#include <optional>
 #include <string>
 
 namespace sage::server {
@@ -18,6 +19,13 @@ bool SameToken(const std::string& a, const std::string& b);
 /// the file if it cannot be written, or if the one there may be read by other users or is not a
 /// token.
 std::string MissionToken(const std::string& dir, bool reuse);
+
+/// Where a mission's servers listened (DIR/live.json), so that a resumed one listens there again
+/// and open pages reconnect; nullopt if there is no readable live.json.
+struct LiveEndpoints {
+  int http_port = -1, foxglove_port = -1;
+};
+std::optional<LiveEndpoints> ReadLiveEndpoints(const std::string& dir);
 
 /// Writes DIR/live.json: {"http_port": P, "foxglove_port": F, "pid": server pid} (-1: off).
 /// Throws std::runtime_error naming the file.

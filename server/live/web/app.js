@@ -108,7 +108,13 @@
 
   function connectStream() {
     const source = new EventSource("/api/stream?token=" + encodeURIComponent(token));
-    source.onopen = () => setLink("streaming", "live");
+    source.onopen = () => {
+      // A stream's first frame carries the server's latest events: the log starts again from
+      // them (a resumed server numbers its events anew).
+      events.length = 0;
+      eventsSeen = 0;
+      setLink("streaming", "live");
+    };
     source.onmessage = (message) => {
       const next = JSON.parse(message.data);
       takeFrame(next);
