@@ -257,7 +257,8 @@
 
   // ---------- the map ----------
   const canvas = $("map");
-  const ctx = canvas.getContext("2d");
+  // Opaque: the compositor need not blend the map with what is under it.
+  const ctx = canvas.getContext("2d", { alpha: false });
   let zoom = 1, panX = 0, panY = 0;  // screen = fit(world) * zoom + pan
   let dpr = 1, width = 0, height = 0;
   let fitScale = 1, fitX = 0, fitY = 0;

@@ -8,19 +8,15 @@
 #include <gtest/gtest.h>
 
 #include "maps/world.h"
+#include "tests/support/missions.h"
 
 namespace sage::live {
 namespace {
 
-const std::string kTwoXt = std::string(SAGE_SOURCE_DIR) + "/scenarios/two_xt.yaml";
+const std::string kTwoXt = testing::TwoXtPath();
 
 agents::StateReport State(int id, const std::string& name, std::int64_t cycle, Eigen::Vector2d position) {
-  agents::StateReport s;
-  s.id = id;
-  s.name = name;
-  s.cycle = cycle;
-  s.time_s = static_cast<double>(cycle) / 10.0;
-  s.state.position_m = position;
+  agents::StateReport s = testing::VehicleState(id, name, cycle, position);
   s.state.heading_rad = 0.25;
   return s;
 }

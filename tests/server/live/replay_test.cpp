@@ -17,45 +17,21 @@
 
 #include "server/mission.h"
 #include "server/report/run_directory.h"
+#include "tests/support/missions.h"
 
 namespace sage::live {
 namespace {
 
 namespace fs = std::filesystem;
-const std::string kTwoXt = std::string(SAGE_SOURCE_DIR) + "/scenarios/two_xt.yaml";
-
-std::string Read(const fs::path& path) {
-  std::ifstream in(path);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
-
-// Three vehicles on two_xt for 60 s; "late" joins at 45 s, rov2 is lost at 50 s; the operator
-// sets P4 to 6 at about 20 s.
-maps::Scenario Eventful() {
-  maps::Scenario s = maps::WithDuration(maps::WithVehicleCount(maps::LoadScenario(kTwoXt), 3), 60.0);
-  maps::FleetEvent join;
-  join.time_s = 45.0;
-  join.kind = maps::FleetEvent::Kind::kJoin;
-  join.vehicle = s.vehicles[0];
-  join.vehicle.name = "late";
-  join.vehicle.start_m = {4.8, 0.6};
-  maps::FleetEvent lose;
-  lose.time_s = 50.0;
-  lose.kind = maps::FleetEvent::Kind::kLose;
-  lose.vehicle.name = s.vehicles[1].name;
-  s.fleet_events = {join, lose};
-  s.Validate();
-  return s;
-}
+using testing::EventfulTwoXt;
+std::string Read(const fs::path& path) { return testing::ReadText(path); }
 
 class ReplayTest : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
     dir_ = new fs::path(fs::temp_directory_path() / ("sage_replay_test_" + std::to_string(getpid())));
     fs::remove_all(*dir_);
-    const maps::Scenario s = Eventful();
+    const maps::Scenario s = EventfulTwoXt();
     server::RunDirectory run(dir_->string(), s);
     server::Mission mission(s, server::MissionOptions{"", server::ControllerKind::kErgodic, &run, false});
     while (mission.Step()) {
@@ -115,7 +91,7 @@ TEST_F(ReplayTest, ShowsWhoWasInTheMissionAndWhere) {
 
 TEST_F(ReplayTest, RiskAndVisitsAsTheMissionHadThem) {
   Replay replay(server::ReadRunRecord(dir_->string()));
-  const maps::Scenario s = Eventful();
+  const maps::Scenario s = EventfulTwoXt();
   const Eigen::VectorXd profile = s.ProfileWeights(s.ProfileOrThrow(""));
   EXPECT_DOUBLE_EQ(replay.FrameAt(10.0).valves[3].raw_weight, profile[3]);
   const LiveFrame later = replay.FrameAt(40.0);
