@@ -137,6 +137,11 @@ std::uint64_t LiveView::frames_published() const {
   return seq_;
 }
 
+double LiveView::publisher_ms_per_frame() const {
+  const std::uint64_t frames = digested_.load();
+  return frames == 0 ? 0.0 : static_cast<double>(digest_ns_.load()) * 1e-6 / static_cast<double>(frames);
+}
+
 std::shared_ptr<const std::string> LiveView::NextFrame(std::uint64_t after_seq, bool with_trails,
                                                        std::chrono::milliseconds wait, std::uint64_t* seq) {
   std::unique_lock lock(published_mutex_);
@@ -163,21 +168,25 @@ std::string LiveView::HeatJson(std::optional<double>) {
   return heat_json_ ? *heat_json_ : std::string("{\"seq\":0,\"nx\":0,\"ny\":0}");
 }
 
-// Trails: a point each trail_s / trail_points mission seconds, the last trail_points kept.
+// Trails: a point each trail_s / trail_points mission seconds, those of the last trail_s kept.
 void LiveView::Digest(LiveFrame& frame, std::vector<EventView>& events) {
   const double step = options_.trail_s / std::max(1, options_.trail_points);
-  const std::size_t kept = 2 * static_cast<std::size_t>(std::max(1, options_.trail_points));
   frame.trails.resize(frame.vehicles.size());
   for (std::size_t i = 0; i < frame.vehicles.size(); ++i) {
     const VehicleView& v = frame.vehicles[i];
     Trail& trail = trails_[v.id];
-    if (v.status != VehicleStatus::kLost && v.status != VehicleStatus::kLeft && frame.time_s - trail.last_s >= step) {
-      trail.points.push_back(v.x_m);
-      trail.points.push_back(v.y_m);
-      trail.last_s = frame.time_s;
-      while (trail.points.size() > kept) trail.points.pop_front();
+    const bool flying = v.status != VehicleStatus::kLost && v.status != VehicleStatus::kLeft;
+    if (flying && (trail.points.empty() || frame.time_s - trail.points.back().time_s >= step)) {
+      trail.points.push_back({frame.time_s, v.x_m, v.y_m});
     }
-    frame.trails[i].assign(trail.points.begin(), trail.points.end());
+    while (!trail.points.empty() && trail.points.front().time_s < frame.time_s - options_.trail_s && flying) {
+      trail.points.pop_front();
+    }
+    frame.trails[i].clear();
+    for (const TrailPoint& p : trail.points) {
+      frame.trails[i].push_back(p.x_m);
+      frame.trails[i].push_back(p.y_m);
+    }
   }
   std::vector<double> shares(frame.valves.size());
   for (std::size_t i = 0; i < shares.size(); ++i) shares[i] = frame.valves[i].share;
@@ -234,8 +243,12 @@ void LiveView::PublisherLoop() {
       pending_frame_.reset();
       events.swap(pending_events_);
     }
+    const auto digest_start = std::chrono::steady_clock::now();
     Digest(frame, events);
     published_cv_.notify_all();
+    digest_ns_ += static_cast<std::uint64_t>(
+        std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now() - digest_start).count());
+    ++digested_;
     if (foxglove_) {
       std::shared_ptr<const LiveFrame> latest;
       std::shared_ptr<const HeatGrid> heat;

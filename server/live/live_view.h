@@ -33,8 +33,8 @@ struct LiveViewOptions {
   std::optional<int> foxglove_port = 0;  ///< foxglove.websocket.v1 (0: any free one); none: off
   std::string token;                     ///< the mission's token (both servers ask for it)
   double frame_period_s = 0.1;           ///< wall seconds between frames (10 a second)
-  double trail_s = 8.0;                  ///< mission seconds of each vehicle's trail
-  int trail_points = 16;                 ///< points of a trail
+  double trail_s = 4.0;                  ///< mission seconds of each vehicle's trail (the page's too)
+  int trail_points = 8;                  ///< points of a trail
 };
 
 /// An operator's request from the page, waiting for the server's loop to carry it out.
@@ -89,8 +89,11 @@ class LiveView final : public ViewSource {
   bool live() const override { return true; }
   bool closed() const override;
 
-  /// Frames published, and frames the publisher skipped because a newer one came first.
+  /// Frames published so far.
   std::uint64_t frames_published() const;
+  /// The publisher thread's time a frame (trails, log, JSON, heat map; the Foxglove messages
+  /// while someone subscribes), in ms: what the view takes from the machine besides the loop's copy.
+  double publisher_ms_per_frame() const;
 
  private:
   void PublisherLoop();
@@ -111,9 +114,12 @@ class LiveView final : public ViewSource {
   std::optional<std::string> closed_;
 
   // The publisher's own (only its thread touches them).
+  struct TrailPoint {
+    double time_s;
+    float x_m, y_m;
+  };
   struct Trail {
-    std::deque<float> points;  // x, y pairs
-    double last_s = -1e300;
+    std::deque<TrailPoint> points;  // oldest first
   };
   std::map<int, Trail> trails_;
   std::vector<double> heat_shares_;
@@ -133,6 +139,7 @@ class LiveView final : public ViewSource {
   std::shared_ptr<const HeatGrid> heat_;
   std::uint64_t skipped_ = 0;
   bool closed_streams_ = false;  // the last frame is out: streams end
+  std::atomic<std::uint64_t> digest_ns_{0}, digested_{0};
 
   std::thread publisher_;
   std::unique_ptr<ViewServer> http_;

@@ -17,7 +17,7 @@ namespace sage::live {
 
 class Replay final : public ViewSource {
  public:
-  explicit Replay(server::RunRecord record, double trail_s = 8.0, int trail_points = 16);
+  explicit Replay(server::RunRecord record, double trail_s = 4.0, int trail_points = 8);
 
   /// The frame at mission time t (clamped to the record).
   LiveFrame FrameAt(double t) const;

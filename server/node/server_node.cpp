@@ -307,6 +307,8 @@ int RunServerNode(const maps::Scenario& scenario, const ServerNodeOptions& optio
   constexpr double kRemovalWait_s = 5.0;
   std::vector<PendingRemoval> removals;
   const std::string run_dir = std::filesystem::absolute(options.out_dir).string();
+  double live_copy_ms = 0.0;  // the loop's part of the live view: copying the core's state
+  long live_frames = 0;
 
   // The mission's wall time runs from its first cycle's time (after the start-up lead).
   const auto wall_start = SteadyClock::now() + std::chrono::duration_cast<SteadyClock::duration>(
@@ -562,7 +564,12 @@ int RunServerNode(const maps::Scenario& scenario, const ServerNodeOptions& optio
     run.Tick(core);
     // The live view's frame, a copy of the core's state (at most ten a second); the view's own
     // thread does the rest.
-    if (live && live->FrameDue()) live->Publish(frames.Make(core, last_cycle_ms, /*finished=*/false));
+    if (live && live->FrameDue()) {
+      const auto copy_start = SteadyClock::now();
+      live->Publish(frames.Make(core, last_cycle_ms, /*finished=*/false));
+      live_copy_ms += std::chrono::duration<double, std::milli>(SteadyClock::now() - copy_start).count();
+      ++live_frames;
+    }
     last_cycle_ms = std::chrono::duration<double, std::milli>(SteadyClock::now() - cycle_start).count();
     total_cycle_ms += last_cycle_ms;
     max_cycle_ms = std::max(max_cycle_ms, last_cycle_ms);
@@ -586,6 +593,10 @@ int RunServerNode(const maps::Scenario& scenario, const ServerNodeOptions& optio
   publish_status(cycle, end_time, true);
   if (live) {
     live->Publish(frames.Make(core, last_cycle_ms, /*finished=*/true));
+    for (const PendingRemoval& p : removals) {
+      p.action->Answer(false, fmt::format("the mission ended before vehicle {} left (told to at t = {:.1f} s)", p.id,
+                                          p.told_at_s));
+    }
     live->Close("the mission has ended");
   }
 
@@ -603,6 +614,11 @@ int RunServerNode(const maps::Scenario& scenario, const ServerNodeOptions& optio
                (messages_in + messages_out) / std::max(1e-9, wall_s), bytes_in / 1e6, bytes_out / 1e6,
                (bytes_in + bytes_out) / 1e6 / std::max(1e-9, wall_s), total_cycle_ms / std::max(1L, cycles_run), p99_ms,
                max_cycle_ms, peak_rss_mb, options.out_dir, finish_s);
+  if (live) {
+    // What the live view cost: the loop's copy (inside the cycle times above) and its own thread.
+    spdlog::info("server: live view: {} frames, {:.3f} ms a frame in the server's loop, {:.3f} ms in the view's thread",
+                 live_frames, live_copy_ms / std::max(1L, live_frames), live->publisher_ms_per_frame());
+  }
   // In lockstep the mission is the one sage run flies with the same scenario and seed.
   spdlog::info("server: {} of {} cycles in lockstep with the vehicles{}", cycles_run - cycles_not_in_step, cycles_run,
                cycles_not_in_step == 0

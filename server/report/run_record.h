@@ -39,8 +39,8 @@ struct RunRecord {
   bool cut_line = false;                       ///< a last, unterminated line was left out
 };
 
-/// Reads DIR. Tracks keep at most `max_poses` poses in all (the pose period grows from 0.2 s to
+/// Reads DIR. Tracks keep at most `max_poses` poses in all, 24 bytes each (the pose period grows from 0.2 s to
 /// keep them so). Throws maps::ScenarioError with one line for anything missing or wrong.
-RunRecord ReadRunRecord(const std::string& dir, std::size_t max_poses = 20'000'000);
+RunRecord ReadRunRecord(const std::string& dir, std::size_t max_poses = 10'000'000);
 
 }  // namespace sage::server

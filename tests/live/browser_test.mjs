@@ -88,6 +88,11 @@ async function main() {
     appliedAt = Number((answer.match(/t = ([0-9.]+) s/) || [])[1]);
     await waitFor("the risk change in the event log", async () => (await page.textContent("#events")).includes(`${RISK_VALVE}: risk ${RISK_WEIGHT}`), 10000);
     check(true, "the event log shows the risk change");
+    // The screenshot the README shows: the fleet a few mission seconds after the change.
+    await page.waitForTimeout(2500);
+    const shot = path.join(out, "live_view.png");
+    await page.screenshot({ path: shot });
+    check(fs.statSync(shot).size > 20000, `screenshot saved: ${shot}`);
     // A bad request is refused with the CLI's rule.
     await page.fill("#risk-valve", "NOPE");
     await page.fill("#risk-weight", "1");
@@ -97,12 +102,6 @@ async function main() {
       return text && text !== "…" && !applied.test(text) ? text : null;
     }, 20000);
     check(/^valve = NOPE: not in this mission \(valves: P1, /.test(refused), `an unknown valve is refused: "${refused}"`);
-
-    // The screenshot the README shows.
-    await page.waitForTimeout(1000);
-    const shot = path.join(out, "live_view.png");
-    await page.screenshot({ path: shot });
-    check(fs.statSync(shot).size > 20000, `screenshot saved: ${shot}`);
 
     // Stop from the page: the server writes the run directory.
     await page.click("#stop-form button");

@@ -37,7 +37,11 @@ function serverFigures(output) {
   const cycle = output.match(/server cycle ([0-9.]+) ms mean, ([0-9.]+) ms p99/);
   const factor = output.match(/\(([0-9.]+)x real time\)/);
   const lockstep = output.match(/(\d+) of (\d+) cycles in lockstep/);
+  const live = output.match(/live view: (\d+) frames, ([0-9.]+) ms a frame in the server's loop, ([0-9.]+) ms in the view's thread/);
   return {
+    live_frames: live ? Number(live[1]) : 0,
+    loop_copy_ms: live ? Number(live[2]) : NaN,
+    view_thread_ms: live ? Number(live[3]) : NaN,
     cycle_mean_ms: cycle ? Number(cycle[1]) : NaN,
     cycle_p99_ms: cycle ? Number(cycle[2]) : NaN,
     real_time_factor: factor ? Number(factor[1]) : NaN,
@@ -104,14 +108,15 @@ for (let k = 0; k < runs; k++) {
 fs.writeFileSync(path.join(out, "live_view_bench.json"), JSON.stringify({ field, duration, results }, null, 2));
 const rows = results.map((r) =>
   `| ${r.config} | ${r.run} | ${r.cycle_mean_ms} / ${r.cycle_p99_ms} | ${r.real_time_factor}x | ${r.lockstep} | ` +
-  `${r.fps_median === undefined ? "-" : `${r.fps_min.toFixed(1)} / ${r.fps_median.toFixed(1)}`} | ` +
+  `${r.fps_median === undefined ? "-" : `${r.fps_min.toFixed(1)} / ${r.fps_p10.toFixed(1)} / ${r.fps_median.toFixed(1)}`} | ` +
   `${r.updates_median === undefined ? "-" : `${r.updates_min.toFixed(1)} / ${r.updates_median.toFixed(1)}`} | ` +
-  `${r.chromium_cores === undefined ? "-" : r.chromium_cores.toFixed(2)} | ${r.load_before} -> ${r.load_after} |`);
+  `${r.chromium_cores === undefined ? "-" : r.chromium_cores.toFixed(2)} | ` +
+  `${Number.isNaN(r.loop_copy_ms) ? "-" : `${r.loop_copy_ms} / ${r.view_thread_ms}`} | ${r.load_before} -> ${r.load_after} |`);
 const table = [
   `${field}, ${duration} s per run`,
   "",
-  "| live view | run | server cycle mean / p99 (ms) | real time | cycles in lockstep | page frames/s min / median | updates/s min / median | chromium (cores) | load average before -> after |",
-  "|---|---:|---:|---:|---:|---:|---:|---:|---|",
+  "| live view | run | server cycle mean / p99 (ms) | real time | cycles in lockstep | page frames/s min / p10 / median | updates/s min / median | chromium (cores) | view's ms a frame: loop / own thread | load average before -> after |",
+  "|---|---:|---:|---:|---:|---:|---:|---:|---:|---|",
   ...rows,
 ].join("\n");
 fs.writeFileSync(path.join(out, "live_view_bench.md"), table + "\n");

@@ -11,6 +11,8 @@
   const STATUS = ["alive", "stale", "lost", "left"];
   const HULL_M = 0.3;          // nose to centre: a BlueROV2 is 0.46 x 0.58 m
   const TABLE_ROWS = 100;      // valves listed at once (the filter finds the others)
+  const TRAIL_S = 4;           // mission seconds of each vehicle's trail (the server's too)
+  const TRAIL_POINTS = 8;
   const TABLE_PERIOD_MS = 1000; // the table and the log are rewritten at most this often
   // Redraws a second at most: frames come ten a second and vehicles move smoothly between them at
   // 30; more would only take CPU from the mission on the same machine.
@@ -41,7 +43,7 @@
   let positions = new Map();  // id -> {x0, y0, h0, x1, y1, h1, at}: drawn between the last two frames
   let frameInterval = 100;    // ms between the last frames
   let lastFrameAt = 0;
-  const trails = new Map();   // id -> [x, y, ...] (live: kept here from the frames)
+  const trails = new Map();   // id -> {xy: [x, y, ...], times: [t, ...]} (live: kept here from the frames)
   let heat = null;            // {nx, ny, cell_m, canvas}
   let heatSeq = -1;
   let selectedValve = -1;
@@ -155,20 +157,31 @@
     }
     positions = moved;
     if (next.trails) {
+      // The server's trails (a stream's first frame, every replay frame): evenly spaced over the
+      // last TRAIL_S of mission time.
       trails.clear();
-      next.v.forEach((v, i) => trails.set(v[0], next.trails[i].slice()));
+      next.v.forEach((v, i) => {
+        const xy = next.trails[i].slice();
+        const n = xy.length / 2;
+        const times = Array.from({ length: n }, (_, k) => next.t - TRAIL_S * (n - 1 - k) / Math.max(1, n - 1));
+        trails.set(v[0], { xy, times });
+      });
     } else {
-      // Live: a trail point each half mission second, eight seconds of them.
+      // Live: a point each TRAIL_S / TRAIL_POINTS of mission time, the last TRAIL_S of them.
       for (const [id, , x, y, , status] of next.v) {
         if (status >= 2) continue;
         let trail = trails.get(id);
-        if (!trail) trails.set(id, (trail = []));
-        const n = trail.length;
-        const last = trail.lastT === undefined ? -1e9 : trail.lastT;
-        if (next.t - last >= 0.5 || n === 0) {
-          trail.push(x, y);
-          trail.lastT = next.t;
-          if (trail.length > 32) trail.splice(0, trail.length - 32);
+        if (!trail) trails.set(id, (trail = { xy: [], times: [] }));
+        const last = trail.times.length ? trail.times[trail.times.length - 1] : -1e9;
+        if (next.t - last >= TRAIL_S / TRAIL_POINTS) {
+          trail.xy.push(x, y);
+          trail.times.push(next.t);
+        }
+        let old = 0;
+        while (old < trail.times.length && trail.times[old] < next.t - TRAIL_S) old++;
+        if (old > 0) {
+          trail.times.splice(0, old);
+          trail.xy.splice(0, 2 * old);
         }
       }
     }
@@ -420,19 +433,19 @@
     // Trails: one path for those flying, one for the greyed.
     const status = new Map();
     for (const v of frame.v) status.set(v[0], v[5]);
-    // A large fleet's trails with every other point: a thousand trails of sixteen were the
-    // costliest part of a redraw.
+    // A large fleet's trails with every other point: a thousand full trails were the costliest
+    // part of a redraw.
     const step = frame.v.length > 300 ? 4 : 2;
     for (const grey of [false, true]) {
       g.strokeStyle = grey ? "rgba(140,150,160,0.4)" : "rgba(255,180,90,0.75)";
       g.lineWidth = 1;
       g.beginPath();
-      for (const [id, trail] of trails) {
-        if ((status.get(id) !== 0) !== grey || trail.length < 4) continue;
-        g.moveTo(sx(trail[0]), sy(trail[1]));
-        for (let k = step; k < trail.length; k += step) g.lineTo(sx(trail[k]), sy(trail[k + 1]));
-        const n = trail.length;
-        if ((n - 2) % step !== 0) g.lineTo(sx(trail[n - 2]), sy(trail[n - 1]));
+      for (const [id, { xy }] of trails) {
+        if ((status.get(id) !== 0) !== grey || xy.length < 4) continue;
+        g.moveTo(sx(xy[0]), sy(xy[1]));
+        for (let k = step; k < xy.length; k += step) g.lineTo(sx(xy[k]), sy(xy[k + 1]));
+        const n = xy.length;
+        if ((n - 2) % step !== 0) g.lineTo(sx(xy[n - 2]), sy(xy[n - 1]));
       }
       g.stroke();
     }
