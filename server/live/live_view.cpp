@@ -1,5 +1,10 @@
 #include "server/live/live_view.h"
 
+#include <pthread.h>
+#include <sched.h>
+#include <sys/resource.h>
+#include <unistd.h>
+
 #include <algorithm>
 #include <cmath>
 
@@ -232,6 +237,12 @@ void LiveView::Digest(LiveFrame& frame, std::vector<EventView>& events) {
 }
 
 void LiveView::PublisherLoop() {
+  // The view yields to the mission: SCHED_BATCH (a frame handed over does not wake this thread
+  // in the loop's place: measured, the loop's copy had taken the publisher's whole work, 1.5 ms
+  // of a 10 ms cycle at 1,000 vehicles) and nice 5. Failing either only costs that.
+  sched_param batch{};
+  pthread_setschedparam(pthread_self(), SCHED_BATCH, &batch);
+  setpriority(PRIO_PROCESS, static_cast<id_t>(gettid()), 5);
   while (true) {
     LiveFrame frame;
     std::vector<EventView> events;

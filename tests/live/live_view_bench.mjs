@@ -8,13 +8,14 @@
 //
 //   build/bin/sage field generate --xts 300 --valves 1000 --vehicles 1000 --seed 1 -o /tmp/f1000.yaml
 //   node tests/live/live_view_bench.mjs --sage build/bin/sage --source-dir . --out /tmp/live_bench \
-//        --field /tmp/f1000.yaml --duration 60 --runs 2 [--configs off,idle,viewer] [--secured]
+//        --field /tmp/f1000.yaml --duration 60 --runs 2 [--configs off,idle,viewer,replay] [--secured]
+// (replay: the page alone, `sage view` of the run "off" just recorded, played at 1x, no mission running)
 import fs from "node:fs";
 import os from "node:os";
 import path from "node:path";
 import { chromium } from "playwright-core";
 import { execSync } from "node:child_process";
-import { CHROMIUM_FLAGS, freshDir, liveEndpoints, parseArgs, run, sleep } from "./common.mjs";
+import { CHROMIUM_FLAGS, freshDir, liveEndpoints, parseArgs, run, sleep, waitFor } from "./common.mjs";
 
 const args = parseArgs(process.argv);
 const out = freshDir(path.resolve(args.out));
@@ -101,9 +102,41 @@ async function once(config, k) {
   return result;
 }
 
+// The page alone, with no mission running: `sage view` of a run just recorded, played at 1x.
+async function replay(dir, k) {
+  const before = load();
+  const viewer = run(args.sage, ["view", dir]);
+  const url = await waitFor("sage view's address", () => (viewer.output.match(/open (http:\/\/\S+)/) || [])[1], 300000);
+  const browser = await chromium.launch({ executablePath: "/usr/bin/chromium", args: CHROMIUM_FLAGS });
+  const page = await browser.newPage({ viewport: { width: 1400, height: 820 } });
+  await page.goto(url);
+  await page.waitForFunction(() => window.sageView && window.sageView.ready, null, { timeout: 60000 });
+  await page.selectOption("#speed", "1");
+  await page.click("#play");
+  await sleep(3000);
+  const cpu0 = chromiumCpu(), wall0 = Date.now();
+  const fps = [];
+  for (let i = 0; i < Math.min(40, duration - 5); i++) {
+    await sleep(1000);
+    fps.push(await page.evaluate(() => window.sageView.fps));
+  }
+  const cores = (chromiumCpu() - cpu0) / ((Date.now() - wall0) / 1000);
+  await browser.close();
+  viewer.kill("SIGINT");
+  await viewer.exited;
+  fps.sort((a, b) => a - b);
+  const result = { config: "replay", run: k, load_before: before, load_after: load(), chromium_cores: cores,
+                   fps_min: fps[0], fps_p10: fps[Math.floor(0.1 * fps.length)], fps_median: fps[Math.floor(0.5 * fps.length)],
+                   loop_copy_ms: NaN, cycle_mean_ms: "-", cycle_p99_ms: "-", real_time_factor: "-", lockstep: "-" };
+  console.log(JSON.stringify(result));
+  return result;
+}
+
 const results = [];
 for (let k = 0; k < runs; k++) {
-  for (const config of configs) results.push(await once(config, k));
+  for (const config of configs) {
+    results.push(config === "replay" ? await replay(path.join(out, `off_${k}`), k) : await once(config, k));
+  }
 }
 fs.writeFileSync(path.join(out, "live_view_bench.json"), JSON.stringify({ field, duration, results }, null, 2));
 const rows = results.map((r) =>
