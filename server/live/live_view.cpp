@@ -45,11 +45,7 @@ LiveView::LiveView(LiveScene scene, LiveViewOptions options)
     if (options_.foxglove_port) foxglove_ = std::make_unique<FoxgloveBridge>(scene_, *options_.foxglove_port, options_.token);
   } catch (...) {
     http_.reset();
-    {
-      std::lock_guard lock(mailbox_mutex_);
-      stop_ = true;
-    }
-    mailbox_cv_.notify_all();
+    stop_ = true;
     publisher_.join();
     throw;
   }
@@ -59,12 +55,9 @@ LiveView::~LiveView() {
   Close("the mission has ended");
   // The last frame (the mission's end) is published first, and the pages' streams get a moment
   // to send it before the servers stop.
-  {
-    std::lock_guard lock(mailbox_mutex_);
-    stop_ = true;
-  }
-  mailbox_cv_.notify_all();
+  stop_ = true;
   if (publisher_.joinable()) publisher_.join();
+  delete mailbox_.exchange(nullptr);
   {
     std::lock_guard lock(published_mutex_);
     closed_streams_ = true;
@@ -80,32 +73,40 @@ std::string LiveView::FoxgloveUrl() const { return foxglove_ ? foxglove_->Url() 
 int LiveView::http_port() const { return http_ ? http_->port() : -1; }
 int LiveView::foxglove_port() const { return foxglove_ ? foxglove_->port() : -1; }
 
+namespace {
+std::int64_t SteadyNs() {
+  return std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now().time_since_epoch()).count();
+}
+}  // namespace
+
 bool LiveView::FrameDue() const {
-  std::lock_guard lock(mailbox_mutex_);
   // Within 80 % of the period: the loop asks once a cycle, and cycles a period apart that come a
   // little early would otherwise make every other one wait (five frames a second, not ten).
-  return std::chrono::steady_clock::now() - last_publish_ >= std::chrono::duration<double>(0.8 * options_.frame_period_s);
+  return static_cast<double>(SteadyNs() - last_publish_ns_.load(std::memory_order_relaxed)) >=
+         0.8e9 * options_.frame_period_s;
 }
 
 void LiveView::Publish(LiveFrame frame) {
-  {
-    std::lock_guard lock(mailbox_mutex_);
-    if (pending_frame_) ++skipped_;
-    pending_frame_ = std::move(frame);
-    last_publish_ = std::chrono::steady_clock::now();
+  auto* fresh = new LiveFrame(std::move(frame));
+  // A frame the view's thread has not taken yet is taken back: its events go with this one.
+  if (LiveFrame* stale = mailbox_.exchange(nullptr, std::memory_order_acq_rel)) {
+    ++skipped_;
+    loop_events_.insert(loop_events_.begin(), std::make_move_iterator(stale->new_events.begin()),
+                        std::make_move_iterator(stale->new_events.end()));
+    delete stale;
   }
-  mailbox_cv_.notify_one();
+  fresh->new_events = std::move(loop_events_);
+  loop_events_.clear();
+  mailbox_.store(fresh, std::memory_order_release);
+  last_publish_ns_.store(SteadyNs(), std::memory_order_relaxed);
 }
 
-void LiveView::OnEvent(EventView event) {
-  std::lock_guard lock(mailbox_mutex_);
-  pending_events_.push_back(std::move(event));
-}
+void LiveView::OnEvent(EventView event) { loop_events_.push_back(std::move(event)); }
 
 std::vector<std::shared_ptr<PendingAction>> LiveView::TakeActions() {
-  std::lock_guard lock(actions_mutex_);
   std::vector<std::shared_ptr<PendingAction>> out;
-  out.swap(actions_);
+  std::unique_lock lock(actions_mutex_, std::try_to_lock);
+  if (lock.owns_lock()) out.swap(actions_);
   return out;
 }
 
@@ -243,17 +244,19 @@ void LiveView::PublisherLoop() {
   sched_param batch{};
   pthread_setschedparam(pthread_self(), SCHED_BATCH, &batch);
   setpriority(PRIO_PROCESS, static_cast<id_t>(gettid()), 5);
+  // A look at the mailbox every few ms: the loop never wakes this thread itself.
+  constexpr auto kLook = std::chrono::milliseconds(5);
   while (true) {
-    LiveFrame frame;
-    std::vector<EventView> events;
-    {
-      std::unique_lock lock(mailbox_mutex_);
-      mailbox_cv_.wait(lock, [&] { return stop_ || pending_frame_.has_value(); });
-      if (!pending_frame_) return;  // stopping, nothing left
-      frame = std::move(*pending_frame_);
-      pending_frame_.reset();
-      events.swap(pending_events_);
+    const bool stopping = stop_.load();
+    std::unique_ptr<LiveFrame> taken(mailbox_.exchange(nullptr, std::memory_order_acq_rel));
+    if (!taken) {
+      if (stopping) return;  // and nothing left
+      std::this_thread::sleep_for(kLook);
+      continue;
     }
+    LiveFrame frame = std::move(*taken);
+    std::vector<EventView> events = std::move(frame.new_events);
+    frame.new_events.clear();
     const auto digest_start = std::chrono::steady_clock::now();
     Digest(frame, events);
     published_cv_.notify_all();

@@ -67,14 +67,16 @@ class LiveView final : public ViewSource {
   int http_port() const;
   int foxglove_port() const;
 
-  // ---- from the mission's loop ----
+  // ---- from the mission's loop (one thread); none of these waits for a lock ----
   /// Is a frame due (frame_period_s of wall time since the last)?
   bool FrameDue() const;
-  /// Hands over a frame; returns at once (the publisher takes the newest).
+  /// Hands over a frame with the events since the last; returns at once. The view's thread takes
+  /// the newest; a frame it had not taken yet is dropped (its events go with this one).
   void Publish(LiveFrame frame);
-  /// An event of the record, for the log.
+  /// An event of the record, for the log (handed over with the next frame).
   void OnEvent(EventView event);
-  /// The operators' requests from the page since the last call, to be answered.
+  /// The operators' requests from the page since the last call, to be answered (none this time
+  /// if a page is handing one in at this very moment: they come next cycle).
   std::vector<std::shared_ptr<PendingAction>> TakeActions();
   /// The mission has ended: requests still waiting, and any that come, are refused with that.
   void Close(const std::string& why);
@@ -102,12 +104,13 @@ class LiveView final : public ViewSource {
   LiveScene scene_;
   LiveViewOptions options_;
   std::string scene_json_;
-  mutable std::mutex mailbox_mutex_;  // the loop's side
-  std::condition_variable mailbox_cv_;
-  std::optional<LiveFrame> pending_frame_;
-  std::vector<EventView> pending_events_;
+  // The hand-over: the loop swaps a frame in, the view's thread swaps it out (it looks every
+  // few ms). No lock: a lock the view's low-priority thread held when preempted had kept the
+  // loop waiting.
+  std::atomic<LiveFrame*> mailbox_{nullptr};
+  std::vector<EventView> loop_events_;  // the loop's own, until its next frame
+  std::atomic<std::int64_t> last_publish_ns_{0};
   std::atomic<bool> stop_{false};
-  std::chrono::steady_clock::time_point last_publish_{};
 
   std::mutex actions_mutex_;
   std::vector<std::shared_ptr<PendingAction>> actions_;
@@ -137,7 +140,7 @@ class LiveView final : public ViewSource {
   std::uint64_t heat_seq_ = 0;
   std::shared_ptr<const std::string> heat_json_;
   std::shared_ptr<const HeatGrid> heat_;
-  std::uint64_t skipped_ = 0;
+  std::uint64_t skipped_ = 0;  // frames replaced before the view's thread took them (the loop's)
   bool closed_streams_ = false;  // the last frame is out: streams end
   std::atomic<std::uint64_t> digest_ns_{0}, digested_{0};
 
