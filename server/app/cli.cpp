@@ -19,6 +19,7 @@
 #include "server/app/options.h"
 #include "server/app/run_commands.h"
 #include "server/app/security_command.h"
+#include "server/app/view_command.h"
 #include "proto/dds_config.h"
 #include "proto/mission_clock.h"
 
@@ -141,6 +142,18 @@ void AddController(CLI::App& cmd, std::string& controller) {
       ->capture_default_str();
 }
 
+// The live view's two servers, on 127.0.0.1 behind the mission's token (RUN_DIR/live_token).
+void AddLiveView(CLI::App& cmd, std::string& http, std::string& foxglove) {
+  cmd.add_option("--http", http,
+                 "Port of the live view, a page on 127.0.0.1 that shows the fleet, the valves' risk and the events, and "
+                 "takes an operator's requests with the mission's token (0: any free port, printed; off: none)")
+      ->capture_default_str();
+  cmd.add_option("--foxglove", foxglove,
+                 "Port of the Foxglove WebSocket (foxglove.websocket.v1: vehicle poses, valves, the risk grid) on "
+                 "127.0.0.1, for Foxglove or Lichtblick with the printed address (0: any free port; off: none)")
+      ->capture_default_str();
+}
+
 void AddMissionDir(CLI::App& cmd, OperatorCommand& o) {
   cmd.add_option("--mission", o.mission_dir, "Run directory of the mission (default: $SAGE_MISSION or runs/latest)");
   AddNetwork(cmd, o.network, "the mission's, in mission.json");
@@ -250,6 +263,7 @@ int RunCli(int argc, char** argv) {
                    "Plain DDS: no authentication, no encryption, any local process can join the mission (default: DDS "
                    "Security on)")
       ->excludes(launch_security);
+  AddLiveView(*launch, launch_cmd.http, launch_cmd.foxglove);
   launch->add_option("--resume", launch_cmd.resume_dir,
                      "Bring back the mission whose server died, from the checkpoint in this run directory (no "
                      "scenario or overrides: the run's own are used); vehicles still flying carry on, the others are "
@@ -277,6 +291,17 @@ int RunCli(int argc, char** argv) {
                      "all in from the first cycle (sage launch gives 1 s + 1 ms per vehicle); not for --resume")
       ->check(CLI::Range(0.0, 600.0))
       ->capture_default_str();
+
+  AddLiveView(*server, server_cmd.http, server_cmd.foxglove);
+
+  ViewCommand view_cmd;
+  CLI::App* view = app.add_subcommand(
+      "view", "Watch a finished or partial mission in the live view's page, from its run directory, with a time "
+              "slider and play/pause; serves on 127.0.0.1 until Ctrl-C (the address, with its token, is printed)");
+  view->add_option("run_dir", view_cmd.run_dir, "Run directory (trajectory.csv, fleet_events.csv, risk_events.csv, "
+                                                "scenario.yaml, metrics.json)")
+      ->required();
+  view->add_option("--http", view_cmd.http, "Port of the page on 127.0.0.1 (0: any free port)")->capture_default_str();
 
   AgentsCommand agents_cmd;
   CLI::App* agents = app.add_subcommand("agents", "An agent host: several BlueROV2s in one Box2D world (sage launch "
@@ -493,6 +518,7 @@ int RunCli(int argc, char** argv) {
     }
     if (*server) return CmdServer(server_cmd);
     if (*agents) return CmdAgents(agents_cmd);
+    if (*view) return CmdView(view_cmd);
     // The mission as mission.json says, on this machine's network as the options say.
     const auto mission = [&] {
       MissionFile m = FindMission(op.mission_dir);

@@ -23,6 +23,7 @@
 #include "proto/messages.h"
 #include "proto/mission_clock.h"
 #include "proto/qos.h"
+#include "server/app/fleet_commands.h"
 #include "server/app/processes.h"
 #include "server/app/resume_plan.h"
 #include "server/app/security_command.h"
@@ -98,6 +99,9 @@ std::string WhatWasKept(const std::string& dir) {
 }  // namespace
 
 int Launch(const LaunchCommand& c) {
+  // The live view's ports, checked before anything starts.
+  CheckPortFree("--http", PortOption("--http", c.http).value_or(0));
+  CheckPortFree("--foxglove", PortOption("--foxglove", c.foxglove).value_or(0));
   const bool resume = !c.resume_dir.empty();
   maps::Scenario scenario;
   std::string out_dir;
@@ -222,6 +226,8 @@ int Launch(const LaunchCommand& c) {
     const double lead_s = 1.0 + 0.001 * static_cast<double>(scenario.vehicles.size());
     server_args.insert(server_args.end(), {"--start-in", Number(lead_s)});
   }
+  // The live view: the server prints its addresses (with the mission's token).
+  server_args.insert(server_args.end(), {"--http", c.http, "--foxglove", c.foxglove});
   server_args.insert(server_args.end(), common.begin(), common.end());
   int server_stdout = -1;
   const pid_t server = Spawn(server_args, "", false, &server_stdout);
@@ -354,6 +360,10 @@ int Launch(const LaunchCommand& c) {
                            "remove ID | ") +
                (c.point_latest ? std::string("sage stop (they find this mission through runs/latest)")
                                : fmt::format("sage stop, each with --mission {}", out_dir)));
+  if (c.http != "off") {
+    terminal.Log("launch: or in a browser on this machine, at the address of the server's 'live view' line (its token "
+                 "is also in " + (fs::path(out_dir) / "live_token").string() + ")");
+  }
 
   std::size_t next_event = 0;
   while (next_event < scenario.fleet_events.size() && scenario.fleet_events[next_event].time_s <= resumed_at) ++next_event;

@@ -40,6 +40,8 @@ struct LaunchCommand {
   bool point_latest = true;      ///< runs/latest points to the mission (off: --no-latest)
   std::string security_dir;      ///< DDS Security identities to use (default: new ones in DIR/security)
   bool insecure = false;         ///< plain DDS: no authentication, no encryption (--insecure)
+  std::string http = "0";        ///< the live view's port: "off", or 0..65535 (0: any free one)
+  std::string foxglove = "0";    ///< the Foxglove WebSocket's port: "off", or 0..65535
   const std::atomic<bool>* stop = nullptr;
 };
 
@@ -56,6 +58,14 @@ struct ServerCommand {
   double start_in_s = 0.0;       ///< wall seconds from start-up to the mission's t = 0 (a fresh mission)
   std::string security_dir;      ///< DDS Security directory: the server's identity there (empty: plain DDS)
   bool launched = false;         ///< started by sage launch, whose mission.json it is (else the server writes one)
+  std::string http = "0";        ///< the live view's port: "off", or 0..65535 (0: any free one)
+  std::string foxglove = "0";    ///< the Foxglove WebSocket's port: "off", or 0..65535
+};
+
+/// sage view
+struct ViewCommand {
+  std::string run_dir;           ///< a finished or partial run directory
+  std::string http = "0";        ///< the page's port, 0..65535 (0: any free one)
 };
 
 /// sage agents
