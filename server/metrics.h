@@ -231,7 +231,7 @@ class MetricsAccumulator {
   MetricsAccumulator(const maps::Scenario& scenario, const maps::SpectralBasis& basis, const maps::RiskField& risk,
                      const MetricsOptions& options = {});
   MetricsAccumulator(const MetricsAccumulator&) = default;
-  MetricsAccumulator& operator=(const MetricsAccumulator&) = default;
+  MetricsAccumulator& operator=(const MetricsAccumulator&) = delete;  // it refers to its scenario, basis and field
   /// Waits for the coverage helper, which writes into this accumulator's sums.
   ~MetricsAccumulator() { coverage_.Drop(); }
 
