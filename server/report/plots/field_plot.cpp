@@ -25,6 +25,8 @@ constexpr double kColourBarGap = 22.0, kColourBarWidth = 14.0, kRightZone = 140.
 constexpr double kLabelFont = 11.0, kLegendFont = 12.0, kCaptionFont = 11.0;
 // Event labels tried at most (the rest keep their markers and are counted in the caption).
 constexpr int kMaxEventLabels = 40;
+// Above this many valves the field is crowded: only the heaviest valves' labels are tried, first.
+constexpr std::size_t kCrowdedValves = 60, kMaxCrowdedValveLabels = 40;
 
 // Tracks: colours that are none of the markers' (red, green, orange) nor the risk's reds.
 constexpr const char* kTrackColours[] = {"#1f77b4", "#9467bd", "#17becf", "#8c564b", "#e377c2", "#7f7f7f",
@@ -425,8 +427,13 @@ std::string FieldPlotSvg(const MissionPlotInput& input, FieldPlotLayout* layout_
     layout.structures.push_back(box);
     placer.AddObstacle(box);
   }
+  // Valve dots shrink with the room each valve has (35,000 valves on 720 x 480 px: 0.8 px) so
+  // that they do not blacken the map, and fade below 1.5 px.
+  const double valve_dot_r =
+      std::clamp(0.25 * std::sqrt(map_w * map_h / std::max<std::size_t>(valves.size(), 1)), 0.8, 2.5);
+  const char* valve_dot_fill = valve_dot_r < 1.5 ? "fill=\"#222\" fill-opacity=\"0.55\"" : "fill=\"#222\"";
   for (const maps::Valve& v : valves) {
-    const Box dot = Box::Around(px(v.position_m.x()), py(v.position_m.y()), 3.5);
+    const Box dot = Box::Around(px(v.position_m.x()), py(v.position_m.y()), valve_dot_r + 1.0);
     layout.valve_markers.push_back(dot);
     placer.AddObstacle(dot);
   }
@@ -449,7 +456,7 @@ std::string FieldPlotSvg(const MissionPlotInput& input, FieldPlotLayout* layout_
       put("<circle cx=\"{:.1f}\" cy=\"{:.1f}\" r=\"{:.1f}\" fill=\"none\" stroke=\"#222\" stroke-width=\"0.8\" "
           "stroke-dasharray=\"3 2\"/>\n", x, y, visit_r);
     }
-    put("<circle cx=\"{:.1f}\" cy=\"{:.1f}\" r=\"{}\" fill=\"#222\"/>\n", x, y, valves.size() > 500 ? 1.5 : 2.5);
+    put("<circle cx=\"{:.1f}\" cy=\"{:.1f}\" r=\"{:.1f}\" {}/>\n", x, y, valve_dot_r, valve_dot_fill);
   }
   // Track starts and ends.
   for (const int v : drawn) {
@@ -484,26 +491,46 @@ std::string FieldPlotSvg(const MissionPlotInput& input, FieldPlotLayout* layout_
     return true;
   };
   int xt_labels_out = 0, valve_labels_out = 0, event_labels_out = 0;
-  for (std::size_t k = 0; k < scenario.structures.size(); ++k) {
-    const maps::ChristmasTree& xt = scenario.structures[k];
-    const Box& b = layout.structures[k];
-    const double w = TextWidth(xt.name, kLabelFont);
-    // Inside its own footprint when it fits (white on the footprint), else beside it.
-    const Box inside{0.5 * (b.x0 + b.x1) - 0.5 * w, 0.5 * (b.y0 + b.y1) - 0.5 * label_h, 0.5 * (b.x0 + b.x1) + 0.5 * w,
-                     0.5 * (b.y0 + b.y1) + 0.5 * label_h};
-    if (b.Grown(-2.0).Contains(inside)) {
-      write_label(inside, xt.name, xt.name, true, "white");
-    } else if (!place(b, xt.name, xt.name, "#222")) {
-      ++xt_labels_out;
+  int xt_labels_not_tried = 0;
+  const auto label_xts = [&](bool beside) {
+    for (std::size_t k = 0; k < scenario.structures.size(); ++k) {
+      const maps::ChristmasTree& xt = scenario.structures[k];
+      const Box& b = layout.structures[k];
+      const double w = TextWidth(xt.name, kLabelFont);
+      // Inside its own footprint when it fits (white on the footprint), else beside it.
+      const Box inside{0.5 * (b.x0 + b.x1) - 0.5 * w, 0.5 * (b.y0 + b.y1) - 0.5 * label_h, 0.5 * (b.x0 + b.x1) + 0.5 * w,
+                       0.5 * (b.y0 + b.y1) + 0.5 * label_h};
+      if (b.Grown(-2.0).Contains(inside)) {
+        write_label(inside, xt.name, xt.name, true, "white");
+      } else if (!beside) {
+        ++xt_labels_not_tried;
+      } else if (!place(b, xt.name, xt.name, "#222")) {
+        ++xt_labels_out;
+      }
     }
-  }
+  };
+  // On a crowded field (hundreds of valves) the riskiest valves matter more to a reader than the
+  // XTs' names: the kMaxCrowdedValveLabels heaviest are labelled first, and an XT is named only
+  // inside its footprint (hundreds of names beside XTs, with leader lines, read as noise).
+  const bool crowded = valves.size() > kCrowdedValves;
   std::vector<std::size_t> by_weight(valves.size());
   for (std::size_t i = 0; i < valves.size(); ++i) by_weight[i] = i;
   std::stable_sort(by_weight.begin(), by_weight.end(), [&](std::size_t a, std::size_t b) { return weights[a] > weights[b]; });
-  for (const std::size_t i : by_weight) {
-    // The weight as the run table prints it.
-    const std::string text = fmt::format("{} {:.2f}", valves[i].name, weights[i]);
-    if (!place(layout.valve_markers[i], text, valves[i].name, "#111")) ++valve_labels_out;
+  const std::size_t valve_labels_tried = crowded ? std::min(valves.size(), kMaxCrowdedValveLabels) : valves.size();
+  const auto label_valves = [&] {
+    for (std::size_t k = 0; k < valve_labels_tried; ++k) {
+      const std::size_t i = by_weight[k];
+      // The weight as the run table prints it.
+      const std::string text = fmt::format("{} {:.2f}", valves[i].name, weights[i]);
+      if (!place(layout.valve_markers[i], text, valves[i].name, "#111")) ++valve_labels_out;
+    }
+  };
+  if (crowded) {
+    label_valves();
+    label_xts(false);
+  } else {
+    label_xts(true);
+    label_valves();
   }
   // Risk changes at one valve share a label: "150 s: 0.45, 300 s: 0.10".
   std::map<std::string, std::string> risk_text;
@@ -564,9 +591,18 @@ std::string FieldPlotSvg(const MissionPlotInput& input, FieldPlotLayout* layout_
   }
   if (layout.labels_left_out > 0) {
     caption.push_back(fmt::format("{} of {} labels left out where they would cover another label, a structure or a marker "
-                                  "(XTs, then valves by weight, then events).",
+                                  "({}, then events).",
                                   Grouped(layout.labels_left_out),
-                                  Grouped(static_cast<long long>(layout.labels.size()) + layout.labels_left_out)));
+                                  Grouped(static_cast<long long>(layout.labels.size()) + layout.labels_left_out),
+                                  crowded ? "the heaviest valves, then XTs" : "XTs, then valves by weight"));
+  }
+  if (xt_labels_not_tried > 0) {
+    caption.push_back(fmt::format("{} XTs are too small at this scale to hold their names and are not named.",
+                                  Grouped(xt_labels_not_tried)));
+  }
+  if (valve_labels_tried < valves.size()) {
+    caption.push_back(fmt::format("Of {} valves, the {} of highest weight are labelled (where there is room).",
+                                  Grouped(static_cast<long long>(valves.size())), valve_labels_tried));
   }
   std::vector<std::string> caption_lines;
   for (const std::string& c : caption)

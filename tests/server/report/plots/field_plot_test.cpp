@@ -8,12 +8,14 @@
 #include <cmath>
 #include <map>
 #include <regex>
+#include <set>
 #include <sstream>
 #include <string>
 
 #include <fmt/format.h>
 #include <gtest/gtest.h>
 
+#include "maps/scenario/field_generator.h"
 #include "maps/scenario/scenario.h"
 #include "server/mission.h"
 #include "server/mission_core.h"
@@ -303,6 +305,55 @@ TEST(FieldPlot, RevisitChartSortedByLongestGap) {
     EXPECT_GT(found, at);
     at = found;
   }
+}
+
+// A crowded field (a generated 100-XT, 350-valve field): only the 40 heaviest valves are tried,
+// first; an XT is named only inside its footprint (none beside it with a leader line); the
+// labels still keep clear of each other, the XTs and the valve dots; the caption says so.
+TEST(FieldPlot, CrowdedFieldLabelsTheHeaviestValves) {
+  maps::FieldOptions options;
+  options.xts = 100;
+  options.valves = 350;
+  options.vehicles = 4;
+  const maps::Scenario field = maps::GenerateField(options);
+  const std::vector<maps::Valve> valves = field.AllValves();
+  MissionMetrics metrics;
+  Trajectory trajectory;
+  for (std::size_t i = 0; i < valves.size(); ++i) {
+    ValveMetrics v;
+    v.name = valves[i].name;
+    v.weight = 0.001 + 1e-5 * static_cast<double>((i * 37) % 350);  // distinct, in no order of the index
+    metrics.valves.push_back(v);
+  }
+  for (int v = 0; v < 4; ++v) {
+    trajectory.vehicle_names.push_back(fmt::format("rov{}", v + 1));
+    trajectory.samples.push_back({0.0, v, field.vehicles[v].start_m});
+  }
+  std::vector<std::pair<double, std::string>> by_weight;
+  for (const ValveMetrics& v : metrics.valves) by_weight.emplace_back(-v.weight, v.name);
+  std::sort(by_weight.begin(), by_weight.end());
+  std::set<std::string> heaviest;
+  for (std::size_t k = 0; k < 40; ++k) heaviest.insert(by_weight[k].second);
+
+  FieldPlotLayout layout;
+  const std::string svg = FieldPlotSvg({&field, &metrics, &trajectory, {}, 0, "crowded"}, &layout);
+  int valve_labels = 0;
+  for (std::size_t i = 0; i < layout.labels.size(); ++i) {
+    const FieldPlotLayout::Label& a = layout.labels[i];
+    if (a.owner.rfind("XT-", 0) == 0) {
+      EXPECT_TRUE(a.inside_owner) << a.text;
+    } else {
+      EXPECT_TRUE(heaviest.count(a.owner)) << a.text;
+      ++valve_labels;
+    }
+    for (std::size_t j = i + 1; j < layout.labels.size(); ++j) EXPECT_FALSE(a.box.Overlaps(layout.labels[j].box));
+    for (const Box& dot : layout.valve_markers) EXPECT_FALSE(a.box.Overlaps(dot));
+    if (!a.inside_owner) {
+      for (const Box& xt : layout.structures) EXPECT_FALSE(a.box.Overlaps(xt)) << a.text;
+    }
+  }
+  EXPECT_GT(valve_labels, 10);
+  EXPECT_EQ(Count(svg, "Of 350 valves, the 40 of highest weight are labelled"), 1);
 }
 
 // The record's copy stays within its budget however many vehicles and cycles: 10,000 vehicles
