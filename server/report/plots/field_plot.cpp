@@ -427,15 +427,28 @@ std::string FieldPlotSvg(const MissionPlotInput& input, FieldPlotLayout* layout_
     layout.structures.push_back(box);
     placer.AddObstacle(box);
   }
+  // On a crowded field (hundreds of valves) the riskiest valves matter more to a reader than the
+  // XTs' names: the kMaxCrowdedValveLabels heaviest are labelled first, and an XT is named only
+  // inside its footprint (hundreds of names beside XTs, with leader lines, read as noise).
+  const bool crowded = valves.size() > kCrowdedValves;
+  std::vector<std::size_t> by_weight(valves.size());
+  for (std::size_t i = 0; i < valves.size(); ++i) by_weight[i] = i;
+  std::stable_sort(by_weight.begin(), by_weight.end(), [&](std::size_t a, std::size_t b) { return weights[a] > weights[b]; });
+  const std::size_t valve_labels_tried = crowded ? std::min(valves.size(), kMaxCrowdedValveLabels) : valves.size();
   // Valve dots shrink with the room each valve has (35,000 valves on 720 x 480 px: 0.8 px) so
   // that they do not blacken the map, and fade below 1.5 px.
   const double valve_dot_r =
       std::clamp(0.25 * std::sqrt(map_w * map_h / std::max<std::size_t>(valves.size(), 1)), 0.8, 2.5);
-  const char* valve_dot_fill = valve_dot_r < 1.5 ? "fill=\"#222\" fill-opacity=\"0.55\"" : "fill=\"#222\"";
-  for (const maps::Valve& v : valves) {
-    const Box dot = Box::Around(px(v.position_m.x()), py(v.position_m.y()), valve_dot_r + 1.0);
+  const bool faded_dots = valve_dot_r < 1.5;
+  const char* valve_dot_fill = faded_dots ? "fill=\"#222\" fill-opacity=\"0.55\"" : "fill=\"#222\"";
+  // Faded dots (thousands of valves, a few px apart) leave no label room anywhere: there only the
+  // dots of the valves to be labelled are kept clear, and a label's white outline may hide others.
+  std::vector<char> keep_clear(valves.size(), faded_dots && crowded ? 0 : 1);
+  for (std::size_t k = 0; k < valve_labels_tried; ++k) keep_clear[by_weight[k]] = 1;
+  for (std::size_t i = 0; i < valves.size(); ++i) {
+    const Box dot = Box::Around(px(valves[i].position_m.x()), py(valves[i].position_m.y()), valve_dot_r + 1.0);
     layout.valve_markers.push_back(dot);
-    placer.AddObstacle(dot);
+    if (keep_clear[i]) placer.AddObstacle(dot);
   }
   for (const EventMarker& e : input.events) placer.AddObstacle(Box::Around(px(e.position_m.x()), py(e.position_m.y()), 7.0));
   for (const int v : drawn) {
@@ -509,14 +522,6 @@ std::string FieldPlotSvg(const MissionPlotInput& input, FieldPlotLayout* layout_
       }
     }
   };
-  // On a crowded field (hundreds of valves) the riskiest valves matter more to a reader than the
-  // XTs' names: the kMaxCrowdedValveLabels heaviest are labelled first, and an XT is named only
-  // inside its footprint (hundreds of names beside XTs, with leader lines, read as noise).
-  const bool crowded = valves.size() > kCrowdedValves;
-  std::vector<std::size_t> by_weight(valves.size());
-  for (std::size_t i = 0; i < valves.size(); ++i) by_weight[i] = i;
-  std::stable_sort(by_weight.begin(), by_weight.end(), [&](std::size_t a, std::size_t b) { return weights[a] > weights[b]; });
-  const std::size_t valve_labels_tried = crowded ? std::min(valves.size(), kMaxCrowdedValveLabels) : valves.size();
   const auto label_valves = [&] {
     for (std::size_t k = 0; k < valve_labels_tried; ++k) {
       const std::size_t i = by_weight[k];
@@ -601,8 +606,9 @@ std::string FieldPlotSvg(const MissionPlotInput& input, FieldPlotLayout* layout_
                                   Grouped(xt_labels_not_tried)));
   }
   if (valve_labels_tried < valves.size()) {
-    caption.push_back(fmt::format("Of {} valves, the {} of highest weight are labelled (where there is room).",
-                                  Grouped(static_cast<long long>(valves.size())), valve_labels_tried));
+    caption.push_back(fmt::format("Of {} valves, the {} of highest weight are labelled (where there is room){}.",
+                                  Grouped(static_cast<long long>(valves.size())), valve_labels_tried,
+                                  faded_dots ? "; a label's outline may hide the faded dots of other valves" : ""));
   }
   std::vector<std::string> caption_lines;
   for (const std::string& c : caption)
