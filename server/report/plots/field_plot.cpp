@@ -421,12 +421,6 @@ std::string FieldPlotSvg(const MissionPlotInput& input, FieldPlotLayout* layout_
   const Box scale_box{kLeft + 6.0, kTop + map_h - 30.0, kLeft + 18.0 + bar_px + 10.0, kTop + map_h - 4.0};
   const bool draw_scale_bar = map_h >= 40.0 && bar_px >= 20.0;
   if (draw_scale_bar) placer.AddObstacle(scale_box);
-  for (const maps::ChristmasTree& xt : scenario.structures) {
-    const Eigen::Vector2d lo = xt.center_m - 0.5 * xt.size_m;
-    const Box box{px(lo.x()), py(lo.y() + xt.size_m.y()), px(lo.x() + xt.size_m.x()), py(lo.y())};
-    layout.structures.push_back(box);
-    placer.AddObstacle(box);
-  }
   // On a crowded field (hundreds of valves) the riskiest valves matter more to a reader than the
   // XTs' names: the kMaxCrowdedValveLabels heaviest are labelled first, and an XT is named only
   // inside its footprint (hundreds of names beside XTs, with leader lines, read as noise).
@@ -435,6 +429,19 @@ std::string FieldPlotSvg(const MissionPlotInput& input, FieldPlotLayout* layout_
   for (std::size_t i = 0; i < valves.size(); ++i) by_weight[i] = i;
   std::stable_sort(by_weight.begin(), by_weight.end(), [&](std::size_t a, std::size_t b) { return weights[a] > weights[b]; });
   const std::size_t valve_labels_tried = crowded ? std::min(valves.size(), kMaxCrowdedValveLabels) : valves.size();
+  // XT footprints under 3 px on a crowded field (10,000 XTs a few px apart) are specks like the
+  // faded valve dots: a label may cover them, as the caption says.
+  int specks_not_kept_clear = 0;
+  for (const maps::ChristmasTree& xt : scenario.structures) {
+    const Eigen::Vector2d lo = xt.center_m - 0.5 * xt.size_m;
+    const Box box{px(lo.x()), py(lo.y() + xt.size_m.y()), px(lo.x() + xt.size_m.x()), py(lo.y())};
+    layout.structures.push_back(box);
+    if (crowded && std::max(box.width(), box.height()) < 3.0) {
+      ++specks_not_kept_clear;
+    } else {
+      placer.AddObstacle(box);
+    }
+  }
   // Valve dots shrink with the room each valve has (35,000 valves on 720 x 480 px: 0.8 px) so
   // that they do not blacken the map, and fade below 1.5 px.
   const double valve_dot_r =
@@ -608,7 +615,11 @@ std::string FieldPlotSvg(const MissionPlotInput& input, FieldPlotLayout* layout_
   if (valve_labels_tried < valves.size()) {
     caption.push_back(fmt::format("Of {} valves, the {} of highest weight are labelled (where there is room){}.",
                                   Grouped(static_cast<long long>(valves.size())), valve_labels_tried,
-                                  faded_dots ? "; a label's outline may hide the faded dots of other valves" : ""));
+                                  faded_dots && specks_not_kept_clear > 0
+                                      ? "; a label's outline may hide the faded dots of other valves and XT footprints under 3 px"
+                                  : faded_dots            ? "; a label's outline may hide the faded dots of other valves"
+                                  : specks_not_kept_clear ? "; a label's outline may hide XT footprints under 3 px"
+                                                          : ""));
   }
   std::vector<std::string> caption_lines;
   for (const std::string& c : caption)
