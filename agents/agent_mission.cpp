@@ -20,7 +20,7 @@ constexpr std::size_t kReportsKept = 8;
 }  // namespace
 
 AgentMission::AgentMission(const maps::World& world, const maps::Scenario& scenario, Guidance guidance)
-    : scenario_(scenario), host_(world, scenario, guidance) {}
+    : scenario_(scenario), host_(world, scenario, guidance), sensors_(world, scenario) {}
 
 void AgentMission::AddVehicle(VehicleId id, const maps::VehicleSpec& spec, const VehicleResume* resume) {
   maps::VehicleSpec placed = spec;
@@ -196,15 +196,20 @@ AgentMission::CycleOutput AgentMission::Step(std::int64_t cycle) {
     reported_.emplace_back(id, s.state.position_m);
     out.states.push_back(std::move(s));
   }
+  // The sensors look from the states just reported (vehicles holding still look too).
+  if (sensors_.any()) {
+    for (const StateReport& s : out.states) sensors_.Scan(s.id, cycle, s.state, out.scans);
+  }
   // Vehicles hold still until the server's first word.
   if (!snapshot_.has_value()) return out;
   for (auto& [id, member] : members_) {
     if (const std::optional<VehicleTarget> target = TargetOf(id, member, t)) host_.SetTarget(id, *target);
   }
   host_.Step(t);
+  auto member = members_.cbegin();  // the states are in the members' order
   for (StateReport& s : out.states) {
     s.command_mps = host_.LastCommand(s.id);
-    s.target_cycle = members_.at(s.id).steered_cycle;
+    s.target_cycle = (member++)->second.steered_cycle;
   }
   // Every coverage period on the mission clock (cycles 1, 1 + P, 1 + 2P, ...: the first cycle
   // that steers is 1), the same cycles for every host however late it joined, so that a fleet

@@ -19,6 +19,7 @@
 
 #include "agents/agent_host.h"
 #include "agents/fleet_messages.h"
+#include "agents/perception/leak_sensors.h"
 #include "maps/scenario/scenario.h"
 #include "maps/world.h"
 
@@ -71,6 +72,7 @@ class AgentMission {
   struct CycleOutput {
     std::vector<StateReport> states;        ///< every vehicle's state at the cycle's time
     std::vector<CoverageMessage> coverage;  ///< running coverage, when the coverage period is due
+    std::vector<ScanReport> scans;          ///< the leak sensors' scans of this cycle (vehicle, then sensor order)
   };
   /// One control cycle at mission time cycle / control rate: steer, step the physics, report.
   CycleOutput Step(std::int64_t cycle);
@@ -102,6 +104,7 @@ class AgentMission {
 
   const maps::Scenario& scenario_;
   AgentHost host_;
+  LeakSensors sensors_;
   std::map<VehicleId, Member> members_;
   std::optional<FleetSnapshot> snapshot_;
   bool new_server_ = false;

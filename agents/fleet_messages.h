@@ -40,6 +40,18 @@ struct CoverageMessage {
   maps::CoverageReport report;
 };
 
+/// One scan of one of a vehicle's leak sensors (rt/sage/detection): where it looked from and
+/// what it saw. No detection is news too: the server lowers the risk of what was in view.
+struct ScanReport {
+  VehicleId id = 0;
+  std::int64_t cycle = 0;      ///< the host's control cycle of the scan (its state's)
+  double time_s = 0.0;         ///< cycle / control rate
+  int sensor = 0;              ///< index into the scenario's sensors
+  Eigen::Vector2d position_m = Eigen::Vector2d::Zero();  ///< the vehicle's position at the cycle
+  double heading_rad = 0.0;    ///< and its heading: the sensor looks along it
+  std::vector<Eigen::Vector2d> detections_m;  ///< leak detections, workspace frame
+};
+
 /// Once a server cycle to every host (rt/sage/fleet_coverage): the field and the fleet's coverage.
 struct FleetSnapshot {
   std::uint64_t cycle = 0;     ///< the server cycle (>= 1)

@@ -230,6 +230,10 @@ class NearestMedoid {
     Points at;
     for (int c : medoids) at.push_back(dist.centre(c));
     span_ = Span(at);
+    Eigen::Vector2d lo = at[0], hi = at[0];
+    for (const Eigen::Vector2d& x : at) lo = lo.cwiseMin(x), hi = hi.cwiseMax(x);
+    centre_ = 0.5 * (lo + hi);
+    half_diagonal_ = 0.5 * (hi - lo).norm();
     cell_ = std::max(span_ / std::sqrt(static_cast<double>(at.size())), 1e-6);  // ~1 medoid a cell
     index_.emplace(at, cell_);
   }
@@ -254,7 +258,10 @@ class NearestMedoid {
         const double d = dist_(v, c);
         if (d < best_d) best = c, best_d = d;
       }
-      if (radius >= best_d || seen == medoids_.size() || lo > 4.0 * span_ + 4.0 * cell_) return best;
+      // Every medoid is within |x - centre| + half a diagonal of their box: past that all were
+      // looked at (the bound had been 4 spans, 4 um when the medoids coincide: a valve farther
+      // than that from them got no medoid at all, an index of -1; found by the scenario fuzzer).
+      if (radius >= best_d || seen == medoids_.size() || lo > (x - centre_).norm() + half_diagonal_ + cell_) return best;
     }
   }
 
@@ -262,6 +269,8 @@ class NearestMedoid {
   ValveDistances& dist_;
   const std::vector<int>& medoids_;
   double span_ = 0.0, cell_ = 0.0;
+  Eigen::Vector2d centre_ = Eigen::Vector2d::Zero();
+  double half_diagonal_ = 0.0;
   std::optional<maps::NearbyPoints> index_;
   std::vector<int> within_;
   std::vector<std::pair<double, int>> band_;
@@ -647,7 +656,7 @@ class Search {
       Candidate merged = Of(s, u);
       for (int v : s.order[t]) merged = Edit(std::move(merged), -1, v);
       if (splits.empty()) make_splits();
-      const auto best = std::min_element(splits.begin(), splits.end(), [&](const auto& x, const auto& y) {
+      const auto best = std::min_element(splits.begin(), splits.end(), [&, t = t](const auto& x, const auto& y) {
         return std::max(Lap(a, x.first), Lap(t, x.second)) < std::max(Lap(a, y.first), Lap(t, y.second));
       });
       if (Try(s, {a, t, u}, {best->first, best->second, merged})) {
@@ -851,6 +860,12 @@ FleetTourPlan Plan(const maps::OccupancyGrid& grid, const Points& valves_m, cons
       const int from = order[q], to = order[(q + 1) % size];
       out.tour.order.push_back(static_cast<int>(std::lower_bound(out.valves.begin(), out.valves.end(), from) -
                                                 out.valves.begin()));
+      if (!options.legs) {  // the lap as the search priced it
+        const double d = from == to ? 0.0 : dist(from, to);
+        out.tour.ok = out.tour.ok && d < kUnreachable;
+        out.tour.length_m += d;
+        continue;
+      }
       out.tour.legs.push_back(LegPath(grid, valves_m[from], valves_m[to], dist(from, to)));
       out.tour.ok = out.tour.ok && !out.tour.legs.back().empty();
       out.tour.length_m += PathLength(out.tour.legs.back());

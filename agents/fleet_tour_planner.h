@@ -107,13 +107,17 @@ struct FleetTourOptions {
   /// holds (n vehicles), so that a vehicle with the riskier valves gets fewer of them; 0 = the
   /// lap alone (an operator's tours).
   double risk_share = 0.0;
+  /// false: no A* legs (every tour's legs empty), each lap priced on the grid distances d the
+  /// search used (at most 8.2 % above the flown legs): for a caller that needs the split and its
+  /// laps, not a path to fly. The legs were a third of planning a 10,000-vehicle field.
+  bool legs = true;
 };
 
 /// One vehicle's share and its tour, ready for TourController(tour, grid, speed, wait, weights).
 struct VehicleTour {
   std::vector<int> valves;  ///< global valve indices, ascending; never empty
   Eigen::VectorXd weights;  ///< per valves[k]: w^alpha / sum over this tour (sums to 1)
-  Tour tour;                ///< order indexes `valves` (order[0] = 0); legs from PlanGridPath
+  Tour tour;                ///< order indexes `valves` (order[0] = 0); legs from PlanGridPath (none without options.legs)
   double lap_time_s = 0.0;  ///< sum_i |legs[i]| / speed + sum_k wait_per_lap_s * weights[k] (s)
 };
 

@@ -47,15 +47,6 @@ RegionBox RegionAround(const std::vector<Eigen::Vector2d>& points, const Workspa
   return box;
 }
 
-GaussianComponent NarrowedTo(const GaussianComponent& valve, double max_sigma_m) {
-  // The larger eigenvalue of the symmetric 2 x 2 [[a, b], [b, c]]: (a + c) / 2 + sqrt(((a - c) / 2)^2 + b^2).
-  const Eigen::Matrix2d& s = valve.covariance_m2;
-  const double half_trace = 0.5 * (s(0, 0) + s(1, 1)), half_diff = 0.5 * (s(0, 0) - s(1, 1));
-  const double widest = half_trace + std::sqrt(half_diff * half_diff + s(0, 1) * s(1, 0));
-  if (!(widest > max_sigma_m * max_sigma_m)) return valve;
-  return {valve.mean_m, s * (max_sigma_m * max_sigma_m / widest)};
-}
-
 RegionField::RegionField(const RegionBox& box, const std::vector<GaussianComponent>& valves,
                          const OccupancyGrid& blocked)
     : box_(box), basis_(box.size_m.x(), box.size_m.y(), box.order), risk_(basis_, InBox(box, valves)) {

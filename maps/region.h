@@ -31,13 +31,6 @@ struct RegionBox {
 RegionBox RegionAround(const std::vector<Eigen::Vector2d>& points, const Workspace& workspace, double margin_m,
                        double min_side_m, double resolution_m, int min_order, int max_order);
 
-/// A valve's Gaussian as a region's target aims it: scaled about its mean so that its widest
-/// standard deviation (the square root of the covariance's larger eigenvalue) is at most
-/// max_sigma_m; a narrower one is returned as it is. Only within the visit radius does a pass
-/// count as a look, so a target whose mass lies there spends the vehicle's time where looking
-/// happens rather than over the Gaussian's tails.
-GaussianComponent NarrowedTo(const GaussianComponent& valve, double max_sigma_m);
-
 /// A region's basis and its valves' risk on it (closed form, as the field's: each valve's
 /// Gaussian projected on the region's basis, with the water no hull can be in taken out).
 class RegionField {

@@ -25,6 +25,12 @@ Eigen::Matrix2d Inverse(const Eigen::Matrix2d& m) {
 
 }  // namespace
 
+GaussianComponent NarrowedTo(const GaussianComponent& valve, double max_sigma_m) {
+  const double widest = LargestEigenvalue(valve.covariance_m2);
+  if (!(widest > max_sigma_m * max_sigma_m)) return valve;
+  return {valve.mean_m, valve.covariance_m2 * (max_sigma_m * max_sigma_m / widest)};
+}
+
 RiskField::RiskField(const SpectralBasis& basis, std::vector<GaussianComponent> components)
     : components_(std::move(components)) {
   if (components_.empty()) throw std::invalid_argument("RiskField: needs at least one component");

@@ -22,6 +22,13 @@ struct GaussianComponent {
   Eigen::Matrix2d covariance_m2 = Eigen::Matrix2d::Identity();
 };
 
+/// A valve's Gaussian as a target aims at it (a region's): scaled about its mean so that its widest
+/// standard deviation (the square root of the covariance's larger eigenvalue) is at most
+/// max_sigma_m; a narrower one is returned as it is. Only within the visit radius does a pass
+/// count as a look, so a target whose mass lies there spends the vehicle's time where looking
+/// happens rather than over the Gaussian's tails.
+GaussianComponent NarrowedTo(const GaussianComponent& valve, double max_sigma_m);
+
 class RiskField {
  public:
   /// Caches the closed-form coefficient vector of each component on `basis`. Weights start equal.

@@ -88,7 +88,8 @@ struct RiskLayer::Impl {
     float applied;  // the value the caches account for
   };
 
-  Impl(const SpectralBasis& b, RiskField p, RiskLayerOptions o) : basis(b), prior(std::move(p)), options(o) {
+  Impl(const SpectralBasis& b, std::optional<RiskField> p, const RiskField* borrowed, RiskLayerOptions o)
+      : basis(b), owned_prior(std::move(p)), prior(owned_prior ? *owned_prior : *borrowed), options(o) {
     options.Validate();
     if (prior.coefficients().size() != basis.size()) {
       throw std::invalid_argument("RiskLayer: the prior has " + std::to_string(prior.coefficients().size()) +
@@ -174,6 +175,7 @@ struct RiskLayer::Impl {
       before = node->risk();
     }
     pending.try_emplace(IdOf(c), Pending{node, c, before});  // keeps the first `applied`
+    nonzero += (value != 0.0f ? 1 : 0) - (before != 0.0f ? 1 : 0);
     node->set_risk(value);
     mass_set += (static_cast<double>(value) - before) * BoxOf(c).area();
   }
@@ -243,8 +245,10 @@ struct RiskLayer::Impl {
   }
 
   SpectralBasis basis;
-  RiskField prior;
+  std::optional<RiskField> owned_prior;  // empty: the prior is a World's live field (OverWorld)
+  const RiskField& prior;
   RiskLayerOptions options;
+  std::int64_t nonzero = 0;  // leaves whose excess is not 0
   std::optional<OccupancyGrid> blocked;  // where Raise() puts nothing (ForWorld)
   std::unique_ptr<RiskOcTree> tree;
   int key_offset = 0;
@@ -263,13 +267,21 @@ struct RiskLayer::Impl {
 };
 
 RiskLayer::RiskLayer(const SpectralBasis& basis, RiskField prior, RiskLayerOptions options)
-    : impl_(std::make_unique<Impl>(basis, std::move(prior), options)) {}
+    : impl_(std::make_unique<Impl>(basis, std::move(prior), nullptr, options)) {}
 
 RiskLayer RiskLayer::ForWorld(const World& world, RiskLayerOptions options) {
   RiskLayer layer(world.basis(), world.risk(), options);
   layer.impl_->blocked = world.blocked();
   return layer;
 }
+
+RiskLayer RiskLayer::OverWorld(const World& world, RiskLayerOptions options) {
+  RiskLayer layer(std::make_unique<Impl>(world.basis(), std::nullopt, &world.risk(), options));
+  layer.impl_->blocked = world.blocked();
+  return layer;
+}
+
+RiskLayer::RiskLayer(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
 
 RiskLayer::~RiskLayer() = default;
 RiskLayer::RiskLayer(RiskLayer&&) noexcept = default;
@@ -278,7 +290,11 @@ RiskLayer& RiskLayer::operator=(RiskLayer&&) noexcept = default;
 double RiskLayer::resolution_m() const { return impl_->options.resolution_m; }
 const SpectralBasis& RiskLayer::basis() const { return impl_->basis; }
 const RiskField& RiskLayer::prior() const { return impl_->prior; }
-RiskField& RiskLayer::mutable_prior() { return impl_->prior; }
+RiskField& RiskLayer::mutable_prior() {
+  if (!impl_->owned_prior) throw std::logic_error("RiskLayer::mutable_prior: the prior is the World's live field");
+  return *impl_->owned_prior;
+}
+std::int64_t RiskLayer::nonzero_leaves() const { return impl_->nonzero; }
 std::int64_t RiskLayer::leaf_count() const { return static_cast<std::int64_t>(impl_->tree->getNumLeafNodes()); }
 double RiskLayer::excess_mass() const { return impl_->mass_set; }
 std::int64_t RiskLayer::leaf_terms_evaluated() const { return impl_->terms; }
@@ -351,6 +367,7 @@ void RiskLayer::Relax(double keep) {
     for (const Impl::LeafRef& leaf : b.leaves) {
       float v = static_cast<float>(keep * leaf.node->risk());
       if (std::abs(v) < kNegligibleExcess_per_m2) v = 0.0f;
+      m.nonzero += (v != 0.0f ? 1 : 0) - (leaf.node->risk() != 0.0f ? 1 : 0);
       leaf.node->set_risk(v);
     }
     m.EnsureSum(b);
@@ -363,6 +380,9 @@ void RiskLayer::Relax(double keep) {
 const Eigen::VectorXd& RiskLayer::coefficients() const {
   Impl& m = *impl_;
   m.Refresh();
+  // No excess anywhere: the prior's own vector, so a mission nothing raised flies as without a
+  // layer, bit for bit (adding the blocks' zero sums would turn a -0 into +0).
+  if (m.nonzero == 0) return m.prior.coefficients();
   m.coefficients = (m.prior.coefficients() + m.excess_k) / (1.0 + m.excess_mass);
   return m.coefficients;
 }
@@ -389,6 +409,28 @@ Eigen::VectorXd RiskLayer::RecomputedCoefficients() const {
     mass += v * box.area();
   }
   return (m.prior.coefficients() + excess) / (1.0 + mass);
+}
+
+Eigen::VectorXd RiskLayer::ExcessOn(const SpectralBasis& basis, const Eigen::Vector2d& origin_m,
+                                    const std::function<bool(const Eigen::Vector2d&)>& take, double& mass) const {
+  const Impl& m = *impl_;
+  Eigen::VectorXd sum = Eigen::VectorXd::Zero(basis.size());
+  mass = 0.0;
+  if (m.nonzero == 0) return sum;
+  for (const Impl::Block& b : m.blocks) {
+    for (const Impl::LeafRef& leaf : b.leaves) {
+      const double v = leaf.node->risk();
+      if (v == 0.0 || !take(m.CentreOf(leaf.cell))) continue;
+      const Box box = m.BoxOf(leaf.cell);
+      // In the other basis' frame, clipped to its box.
+      const Box local{std::max(0.0, box.x0 - origin_m.x()), std::min(basis.width_m(), box.x1 - origin_m.x()),
+                      std::max(0.0, box.y0 - origin_m.y()), std::min(basis.height_m(), box.y1 - origin_m.y())};
+      if (local.x1 <= local.x0 || local.y1 <= local.y0) continue;
+      AddBoxIntegral(basis, local, v, sum);
+      mass += v * local.area();
+    }
+  }
+  return sum;
 }
 
 double RiskLayer::Density(const Eigen::Vector2d& x_m) const {

@@ -20,6 +20,7 @@
 // a write) and risk 0. One owner, one thread: the const accessors bring the caches up to date.
 // No DDS and no files: the tree is written to and read from streams.
 #include <cstdint>
+#include <functional>
 #include <iosfwd>
 #include <memory>
 #include <string>
@@ -54,6 +55,11 @@ class RiskLayer {
   /// The mission's layer: World's basis and risk field (valves, blocked water taken out) as the
   /// prior; Raise() leaves out the water no hull can be in (World::blocked()).
   static RiskLayer ForWorld(const World& world, RiskLayerOptions options = {});
+  /// The same over World's live risk field itself, not a copy (a 35,000-valve field's per-valve
+  /// coefficients are 1.1 GB): the field's weights as its one writer sets them (the mission core,
+  /// through FleetServer) are the prior's at the next coefficients(). `world` outlives the layer;
+  /// mutable_prior() is not available on such a layer (the field's writer changes it).
+  static RiskLayer OverWorld(const World& world, RiskLayerOptions options = {});
   ~RiskLayer();
   RiskLayer(RiskLayer&&) noexcept;
   RiskLayer& operator=(RiskLayer&&) noexcept;
@@ -63,6 +69,7 @@ class RiskLayer {
   /// The prior. Changing its weights through mutable_prior() is seen by the next coefficients()
   /// (O(M K^2) once, RiskField's own cache).
   const RiskField& prior() const;
+  /// Throws std::logic_error on a layer made by OverWorld.
   RiskField& mutable_prior();
 
   /// Leaves in the tree (every leaf ever touched; a relaxed leaf stays, at 0).
@@ -72,6 +79,15 @@ class RiskLayer {
   double Excess(const Eigen::Vector2d& x_m) const;
   /// Integral of the excess over the workspace (mass, the prior's being 1), as last set.
   double excess_mass() const;
+  /// Leaves whose excess is not 0 now. With none, coefficients() is the prior's (bit for bit).
+  std::int64_t nonzero_leaves() const;
+  /// The excess of the non-zero leaves whose centre `take` accepts, projected on another basis
+  /// whose box starts at origin_m (workspace frame): sum of excess * integral over the leaf's box
+  /// (clipped to that box) of F_k, flat-indexed as `basis`; `mass` gets the matching integral of
+  /// the excess. What a partition's share or a region's box of the layer holds. O(non-zero
+  /// leaves x K^2).
+  Eigen::VectorXd ExcessOn(const SpectralBasis& basis, const Eigen::Vector2d& origin_m,
+                           const std::function<bool(const Eigen::Vector2d&)>& take, double& mass) const;
 
   /// Sets the excess density (1/m^2, finite) of the leaf containing x_m, creating the leaf; the
   /// tree stores it as a float, so the layer uses the float. O(1) here; its phi_k share is paid
@@ -119,6 +135,7 @@ class RiskLayer {
 
  private:
   struct Impl;
+  explicit RiskLayer(std::unique_ptr<Impl> impl);
   std::unique_ptr<Impl> impl_;
 };
 

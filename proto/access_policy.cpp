@@ -65,6 +65,8 @@ const std::vector<TopicAccess>& MissionTopicAccess() {
       // Operators reserve, remove and stop; the server orders hosts to retire a vehicle.
       {kFleetCommandTopic, {kOperator, kServer}, {kServer, kAgentHost, kViewer}},
       {kFleetCommandResultTopic, {kServer}, {kOperator, kViewer}},
+      // The vehicles' leak-sensor scans, fused by the server.
+      {kDetectionTopic, {kAgentHost}, {kServer, kViewer}},
   };
   return kRules;
 }

@@ -1,6 +1,9 @@
 #include "proto/dds_config.h"
 
+#include <arpa/inet.h>
 #include <fcntl.h>
+#include <ifaddrs.h>
+#include <netinet/in.h>
 #include <sys/file.h>
 #include <unistd.h>
 
@@ -27,7 +30,87 @@ std::string XmlEscaped(std::string_view text) {
   return out;
 }
 
+bool IsIpv4(const std::string& text) {
+  in_addr unused{};
+  return inet_pton(AF_INET, text.c_str(), &unused) == 1;
+}
+
+constexpr std::string_view kInternalXml =
+    // Ask for 4 MiB socket receive buffers (Cyclone asks for 1 MiB; the OS may grant less, which
+    // is accepted): a host's 250 states of a cycle arrive as one burst, and a secured receiver,
+    // slower to decrypt each one, overflowed 1 MiB (measured: 3,500-4,700 UDP receive-buffer
+    // drops in a 30 s secured 1,000-vehicle launch, each lost reliable sample waiting for a repair).
+    "<Internal><SocketReceiveBufferSize max=\"4MiB\"/></Internal>";
+
 }  // namespace
+
+std::string InterfaceAddress(const std::string& name) {
+  ifaddrs* list = nullptr;
+  if (getifaddrs(&list) != 0) return {};
+  std::string found;
+  for (const ifaddrs* a = list; a != nullptr && found.empty(); a = a->ifa_next) {
+    if (a->ifa_addr == nullptr || a->ifa_addr->sa_family != AF_INET) continue;
+    char text[INET_ADDRSTRLEN] = {};
+    const auto* in = reinterpret_cast<const sockaddr_in*>(a->ifa_addr);
+    if (inet_ntop(AF_INET, &in->sin_addr, text, sizeof text) == nullptr) continue;
+    if (name == a->ifa_name || name == text) found = text;
+  }
+  freeifaddrs(list);
+  return found;
+}
+
+std::string CycloneConfigXml(const NetworkConfig& network, int max_participants,
+                             const std::optional<SecurityIdentity>& security) {
+  if (max_participants < 1 || max_participants > kMaxLocalParticipants) {
+    throw std::invalid_argument("CycloneConfigXml: max_participants = " + std::to_string(max_participants) +
+                                ": must be in 1.." + std::to_string(kMaxLocalParticipants));
+  }
+  const std::string security_xml = security ? SecurityXml(*security) : std::string();
+  const bool loopback = network.interface_name == "lo";
+  const std::string interface_xml =
+      IsIpv4(network.interface_name) ? "<NetworkInterface address=\"" + network.interface_name + "\""
+                                     : "<NetworkInterface name=\"" + XmlEscaped(network.interface_name) + "\"";
+  std::string peers_xml;
+  if (!network.multicast) {
+    // This machine's own address first: the mission's processes here find each other through it.
+    std::string own = "127.0.0.1";
+    if (!loopback) {
+      own = InterfaceAddress(network.interface_name);
+      if (own.empty()) {
+        throw std::invalid_argument("network: interface = '" + XmlEscaped(network.interface_name.substr(0, 64)) +
+                                    "': no such interface with an IPv4 address on this machine");
+      }
+    }
+    peers_xml += "<Peer address=\"" + own + "\"/>";
+  }
+  for (const std::string& peer : network.peers) peers_xml += "<Peer address=\"" + XmlEscaped(peer) + "\"/>";
+  if (network.multicast) {
+    // lo lacks the MULTICAST flag, so Cyclone must be told to use multicast on it anyway; any
+    // other interface multicasts as its own flag says.
+    return "<CycloneDDS><Domain id=\"any\"><General><Interfaces>" + interface_xml +
+           (loopback ? " multicast=\"true\"" : "") +
+           "/></Interfaces><AllowMulticast>true</AllowMulticast></General>" +
+           (peers_xml.empty() ? std::string() : "<Discovery><Peers>" + peers_xml + "</Peers></Discovery>") +
+           std::string(kInternalXml) + security_xml + "</Domain></CycloneDDS>";
+  }
+  // Without multicast, discovery probes the unicast ports of participant indices 0..N on each
+  // peer, and each process claims the first free index. Cyclone's default N (9) admits only 9
+  // processes per domain on a host (measured); MaxAutoParticipantIndex = N admits N (measured:
+  // 19 -> 19 of 20 processes, 24 -> 20 of 20).
+  return "<CycloneDDS><Domain id=\"any\"><General><Interfaces>" + interface_xml +
+         "/></Interfaces><AllowMulticast>false</AllowMulticast></General><Discovery>"
+         "<ParticipantIndex>auto</ParticipantIndex><MaxAutoParticipantIndex>" +
+         std::to_string(max_participants) + "</MaxAutoParticipantIndex><Peers>" + peers_xml + "</Peers></Discovery>" +
+         std::string(kInternalXml) + security_xml + "</Domain></CycloneDDS>";
+}
+
+std::string CycloneConfigDocument(const NetworkConfig& network, int domain_id, int max_participants,
+                                  const std::optional<SecurityIdentity>& security) {
+  std::string xml = CycloneConfigXml(network, max_participants, security);
+  const std::string any = "<Domain id=\"any\">";
+  xml.replace(xml.find(any), any.size(), "<Domain id=\"" + std::to_string(domain_id) + "\">");
+  return "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n" + xml + "\n";
+}
 
 std::string SecurityXml(const SecurityIdentity& identity) {
   const std::pair<const char*, const std::string*> fields[] = {
@@ -64,39 +147,9 @@ std::string SecurityXml(const SecurityIdentity& identity) {
 
 std::string LocalhostConfigXml(int max_participants, LoopbackDiscovery discovery,
                                const std::optional<SecurityIdentity>& security) {
-  if (max_participants < 1 || max_participants > kMaxLocalParticipants) {
-    throw std::invalid_argument(
-        "LocalhostConfigXml: max_participants = " + std::to_string(max_participants) +
-        ": must be in 1.." + std::to_string(kMaxLocalParticipants));
-  }
-  const std::string security_xml = security ? SecurityXml(*security) : std::string();
-  // Ask for 4 MiB socket receive buffers (Cyclone asks for 1 MiB; the OS may grant less, which is
-  // accepted): a host's 250 states of a cycle arrive as one burst, and a secured receiver, slower
-  // to decrypt each one, overflowed 1 MiB (measured: 3,500-4,700 UDP receive-buffer drops in a
-  // 30 s secured 1,000-vehicle launch, each lost reliable sample waiting for a repair).
-  const std::string internal_xml = "<Internal><SocketReceiveBufferSize max=\"4MiB\"/></Internal>";
-  // Only `lo`: nothing leaves the machine and no other host's traffic reaches the mission.
-  if (discovery == LoopbackDiscovery::kMulticast) {
-    // lo lacks the MULTICAST flag, so Cyclone must be told to use multicast on it anyway.
-    return "<CycloneDDS><Domain id=\"any\"><General>"
-           "<Interfaces><NetworkInterface name=\"lo\" multicast=\"true\"/></Interfaces>"
-           "<AllowMulticast>true</AllowMulticast>"
-           "</General>" + internal_xml + security_xml + "</Domain></CycloneDDS>";
-  }
-  // Without multicast, discovery probes the unicast ports of participant indices 0..N on the
-  // peer 127.0.0.1, and each process claims the first free index. Cyclone's default N (9)
-  // admits only 9 processes per domain on a host (measured); MaxAutoParticipantIndex = N
-  // admits N (measured: 19 -> 19 of 20 processes, 24 -> 20 of 20).
-  return "<CycloneDDS><Domain id=\"any\"><General>"
-         "<Interfaces><NetworkInterface name=\"lo\"/></Interfaces>"
-         "<AllowMulticast>false</AllowMulticast>"
-         "</General><Discovery>"
-         "<ParticipantIndex>auto</ParticipantIndex>"
-         "<MaxAutoParticipantIndex>" +
-         std::to_string(max_participants) +
-         "</MaxAutoParticipantIndex>"
-         "<Peers><Peer address=\"127.0.0.1\"/></Peers>"
-         "</Discovery>" + internal_xml + security_xml + "</Domain></CycloneDDS>";
+  NetworkConfig loopback;
+  loopback.multicast = discovery == LoopbackDiscovery::kMulticast;
+  return CycloneConfigXml(loopback, max_participants, security);
 }
 
 int MissionDomainId(std::optional<int> explicit_domain, std::string_view run_key,

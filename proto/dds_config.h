@@ -1,9 +1,11 @@
 #pragma once
 // Cyclone DDS configuration for missions and tests on one machine: traffic on loopback only,
 // and one DDS domain per mission so that two missions (or a mission and a test) never meet.
+#include <cstddef>
 #include <optional>
 #include <string>
 #include <string_view>
+#include <vector>
 
 namespace sage::proto {
 
@@ -45,6 +47,41 @@ struct SecurityIdentity {
   std::string governance;      ///< S/MIME-signed governance document (governance.p7s)
   std::string permissions;     ///< S/MIME-signed permissions document (permissions.p7s)
 };
+
+/// Where a mission's DDS traffic goes. The default is this machine alone: the loopback interface,
+/// unicast discovery to 127.0.0.1, no multicast. For agent hosts on other machines: the interface
+/// that reaches them and, without multicast, the addresses of the other machines (peers).
+struct NetworkConfig {
+  /// A network interface by name ("eth0") or by one of its IPv4 addresses ("10.0.0.1").
+  std::string interface_name = "lo";
+  /// IPv4 addresses or host names where other participants of the mission run. Without
+  /// multicast, discovery probes these (and this machine's own address on the interface).
+  std::vector<std::string> peers;
+  /// SPDP discovery by multicast on the interface (and data as Cyclone chooses): no peer list
+  /// needed on a network that carries multicast; off, discovery is unicast to the peers only.
+  bool multicast = false;
+  bool operator==(const NetworkConfig&) const = default;
+};
+
+/// The IPv4 address of interface `name` on this machine (its first), or of the machine if
+/// `name` is an address of it; empty if it has none (no such interface, or not up here).
+std::string InterfaceAddress(const std::string& name);
+
+/// A Cyclone configuration (an XML fragment for dds_create_domain, or the CYCLONEDDS_URI of
+/// another tool) for `network`: its interface only; without multicast, unicast discovery to the
+/// peers and this machine's own address on the interface (so the mission's processes on this
+/// machine find each other), probing participant indices 0..max_participants of each; with
+/// multicast, Cyclone's SPDP multicast on the interface (and the peers, if any, as well). The
+/// <Security> element of `security` as in LocalhostConfigXml. Names are checked where they come
+/// in (maps::NetworkProblem) and XML-escaped here. Throws std::invalid_argument with one line for
+/// an interface with no IPv4 address on this machine.
+std::string CycloneConfigXml(const NetworkConfig& network, int max_participants,
+                             const std::optional<SecurityIdentity>& security = std::nullopt);
+
+/// The same as a whole Cyclone configuration document for domain `domain_id` (what a run
+/// directory's cyclonedds.xml holds, for `CYCLONEDDS_URI=file://...` of other tools).
+std::string CycloneConfigDocument(const NetworkConfig& network, int domain_id, int max_participants,
+                                  const std::optional<SecurityIdentity>& security = std::nullopt);
 
 /// The <Security> element of a Cyclone configuration for `identity`: Authentication (IdentityCA,
 /// IdentityCertificate, PrivateKey), AccessControl (PermissionsCA, Governance, Permissions) and

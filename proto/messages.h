@@ -29,6 +29,8 @@ using MissionStatus = sage_msgs_msg_dds__MissionStatus_;
 using FleetCommand = sage_msgs_msg_dds__FleetCommand_;
 /// The server's answer to an operator's FleetCommand (unkeyed).
 using FleetCommandResult = sage_msgs_msg_dds__FleetCommandResult_;
+/// One scan of a vehicle's leak sensor and its detections (key vehicle_id).
+using Detection = sage_msgs_msg_dds__Detection_;
 
 #define SAGE_PROTO_MESSAGE_TRAITS(Type, c_name, topic)                           \
   template <>                                                                    \
@@ -47,6 +49,7 @@ SAGE_PROTO_MESSAGE_TRAITS(RiskUpdateResult, sage_msgs_msg_dds__RiskUpdateResult_
 SAGE_PROTO_MESSAGE_TRAITS(MissionStatus, sage_msgs_msg_dds__MissionStatus_, kMissionStatusTopic);
 SAGE_PROTO_MESSAGE_TRAITS(FleetCommand, sage_msgs_msg_dds__FleetCommand_, kFleetCommandTopic);
 SAGE_PROTO_MESSAGE_TRAITS(FleetCommandResult, sage_msgs_msg_dds__FleetCommandResult_, kFleetCommandResultTopic);
+SAGE_PROTO_MESSAGE_TRAITS(Detection, sage_msgs_msg_dds__Detection_, kDetectionTopic);
 
 #undef SAGE_PROTO_MESSAGE_TRAITS
 

@@ -121,15 +121,29 @@ Qos RiskUpdateQos() {
 
 Qos FleetCommandResultQos() { return RiskUpdateResultQos(); }
 
+Qos DetectionQos() {
+  Qos qos;
+  // Reliable: each scan is evidence of its own (a lost scan that saw a leak is a leak seen later),
+  // unlike states and coverage, which the next sample supersedes. Keep-last 32 per vehicle: a few
+  // seconds of scans at the usual rates, so a server that stalls briefly still gets them, and a
+  // vehicle is never held back by a slow server for long.
+  SetReliable(qos);
+  SetKeepLast(qos, 32);
+  dds_qset_durability(qos.get(), DDS_DURABILITY_VOLATILE);
+  return qos;
+}
+
 Qos RiskUpdateResultQos() {
   Qos qos;
   // Transient-local: the operator's command may be matched by the server's writer a moment after
   // the server took its update and answered; the answer then still reaches it. Answers are
-  // matched by the update's stamp, so older ones are ignored. 16 deep for several sensors'
-  // updates in one cycle.
+  // matched by the update's stamp, so older ones are ignored. 256 deep: the server answers at
+  // most 16 updates of each sender in a cycle (the depth of RiskUpdateQos), so an operator's
+  // answer outlives the answers to a dozen flooding senders written in the same cycle (16 deep,
+  // one flood's answers pushed an operator's out of the history before it was read).
   SetReliable(qos);
-  SetKeepLast(qos, 16);
-  SetTransientLocal(qos, 16);
+  SetKeepLast(qos, 256);
+  SetTransientLocal(qos, 256);
   return qos;
 }
 

@@ -60,7 +60,7 @@ Qos FleetCoverageQos();
 /// keep-last 16 per source.
 Qos RiskUpdateQos();
 
-/// RiskUpdateResult (server -> the operator who sent the update): reliable, transient-local, keep-last 16.
+/// RiskUpdateResult (server -> the operator who sent the update): reliable, transient-local, keep-last 256.
 Qos RiskUpdateResultQos();
 
 /// MissionStatus (server -> everyone): reliable, transient-local, keep-last 1.
@@ -70,7 +70,11 @@ Qos MissionStatusQos();
 Qos FleetCommandQos();
 
 /// FleetCommandResult (server -> the operator who sent the command): reliable, transient-local,
-/// keep-last 16, like RiskUpdateResult.
+/// keep-last 256, like RiskUpdateResult.
 Qos FleetCommandResultQos();
+
+/// Detection (vehicles' sensor scans -> server), keyed by vehicle: reliable, volatile, keep-last
+/// 32 per vehicle.
+Qos DetectionQos();
 
 }  // namespace sage::proto

@@ -12,12 +12,14 @@ inline constexpr const char* kRiskUpdateResultTopic = "rt/sage/risk_update_resul
 inline constexpr const char* kMissionStatusTopic = "rt/sage/mission_status";
 inline constexpr const char* kFleetCommandTopic = "rt/sage/fleet_command";
 inline constexpr const char* kFleetCommandResultTopic = "rt/sage/fleet_command_result";
+inline constexpr const char* kDetectionTopic = "rt/sage/detection";
 
 /// Every topic of a mission: DDS Security's governance and permissions are derived from this list
 /// (proto/access_policy.h), so a topic added here without an access rule fails their tests.
-inline constexpr std::array<const char*, 9> kMissionTopics = {
+inline constexpr std::array<const char*, 10> kMissionTopics = {
     kVehicleStateTopic,   kVehicleCoverageTopic, kErgodicTargetTopic,
     kFleetCoverageTopic,  kRiskUpdateTopic,      kRiskUpdateResultTopic,
     kMissionStatusTopic,  kFleetCommandTopic,    kFleetCommandResultTopic,
+    kDetectionTopic,
 };
 }  // namespace sage::proto

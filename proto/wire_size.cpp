@@ -114,4 +114,12 @@ std::size_t WireBytes(const FleetCommandResult& m) {
   return c.Total();
 }
 
+std::size_t WireBytes(const Detection& m) {
+  Cdr c;
+  c.Primitive<std::uint32_t>().Primitive<std::int64_t>().Primitive<std::uint64_t>().Primitive<std::int64_t>();
+  c.Primitive<std::uint32_t>().Primitive<double>().Primitive<double>().Primitive<double>();
+  c.Sequence<double>(m.detections_xy_m._length);
+  return c.Total();
+}
+
 }  // namespace sage::proto

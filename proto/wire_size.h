@@ -24,5 +24,6 @@ std::size_t WireBytes(const RiskUpdateResult& m);
 std::size_t WireBytes(const MissionStatus& m);
 std::size_t WireBytes(const FleetCommand& m);
 std::size_t WireBytes(const FleetCommandResult& m);
+std::size_t WireBytes(const Detection& m);
 
 }  // namespace sage::proto

@@ -103,6 +103,10 @@ void FleetServer::UpdateEffectiveWeights(double time_s) {
     w = w.array().pow(scenario_.ergodic.weight_exponent);
     w /= w.sum();
   }
+  if (weight_factors_.size() == w.size()) {  // the risk loop: a valve just looked at weighs less
+    w = w.cwiseProduct(weight_factors_);
+    w /= w.sum();
+  }
   const maps::StarvationGuard& guard = scenario_.guard;
   if (guard.enabled) {
     const double heaviest = w.maxCoeff();

@@ -43,6 +43,9 @@ class FleetServer {
   /// Per valve, how long (s) it may go unvisited before the guard boosts it (empty: the
   /// scenario's revisit_bound_s for every valve).
   void SetRevisitBounds(Eigen::VectorXd bounds_s) { revisit_bounds_ = std::move(bounds_s); }
+  /// Per valve, a factor in (0, 1] the controllers' weights are scaled by before the guard (the
+  /// risk loop's evidence that no leak is there); empty: none. Taken at the next Cycle.
+  void SetWeightFactors(Eigen::VectorXd factors) { weight_factors_ = std::move(factors); }
 
   /// A vehicle joined (or was first heard of). Idempotent.
   void AddVehicle(int id, const std::string& name);
@@ -135,6 +138,7 @@ class FleetServer {
   std::vector<Eigen::Vector2d> valve_positions_;
   const VisitTracker* visits_ = nullptr;
   Eigen::VectorXd revisit_bounds_;
+  Eigen::VectorXd weight_factors_;
   std::map<int, VehicleRecord> vehicles_;
   Eigen::VectorXd raw_weights_;
   Eigen::VectorXd effective_;

@@ -62,10 +62,48 @@ VisitTracker::VisitTracker(std::vector<Eigen::Vector2d> valves, double visit_rad
       visit_radius_m_(visit_radius_m),
       rearm_radius_m_(rearm_radius_m),
       nearby_(valves_, visit_radius_m > 0.0 && std::isfinite(visit_radius_m) ? visit_radius_m : 1.0),
-      visit_times_(valves_.size()) {
+      visits_(valves_.size()),
+      watches_of_(valves_.size()) {
   if (!(visit_radius_m_ > 0.0) || !(rearm_radius_m_ >= visit_radius_m_)) {
     throw std::invalid_argument("VisitTracker: need 0 < visit_radius <= rearm_radius");
   }
+}
+
+void VisitTracker::ValveVisits::Add(double time_s) {
+  ++count;
+  const double none = -std::numeric_limits<double>::infinity();
+  if (folded_last_s != none && time_s < folded_last_s) {
+    // Older than every visit kept (a vehicle far behind the others): only a new first visit's gap
+    // is known; one between two folded visits splits a gap that is no longer known.
+    if (time_s < first_s) folded_max_gap_s = std::max(folded_max_gap_s, first_s - time_s);
+    first_s = std::min(first_s, time_s);
+    return;
+  }
+  first_s = std::min(first_s, time_s);
+  // Vehicles' samples may interleave out of time order (a late host over DDS): kept sorted.
+  recent.insert(std::upper_bound(recent.begin(), recent.end(), time_s), time_s);
+  if (recent.size() > kRecentVisits) {
+    const double oldest = recent.front();
+    if (folded_last_s != none) folded_max_gap_s = std::max(folded_max_gap_s, oldest - folded_last_s);
+    folded_last_s = oldest;
+    recent.erase(recent.begin());
+  }
+}
+
+void VisitTracker::EventWatch::Count(double visit_s) {
+  if (visit_s < time_s) {
+    ++before;
+    last_before_s = std::max(last_before_s, visit_s);
+  } else {
+    ++after;
+    first_after_s = std::min(first_after_s, visit_s);
+    last_after_s = std::max(last_after_s, visit_s);
+  }
+}
+
+void VisitTracker::Record(int valve, double time_s) {
+  visits_[valve].Add(time_s);
+  for (const std::size_t i : watches_of_[valve]) watches_[i].Count(time_s);
 }
 
 // The valves this vehicle had disarmed are re-armed once it is past rearm_radius of them; the
@@ -82,17 +120,29 @@ std::vector<int> VisitTracker::Update(int vehicle, const Eigen::Vector2d& positi
     const auto at = std::lower_bound(disarmed.begin(), disarmed.end(), i);
     if (at != disarmed.end() && *at == i) continue;  // still disarmed
     disarmed.insert(at, i);
-    // Vehicles' samples may interleave out of time order (a late host over DDS): keep each
-    // valve's visits sorted.
-    std::vector<double>& times = visit_times_[i];
-    times.insert(std::upper_bound(times.begin(), times.end(), time_s), time_s);
+    Record(i, time_s);
     visited.push_back(i);
   }
   return visited;
 }
 
-void VisitTracker::Restore(std::vector<std::vector<int>> disarmed, std::vector<std::vector<double>> visit_times) {
-  if (visit_times.size() != valves_.size()) throw std::invalid_argument("VisitTracker::Restore: wrong valve count");
+void VisitTracker::WatchAround(int valve, double time_s) {
+  EventWatch w;
+  w.valve = valve;
+  w.time_s = time_s;
+  const ValveVisits& v = visits_.at(static_cast<std::size_t>(valve));
+  // The visits no longer kept are older than every kept one: before the event (a mission watches
+  // an event when it happens, long before 64 later visits).
+  w.before = v.count - v.recent.size();
+  w.last_before_s = v.folded_last_s;
+  for (const double t : v.recent) w.Count(t);
+  watches_of_[static_cast<std::size_t>(valve)].push_back(watches_.size());
+  watches_.push_back(w);
+}
+
+void VisitTracker::Restore(std::vector<std::vector<int>> disarmed, std::vector<ValveVisits> visits,
+                           std::vector<EventWatch> watches) {
+  if (visits.size() != valves_.size()) throw std::invalid_argument("VisitTracker::Restore: wrong valve count");
   for (const auto& d : disarmed) {
     for (std::size_t k = 0; k < d.size(); ++k) {
       if (d[k] < 0 || static_cast<std::size_t>(d[k]) >= valves_.size() || (k > 0 && d[k] <= d[k - 1])) {
@@ -100,17 +150,41 @@ void VisitTracker::Restore(std::vector<std::vector<int>> disarmed, std::vector<s
       }
     }
   }
+  for (const ValveVisits& v : visits) {
+    if (v.recent.size() > kRecentVisits || v.recent.size() > v.count || !std::is_sorted(v.recent.begin(), v.recent.end())) {
+      throw std::invalid_argument("VisitTracker::Restore: a valve's visits are not a record of visits");
+    }
+  }
+  std::vector<std::vector<std::size_t>> of(valves_.size());
+  for (std::size_t i = 0; i < watches.size(); ++i) {
+    if (watches[i].valve < 0 || static_cast<std::size_t>(watches[i].valve) >= valves_.size()) {
+      throw std::invalid_argument("VisitTracker::Restore: a watch of no valve");
+    }
+    of[static_cast<std::size_t>(watches[i].valve)].push_back(i);
+  }
   disarmed_ = std::move(disarmed);
-  visit_times_ = std::move(visit_times);
+  visits_ = std::move(visits);
+  watches_ = std::move(watches);
+  watches_of_ = std::move(of);
 }
 
 void VisitTracker::Forget(int vehicle) {
   if (vehicle >= 0 && static_cast<std::size_t>(vehicle) < disarmed_.size()) disarmed_[vehicle].clear();
 }
 
-double VisitTracker::LastVisit(int valve) const {
-  const std::vector<double>& times = visit_times_.at(valve);
-  return times.empty() ? -std::numeric_limits<double>::infinity() : times.back();
+double VisitTracker::LastVisit(int valve) const { return visits_.at(static_cast<std::size_t>(valve)).last_s(); }
+
+void FillEventResponses(const VisitTracker& visits, MissionMetrics& metrics) {
+  const std::size_t n = std::min(metrics.events.size(), visits.watches().size());
+  for (std::size_t i = 0; i < n; ++i) {
+    const VisitTracker::EventWatch& w = visits.watches()[i];
+    const double first = visits.visits()[static_cast<std::size_t>(w.valve)].first_s;
+    EventResponse& r = metrics.events[i];
+    // The mean of consecutive differences telescopes to (last - first) / (n - 1).
+    r.time_to_next_visit_s = w.after > 0 ? w.first_after_s - w.time_s : kNaN;
+    r.interval_before_s = w.before >= 2 ? (w.last_before_s - first) / static_cast<double>(w.before - 1) : kNaN;
+    r.interval_after_s = w.after >= 2 ? (w.last_after_s - w.first_after_s) / static_cast<double>(w.after - 1) : kNaN;
+  }
 }
 
 double PearsonCorrelation(const std::vector<double>& a, const std::vector<double>& b) {
@@ -215,10 +289,6 @@ void MetricsAccumulator::CoverageBacklog::Settle(const maps::SpectralBasis& basi
   queued_.clear();
 }
 
-double MetricsAccumulator::latest_metric() const {
-  return state_.metric_over_time.empty() ? kNaN : state_.metric_over_time.back().ergodic_metric;
-}
-
 void MetricsAccumulator::Restore(State state, VisitTracker visits) {
   if (state.time_near_s.size() != valves_.size() || state.sum_f.size() != basis_.size() || state.schedule.empty()) {
     throw std::invalid_argument("MetricsAccumulator::Restore: state of another mission");
@@ -316,11 +386,21 @@ double MetricsAccumulator::MetricAt(double time_s) const {
 void MetricsAccumulator::TakeCheckpointsBefore(double time_s) {
   if (state_.schedule.empty()) throw std::logic_error("MetricsAccumulator: OnWeights before the first sample");
   const double period = options_.metric_sample_period_s;
-  for (; state_.next_checkpoint * period <= time_s; ++state_.next_checkpoint) {
-    const double t = state_.next_checkpoint * period;
-    const double value = MetricAt(t);
-    if (!std::isnan(value)) state_.metric_over_time.push_back({t, value});
-  }
+  for (; state_.next_checkpoint * period <= time_s; ++state_.next_checkpoint) TakeCheckpoint(state_.next_checkpoint);
+}
+
+void MetricsAccumulator::TakeCheckpoint(int k) {
+  const double period = options_.metric_sample_period_s;
+  const double value = MetricAt(k * period);
+  if (std::isnan(value)) return;
+  state_.latest_metric = value;
+  if (k % state_.metric_stride != 0) return;
+  std::vector<MetricSample>& kept = state_.metric_over_time;
+  kept.push_back({k * period, value});
+  if (kept.size() <= kMetricSamplesKept) return;
+  // Every other one goes: the spacing doubles (the samples kept are on the new stride already).
+  state_.metric_stride *= 2;
+  std::erase_if(kept, [&](const MetricSample& m) { return std::llround(m.time_s / period) % state_.metric_stride != 0; });
 }
 
 MissionMetrics MetricsAccumulator::Result(double end_s) const {
@@ -335,9 +415,7 @@ MissionMetrics MetricsAccumulator::Result(double end_s) const {
   // Checkpoints strictly before the end (within rounding), then the end itself.
   const double period = options_.metric_sample_period_s;
   for (; done.state_.next_checkpoint * period < end_s * (1.0 - 1e-12); ++done.state_.next_checkpoint) {
-    const double t = done.state_.next_checkpoint * period;
-    const double value = done.MetricAt(t);
-    if (!std::isnan(value)) done.state_.metric_over_time.push_back({t, value});
+    done.TakeCheckpoint(done.state_.next_checkpoint);
   }
   for (const auto& [vehicle, pending] : state_.pending) {
     if (pending.time_s <= end_s) done.Hold(pending, std::clamp(median, 0.0, end_s - pending.time_s));
@@ -366,23 +444,31 @@ MissionMetrics MetricsAccumulator::Result(double end_s) const {
     ValveMetrics m;
     m.name = valves[v].name;
     m.weight = average_weights[v];
-    for (double t : visits_.visit_times()[v])
+    const VisitTracker::ValveVisits& record = visits_.visits()[v];
+    // Visits after the end (a record read past it) are left out; those are among the kept ones.
+    for (double t : record.recent)
       if (t <= end_s) m.visit_times_s.push_back(t);
-    m.visits = static_cast<int>(m.visit_times_s.size());
+    const std::size_t later = record.recent.size() - m.visit_times_s.size();
+    m.visits = static_cast<int>(record.count - later);
     m.time_near_s = done.state_.time_near_s[v];
     const double open = std::max(0.0, end_s - std::min(end_s, done.state_.watched_until_s[v]));  // to the end
     m.longest_unwatched_s = std::max(done.state_.longest_unwatched_s[v], open);
     m.unwatched_squares_s2 = done.state_.unwatched_squares_s2[v] + open * open;
     m.max_gap_s = end_s;
-    if (!m.visit_times_s.empty()) {
-      m.max_gap_s = std::max(m.visit_times_s.front(), end_s - m.visit_times_s.back());
+    if (m.visits > 0) {
+      const double last = m.visit_times_s.empty() ? record.folded_last_s : m.visit_times_s.back();
+      // start -> first, last -> end, the gaps folded away, the one into the kept visits, and theirs.
+      m.max_gap_s = std::max({record.first_s, end_s - last, record.folded_max_gap_s});
+      if (!m.visit_times_s.empty() && record.count > record.recent.size()) {
+        m.max_gap_s = std::max(m.max_gap_s, m.visit_times_s.front() - record.folded_last_s);
+      }
       for (std::size_t j = 1; j < m.visit_times_s.size(); ++j) {
         m.max_gap_s = std::max(m.max_gap_s, m.visit_times_s[j] - m.visit_times_s[j - 1]);
       }
+      // The mean of consecutive differences telescopes to (last - first) / (n - 1): the paper's
+      // A* row, 37 visits one lap apart, gives its 8.1 s.
+      if (m.visits >= 2) m.mean_interval_s = (last - record.first_s) / (m.visits - 1);
     }
-    // The mean of consecutive differences telescopes to (last - first) / (n - 1): the paper's
-    // A* row, 37 visits one lap apart, gives its 8.1 s.
-    if (m.visits >= 2) m.mean_interval_s = (m.visit_times_s.back() - m.visit_times_s.front()) / (m.visits - 1);
     visit_counts.push_back(m.visits);
     weight_values.push_back(m.weight);
     out.valves.push_back(std::move(m));

@@ -25,35 +25,78 @@ namespace sage::server {
 /// Counts visits online: a visit is an entry within visit_radius of a valve; the valve is
 /// re-armed for that vehicle only after it leaves rearm_radius, so jitter is not counted twice.
 /// A vehicle's state is the few valves it has disarmed; a sample looks only at those and at the
-/// valves near it.
+/// valves near it. What it keeps of each valve does not grow with the mission's length: the
+/// latest kRecentVisits visits exactly, and of the older ones their count, the first and the
+/// longest gap between two of them (a 100,000 s mission had held every visit time of every valve).
 class VisitTracker {
  public:
+  /// Visits of a valve kept exactly (metrics.json's visit_times_s lists them).
+  static constexpr std::size_t kRecentVisits = 64;
+
+  /// One valve's visits. Gaps between consecutive visits are exact as long as no visit comes in
+  /// older than the kept ones but the first (a vehicle more than kRecentVisits visits late); then
+  /// the longest gap may be overstated, never understated.
+  struct ValveVisits {
+    std::size_t count = 0;
+    double first_s = std::numeric_limits<double>::infinity();
+    double folded_last_s = -std::numeric_limits<double>::infinity();  ///< the latest visit not kept (-inf: none)
+    double folded_max_gap_s = 0.0;  ///< longest gap between consecutive visits up to folded_last_s
+    std::vector<double> recent;     ///< the latest visits, ascending, at most kRecentVisits
+    void Add(double time_s);
+    /// The latest visit (-infinity before the first).
+    double last_s() const { return recent.empty() ? folded_last_s : recent.back(); }
+    bool operator==(const ValveVisits&) const = default;
+  };
+
+  /// How one valve's visits went around one time (a risk event's): before it, their count and the
+  /// last; from it on, their count, the first and the last. Kept as visits come, in any order.
+  struct EventWatch {
+    int valve = 0;
+    double time_s = 0.0;
+    std::size_t before = 0, after = 0;
+    double last_before_s = -std::numeric_limits<double>::infinity();
+    double first_after_s = std::numeric_limits<double>::infinity();
+    double last_after_s = -std::numeric_limits<double>::infinity();
+    void Count(double visit_s);  ///< one more visit of the valve, at visit_s
+    bool operator==(const EventWatch&) const = default;
+  };
+
   VisitTracker(std::vector<Eigen::Vector2d> valves, double visit_radius_m, double rearm_radius_m);
   /// Feeds one vehicle's position at time t; returns the indices of valves visited by this sample
   /// (ascending).
   std::vector<int> Update(int vehicle, const Eigen::Vector2d& position_m, double time_s);
   /// Drops a vehicle's arming state (it left the mission).
   void Forget(int vehicle);
-  const std::vector<std::vector<double>>& visit_times() const { return visit_times_; }
+  /// Each valve's visits [valve].
+  const std::vector<ValveVisits>& visits() const { return visits_; }
   /// Time of the last visit of valve i, or -infinity before the first.
   double LastVisit(int valve) const;
+  /// Follows the visits of `valve` around `time_s` from now on (a risk event's), the ones already
+  /// counted taken as their times say (those no longer kept as before it). watches()[i] is the
+  /// i-th call's.
+  void WatchAround(int valve, double time_s);
+  const std::vector<EventWatch>& watches() const { return watches_; }
   /// The valves each vehicle has disarmed ([vehicle] -> ascending valve indices), for a
-  /// checkpoint; and its restoration (throws std::invalid_argument for an index out of range or
-  /// lists not ascending).
+  /// checkpoint; and its restoration (throws std::invalid_argument for an index out of range,
+  /// lists not ascending, or visits and watches that do not fit the valves).
   const std::vector<std::vector<int>>& disarmed() const { return disarmed_; }
-  void Restore(std::vector<std::vector<int>> disarmed, std::vector<std::vector<double>> visit_times);
+  void Restore(std::vector<std::vector<int>> disarmed, std::vector<ValveVisits> visits, std::vector<EventWatch> watches);
   /// Valves within visit_radius of x (ascending), as Update counts them.
   void ValvesWithinVisitRadius(const Eigen::Vector2d& x, std::vector<int>& out) const {
     nearby_.Within(x, visit_radius_m_, out);
   }
 
  private:
+  void Record(int valve, double time_s);
+
   std::vector<Eigen::Vector2d> valves_;
   double visit_radius_m_;
   double rearm_radius_m_;
   maps::NearbyPoints nearby_;
-  std::vector<std::vector<int>> disarmed_;        // [vehicle] -> valves, ascending
-  std::vector<std::vector<double>> visit_times_;  // [valve]
+  std::vector<std::vector<int>> disarmed_;  // [vehicle] -> valves, ascending
+  std::vector<ValveVisits> visits_;         // [valve]
+  std::vector<EventWatch> watches_;
+  std::vector<std::vector<std::size_t>> watches_of_;  // [valve] -> indices into watches_
   std::vector<int> near_scratch_;
 };
 
@@ -64,6 +107,7 @@ struct ValveMetrics {
   double mean_interval_s = std::numeric_limits<double>::quiet_NaN();  ///< mean of gaps between visits; NaN if < 2
   double max_gap_s = 0.0;            ///< longest of start->first, between visits, last->end
   double time_near_s = 0.0;          ///< time within the visit radius (any vehicle)
+  /// The latest visits (at most VisitTracker::kRecentVisits; all of them in a mission with fewer).
   std::vector<double> visit_times_s;
   /// Longest time (s) with no vehicle within the visit radius (start and end included): a
   /// vehicle holding station at a valve watches it, though it makes one visit.
@@ -92,6 +136,35 @@ struct EventResponse {
   double heading_change_rad = 0.0;
 };
 
+/// One hidden leak, as the mission met it (issue 9's headline metric): from its onset, when a
+/// vehicle's sensor first reported it and when the server's posterior confirmed it.
+struct LeakMetrics {
+  std::string where;                  ///< its valve ("P3") or "seabed (x, y)"
+  Eigen::Vector2d position_m = Eigen::Vector2d::Zero();
+  int valve = -1;                     ///< its valve's index, or -1 on open seabed
+  double start_s = 0.0;
+  double strength = 1.0;
+  /// Mission time of the first detection within the association radius after the onset; NaN if never.
+  double detected_s = std::numeric_limits<double>::quiet_NaN();
+  /// Mission time the posterior of a leaf within the association radius first reached
+  /// fusion.confirm_probability after the onset; NaN if never.
+  double confirmed_s = std::numeric_limits<double>::quiet_NaN();
+  int detections = 0;                 ///< detections associated with it
+  /// A valve's leak: visits to the valve per minute from its detection to the end (NaN if undetected).
+  double visits_per_min_after_detection = std::numeric_limits<double>::quiet_NaN();
+};
+
+/// Alarms the posterior raised where no leak was (a leaf reaching fusion.alarm_probability away
+/// from every leak that had started), and how they went.
+struct FalseAlarmMetrics {
+  int detections = 0;     ///< detections associated with no leak that had started
+  int raised = 0;
+  int cleared = 0;        ///< fell back below half the alarm probability before the end
+  int confirmed = 0;      ///< reached the confirmation probability: a leak reported where there is none
+  double mean_time_to_clear_s = std::numeric_limits<double>::quiet_NaN();
+  double max_time_to_clear_s = std::numeric_limits<double>::quiet_NaN();
+};
+
 struct MissionMetrics {
   std::string controller;            ///< "ergodic", "astar", or "recorded"
   std::string profile;
@@ -100,6 +173,8 @@ struct MissionMetrics {
   std::vector<ValveMetrics> valves;
   double visit_weight_correlation = std::numeric_limits<double>::quiet_NaN();  ///< NaN if undefined
   double ergodic_metric = 0.0;       ///< final, of the whole fleet's time average vs the final phi
+  /// Every metric_sample_period_s while the mission is short; a long one's thinned evenly, at
+  /// most about kMetricSamplesKept samples (the spacing doubles as needed), and the end.
   std::vector<MetricSample> metric_over_time;
   double time_outside_s = 0.0;       ///< vehicle-seconds outside the workspace box
   double time_pinned_s = 0.0;        ///< vehicle-seconds within boundary_margin of its edge (inside)
@@ -119,6 +194,12 @@ struct MissionMetrics {
   double longest_gap_median_s = 0.0;  ///< over valves, of each valve's longest unwatched stretch (s)
   double longest_gap_p90_s = 0.0;
   double longest_gap_max_s = 0.0;
+
+  // Leak sensing (server/perception): empty / all zero when the scenario has no sensors.
+  bool sensing = false;               ///< the vehicles carried leak sensors
+  std::vector<LeakMetrics> leaks;
+  FalseAlarmMetrics false_alarms;
+  std::uint64_t scans = 0;            ///< scans fused
 };
 
 struct MetricsOptions {
@@ -172,7 +253,13 @@ class MetricsAccumulator {
   /// The metrics of [0, end_s] as they stand (a copy is finished; this one goes on).
   MissionMetrics Result(double end_s) const;
   /// The latest checkpoint's ergodic metric (NaN before the first): what a progress line shows.
-  double latest_metric() const;
+  double latest_metric() const { return state_.latest_metric; }
+  /// Samples of the metric over time kept at most: beyond, every other one is dropped and the
+  /// spacing doubles, as the run directory's plot copy is thinned (memory and metrics.json stay
+  /// the same size however long the mission).
+  static constexpr std::size_t kMetricSamplesKept = 4096;
+  /// Follows the visits of `valve` around `time_s` (VisitTracker::WatchAround): a risk event's.
+  void WatchVisits(int valve, double time_s) { visits_.WatchAround(valve, time_s); }
   const VisitTracker& visits() const { return visits_; }
   std::size_t refused_samples() const { return state_.refused; }
 
@@ -192,7 +279,9 @@ class MetricsAccumulator {
     double time_outside_s = 0.0, time_pinned_s = 0.0;
     Eigen::VectorXd sum_f;                  ///< sum of F_k(x) dt of held samples
     double sum_dt = 0.0;
-    std::vector<MetricSample> metric_over_time;
+    std::vector<MetricSample> metric_over_time;  ///< the checkpoints k with k % metric_stride == 0
+    int metric_stride = 1;                  ///< doubles whenever metric_over_time outgrows kMetricSamplesKept
+    double latest_metric = std::numeric_limits<double>::quiet_NaN();  ///< of the latest checkpoint
     int next_checkpoint = 1;                ///< checkpoint k is at k * metric_sample_period_s
     std::vector<WeightChange> schedule;
     std::size_t refused = 0;
@@ -209,6 +298,8 @@ class MetricsAccumulator {
   // Brings state_.sum_f up to date with every held sample (waits for the helper thread).
   void SettleCoverage() const;
   void TakeCheckpointsBefore(double time_s);
+  // Checkpoint k's metric: the latest, and kept if k is on the stride (thinning when too many).
+  void TakeCheckpoint(int k);
   double MetricAt(double time_s) const;
   double MedianSpacing() const;
 
@@ -296,6 +387,11 @@ class MetricsAccumulator {
   std::vector<Eigen::VectorXd> phi_;  // phi_k of each schedule entry
   mutable Eigen::VectorXd f_;         // scratch
 };
+
+/// Fills each risk event's time to the valve's next visit and its revisit interval before and
+/// after: metrics.events[i] from visits.watches()[i] (a mission watches each event's valve from
+/// the event on, VisitTracker::WatchAround).
+void FillEventResponses(const VisitTracker& visits, MissionMetrics& metrics);
 
 /// Fills the fleet figures of `metrics` (expected detection delay, risk-weighted interval,
 /// dominant interval, unvisited valves, longest-gap quantiles) from its valves.

@@ -99,6 +99,7 @@ struct Mission::Impl {
     const agents::AgentMission::CycleOutput reports = agents.Step(cycle);
     for (const agents::StateReport& s : reports.states) core.OnState(s);
     for (const agents::CoverageMessage& c : reports.coverage) core.OnCoverage(c);
+    for (const agents::ScanReport& s : reports.scans) core.OnScan(s);
     using Clock = std::chrono::steady_clock;
     const Clock::time_point cycle_start = options.server_cycle_s ? Clock::now() : Clock::time_point();
     const CycleOutput answer = core.Cycle(cycle);

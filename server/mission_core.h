@@ -17,11 +17,14 @@
 #include "agents/fleet_messages.h"
 #include "agents/fleet_tour_planner.h"
 #include "maps/region.h"
+#include "maps/risk_layer.h"
 #include "maps/scenario/scenario.h"
 #include "maps/world.h"
 #include "server/fleet_server.h"
 #include "server/metrics.h"
+#include "server/perception/risk_loop.h"
 #include "server/roster.h"
+#include "server/region_split.h"
 #include "server/rejections.h"
 #include "server/sender_limits.h"
 #include "server/trajectory.h"
@@ -94,9 +97,12 @@ struct MissionCheckpoint {
   Roster::State roster;
   MetricsAccumulator::State metrics;
   std::vector<std::vector<int>> disarmed;            ///< valves each vehicle has disarmed [vehicle] (ascending)
-  std::vector<std::vector<double>> visit_times;       ///< [valve]
+  std::vector<VisitTracker::ValveVisits> visits;      ///< [valve]
+  std::vector<VisitTracker::EventWatch> visit_watches;  ///< one per risk event (fleet.responses), in order
   std::size_t rejected_samples = 0;
   std::map<std::string, std::size_t> rejected_by_kind, rejected_by_sender;  ///< RejectionCounts' parts
+  std::string risk_layer_ot;        ///< the risk layer's excess as OctoMap .ot bytes (empty: none set)
+  RiskLoop::State risk_loop;        ///< the leak belief, its scoring and the scans waiting for their cycle
 };
 
 class MissionCore {
@@ -114,12 +120,20 @@ class MissionCore {
 
   // ---- from the vehicles ----
   /// A vehicle's state of one of its cycles. The first state of an unknown (or gone) vehicle
-  /// joins it. Refused (counted, false) if not finite, older than its last, or from the future.
-  bool OnState(const agents::StateReport& state);
+  /// joins it. Refused (counted, false) if not finite, of an id outside 0..kMaxVehicleId, from
+  /// the future, or joining one vehicle more than the workspace's Room(); ignored if older than
+  /// its last.
+  /// `writer`: the transport's handle of whoever sent it (the DDS writer; 0 = none), which a
+  /// refusal is counted under beside the vehicle the state names.
+  bool OnState(const agents::StateReport& state, std::uint64_t writer = 0);
   /// The vehicle was lost (lost = true: its liveliness lapsed) or left cleanly.
   void OnVehicleGone(int id, bool lost);
-  /// A vehicle's running coverage; false if stale, of an unknown vehicle, or malformed.
-  bool OnCoverage(const agents::CoverageMessage& coverage);
+  /// A vehicle's running coverage; false if stale, of an unknown vehicle, or malformed (counted
+  /// as OnState's refusals are).
+  bool OnCoverage(const agents::CoverageMessage& coverage, std::uint64_t writer = 0);
+  /// One of a vehicle's leak-sensor scans, fused at the server cycle of its own cycle (RiskLoop).
+  /// Refused (counted, false) if malformed, off its sensor's schedule, stale, or from the future.
+  bool OnScan(const agents::ScanReport& scan);
 
   // ---- from operators ----
   /// An operator's (or a sensor's) change of a valve's risk: applied unless `sender` (who sent
@@ -136,6 +150,12 @@ class MissionCore {
   OperatorAnswer RemoveRequest(int id) const;
   /// Issues `count` new ids (1..10000) for vehicles an operator adds; names are rov<id + 1>.
   OperatorAnswer ReserveIds(int count);
+  /// Largest vehicle id a state may name (2^24 - 1): ids index nothing by value, but the next id
+  /// issued follows the largest heard and must stay far from overflow.
+  static constexpr int kMaxVehicleId = (1 << 24) - 1;
+  /// Vehicles the mission holds alive at once: the workspace's room at 1 m^2 a BlueROV2 (the
+  /// scenario's own fleet always fits). A state that would join one more is refused at the door.
+  std::size_t Room() const;
 
   /// One server cycle at mission time cycle / control rate: the states and coverage received
   /// are taken into the record, risk events and the guard applied, and the fleet's snapshot and
@@ -150,6 +170,10 @@ class MissionCore {
   const FleetServer& fleet() const { return fleet_; }
   const Roster& roster() const { return roster_; }
   const MetricsAccumulator& metrics_accumulator() const { return metrics_; }
+  /// The mission's risk layer: the valves' field as its prior (the vehicles' phi_k come from it)
+  /// and the leaves the risk loop raised; risk.ot is it.
+  const maps::RiskLayer& risk_layer() const { return layer_; }
+  const RiskLoop& risk_loop() const { return loop_; }
   /// The ergodic metric of the record so far (the same number metrics.json gives).
   double ergodic_metric() const { return metrics_.latest_metric(); }
   /// Metrics of [0, end_s] as they stand; events answered (time to next visit, intervals).
@@ -188,10 +212,15 @@ class MissionCore {
   void AssignTargets(const std::vector<int>& alive, bool risk_changed, CycleOutput& out);
   void AssignTours(const std::vector<int>& alive, bool risk_changed, CycleOutput& out);
   void AssignRegions(const std::vector<int>& alive, CycleOutput& out);
+  // The live vehicles as the planners see them: where each last reported (or its start), its speed.
+  std::vector<agents::FleetVehicle> FleetVehicles(const std::vector<int>& alive) const;
   // The valves split among the live vehicles, balanced on travel (the fleet's tours).
-  agents::FleetTourPlan PlanShares(const std::vector<int>& alive, double weight_exponent, double risk_share = 0.0) const;
+  agents::FleetTourPlan PlanShares(const std::vector<int>& alive, double weight_exponent) const;
+  void TakeSplit(RegionSplit split);
   double next_time_s() const;  // the mission time of the coming cycle, when input takes effect
   double RiskMass(const std::vector<int>& valves) const;
+  // A partition share's phi_k with the layer's leaves nearest its valves (the share alone when none).
+  Eigen::VectorXd ShareOfLayer(int id) const;
 
   const maps::World& world_;
   const maps::Scenario& scenario_;
@@ -201,6 +230,9 @@ class MissionCore {
   ControllerKind controller_;
   MissionRecorder* recorder_;
   FleetServer fleet_;
+  maps::RiskLayer layer_;  // over world_'s live field: the fleet server's weights are its prior's
+  RiskLoop loop_;
+  bool layer_changed_ = false;  // the loop changed the layer's excess this cycle
   MetricsAccumulator metrics_;
   Roster roster_;
   std::vector<TrajectorySample> samples_;  // received since the last cycle
@@ -210,6 +242,8 @@ class MissionCore {
   std::size_t risk_recorded_ = 0;  // risk changes handed to the recorder
   std::size_t risk_measured_ = 0;  // risk changes whose heading change is being measured
   std::size_t schedule_seen_ = 0;  // weight schedule entries handed to the metrics
+  Eigen::VectorXd tour_weights_;   // the snapshot's valve_weights (tours), as of
+  std::size_t tour_weights_for_ = 0;  // this many weight schedule entries
   RejectionCounts rejected_;
   SenderLimits risk_limits_{kRiskUpdatesPerSecond, kRiskUpdateBurst};
   std::int64_t cycle_ = -1;
@@ -234,6 +268,7 @@ class MissionCore {
     Eigen::VectorXd sent_weights;  // proportions of the share's valve weights its target was made from
     double lap_time_s = 0.0;       // of its tour: the age weighting's and the guard's clock
     double split_mass = 0.0;       // its share of the field's risk when the field was split
+    double sent_excess = 0.0;      // the layer's excess in its box its target was made with
   };
   struct RegionPlan {
     std::vector<int> planned_for;
@@ -242,6 +277,9 @@ class MissionCore {
     double first_join_s = -1.0;
     std::size_t risk_seen = 0;  // schedule entries looked at for a re-split
     std::map<int, RegionShare> shares;
+    std::unique_ptr<PendingRegionSplit> pending;  // a split being planned, taken at its due cycle
+    double pending_started_s = 0.0;
+    std::size_t pending_risk_seen = 0;            // schedule entries when it started
   };
   RegionPlan region_plan_;
 };
@@ -249,10 +287,6 @@ class MissionCore {
 /// Angle (rad, 0..pi) between two commanded velocities; 0 if either is (near) zero. The
 /// heading change of a risk event (EventResponse::heading_change_rad).
 double HeadingChange(const Eigen::Vector2d& before_mps, const Eigen::Vector2d& after_mps);
-
-/// Fills each risk event's time to the valve's next visit and its revisit interval before and
-/// after, from the visit times in `metrics`.
-void FillEventResponses(const maps::Scenario& scenario, MissionMetrics& metrics);
 
 /// The first id the server issues to vehicles added at runtime: after the scenario's vehicles
 /// (ids 0..N-1) and its fleet_events joins (N, N+1, ... in order).

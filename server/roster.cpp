@@ -20,6 +20,7 @@ const FleetEventRecord* Roster::Join(int id, const std::string& name, double tim
   if (rejoined && m.status == Status::kLost && lost_count_ > 0) --lost_count_;
   m.name = name;
   m.status = Status::kAlive;
+  alive_stale_ = names_stale_ = true;
   m.joined_s = time_s;
   m.target_sent = false;
   ++alive_count_;
@@ -31,6 +32,7 @@ const FleetEventRecord* Roster::Leave(int id, bool lost, double time_s) {
   Member* m = Find(id);
   if (m == nullptr || m->status != Status::kAlive) return nullptr;
   m->status = lost ? Status::kLost : Status::kLeft;
+  alive_stale_ = true;
   m->gone_s = time_s;
   --alive_count_;
   if (lost) ++lost_count_;
@@ -50,12 +52,24 @@ const Roster::Member* Roster::Find(int id) const {
   return it == members_.end() ? nullptr : &it->second;
 }
 
-std::vector<int> Roster::alive() const {
-  std::vector<int> ids;
-  ids.reserve(alive_count_);
-  for (const auto& [id, m] : members_)
-    if (m.status == Status::kAlive) ids.push_back(id);
-  return ids;
+const std::vector<int>& Roster::alive() const {
+  if (alive_stale_) {
+    alive_.clear();
+    alive_.reserve(alive_count_);
+    for (const auto& [id, m] : members_)
+      if (m.status == Status::kAlive) alive_.push_back(id);
+    alive_stale_ = false;
+  }
+  return alive_;
+}
+
+const std::vector<const std::string*>& Roster::names_by_index() const {
+  if (names_stale_) {
+    names_.assign(members_.size(), nullptr);
+    for (const auto& [id, m] : members_) names_[m.index] = &m.name;
+    names_stale_ = false;
+  }
+  return names_;
 }
 
 int Roster::ReserveIds(int count) {
@@ -78,6 +92,7 @@ void Roster::Restore(State state) {
   lost_count_ = state.lost_count;
   alive_count_ = 0;
   for (const auto& [id, m] : members_) alive_count_ += m.status == Status::kAlive ? 1 : 0;
+  alive_stale_ = names_stale_ = true;
 }
 
 }  // namespace sage::server

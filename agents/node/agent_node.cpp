@@ -7,10 +7,13 @@
 #include <csignal>
 #include <limits>
 #include <map>
+#include <optional>
 #include <thread>
 
 #include <spdlog/spdlog.h>
 
+#include "agents/node/host_door.h"
+#include "agents/node/network.h"
 #include "agents/node/wire.h"
 #include "maps/world.h"
 #include "proto/dds_config.h"
@@ -25,18 +28,6 @@ namespace {
 using Clock = std::chrono::system_clock;  // CLOCK_REALTIME: shared by every process of the mission
 constexpr std::chrono::seconds kSlowServerWait{2};
 
-// The mission clock as the current server announces it.
-struct MissionClock {
-  std::uint64_t instance = 0;
-  long long start_ns = 0;
-  double time_scale = 1.0;
-  double MissionTime(long long ns) const { return static_cast<double>(ns - start_ns) * 1e-9 * time_scale; }
-  Clock::time_point WallOf(double mission_s) const {
-    return Clock::time_point(std::chrono::duration_cast<Clock::duration>(
-        std::chrono::nanoseconds(start_ns + static_cast<long long>(mission_s / time_scale * 1e9))));
-  }
-};
-
 }  // namespace
 
 int RunAgentNode(const maps::Scenario& scenario, const AgentNodeOptions& options) {
@@ -46,12 +37,15 @@ int RunAgentNode(const maps::Scenario& scenario, const AgentNodeOptions& options
     const VehicleResume* resume = i < options.resume.size() && options.resume[i] ? &*options.resume[i] : nullptr;
     mission.AddVehicle(static_cast<VehicleId>(options.ids[i]), options.vehicles[i], resume);
   }
-  proto::Participant participant(options.domain_id, proto::LocalhostConfigXml(proto::kMaxLocalParticipants,
-                                                                             proto::LoopbackDiscovery::kUnicastPeers,
-                                                                             options.security));
+  proto::Participant participant(
+      options.domain_id, proto::CycloneConfigXml(NetworkOf(scenario.network), proto::kMaxLocalParticipants, options.security));
   const auto lease = std::chrono::milliseconds(std::lround(scenario.fleet.liveliness_lease_s * 1000.0));
   proto::Writer<proto::VehicleState> states(participant, proto::VehicleStateWriterQos(lease));
   proto::Writer<proto::VehicleCoverage> coverage(participant, proto::VehicleCoverageQos());
+  // The leak sensors' scans, where the scenario gives the vehicles sensors.
+  std::optional<proto::Writer<proto::Detection>> detections;
+  if (!scenario.sensors.empty()) detections.emplace(participant, proto::DetectionQos());
+  std::vector<double> detections_scratch;
   proto::Reader<proto::ErgodicTarget> targets(participant, proto::ErgodicTargetQos());
   proto::Reader<proto::FleetCoverage> fleet(participant, proto::FleetCoverageQos());
   proto::Reader<proto::MissionStatus> status(participant, proto::MissionStatusQos());
@@ -60,37 +54,21 @@ int RunAgentNode(const maps::Scenario& scenario, const AgentNodeOptions& options
   // Three deep: a host that runs ahead sends its next state before this one takes the last, and
   // the vehicles keep apart on the last cycle's.
   proto::Reader<proto::VehicleState> neighbours(participant, proto::VehicleStateRecordQos(3));
-  // The other hosts' vehicles: each one's last few states (cycle, position), newest last.
-  std::map<std::uint32_t, std::deque<std::pair<std::int64_t, Eigen::Vector2d>>> others;
-  std::uint64_t bad_neighbours = 0, reported_rejections = 0;  // refused at the door (logged)
+  std::uint64_t reported_rejections = 0;  // refused at the door (logged)
   long cycles_not_in_step = 0, cycles_run = 0;  // cycles that went on without the server's last word
   double first_not_in_step_s = -1.0;
   std::int64_t next_rejection_report = 0;
 
   const std::uint64_t fingerprint =
       maps::VehicleFingerprint(scenario) ^ (options.guidance == Guidance::kAstar ? 0x5A5Aull : 0ull);
-  MissionClock clock;
-  bool finished = false, other_world = false;
+  HostDoor door(mission, fingerprint);
+  const MissionClock& clock = door.clock();
   // Takes the server's status: a new instance (the first, a restart, a resumed mission) brings
   // its clock, and what the last one said is dropped.
   const auto take_status = [&] {
     bool heard = false;
     status.TakeEach([&](const proto::MissionStatus& s, const dds_sample_info_t& info) {
-      if (!info.valid_data) return;
-      heard = true;
-      if (s.vehicle_fingerprint != fingerprint) {
-        other_world = true;
-        return;
-      }
-      if (s.server_instance != clock.instance) {
-        if (clock.instance != 0) {
-          spdlog::info("agents: a new server runs the mission (t = {:.1f} s on its clock); following it",
-                       s.mission_time_s);
-          mission.OnNewServer();
-        }
-        clock = {s.server_instance, s.start_ns, s.time_scale};
-      }
-      finished = finished || s.finished;
+      if (info.valid_data && door.TakeStatus(s)) heard = true;
     });
     return heard;
   };
@@ -100,13 +78,17 @@ int RunAgentNode(const maps::Scenario& scenario, const AgentNodeOptions& options
                options.domain_id);
   while (clock.instance == 0) {
     if (options.stop && options.stop->load()) return 0;
+    if (door.ended_elsewhere()) {
+      spdlog::info("agents: the mission on DDS domain {} has ended", options.domain_id);
+      return 0;
+    }
     if (std::chrono::steady_clock::now() > give_up) {
       spdlog::error("agents: no SAGE server on DDS domain {} within {:.0f} s", options.domain_id, options.wait_for_server_s);
       return 1;
     }
     status.WaitForData(std::chrono::milliseconds(100));
     take_status();
-    if (other_world) {
+    if (door.other_world()) {
       spdlog::error("agents: the server on DDS domain {} runs another scenario or other options; start sage agents "
                     "with the server's scenario and the same -n, --seed, -K, --forgetting, --turn-radius, --model "
                     "and --controller",
@@ -114,7 +96,7 @@ int RunAgentNode(const maps::Scenario& scenario, const AgentNodeOptions& options
       return 2;
     }
   }
-  if (finished) return 0;
+  if (door.finished()) return 0;
 
   const auto leave = [&](VehicleId id) {
     proto::VehicleState key{};
@@ -131,6 +113,7 @@ int RunAgentNode(const maps::Scenario& scenario, const AgentNodeOptions& options
   // before discovery is done is lost (a join started ahead has seconds for it).
   states.WaitForReaders(1, std::chrono::milliseconds(2000));
   coverage.WaitForReaders(1, std::chrono::milliseconds(2000));
+  if (detections) detections->WaitForReaders(1, std::chrono::milliseconds(2000));
   const std::int64_t first_cycle = scenario.CycleAt(options.start_at_s);
   const std::int64_t end_cycle =
       std::isfinite(options.end_at_s) ? scenario.CycleAt(options.end_at_s) : std::numeric_limits<std::int64_t>::max();
@@ -153,14 +136,15 @@ int RunAgentNode(const maps::Scenario& scenario, const AgentNodeOptions& options
     }
     const std::uint64_t instance = clock.instance;
     if (take_status()) last_heard = std::chrono::steady_clock::now();
-    if (finished) break;
+    if (door.finished()) break;
     if (clock.instance != instance) {  // a new clock: this cycle's number is on it
       k = static_cast<std::int64_t>(std::ceil(clock.MissionTime(proto::NowRealtimeNs()) * rate));
     }
     commands.TakeEach([&](const proto::FleetCommand& c, const dds_sample_info_t& info) {
-      if (!info.valid_data || c.server_instance != clock.instance || proto::AsStringView(c.verb) != "retire") return;
-      const VehicleId id = static_cast<VehicleId>(c.vehicle_id);
-      if (!mission.Contains(id)) return;
+      if (!info.valid_data) return;
+      const std::optional<VehicleId> retired = door.TakeCommand(c);
+      if (!retired) return;
+      const VehicleId id = *retired;
       spdlog::info("agents: {} (id {}) leaves the mission at t = {:.1f} s", mission.Name(id), id,
                    static_cast<double>(k) / rate);
       leave(id);
@@ -170,23 +154,34 @@ int RunAgentNode(const maps::Scenario& scenario, const AgentNodeOptions& options
       std::this_thread::sleep_for(std::chrono::milliseconds(100));  // let the disposes go out
       return 0;
     }
-    const auto take_server_words = [&] {
+    const auto take_targets = [&] {
       // Every host sees every vehicle's assignment (one topic); each takes its own.
       while (targets.TakeEach([&](const proto::ErgodicTarget& m, const dds_sample_info_t& info) {
-        if (info.valid_data && m.server_instance == clock.instance) mission.OnAssignment(wire::FromWire(m));
+        if (info.valid_data) door.TakeTarget(m, k);
       }, 1024) == 1024) {
       }
+    };
+    const auto take_server_words = [&] {
+      take_targets();
+      bool snapshot = false;
       fleet.TakeEach([&](const proto::FleetCoverage& m, const dds_sample_info_t& info) {
-        if (!info.valid_data || m.server_instance != clock.instance) return;
-        if (mission.OnFleetSnapshot(wire::FromWire(m))) {
+        if (!info.valid_data) return;
+        if (door.TakeSnapshot(m, k)) {
+          snapshot = true;
           last_heard = std::chrono::steady_clock::now();
           last_snapshot_at = Clock::now();
         }
       });
+      // A cycle's targets are written before its snapshot, but on another topic: when the two
+      // come together (after a long server cycle, such as taking a 1,000-valve split) the targets
+      // may land between the two takes. Taken again, they steer this cycle as they do in-process.
+      if (snapshot) take_targets();
     };
     take_server_words();
-    // Lockstep where it can be: cycle k steers on the server's word of cycle k - 1, as in the
-    // in-process mission; it waits up to 0.45 of a period for it, then goes on (counted). A server
+    // Lockstep where it can be: cycle k steers on the server's word of cycle k - 1 (its snapshot
+    // numbered k), as in the in-process mission; it waits up to 0.45 of a period for it, then goes
+    // on (counted). (It had waited only for the word of cycle k - 2: unseen while the server is
+    // quick, but after a long server cycle every vehicle steered a cycle on its old target.) A server
     // heard within kSlowServerWait is waited for that long: a long cycle of its own (splitting a
     // 1,000-vehicle field into regions took 0.8 s) is not a silence. The host then catches up
     // with the clock; a server gone silent costs that wait once.
@@ -195,7 +190,7 @@ int RunAgentNode(const maps::Scenario& scenario, const AgentNodeOptions& options
     // moved from the second cycle in sage run.
     if (last_snapshot_at == Clock::time_point{}) last_snapshot_at = Clock::now();
     const auto behind_server = [&] {
-      return mission.has_snapshot() ? mission.snapshot_cycle() + 1 < static_cast<std::uint64_t>(std::max<std::int64_t>(k, 1))
+      return mission.has_snapshot() ? mission.snapshot_cycle() < static_cast<std::uint64_t>(std::max<std::int64_t>(k, 1))
                                     : k > own_first_cycle;
     };
     if (behind_server()) {
@@ -218,22 +213,7 @@ int RunAgentNode(const maps::Scenario& scenario, const AgentNodeOptions& options
     const auto take_neighbours = [&] {
       while (neighbours.TakeEach(
                  [&](const proto::VehicleState& m, const dds_sample_info_t& info) {
-                   if (mission.Contains(static_cast<VehicleId>(m.vehicle_id))) return;
-                   if (info.valid_data && info.instance_state == DDS_ALIVE_INSTANCE_STATE) {
-                     const Eigen::Vector2d p(m.x_m, m.y_m);
-                     if (p.allFinite()) {
-                       if (m.server_instance == clock.instance) {
-                         auto& seen = others[m.vehicle_id];
-                         seen.emplace_back(static_cast<std::int64_t>(m.cycle), p);
-                         if (seen.size() > 3) seen.pop_front();
-                       }
-                     } else {
-                       ++bad_neighbours;  // not a place to keep clear of
-                       others.erase(m.vehicle_id);
-                     }
-                   } else {
-                     others.erase(m.vehicle_id);  // lost or left
-                   }
+                   door.TakeNeighbour(m, info.valid_data, info.instance_state == DDS_ALIVE_INSTANCE_STATE);
                  },
                  1024) == 1024) {
       }
@@ -242,7 +222,7 @@ int RunAgentNode(const maps::Scenario& scenario, const AgentNodeOptions& options
     // Lockstep for the neighbours too: a vehicle of another host near one of this host's whose
     // state of the last cycle is not in yet is waited for (within the same budget).
     const auto near_ones_in = [&] {
-      for (const auto& [other, seen] : others) {
+      for (const auto& [other, seen] : door.others()) {
         if (seen.empty() || seen.back().first >= k - 1 || seen.back().first < k - 3) continue;  // in, or gone
         // The scenario lost it or took it out at its cycle (its lease tells this host later).
         if (const auto end = scenario_ends.find(static_cast<int>(other));
@@ -280,20 +260,17 @@ int RunAgentNode(const maps::Scenario& scenario, const AgentNodeOptions& options
     // The others as of last cycle, as this host's own vehicles see each other (AgentMission):
     // a host that is ahead may have sent this cycle's state already, and a state older than the
     // last cycle's is a vehicle that stopped reporting (lost, or late), not a place.
-    std::vector<Eigen::Vector2d> other_positions;
-    other_positions.reserve(others.size());
-    for (const auto& [id, seen] : others) {
-      for (const auto& [cycle, position] : seen)
-        if (cycle == k - 1) other_positions.push_back(position);
-    }
-    mission.SetOtherVehicles(std::move(other_positions));
+    mission.SetOtherVehicles(door.OthersAt(k - 1));
 
     const AgentMission::CycleOutput out = mission.Step(k);
     ++cycles_run;
     const long long stamp = proto::NowRealtimeNs();
-    // Coverage first: the server waits for the states of the cycle, and by then a report sent
-    // before them is in as well.
+    // Coverage and scans first: the server waits for the states of the cycle, and by then a
+    // report sent before them is in as well.
     for (const CoverageMessage& c : out.coverage) coverage.Write(wire::ToWire(c, stamp));
+    if (detections) {
+      for (const ScanReport& scan : out.scans) detections->Write(wire::ToWire(scan, clock.instance, stamp, detections_scratch));
+    }
     for (const StateReport& s : out.states) states.Write(wire::ToWire(s, clock.instance, stamp));
   }
   for (const VehicleId id : mission.ids()) leave(id);
@@ -302,9 +279,12 @@ int RunAgentNode(const maps::Scenario& scenario, const AgentNodeOptions& options
                  "lockstep), the first at t = {:.1f} s",
                  cycles_not_in_step, cycles_run, first_not_in_step_s);
   }
-  if (mission.rejected() > 0 || bad_neighbours > 0) {
-    spdlog::warn("agents: refused {} message(s) from the server and {} neighbour state(s) with no finite position",
-                 mission.rejected(), bad_neighbours);
+  if (mission.rejected() > 0 || door.bad_neighbours() > 0 || door.bad_statuses() > 0 || door.ahead_of_the_clock() > 0) {
+    spdlog::warn("agents: refused {} message(s) from the server, {} more stamped over {:.0f} s ahead of the clock, {} "
+                 "status(es) with a clock that cannot be and {} neighbour state(s) with no finite position (or beyond "
+                 "{} vehicles)",
+                 mission.rejected(), door.ahead_of_the_clock(), HostDoor::kMaxLead_s, door.bad_statuses(),
+                 door.bad_neighbours(), HostDoor::kMaxOthers);
   }
   std::this_thread::sleep_for(std::chrono::milliseconds(100));  // let the disposes go out
   return 0;

@@ -1,5 +1,8 @@
 #include "agents/node/wire.h"
 
+#include <algorithm>
+#include <limits>
+
 namespace sage::agents::wire {
 namespace {
 
@@ -56,6 +59,37 @@ Assignment FromWire(const proto::ErgodicTarget& m) {
   a.region_order = static_cast<int>(m.region_order);
   a.region_forgetting_s = m.region_forgetting_s;
   return a;
+}
+
+ScanReport FromWire(const proto::Detection& m, double control_rate_hz) {
+  ScanReport s;
+  s.id = static_cast<VehicleId>(m.vehicle_id);
+  s.cycle = m.cycle;
+  s.time_s = static_cast<double>(m.cycle) / control_rate_hz;
+  s.sensor = static_cast<int>(std::min<std::uint32_t>(m.sensor, 1u << 30));
+  s.position_m = {m.x_m, m.y_m};
+  s.heading_rad = m.heading_rad;
+  const auto xy = proto::AsSpan(m.detections_xy_m);
+  for (std::size_t k = 0; k < xy.size(); k += 2) {
+    s.detections_m.emplace_back(xy[k], k + 1 < xy.size() ? xy[k + 1] : std::numeric_limits<double>::quiet_NaN());
+  }
+  return s;
+}
+
+proto::Detection ToWire(const ScanReport& s, std::uint64_t server_instance, long long stamp_ns, std::vector<double>& xy) {
+  xy.clear();
+  for (const Eigen::Vector2d& z : s.detections_m) xy.insert(xy.end(), {z.x(), z.y()});
+  proto::Detection m{};
+  m.vehicle_id = static_cast<std::uint32_t>(s.id);
+  m.stamp_ns = stamp_ns;
+  m.server_instance = server_instance;
+  m.cycle = s.cycle;
+  m.sensor = static_cast<std::uint32_t>(s.sensor);
+  m.x_m = s.position_m.x();
+  m.y_m = s.position_m.y();
+  m.heading_rad = s.heading_rad;
+  m.detections_xy_m = proto::BorrowSequence(std::span<const double>(xy.data(), xy.size()));
+  return m;
 }
 
 proto::VehicleState ToWire(const StateReport& s, std::uint64_t server_instance, long long stamp_ns) {

@@ -15,6 +15,8 @@
 
 #include <Eigen/Core>
 
+#include "maps/scenario/perception.h"
+
 namespace sage::maps {
 
 /// Bad user input (scenario file, CLI value). what() is one line meant for the user:
@@ -174,6 +176,27 @@ struct FleetSettings {
   double risk_share = 0.5;
 };
 
+/// Where a mission's DDS traffic goes, so that agent hosts (and operators) on other machines can
+/// join it. The default is this machine alone: the loopback interface, no multicast. A process
+/// on another machine takes the same scenario with its own interface (--interface).
+struct NetworkSettings {
+  /// A network interface by name ("eth0") or by one of its IPv4 addresses; "lo" = this machine.
+  std::string interface_name = "lo";
+  /// IPv4 addresses or host names of the mission's other machines: without multicast, where
+  /// discovery looks for the other processes (this machine's own address is always looked at).
+  std::vector<std::string> peers;
+  /// Discovery by multicast on the interface (no peers needed on a network that carries it).
+  bool multicast = false;
+  bool operator==(const NetworkSettings&) const = default;
+};
+/// Peers a network may list.
+inline constexpr std::size_t kMaxPeers = 32;
+/// Empty if `network` is well formed, else one line "WHERE: FIELD = VALUE: RULE" (`where` is
+/// e.g. the scenario file or "command line"): an interface name of 1-15 characters of
+/// [A-Za-z0-9_.:-] or an IPv4 address; peers IPv4 addresses or host names (1-253 characters of
+/// [A-Za-z0-9.-]), at most kMaxPeers.
+std::string NetworkProblem(const NetworkSettings& network, const std::string& where);
+
 /// A change of the fleet during a mission: a vehicle joins, is lost (dies without a word), or
 /// leaves cleanly.
 struct FleetEvent {
@@ -275,6 +298,12 @@ struct Scenario {
   std::optional<SeabedSettings> seabed;
   std::vector<Flowline> flowlines;
   std::vector<Boulder> boulders;
+  NetworkSettings network;                  ///< where its DDS traffic goes (not part of ScenarioHash)
+  // Leak sensing (maps/scenario/perception.h): none of it by default, and then a mission flies
+  // exactly as without.
+  std::vector<SensorSpec> sensors;          ///< every vehicle carries each
+  std::vector<LeakSpec> leaks;              ///< hidden from the server; sorted by start on load
+  FusionSettings fusion;
 
   /// All valves in file order (P1..Pn), structure after structure.
   std::vector<Valve> AllValves() const;
@@ -312,8 +341,8 @@ Scenario ParseScenario(const std::string& yaml_text, const std::string& source);
 /// Writes YAML that LoadScenario reads back to an equal Scenario.
 std::string EmitScenario(const Scenario& scenario);
 
-/// A copy that lasts `duration_s`; risk and fleet events after the new end are dropped (they
-/// would never happen).
+/// A copy that lasts `duration_s`; risk and fleet events and leaks after the new end are dropped
+/// (they would never happen).
 Scenario WithDuration(const Scenario& scenario, double duration_s);
 
 /// A copy with exactly `count` vehicles (>= 1): the first `count` of the file's, or all of them
@@ -333,8 +362,8 @@ Eigen::Vector2d JitteredStart(const VehicleSpec& spec, std::uint64_t seed, int i
 /// coverage assignment or fleet events, which only the server uses. A server and an agent host
 /// that disagree on it would fly vehicles in a different world than the one accounted.
 std::uint64_t VehicleFingerprint(const Scenario& scenario);
-/// A hash (FNV-1a) of the whole scenario as EmitScenario writes it: a checkpoint is resumed
-/// only by the scenario it was taken of.
+/// A hash (FNV-1a) of the whole scenario as EmitScenario writes it, but its network (the same
+/// mission may be resumed on another): a checkpoint is resumed only by the scenario it was taken of.
 std::uint64_t ScenarioHash(const Scenario& scenario);
 
 const char* ToString(MotionModel model);

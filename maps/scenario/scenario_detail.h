@@ -25,6 +25,12 @@ inline std::string FormatNumber(double value) {
 // Messages reach the user as one line, whatever text was quoted into them.
 inline std::string OneLine(std::string text) {
   std::replace_if(text.begin(), text.end(), [](char c) { return c == '\n' || c == '\r'; }, ' ');
+  // Any other control character (a key holding ESC or GS) as '?': the line reaches a terminal
+  // (found by the scenario fuzzer).
+  std::replace_if(text.begin(), text.end(), [](char c) { return static_cast<unsigned char>(c) < 0x20 || c == 0x7f; }, '?');
+  // And stays a line: a 1 MB value is not shown whole.
+  constexpr std::size_t kMaxLength = 2000;
+  if (text.size() > kMaxLength) text = text.substr(0, kMaxLength) + "...";
   return text;
 }
 
@@ -47,5 +53,9 @@ inline const char* EventKey(FleetEvent::Kind kind) {
 // scenario file) to an absolute one, the file checked at the door (a known kind, a regular file
 // of at most kMaxSeabedMapBytes) and its bytes hashed into map_fnv1a. Throws ScenarioError.
 void ResolveSeabedMap(SeabedSettings& seabed, const std::string& source);
+
+// The rules on sensors, leaks and fusion (scenario_perception.cpp); Scenario::Validate calls it
+// last. `file` starts each message.
+void ValidatePerception(const Scenario& scenario, const std::string& file);
 
 }  // namespace sage::maps::detail

@@ -141,6 +141,16 @@ std::string EmitScenario(const Scenario& s) {
     }
     out << YAML::EndSeq;
   }
+  // Only when set: a mission on this machine alone writes what it always wrote.
+  if (!(s.network == NetworkSettings{})) {
+    key("network") << YAML::Flow << YAML::BeginMap;
+    key("interface") << s.network.interface_name;
+    key("peers") << YAML::Flow << YAML::BeginSeq;
+    for (const std::string& peer : s.network.peers) out << peer;
+    out << YAML::EndSeq;
+    key("multicast") << s.network.multicast;
+    out << YAML::EndMap;
+  }
   key("default_profile") << s.default_profile;
   key("profiles") << YAML::BeginMap;
   for (const RiskProfile& profile : s.profiles) {
@@ -158,7 +168,58 @@ std::string EmitScenario(const Scenario& s) {
     }
     out << YAML::EndSeq << YAML::EndMap;
   }
-  out << YAML::EndMap << YAML::EndMap;
+  out << YAML::EndMap;
+  // Leak sensing, only where the scenario has some: a scenario without writes what it always did.
+  if (!s.sensors.empty()) {
+    key("sensors") << YAML::BeginSeq;
+    for (const SensorSpec& sensor : s.sensors) {
+      out << YAML::Flow << YAML::BeginMap;
+      key("name") << sensor.name;
+      key("kind") << ToString(sensor.kind);
+      number("range_m", sensor.range_m);
+      number("fov_deg", sensor.fov_deg);
+      number("p_detect", sensor.p_detect);
+      number("half_range_m", sensor.half_range_m);
+      number("false_alarms_per_s", sensor.false_alarms_per_s);
+      number("position_sigma_m", sensor.position_sigma_m);
+      number("rate_hz", sensor.rate_hz);
+      out << YAML::EndMap;
+    }
+    out << YAML::EndSeq;
+  }
+  if (!s.leaks.empty()) {
+    key("leaks") << YAML::BeginSeq;
+    for (const LeakSpec& leak : s.leaks) {
+      out << YAML::Flow << YAML::BeginMap;
+      key("at") << YAML::Flow << YAML::BeginMap;
+      if (!leak.valve.empty()) {
+        key("valve") << leak.valve;
+      } else {
+        key("point_m");
+        vector(leak.point_m);
+      }
+      out << YAML::EndMap;
+      number("start_s", leak.start_s);
+      number("strength", leak.strength);
+      out << YAML::EndMap;
+    }
+    out << YAML::EndSeq;
+  }
+  if (!(s.fusion == FusionSettings{})) {
+    const FusionSettings& f = s.fusion;
+    key("fusion") << YAML::Flow << YAML::BeginMap;
+    key("steer") << (f.steer ? "posterior" : "prior");
+    number("prior_probability", f.prior_probability);
+    number("relax_time_s", f.relax_time_s);
+    number("confirm_probability", f.confirm_probability);
+    number("alarm_probability", f.alarm_probability);
+    number("leak_mass", f.leak_mass);
+    number("spread_m", f.spread_m);
+    number("max_log_odds", f.max_log_odds);
+    number("min_evidence", f.min_evidence);
+    out << YAML::EndMap;
+  }
+  out << YAML::EndMap;
   return std::string(out.c_str()) + "\n";
 }
 

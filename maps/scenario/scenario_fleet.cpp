@@ -203,12 +203,17 @@ std::uint64_t VehicleFingerprint(const Scenario& scenario) {
   if (vehicles_only.seabed && !vehicles_only.seabed->map.empty()) {
     vehicles_only.seabed->map = "fnv1a-" + std::to_string(vehicles_only.seabed->map_fnv1a) + ".bt";
   }
+  vehicles_only.network = {};  // each machine has its own
+  vehicles_only.fusion = FusionSettings{};  // the server's alone (the sensors and the leaks are the vehicles' world)
   return Fnv1a(EmitScenario(vehicles_only));
 }
 
 std::uint64_t ScenarioHash(const Scenario& scenario) {
-  std::string text = EmitScenario(scenario);
-  if (scenario.seabed && !scenario.seabed->map.empty()) text += "# map_fnv1a " + std::to_string(scenario.seabed->map_fnv1a);
+  // The network is each machine's own; the seabed map counts by its content (hashed at the door).
+  Scenario same = scenario;
+  same.network = {};
+  std::string text = EmitScenario(same);
+  if (same.seabed && !same.seabed->map.empty()) text += "# map_fnv1a " + std::to_string(same.seabed->map_fnv1a);
   return Fnv1a(text);
 }
 

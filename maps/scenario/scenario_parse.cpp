@@ -307,12 +307,84 @@ RiskProfile ReadProfile(const Reader& r, const std::string& name, const YAML::No
   return profile;
 }
 
+// ---- Leak sensing: sensors, leaks, fusion (maps/scenario/perception.h) ----
+
+SensorSpec ReadSensor(const Reader& r, const YAML::Node& node, const std::string& path) {
+  r.ExpectMap(node, path, {"name", "kind", "range_m", "fov_deg", "p_detect", "half_range_m", "false_alarms_per_s",
+                           "position_sigma_m", "rate_hz"});
+  SensorSpec sensor;
+  sensor.name = r.Text(r.Require(node, "name", path), path + ".name");
+  r.Optional(node, "kind", path, [&](const YAML::Node& n, const std::string& p) {
+    const std::string kind = r.Text(n, p);
+    if (kind == "camera") sensor.kind = SensorKind::kCamera;
+    else if (kind == "sonar") sensor.kind = SensorKind::kSonar;
+    else r.Fail(p, n, "must be camera or sonar");
+  });
+  r.OptionalNumber(node, "range_m", path, sensor.range_m);
+  r.OptionalNumber(node, "fov_deg", path, sensor.fov_deg);
+  r.OptionalNumber(node, "p_detect", path, sensor.p_detect);
+  r.OptionalNumber(node, "half_range_m", path, sensor.half_range_m);
+  r.OptionalNumber(node, "false_alarms_per_s", path, sensor.false_alarms_per_s);
+  r.OptionalNumber(node, "position_sigma_m", path, sensor.position_sigma_m);
+  r.OptionalNumber(node, "rate_hz", path, sensor.rate_hz);
+  return sensor;
+}
+
+// {at: {valve: P1} | {point_m: [x, y]}, start_s: T, strength: S}
+LeakSpec ReadLeak(const Reader& r, const YAML::Node& node, const std::string& path) {
+  r.ExpectMap(node, path, {"at", "start_s", "strength"});
+  LeakSpec leak;
+  const YAML::Node at = r.Require(node, "at", path);
+  const std::string at_path = path + ".at";
+  r.ExpectMap(at, at_path, {"valve", "point_m", "flowline", "s_m"});
+  if (at["flowline"].IsDefined() || at["s_m"].IsDefined()) {
+    r.Fail(at_path, at, "leaks along a flowline need the scenario's flowlines (not in this version): give point_m");
+  }
+  if (at["valve"].IsDefined() == at["point_m"].IsDefined()) r.Fail(at_path, at, "must give exactly one of valve, point_m");
+  r.Optional(at, "valve", at_path, [&](const YAML::Node& n, const std::string& p) { leak.valve = r.Text(n, p); });
+  r.Optional(at, "point_m", at_path, [&](const YAML::Node& n, const std::string& p) { leak.point_m = r.Vector(n, p); });
+  leak.start_s = r.Number(r.Require(node, "start_s", path), path + ".start_s");
+  r.OptionalNumber(node, "strength", path, leak.strength);
+  return leak;
+}
+
+void ReadFusion(const Reader& r, const YAML::Node& node, const std::string& path, FusionSettings& f) {
+  r.ExpectMap(node, path, {"steer", "prior_probability", "relax_time_s", "confirm_probability", "alarm_probability",
+                           "leak_mass", "spread_m", "max_log_odds", "min_evidence"});
+  r.Optional(node, "steer", path, [&](const YAML::Node& n, const std::string& p) {
+    const std::string text = r.Text(n, p);
+    if (text == "posterior") f.steer = true;
+    else if (text == "prior") f.steer = false;
+    else r.Fail(p, n, "must be posterior (the Bayesian loop) or prior (the profile's weights alone)");
+  });
+  r.OptionalNumber(node, "prior_probability", path, f.prior_probability);
+  r.OptionalNumber(node, "relax_time_s", path, f.relax_time_s);
+  r.OptionalNumber(node, "confirm_probability", path, f.confirm_probability);
+  r.OptionalNumber(node, "alarm_probability", path, f.alarm_probability);
+  r.OptionalNumber(node, "leak_mass", path, f.leak_mass);
+  r.OptionalNumber(node, "spread_m", path, f.spread_m);
+  r.OptionalNumber(node, "max_log_odds", path, f.max_log_odds);
+  r.OptionalNumber(node, "min_evidence", path, f.min_evidence);
+}
+
+void ReadPerception(const Reader& r, const YAML::Node& root, Scenario& s) {
+  r.Optional(root, "sensors", "", [&](const YAML::Node& list, const std::string& p) {
+    r.ExpectList(list, p);
+    for (std::size_t i = 0; i < list.size(); ++i) s.sensors.push_back(ReadSensor(r, list[i], p + "[" + std::to_string(i) + "]"));
+  });
+  r.Optional(root, "leaks", "", [&](const YAML::Node& list, const std::string& p) {
+    r.ExpectList(list, p);
+    for (std::size_t i = 0; i < list.size(); ++i) s.leaks.push_back(ReadLeak(r, list[i], p + "[" + std::to_string(i) + "]"));
+  });
+  r.Optional(root, "fusion", "", [&](const YAML::Node& n, const std::string& p) { ReadFusion(r, n, p, s.fusion); });
+}
+
 Scenario ReadScenario(const Reader& r, const YAML::Node& root, const std::string& source) {
   if (!root.IsMap()) r.Fail("scenario", root, "must be a YAML map of sections (workspace, structures, ...)");
   r.ExpectMap(root, "", {"name", "workspace", "duration_s", "control_rate_hz", "physics_rate_hz",
                          "visit_radius_m", "rearm_radius_m", "seed", "start_jitter_m", "ergodic", "guard", "astar",
                          "structures", "vehicles", "default_profile", "profiles", "fleet", "fleet_events",
-                         "seabed", "flowlines", "boulders"});
+                         "seabed", "flowlines", "boulders", "network", "sensors", "leaks", "fusion"});
   Scenario s;
   s.source_path = source;
   s.name = source.empty() ? "scenario" : std::filesystem::path(source).stem().string();
@@ -393,6 +465,16 @@ Scenario ReadScenario(const Reader& r, const YAML::Node& root, const std::string
     }
   });
   ReadSeabedSections(r, root, s);
+  r.Optional(root, "network", "", [&](const YAML::Node& n, const std::string& p) {
+    r.ExpectMap(n, p, {"interface", "peers", "multicast"});
+    r.Optional(n, "interface", p, [&](const YAML::Node& v, const std::string& q) { s.network.interface_name = r.Text(v, q); });
+    r.Optional(n, "peers", p, [&](const YAML::Node& list, const std::string& q) {
+      r.ExpectList(list, q);
+      for (std::size_t i = 0; i < list.size(); ++i) s.network.peers.push_back(r.Text(list[i], q + "[" + std::to_string(i) + "]"));
+    });
+    r.Optional(n, "multicast", p, [&](const YAML::Node& v, const std::string& q) { s.network.multicast = r.Bool(v, q); });
+  });
+  ReadPerception(r, root, s);
   return s;
 }
 
@@ -422,6 +504,8 @@ Scenario ParseScenario(const std::string& yaml_text, const std::string& source) 
   }
   std::stable_sort(scenario.fleet_events.begin(), scenario.fleet_events.end(),
                    [](const FleetEvent& a, const FleetEvent& b) { return a.time_s < b.time_s; });
+  std::stable_sort(scenario.leaks.begin(), scenario.leaks.end(),
+                   [](const LeakSpec& a, const LeakSpec& b) { return a.start_s < b.start_s; });
   return scenario;
 }
 

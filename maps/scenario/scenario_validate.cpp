@@ -216,7 +216,57 @@ void CheckSeabed(const Checker& c, const Scenario& s, const std::string& workspa
   }
 }
 
+bool IsIpv4(const std::string& text) {
+  int parts = 0;
+  std::size_t at = 0;
+  while (at <= text.size()) {
+    const std::size_t dot = std::min(text.find('.', at), text.size());
+    const std::string part = text.substr(at, dot - at);
+    if (part.empty() || part.size() > 3 || part.find_first_not_of("0123456789") != std::string::npos ||
+        std::stoi(part) > 255) {
+      return false;
+    }
+    ++parts;
+    at = dot + 1;
+  }
+  return parts == 4;
+}
+
+bool OnlyOf(const std::string& text, const std::string& punctuation) {
+  return std::all_of(text.begin(), text.end(), [&](char ch) {
+    return (ch >= 'a' && ch <= 'z') || (ch >= 'A' && ch <= 'Z') || (ch >= '0' && ch <= '9') ||
+           punctuation.find(ch) != std::string::npos;
+  });
+}
+
+// Shown in a one-line error: control characters as '?', at most 64 characters.
+std::string Shown(const std::string& text) {
+  std::string out = text.substr(0, 64);
+  std::replace_if(out.begin(), out.end(), [](char ch) { return static_cast<unsigned char>(ch) < 0x20 || ch == 0x7f; }, '?');
+  return out.empty() ? "\"\"" : text.size() > 64 ? out + "..." : out;
+}
+
 }  // namespace
+
+std::string NetworkProblem(const NetworkSettings& network, const std::string& where) {
+  const std::string& name = network.interface_name;
+  if (!IsIpv4(name) && (name.empty() || name.size() > 15 || !OnlyOf(name, "_.:-"))) {
+    return where + ": network.interface = " + Shown(name) +
+           ": must be a network interface name (1-15 characters of letters, digits, _ . : -) or an IPv4 address";
+  }
+  if (network.peers.size() > kMaxPeers) {
+    return where + ": network.peers = " + std::to_string(network.peers.size()) + " peers: at most " +
+           std::to_string(kMaxPeers);
+  }
+  for (std::size_t i = 0; i < network.peers.size(); ++i) {
+    const std::string& peer = network.peers[i];
+    if (!IsIpv4(peer) && (peer.empty() || peer.size() > 253 || !OnlyOf(peer, ".-"))) {
+      return where + ": network.peers[" + std::to_string(i) + "] = " + Shown(peer) +
+             ": must be an IPv4 address or a host name (letters, digits, . -)";
+    }
+  }
+  return {};
+}
 
 void Scenario::Validate() const {
   const Checker c(source_path.empty() ? "<scenario>" : source_path);
@@ -368,6 +418,10 @@ void Scenario::Validate() const {
   if (!(fleet.risk_share >= 0.0 && fleet.risk_share <= 10.0)) {
     c.Fail("fleet.risk_share", FormatNumber(fleet.risk_share), "must be in [0, 10] (0 = regions balanced on laps alone)");
   }
+  if (const std::string problem = NetworkProblem(network, source_path.empty() ? "<scenario>" : source_path);
+      !problem.empty()) {
+    throw ScenarioError(problem);
+  }
   CheckFleetEvents(c, fleet_events, vehicles, duration_s, check_vehicle);
   std::size_t fleet_size = 0;
   double room_needed_m2 = 0.0;
@@ -425,6 +479,7 @@ void Scenario::Validate() const {
     c.Fail("default_profile", default_profile.empty() ? "\"\"" : default_profile, "must name a profile (" + list + ")");
   }
   CheckSeabed(c, *this, workspace_text);
+  detail::ValidatePerception(*this, source_path.empty() ? "<scenario>" : source_path);
 }
 
 }  // namespace sage::maps

@@ -18,7 +18,10 @@
 #include <cstring>
 #include <ctime>
 #include <filesystem>
+#include <fstream>
+#include <iterator>
 #include <memory>
+#include <vector>
 
 #include "proto/access_policy.h"
 
@@ -186,6 +189,26 @@ void WriteNewFile(const fs::path& path, const std::string& text, mode_t mode) {
   }
 }
 
+struct CertificateValidity {
+  std::time_t not_before = 0, not_after = 0;
+};
+
+// The validity period of the PEM certificate at `path`; throws SecurityError if it cannot be read.
+CertificateValidity ReadCertificateValidity(const std::string& path) {
+  const Bio bio(BIO_new_file(path.c_str(), "r"));
+  const Cert cert(bio ? PEM_read_bio_X509(bio.get(), nullptr, nullptr, nullptr) : nullptr);
+  if (!cert) {
+    ERR_clear_error();
+    throw SecurityError(path + ": not a PEM certificate; a security directory is made by sage security init");
+  }
+  const auto seconds = [&](const ASN1_TIME* t) {
+    std::tm tm{};
+    if (ASN1_TIME_to_tm(t, &tm) != 1) throw SecurityError(path + ": the certificate's validity cannot be read");
+    return timegm(&tm);
+  };
+  return {seconds(X509_get0_notBefore(cert.get())), seconds(X509_get0_notAfter(cert.get()))};
+}
+
 }  // namespace
 
 SecurityDirectorySummary InitSecurityDirectory(const std::string& dir, const SecurityInitOptions& options) {
@@ -240,7 +263,7 @@ SecurityDirectorySummary InitSecurityDirectory(const std::string& dir, const Sec
   return {root.string(), validity.not_before, validity.not_after};
 }
 
-void CheckSecurityDirectory(const std::string& dir) {
+void CheckSecurityDirectory(const std::string& dir, std::time_t now) {
   for (const SecurityRole role : kSecurityRoles) {
     const SecurityIdentity id = IdentityInDirectory(dir, role);
     for (const std::string* path : {&id.identity_ca, &id.certificate, &id.private_key, &id.permissions_ca, &id.governance,
@@ -250,6 +273,37 @@ void CheckSecurityDirectory(const std::string& dir) {
                             "); a security directory is made by sage security init");
       }
     }
+  }
+  // Cyclone refuses an identity out of its validity with a generic "Failed to create participant"
+  // (a mission resumed after its identities' 30 days had no other word): say which and when.
+  const auto renew = std::string("; make new identities (sage security init DIR and --security DIR, or launch the mission "
+                                 "anew: a launch's own identities last 30 days past it)");
+  std::vector<std::string> certificates = {IdentityInDirectory(dir, SecurityRole::kServer).identity_ca};
+  for (const SecurityRole role : kSecurityRoles) certificates.push_back(IdentityInDirectory(dir, role).certificate);
+  for (const std::string& path : certificates) {
+    const CertificateValidity v = ReadCertificateValidity(path);
+    if (now > v.not_after) {
+      throw SecurityError(path + ": the certificate expired on " + Utc(v.not_after) + " UTC (valid from " +
+                          Utc(v.not_before) + ")" + renew);
+    }
+    if (now < v.not_before) {
+      throw SecurityError(path + ": the certificate is valid only from " + Utc(v.not_before) +
+                          " UTC (is this machine's clock behind?)");
+    }
+  }
+  // The permissions carry their own validity (what the access control plugin checks).
+  const std::string permissions = (fs::path(dir) / "permissions.xml").string();
+  std::ifstream in(permissions);
+  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const auto field = [&](const std::string& name) {
+    const std::size_t at = text.find("<" + name + ">");
+    const std::size_t end = text.find("</" + name + ">");
+    return at == std::string::npos || end == std::string::npos ? std::string()
+                                                               : text.substr(at + name.size() + 2, end - at - name.size() - 2);
+  };
+  const std::string not_after = field("not_after");
+  if (!not_after.empty() && Utc(now) > not_after) {  // ISO 8601 UTC strings order as times
+    throw SecurityError(permissions + ": the permissions expired on " + not_after + " UTC" + renew);
   }
 }
 

@@ -7,6 +7,7 @@
 //   DIR/ca.pem, DIR/ca_key.pem (if kept), DIR/governance.{xml,p7s}, DIR/permissions.{xml,p7s},
 //   DIR/<role>/cert.pem, DIR/<role>/key.pem   for role in server, agent_host, operator, viewer.
 // Directories are mode 0700 and keys 0600: the identity keys are what admits a process.
+#include <ctime>
 #include <stdexcept>
 #include <string>
 
@@ -41,7 +42,8 @@ struct SecurityDirectorySummary {
 SecurityDirectorySummary InitSecurityDirectory(const std::string& dir, const SecurityInitOptions& options = {});
 
 /// Checks that `dir` holds every file a mission's processes read (IdentityInDirectory of every
-/// role); throws SecurityError naming the first one missing.
-void CheckSecurityDirectory(const std::string& dir);
+/// role) and that its certificates and permissions are valid at `now`; throws SecurityError with
+/// one line naming the first file missing, or the one that expired (or is not valid yet) and when.
+void CheckSecurityDirectory(const std::string& dir, std::time_t now = std::time(nullptr));
 
 }  // namespace sage::proto

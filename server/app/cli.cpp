@@ -10,6 +10,7 @@
 #include <CLI/CLI.hpp>
 #include <spdlog/spdlog.h>
 
+#include "server/app/bench_leaks.h"
 #include "server/app/bench_scale.h"
 #include "server/app/field_command.h"
 #include "server/app/fleet_commands.h"
@@ -18,7 +19,9 @@
 #include "server/app/options.h"
 #include "server/app/run_commands.h"
 #include "server/app/security_command.h"
+#include "server/app/view_command.h"
 #include "proto/dds_config.h"
+#include "proto/mission_clock.h"
 
 namespace sage::server {
 namespace {
@@ -35,6 +38,16 @@ std::string MustBePositive(const std::string& text) {
   } catch (const std::exception&) {
     return "must be a number > 0";
   }
+}
+
+// A mission clock every agent host follows (proto::PlausibleClock refuses any other).
+std::string MustBeTimeScale(const std::string& text) {
+  try {
+    const double scale = std::stod(text);
+    if (scale >= proto::kMinTimeScale && scale <= proto::kMaxTimeScale) return {};
+  } catch (const std::exception&) {
+  }
+  return "must be a number in 0.001..1000";
 }
 
 // CLI11 reads "-3" into an unsigned option as 2^64 - 3; a seed is a whole number as typed.
@@ -76,6 +89,21 @@ void AddScenarioOverrides(CLI::App& cmd, ScenarioOverrides& o, OverrideSet set, 
   }
   cmd.add_option("--seed", o.seed, "Seed of the start-pose jitter; the same seed gives the same mission")
       ->check(MustBeWholeNumber);
+  cmd.add_option("--random-leaks", o.random_leaks,
+                 "Hide N random leaks from the server, drawn from the seed (onsets uniform in [0.1, 0.9] of the "
+                 "mission), replacing the scenario's leaks: the vehicles' sensors can see them, the server is not told")
+      ->check(CLI::Range(0, 1000));
+  cmd.add_option("--leak-sites", o.leak_sites,
+                 "Where random leaks are: valves (by the default profile's risk), valves-even or seabed (open water "
+                 "1 m from every valve); default valves")
+      ->check(CLI::IsMember({"valves", "valves-even", "seabed"}));
+  if (mission) {
+    cmd.add_option("--steer", o.steer,
+                   "posterior: vehicles steer on the risk layer the sensors' scans update (the Bayesian loop, the "
+                   "default where the scenario has sensors); prior: on the profile's weights alone, the scans only "
+                   "scored (the paper's fixed profiles)")
+        ->check(CLI::IsMember({"posterior", "prior"}));
+  }
   cmd.add_option("--start-jitter", o.start_jitter_m,
                  "Radius (m) within which each vehicle starts around its start_m, drawn from the seed (default: the "
                  "scenario's, 0.2; 0 = exactly at start_m)");
@@ -95,14 +123,40 @@ void AddScenarioOverrides(CLI::App& cmd, ScenarioOverrides& o, OverrideSet set, 
   }
 }
 
+// Where the process's DDS traffic goes: agent hosts and operators on other machines.
+void AddNetwork(CLI::App& cmd, NetworkOverrides& n, const std::string& default_from) {
+  cmd.add_option("--interface", n.interface_name,
+                 "Network interface for DDS, by name or IPv4 address (default: " + default_from +
+                     "; lo = this machine only)");
+  cmd.add_option("--peer", n.peers,
+                 "IPv4 address or host name of another machine of the mission (repeat for each); discovery without "
+                 "multicast looks there (default: " + default_from + ")");
+  cmd.add_option("--multicast", n.multicast, "DDS discovery by multicast on the interface: on|off (default: " +
+                                                 default_from + ", off)")
+      ->check(CLI::IsMember({"on", "off"}));
+}
+
 void AddController(CLI::App& cmd, std::string& controller) {
   cmd.add_option("--controller,-c", controller, "ergodic (SMC) or astar (the fixed inspection tour)")
       ->check(CLI::IsMember({"ergodic", "astar"}))
       ->capture_default_str();
 }
 
+// The live view's two servers, on 127.0.0.1 behind the mission's token (RUN_DIR/live_token).
+void AddLiveView(CLI::App& cmd, std::string& http, std::string& foxglove) {
+  cmd.add_option("--http", http,
+                 "Port of the live view, a page on 127.0.0.1 that shows the fleet, the valves' risk and the events, and "
+                 "takes an operator's requests with the mission's token (0: any free port, printed; off: none)")
+      ->capture_default_str();
+  cmd.add_option("--foxglove", foxglove,
+                 "Port of the Foxglove WebSocket (foxglove.websocket.v1: vehicle poses, valves, the risk grid) on "
+                 "127.0.0.1, for Foxglove or Lichtblick with the printed address (0: any free port; off: none)")
+      ->capture_default_str();
+}
+
 void AddMissionDir(CLI::App& cmd, OperatorCommand& o) {
   cmd.add_option("--mission", o.mission_dir, "Run directory of the mission (default: $SAGE_MISSION or runs/latest)");
+  AddNetwork(cmd, o.network, "the mission's, in mission.json");
   cmd.add_flag("--insecure", o.insecure,
                "Plain DDS instead of the mission's operator identity (mission.json security_dir); a secured mission "
                "does not hear such a command");
@@ -188,9 +242,10 @@ int RunCli(int argc, char** argv) {
                                                   "processes on a private loopback-only domain; Ctrl-C stops cleanly");
   AddScenarioOverrides(*launch, launch_cmd.scenario, OverrideSet::kMission, "scenarios/fleet_field.yaml",
                        /*scenario_required=*/false);
+  AddNetwork(*launch, launch_cmd.scenario.network, "the scenario's network");
   AddController(*launch, launch_cmd.controller);
   launch->add_option("--time-scale", launch_cmd.time_scale, "Mission seconds per wall second (1 = real time)")
-      ->check(MustBePositive)
+      ->check(MustBeTimeScale)
       ->capture_default_str();
   launch->add_option("--out,-o", launch_cmd.out_dir, "Run directory (default: runs/<scenario>_launch)");
   launch->add_option("--hosts", launch_cmd.hosts, "Agent host processes (default: one per 250 vehicles)")->check(MustBePositive);
@@ -208,6 +263,7 @@ int RunCli(int argc, char** argv) {
                    "Plain DDS: no authentication, no encryption, any local process can join the mission (default: DDS "
                    "Security on)")
       ->excludes(launch_security);
+  AddLiveView(*launch, launch_cmd.http, launch_cmd.foxglove);
   launch->add_option("--resume", launch_cmd.resume_dir,
                      "Bring back the mission whose server died, from the checkpoint in this run directory (no "
                      "scenario or overrides: the run's own are used); vehicles still flying carry on, the others are "
@@ -216,13 +272,15 @@ int RunCli(int argc, char** argv) {
   ServerCommand server_cmd;
   CLI::App* server = app.add_subcommand("server", "The mission server alone (sage launch starts it for you)");
   AddScenarioOverrides(*server, server_cmd.scenario, OverrideSet::kMission, "scenarios/fleet_field.yaml");
+  AddNetwork(*server, server_cmd.scenario.network, "the scenario's network");
   AddController(*server, server_cmd.controller);
   server->add_option("--time-scale", server_cmd.time_scale, "Mission seconds per wall second (1 = real time)")
-      ->check(MustBePositive)
+      ->check(MustBeTimeScale)
       ->capture_default_str();
   server->add_option("--out,-o", server_cmd.out_dir, "Run directory (default: runs/<scenario>_server)");
   server->add_option("--domain", server_cmd.domain, "DDS domain id 0..232")->required();
   server->add_flag("--quiet", server_cmd.quiet, "No progress lines");
+  server->add_flag("--launched", server_cmd.launched, "Started by sage launch (which writes mission.json)")->group("");
   server->add_option("--security", server_cmd.security_dir,
                      "DDS Security directory (sage security init): the server's identity there (default: plain DDS)");
   server->add_flag("--resume", server_cmd.resume,
@@ -234,10 +292,22 @@ int RunCli(int argc, char** argv) {
       ->check(CLI::Range(0.0, 600.0))
       ->capture_default_str();
 
+  AddLiveView(*server, server_cmd.http, server_cmd.foxglove);
+
+  ViewCommand view_cmd;
+  CLI::App* view = app.add_subcommand(
+      "view", "Watch a finished or partial mission in the live view's page, from its run directory, with a time "
+              "slider and play/pause; serves on 127.0.0.1 until Ctrl-C (the address, with its token, is printed)");
+  view->add_option("run_dir", view_cmd.run_dir, "Run directory (trajectory.csv, fleet_events.csv, risk_events.csv, "
+                                                "scenario.yaml, metrics.json)")
+      ->required();
+  view->add_option("--http", view_cmd.http, "Port of the page on 127.0.0.1 (0: any free port)")->capture_default_str();
+
   AgentsCommand agents_cmd;
   CLI::App* agents = app.add_subcommand("agents", "An agent host: several BlueROV2s in one Box2D world (sage launch "
                                                   "starts them)");
   AddScenarioOverrides(*agents, agents_cmd.scenario, OverrideSet::kVehicles, "scenarios/fleet_field.yaml");
+  AddNetwork(*agents, agents_cmd.scenario.network, "the scenario's network");
   AddController(*agents, agents_cmd.controller);
   agents->add_option("--domain", agents_cmd.domain, "DDS domain id 0..232")->required();
   agents->add_option("--security", agents_cmd.security_dir,
@@ -366,6 +436,40 @@ int RunCli(int argc, char** argv) {
       ->check(MustBeWholeNumber)
       ->capture_default_str();
 
+  BenchLeaksCommand leaks_cmd;
+  CLI::App* bench_leaks = bench->add_subcommand(
+      "leaks", "How long a leak the server is not told of goes unnoticed: a Monte Carlo over seeds, each run hiding "
+               "random leaks (drawn from its seed) from the server and flying the same mission under each "
+               "configuration (the ergodic fleet on the Bayesian risk loop, the A* tours, the ergodic fleet on each "
+               "fixed profile); the time from onset to first detection and to confirmation, revisits after it and "
+               "false alarms. Writes DIR/leaks.md, leaks.json and leaks.svg (the distribution of detection times) and "
+               "prints the table; progress on stderr. The scenario's vehicles need sensors (see "
+               "scenarios/two_xt_leaks.yaml)");
+  bench_leaks->add_option("scenario", leaks_cmd.scenario.scenario_path, "Scenario YAML with sensors")->required();
+  bench_leaks->add_option("--runs", leaks_cmd.runs, "Monte Carlo runs (seeds --seed, --seed + 1, ...)")->capture_default_str();
+  bench_leaks->add_option("--leaks", leaks_cmd.leaks, "Hidden leaks per run (onsets uniform in [0.1, 0.9] of the mission)")
+      ->capture_default_str();
+  bench_leaks
+      ->add_option("--sites", leaks_cmd.sites,
+                   "Where the leaks are: valves (by the default profile's risk), valves-even or seabed (open water 1 m "
+                   "from every valve)")
+      ->check(CLI::IsMember({"valves", "valves-even", "seabed"}))
+      ->capture_default_str();
+  bench_leaks->add_option("--seed", leaks_cmd.first_seed, "Seed of the first run")->check(MustBeWholeNumber)->capture_default_str();
+  bench_leaks
+      ->add_option("--configs", leaks_cmd.configs,
+                   "What flies each run, comma-separated: bayes (ergodic on the Bayesian loop), astar (the tours), fixed "
+                   "(ergodic on each of the scenario's profiles, the loop not steering)")
+      ->capture_default_str();
+  bench_leaks->add_option("--profile,-p", leaks_cmd.scenario.profile,
+                          "Profile of bayes and astar (default: the scenario's default_profile)");
+  bench_leaks->add_option("--duration", leaks_cmd.scenario.duration_s, "Mission length in seconds (default: the scenario's)");
+  bench_leaks->add_option("--vehicles,-n", leaks_cmd.scenario.vehicles, "Fleet size (default: the scenario's)");
+  bench_leaks->add_option("--assignment", leaks_cmd.scenario.assignment, "Fleet coverage of the ergodic runs")
+      ->check(CLI::IsMember({"shared", "partition", "regions"}));
+  bench_leaks->add_option("--jobs,-j", leaks_cmd.jobs, "Missions flown at once (each on one thread)")->capture_default_str();
+  bench_leaks->add_option("--out,-o", leaks_cmd.out_dir, "Output directory (default: runs/bench_leaks_<scenario>)");
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {
@@ -414,14 +518,22 @@ int RunCli(int argc, char** argv) {
     }
     if (*server) return CmdServer(server_cmd);
     if (*agents) return CmdAgents(agents_cmd);
-    if (*vehicle_add) return AddVehicles(FindMission(op.mission_dir), op.add_count, op.insecure);
-    if (*vehicle_remove) return RemoveVehicle(FindMission(op.mission_dir), op.remove_id, op.insecure);
-    if (*risk_set) return SetRisk(FindMission(op.mission_dir), op.valve, op.weight, op.source, op.insecure);
-    if (*stop) return StopMission(FindMission(op.mission_dir), op.insecure);
+    if (*view) return CmdView(view_cmd);
+    // The mission as mission.json says, on this machine's network as the options say.
+    const auto mission = [&] {
+      MissionFile m = FindMission(op.mission_dir);
+      m.network = op.network.Applied(m.network);
+      return m;
+    };
+    if (*vehicle_add) return AddVehicles(mission(), op.add_count, op.insecure);
+    if (*vehicle_remove) return RemoveVehicle(mission(), op.remove_id, op.insecure);
+    if (*risk_set) return SetRisk(mission(), op.valve, op.weight, op.source, op.insecure);
+    if (*stop) return StopMission(mission(), op.insecure);
     if (*security_init) return CmdSecurityInit(security_cmd);
     if (*generate) return CmdFieldGenerate(field_options, field_out);
     if (*seabed) return CmdFieldSeabed(seabed_seed, seabed_name, seabed_out);
     if (*bench_scale) return CmdBenchScale(bench_cmd);
+    if (*bench_leaks) return CmdBenchLeaks(leaks_cmd);
   } catch (const maps::ScenarioError& e) {
     std::cerr << "sage: error: " << e.what() << "\n";
     return 2;

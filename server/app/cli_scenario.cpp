@@ -48,6 +48,16 @@ void CheckOverrides(const ScenarioOverrides& o) {
 
 }  // namespace
 
+maps::NetworkSettings NetworkOverrides::Applied(maps::NetworkSettings network) const {
+  if (interface_name) network.interface_name = *interface_name;
+  if (!peers.empty()) network.peers = peers;
+  if (multicast) network.multicast = *multicast == "on";
+  if (const std::string problem = maps::NetworkProblem(network, "command line"); !problem.empty()) {
+    throw maps::ScenarioError(problem);
+  }
+  return network;
+}
+
 maps::Scenario LoadWithOverrides(const ScenarioOverrides& o) {
   CheckOverrides(o);
   maps::Scenario scenario = maps::LoadScenario(o.scenario_path);
@@ -79,9 +89,25 @@ maps::Scenario LoadWithOverrides(const ScenarioOverrides& o) {
   if (o.age_weighting_laps) scenario.fleet.age_weighting_laps = *o.age_weighting_laps;
   if (o.risk_share) scenario.fleet.risk_share = *o.risk_share;
   if (o.guard) scenario.guard.enabled = (*o.guard == "on");
+  scenario.network = o.network.Applied(scenario.network);
   if (o.forgetting_time_s) scenario.ergodic.forgetting_time_s = *o.forgetting_time_s;
   if (o.basis_order) scenario.ergodic.basis_order = *o.basis_order;
   if (o.min_turn_radius_m) scenario.ergodic.min_turn_radius_m = *o.min_turn_radius_m;
+  if (o.steer) {
+    if (*o.steer != "posterior" && *o.steer != "prior") {
+      throw maps::ScenarioError("--steer = " + *o.steer + ": must be posterior (the Bayesian loop) or prior");
+    }
+    scenario.fusion.steer = *o.steer == "posterior";
+  }
+  // Drawn last, from the effective seed and duration, so `sage run DIR/scenario.yaml` (which holds
+  // them) and agent hosts given the same options meet the same leaks.
+  if (o.leak_sites && !o.random_leaks) {
+    throw maps::ScenarioError("--leak-sites = " + *o.leak_sites + ": says where --random-leaks N draws its leaks; give N");
+  }
+  if (o.random_leaks) {
+    const maps::LeakSites sites = maps::ParseLeakSites(o.leak_sites.value_or("valves"), "--leak-sites");
+    scenario = maps::WithRandomLeaks(scenario, *o.random_leaks, sites);
+  }
   if (o.model) {
     const maps::MotionModel model = maps::ParseMotionModel(*o.model, "--model");
     for (maps::VehicleSpec& v : scenario.vehicles) v.model = model;

@@ -6,10 +6,23 @@
 #include <cstdint>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "maps/scenario/scenario.h"
 
 namespace sage::server {
+
+/// Where a process's DDS traffic goes (the scenario's `network`), as --interface, --peer (any
+/// number) and --multicast on|off give it; what is not given stays as the scenario (or the
+/// mission's mission.json, for operators) says.
+struct NetworkOverrides {
+  std::optional<std::string> interface_name;
+  std::vector<std::string> peers;
+  std::optional<std::string> multicast;  // "on" | "off"
+  /// `network` with these overrides; throws maps::ScenarioError (one line naming the option) if
+  /// the result breaks maps::NetworkProblem's rules.
+  maps::NetworkSettings Applied(maps::NetworkSettings network) const;
+};
 
 struct ScenarioOverrides {
   std::string scenario_path;
@@ -27,6 +40,11 @@ struct ScenarioOverrides {
   std::optional<double> weight_exponent;  // both the SMC target's and the A* waits
   std::optional<double> age_weighting_laps;  // regions
   std::optional<double> risk_share;          // regions
+  NetworkOverrides network;                  // launch, server, agents
+  // Leak sensing (issue 9): random hidden leaks drawn by seed, and whether vehicles steer on the posterior.
+  std::optional<int> random_leaks;
+  std::optional<std::string> leak_sites;     // valves | valves-even | seabed
+  std::optional<std::string> steer;          // posterior | prior
 };
 
 /// Loads the scenario and applies the overrides; each bad value is a maps::ScenarioError naming

@@ -1,18 +1,31 @@
 #include "server/app/fleet_commands.h"
 
+#include <arpa/inet.h>
+#include <netinet/in.h>
+#include <sys/socket.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <charconv>
 #include <csignal>
+#include <cstring>
+#include <filesystem>
 #include <string>
 
 #include <fmt/format.h>
 
 #include "agents/node/agent_node.h"
 #include "maps/seabed/seabed_obstacles.h"
+#include "server/app/operators.h"
 #include "server/app/resume_plan.h"
 #include "server/app/security_command.h"
 #include "server/node/server_node.h"
+#include "server/report/mission_file.h"
 
 namespace sage::server {
 namespace {
+
+namespace fs = std::filesystem;
 
 std::atomic<bool> g_stop{false};
 std::atomic<int> g_stop_signal{0};
@@ -37,6 +50,35 @@ const std::atomic<bool>* StopOnSignals() {
 
 int StopSignal() { return g_stop_signal.load(); }
 
+std::optional<int> PortOption(const std::string& flag, const std::string& text) {
+  if (text == "off") return std::nullopt;
+  int port = -1;
+  const auto [end, error] = std::from_chars(text.data(), text.data() + text.size(), port);
+  if (error != std::errc() || end != text.data() + text.size() || port < 0 || port > 65535) {
+    throw maps::ScenarioError(fmt::format("{} = {}: must be a port in 0..65535 (0: any free one) or off", flag, text));
+  }
+  return port;
+}
+
+void CheckPortFree(const std::string& flag, int port) {
+  if (port <= 0) return;  // any free port
+  const int fd = socket(AF_INET, SOCK_STREAM | SOCK_CLOEXEC, 0);
+  if (fd < 0) return;  // the server will say
+  sockaddr_in address{};
+  address.sin_family = AF_INET;
+  address.sin_port = htons(static_cast<std::uint16_t>(port));
+  address.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  int yes = 1;
+  setsockopt(fd, SOL_SOCKET, SO_REUSEADDR, &yes, sizeof yes);
+  const bool bound = bind(fd, reinterpret_cast<const sockaddr*>(&address), sizeof address) == 0;
+  const int error = errno;
+  close(fd);
+  if (!bound) {
+    throw maps::ScenarioError(fmt::format("{} = {}: cannot listen on 127.0.0.1:{}: {} (0 takes any free port)", flag,
+                                          port, port, std::strerror(error)));
+  }
+}
+
 int CmdServer(const ServerCommand& c) {
   const std::atomic<bool>* stop = StopOnSignals();
   const maps::Scenario scenario = LoadWithOverrides(c.scenario);
@@ -55,6 +97,36 @@ int CmdServer(const ServerCommand& c) {
   options.start_in_s = c.resume ? 0.0 : c.start_in_s;
   options.show_progress = !c.quiet;
   options.stop = stop;
+  options.on_started = [&] {
+    const std::string security_dir =
+        c.security_dir.empty() ? std::string() : fs::absolute(c.security_dir).lexically_normal().string();
+    WriteDdsConfigFiles(options.out_dir, scenario.network, c.domain, security_dir);
+    if (c.launched || c.resume) return;
+    // A server started by hand says where its mission is, as sage launch does, so that the
+    // operators' commands (sage risk set, vehicle add, stop --mission DIR) find it.
+    MissionFile mission;
+    mission.domain_id = c.domain;
+    mission.scenario_path = (fs::absolute(options.out_dir) / "scenario.yaml").string();
+    mission.run_dir = fs::absolute(options.out_dir).string();
+    mission.time_scale = c.time_scale;
+    mission.controller = c.controller;
+    mission.profile = c.scenario.profile;
+    mission.security_dir = security_dir;
+    mission.network = scenario.network;
+    WriteMissionFile(options.out_dir, mission);
+  };
+  options.http_port = PortOption("--http", c.http);
+  options.foxglove_port = PortOption("--foxglove", c.foxglove);
+  // Vehicles added from the live view join as `sage vehicle add`'s do: a detached agent host on
+  // the mission's domain, with its identity, flying the run's effective scenario.
+  MissionFile mission;
+  mission.domain_id = c.domain;
+  mission.run_dir = std::filesystem::absolute(options.out_dir).string();
+  mission.scenario_path = (std::filesystem::path(mission.run_dir) / "scenario.yaml").string();
+  mission.controller = c.controller;
+  mission.network = scenario.network;
+  mission.security_dir = c.security_dir.empty() ? std::string() : std::filesystem::absolute(c.security_dir).string();
+  options.start_added_vehicles = [mission](int first_id, int count) { return StartAddedHost(mission, first_id, count); };
   return RunServerNode(scenario, options);
 }
 

@@ -17,11 +17,13 @@
 #include <spdlog/spdlog.h>
 
 #include "maps/seabed/seabed_obstacles.h"
+#include "agents/node/network.h"
 #include "proto/dds_config.h"
 #include "proto/dds_endpoints.h"
 #include "proto/messages.h"
 #include "proto/mission_clock.h"
 #include "proto/qos.h"
+#include "server/app/fleet_commands.h"
 #include "server/app/processes.h"
 #include "server/app/resume_plan.h"
 #include "server/app/security_command.h"
@@ -97,6 +99,9 @@ std::string WhatWasKept(const std::string& dir) {
 }  // namespace
 
 int Launch(const LaunchCommand& c) {
+  // The live view's ports, checked before anything starts.
+  CheckPortFree("--http", PortOption("--http", c.http).value_or(0));
+  CheckPortFree("--foxglove", PortOption("--foxglove", c.foxglove).value_or(0));
   const bool resume = !c.resume_dir.empty();
   maps::Scenario scenario;
   std::string out_dir;
@@ -112,6 +117,7 @@ int Launch(const LaunchCommand& c) {
     const RecordSummary record = ReadRecordSummary(out_dir);
     if (record.complete) throw maps::ScenarioError(fmt::format("--resume = {}: the mission there is complete", out_dir));
     scenario = maps::LoadScenario((fs::path(out_dir) / "scenario.yaml").string());
+    scenario.network = c.scenario.network.Applied(scenario.network);  // resumed on this machine's network
     to_resume = VehiclesToResume(scenario, out_dir);  // reads the checkpoint: fails here if there is none
     mission = previous;
     mission.resumes = previous.resumes + 1;
@@ -174,8 +180,8 @@ int Launch(const LaunchCommand& c) {
   // The launcher is the operator's own process: it reads status and states and sends the stop.
   const std::optional<proto::SecurityIdentity> identity =
       MissionIdentity(mission.security_dir, proto::SecurityRole::kOperator, domain, resume ? "mission.json security_dir" : "--security");
-  proto::Participant participant(domain, proto::LocalhostConfigXml(proto::kMaxLocalParticipants,
-                                                                   proto::LoopbackDiscovery::kUnicastPeers, identity));
+  proto::Participant participant(
+      domain, proto::CycloneConfigXml(agents::NetworkOf(scenario.network), proto::kMaxLocalParticipants, identity));
   {
     // The reservation keeps other launches off this domain, not a server started by hand.
     proto::Reader<proto::MissionStatus> servers(participant, proto::MissionStatusQos());
@@ -193,6 +199,7 @@ int Launch(const LaunchCommand& c) {
   mission.scenario_path = scenario_file;
   mission.run_dir = fs::absolute(out_dir).string();
   mission.launcher_pid = getpid();
+  mission.network = scenario.network;
   try {
     if (!resume) WriteScenarioFile(out_dir, scenario);
     WriteMissionFile(out_dir, mission);
@@ -202,10 +209,13 @@ int Launch(const LaunchCommand& c) {
   if (c.point_latest) PointLatestAt(out_dir);
 
   std::vector<std::string> common = {"--domain", std::to_string(domain), "--controller", mission.controller};
+  // Every process on the mission's network (the scenario's, or a resumed mission's new --interface).
+  const std::vector<std::string> network_args = NetworkArgs(scenario.network);
+  common.insert(common.end(), network_args.begin(), network_args.end());
   // Each process takes its own role's identity from the mission's directory.
   if (secured) common.insert(common.end(), {"--security", mission.security_dir});
   std::vector<std::string> server_args = {"server", scenario_file, "--out", out_dir, "--time-scale",
-                                          Number(mission.time_scale), "--quiet"};
+                                          Number(mission.time_scale), "--quiet", "--launched"};
   if (!mission.profile.empty()) server_args.insert(server_args.end(), {"--profile", mission.profile});
   if (resume) {
     server_args.insert(server_args.end(), {"--resume", "--resumes", std::to_string(mission.resumes)});
@@ -216,6 +226,8 @@ int Launch(const LaunchCommand& c) {
     const double lead_s = 1.0 + 0.001 * static_cast<double>(scenario.vehicles.size());
     server_args.insert(server_args.end(), {"--start-in", Number(lead_s)});
   }
+  // The live view: the server prints its addresses (with the mission's token).
+  server_args.insert(server_args.end(), {"--http", c.http, "--foxglove", c.foxglove});
   server_args.insert(server_args.end(), common.begin(), common.end());
   int server_stdout = -1;
   const pid_t server = Spawn(server_args, "", false, &server_stdout);
@@ -348,6 +360,10 @@ int Launch(const LaunchCommand& c) {
                            "remove ID | ") +
                (c.point_latest ? std::string("sage stop (they find this mission through runs/latest)")
                                : fmt::format("sage stop, each with --mission {}", out_dir)));
+  if (c.http != "off") {
+    terminal.Log("launch: or in a browser on this machine, at the address of the server's 'live view' line (its token "
+                 "is also in " + (fs::path(out_dir) / "live_token").string() + ")");
+  }
 
   std::size_t next_event = 0;
   while (next_event < scenario.fleet_events.size() && scenario.fleet_events[next_event].time_s <= resumed_at) ++next_event;

@@ -7,6 +7,7 @@
 
 #include <fmt/format.h>
 
+#include "agents/node/network.h"
 #include "proto/dds_config.h"
 #include "proto/dds_endpoints.h"
 #include "proto/messages.h"
@@ -14,6 +15,7 @@
 #include "proto/qos.h"
 #include "server/app/processes.h"
 #include "server/app/security_command.h"
+#include "server/operator_requests.h"
 
 namespace sage::server {
 namespace {
@@ -40,8 +42,8 @@ proto::Participant OperatorParticipant(const MissionFile& mission, bool insecure
       insecure ? std::nullopt
                : MissionIdentity(mission.security_dir, proto::SecurityRole::kOperator, mission.domain_id,
                                  "mission.json security_dir");
-  return proto::Participant(mission.domain_id, proto::LocalhostConfigXml(proto::kMaxLocalParticipants,
-                                                                         proto::LoopbackDiscovery::kUnicastPeers, identity));
+  return proto::Participant(mission.domain_id, proto::CycloneConfigXml(agents::NetworkOf(mission.network),
+                                                                       proto::kMaxLocalParticipants, identity));
 }
 
 struct CommandAnswer {
@@ -99,30 +101,35 @@ MissionFile FindMission(const std::string& dir) {
   return ReadMissionFile(where);
 }
 
+std::string StartAddedHost(const MissionFile& mission, int first_id, int count) {
+  const std::string log = (fs::path(mission.run_dir) / fmt::format("agents-add-{}.log", first_id)).string();
+  std::vector<std::string> args = {"agents", mission.scenario_path, "--add", std::to_string(count), "--first-id",
+                                   std::to_string(first_id), "--domain", std::to_string(mission.domain_id), "--controller",
+                                   mission.controller};
+  // The new host joins a secured mission with the mission's agent-host identity, as launch's own do.
+  if (!mission.security_dir.empty()) args.insert(args.end(), {"--security", mission.security_dir});
+  // ... and on this machine's network (a vehicle may join from another machine than the server's).
+  const std::vector<std::string> network = NetworkArgs(mission.network);
+  args.insert(args.end(), network.begin(), network.end());
+  const pid_t pid = Spawn(args, log, /*detach=*/true);
+  return HostStartedLine(pid, count, first_id, log);
+}
+
 int AddVehicles(const MissionFile& mission, int count, bool insecure) {
-  if (count < 1 || count > 10000) throw maps::ScenarioError(fmt::format("--count = {}: must be in 1..10000", count));
+  CheckAddCount(count);
   proto::Participant participant = OperatorParticipant(mission, insecure);
   const std::optional<CommandAnswer> answer = AskServer(participant, "reserve", static_cast<std::uint32_t>(count), 0);
   if (!answer) return NoMission(mission, insecure);
   if (!answer->accepted) {
-    std::fprintf(stderr, "sage: error: the mission refused: %s\n", answer->reason.c_str());
+    std::fprintf(stderr, "sage: error: %s\n", CommandRefusedLine(answer->reason).c_str());
     return 2;
   }
-  const int first = answer->first_id;
-  const std::string log = (fs::path(mission.run_dir) / fmt::format("agents-add-{}.log", first)).string();
-  std::vector<std::string> args = {"agents", mission.scenario_path, "--add", std::to_string(count), "--first-id",
-                                   std::to_string(first), "--domain", std::to_string(mission.domain_id), "--controller",
-                                   mission.controller};
-  // The new host joins a secured mission with the mission's agent-host identity, as launch's own do.
-  if (!mission.security_dir.empty()) args.insert(args.end(), {"--security", mission.security_dir});
-  const pid_t pid = Spawn(args, log, /*detach=*/true);
-  std::printf("started agent host pid %d with %d vehicle(s): rov%d..rov%d, ids %d..%d (log: %s)\n", pid, count,
-              first + 1, first + count, first, first + count - 1, log.c_str());
+  std::printf("%s\n", StartAddedHost(mission, answer->first_id, count).c_str());
   return 0;
 }
 
 int RemoveVehicle(const MissionFile& mission, int id, bool insecure) {
-  if (id < 0) throw maps::ScenarioError(fmt::format("id = {}: must be >= 0", id));
+  CheckVehicleId(id);
   proto::Participant participant = OperatorParticipant(mission, insecure);
   proto::Reader<proto::VehicleState> states(participant, proto::VehicleStateReaderQos());
   // Hear the vehicle before ordering it out: the host's dispose reaches only a reader already
@@ -140,7 +147,7 @@ int RemoveVehicle(const MissionFile& mission, int id, bool insecure) {
   const std::optional<CommandAnswer> answer = AskServer(participant, "remove", 0, static_cast<std::uint32_t>(id));
   if (!answer) return NoMission(mission, insecure);
   if (!answer->accepted) {
-    std::fprintf(stderr, "sage: error: the mission refused: %s\n", answer->reason.c_str());
+    std::fprintf(stderr, "sage: error: %s\n", CommandRefusedLine(answer->reason).c_str());
     return 2;
   }
   // The server told its host; the vehicle's state is disposed when it has left.
@@ -154,26 +161,19 @@ int RemoveVehicle(const MissionFile& mission, int id, bool insecure) {
     }
   }
   if (!gone) {
-    std::fprintf(stderr, "sage: error: vehicle %d was told to leave at t = %.1f s but had not left within 5 s\n", id,
-                 answer->mission_time_s);
+    std::fprintf(stderr, "sage: error: %s\n",
+                 VehicleNotLeftLine(id, answer->mission_time_s, std::chrono::duration<double>(kAnswerTimeout).count()).c_str());
     return 1;
   }
   // The server records the leave when the state is disposed, a cycle or two after its order.
-  std::printf("vehicle %d left the mission (told to at t = %.1f s)\n", id, answer->mission_time_s);
+  std::printf("%s\n", VehicleLeftLine(id, answer->mission_time_s).c_str());
   return 0;
 }
 
 int SetRisk(const MissionFile& mission, const std::string& valve, double weight, const std::string& source,
             bool insecure) {
-  if (!(weight >= 0.0 && weight <= maps::kMaxRawWeight)) {
-    throw maps::ScenarioError(fmt::format("weight = {}: must be a number in [0, 1e12] (weights are relative)", weight));
-  }
   const maps::Scenario scenario = maps::LoadScenario(mission.scenario_path);
-  if (scenario.ValveIndex(valve) < 0) {
-    std::string names;
-    for (const maps::Valve& v : scenario.AllValves()) names += (names.empty() ? "" : ", ") + v.name;
-    throw maps::ScenarioError("valve = " + valve + ": not in this mission (valves: " + names + ")");
-  }
+  CheckRiskRequest(scenario, valve, weight);
   proto::Participant participant = OperatorParticipant(mission, insecure);
   // The answer's reader exists before the update is written, so the answer reaches it.
   proto::Reader<proto::RiskUpdateResult> results(participant, proto::RiskUpdateResultQos());
@@ -207,11 +207,10 @@ int SetRisk(const MissionFile& mission, const std::string& valve, double weight,
     return 1;
   }
   if (!answer->applied) {
-    std::fprintf(stderr, "sage: error: the mission did not apply it: %s\n", answer->reason.c_str());
+    std::fprintf(stderr, "sage: error: %s\n", RiskRefusedLine(answer->reason).c_str());
     return 2;
   }
-  std::printf("%s: risk %g applied at t = %.1f s; now %.1f %% of the field's risk\n", valve.c_str(), weight,
-              answer->mission_time_s, 100.0 * answer->new_share);
+  std::printf("%s\n", RiskAppliedLine(valve, weight, answer->mission_time_s, answer->new_share).c_str());
   return 0;
 }
 
@@ -223,7 +222,7 @@ int StopMission(const MissionFile& mission, bool insecure) {
     std::fprintf(stderr, "sage: error: %s\n", answer->reason.c_str());
     return 1;
   }
-  std::printf("the mission stops at t = %.1f s; its server writes %s\n", answer->mission_time_s, mission.run_dir.c_str());
+  std::printf("%s\n", StopLine(answer->mission_time_s, mission.run_dir).c_str());
   return 0;
 }
 

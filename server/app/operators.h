@@ -2,6 +2,8 @@
 // The operators' commands on a running mission, found through its run directory's mission.json
 // (default $SAGE_MISSION, else runs/latest): each asks the mission's server over DDS and says
 // what the mission did — applied, or refused and why.
+#include <string>
+
 #include "server/app/options.h"
 #include "server/report/mission_file.h"
 
@@ -17,6 +19,11 @@ MissionFile FindMission(const std::string& dir);
 /// `sage vehicle add`: the server issues `count` ids; a detached agent host with that many new
 /// vehicles (rov<id + 1>, at free starts) joins the mission (with the agent-host identity).
 int AddVehicles(const MissionFile& mission, int count, bool insecure = false);
+/// Starts a detached agent host for `count` vehicles with the ids the server issued from
+/// `first_id` (rov<id + 1>, at free starts), logging to RUN_DIR/agents-add-<first_id>.log; returns
+/// the one-line answer (HostStartedLine). Both `sage vehicle add` and the live view's "add" use it.
+/// Throws std::runtime_error if it cannot fork.
+std::string StartAddedHost(const MissionFile& mission, int first_id, int count);
 /// `sage vehicle remove`: the server takes vehicle `id` out (or says why not); waits for it to leave.
 int RemoveVehicle(const MissionFile& mission, int id, bool insecure = false);
 /// `sage risk set`: a valve's new raw risk weight.

@@ -40,6 +40,8 @@ struct LaunchCommand {
   bool point_latest = true;      ///< runs/latest points to the mission (off: --no-latest)
   std::string security_dir;      ///< DDS Security identities to use (default: new ones in DIR/security)
   bool insecure = false;         ///< plain DDS: no authentication, no encryption (--insecure)
+  std::string http = "0";        ///< the live view's port: "off", or 0..65535 (0: any free one)
+  std::string foxglove = "0";    ///< the Foxglove WebSocket's port: "off", or 0..65535
   const std::atomic<bool>* stop = nullptr;
 };
 
@@ -55,6 +57,15 @@ struct ServerCommand {
   int resumes = 0;
   double start_in_s = 0.0;       ///< wall seconds from start-up to the mission's t = 0 (a fresh mission)
   std::string security_dir;      ///< DDS Security directory: the server's identity there (empty: plain DDS)
+  bool launched = false;         ///< started by sage launch, whose mission.json it is (else the server writes one)
+  std::string http = "0";        ///< the live view's port: "off", or 0..65535 (0: any free one)
+  std::string foxglove = "0";    ///< the Foxglove WebSocket's port: "off", or 0..65535
+};
+
+/// sage view
+struct ViewCommand {
+  std::string run_dir;           ///< a finished or partial run directory
+  std::string http = "0";        ///< the page's port, 0..65535 (0: any free one)
 };
 
 /// sage agents
@@ -84,6 +95,18 @@ struct BenchScaleCommand {
   std::uint64_t seed = 1;                  ///< the fields' and missions' seed
 };
 
+/// sage bench leaks
+struct BenchLeaksCommand {
+  ScenarioOverrides scenario;              ///< the path, and --profile, --duration, --vehicles, --assignment
+  int runs = 100;                          ///< Monte Carlo runs (seeds first_seed, first_seed + 1, ...)
+  int leaks = 1;                           ///< hidden leaks per run
+  std::string sites = "valves";            ///< valves | valves-even | seabed
+  std::uint64_t first_seed = 1;
+  std::string configs = "bayes,astar,fixed";  ///< what flies each run (see CmdBenchLeaks)
+  std::string out_dir;                     ///< default runs/bench_leaks_<scenario>
+  int jobs = 1;                            ///< missions flown at once
+};
+
 /// The operators' commands on a running mission.
 struct OperatorCommand {
   std::string mission_dir;       ///< default: $SAGE_MISSION, else runs/latest
@@ -93,6 +116,7 @@ struct OperatorCommand {
   double weight = 0.0;
   std::string source = "operator";
   bool insecure = false;         ///< plain DDS even if the mission is secured (its server will not hear it)
+  NetworkOverrides network;      ///< where this machine's DDS traffic goes (default: mission.json's)
 };
 
 /// sage security init

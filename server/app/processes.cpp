@@ -80,6 +80,14 @@ pid_t Spawn(const std::vector<std::string>& args, const std::string& log_path, b
   return pid;
 }
 
+std::vector<std::string> NetworkArgs(const maps::NetworkSettings& network) {
+  if (network == maps::NetworkSettings{}) return {};
+  std::vector<std::string> args = {"--interface", network.interface_name};
+  for (const std::string& peer : network.peers) args.insert(args.end(), {"--peer", peer});
+  args.insert(args.end(), {"--multicast", network.multicast ? "on" : "off"});
+  return args;
+}
+
 std::string DescribeExit(int wait_status) {
   if (WIFSIGNALED(wait_status)) {
     const int sig = WTERMSIG(wait_status);

@@ -7,6 +7,8 @@
 #include <string>
 #include <vector>
 
+#include "maps/scenario/scenario.h"
+
 namespace sage::server {
 
 /// fork + exec of this same `sage` binary with `args`; stdout/stderr go to `log_path` unless it
@@ -16,6 +18,10 @@ namespace sage::server {
 /// std::runtime_error if it cannot fork.
 pid_t Spawn(const std::vector<std::string>& args, const std::string& log_path, bool detach = false,
             int* stdout_pipe = nullptr);
+
+/// The options that give a child process `network` (--interface, --peer..., --multicast); none
+/// for this machine alone (the default).
+std::vector<std::string> NetworkArgs(const maps::NetworkSettings& network);
 
 /// "exited with status 1", "was killed by SIGKILL", from a waitpid status.
 std::string DescribeExit(int wait_status);

@@ -128,25 +128,7 @@ int CmdEvaluate(const EvaluateCommand& c) {
   const maps::Scenario scenario = maps::LoadScenario(c.scenario_path);
   const maps::RiskProfile* profile = &scenario.ProfileOrThrow(c.profile);
   const Trajectory trajectory = ReadTrajectoryCsv(c.trajectory_path);
-  if (trajectory.samples.empty()) throw maps::ScenarioError(c.trajectory_path + ": no samples");
-  // The weights over time follow the profile and its events, as they would have in a mission.
-  std::vector<WeightChange> schedule;
-  Eigen::VectorXd raw = scenario.ProfileWeights(*profile);
-  schedule.push_back({0.0, raw / raw.sum()});
-  for (const maps::RiskEvent& e : profile->events) {
-    raw[scenario.ValveIndex(e.valve)] = e.weight;
-    schedule.push_back({e.time_s, raw / raw.sum()});
-  }
-  const double last = trajectory.samples.back().time_s;
-  const double duration = c.duration_s.value_or(last > 0.0 ? last : 1.0 / scenario.control_rate_hz);
-  if (!(duration > 0.0) || !std::isfinite(duration)) {
-    throw maps::ScenarioError(fmt::format("--duration = {}: must be a finite number > 0", duration));
-  }
-  MetricsOptions options;
-  options.profile = profile->name;
-  // A log of hours gets a metric sample every few seconds rather than a million of them.
-  options.metric_sample_period_s = std::max(1.0, duration / 1e5);
-  const MissionMetrics metrics = ComputeMetrics(trajectory, scenario, schedule, duration, options);
+  const MissionMetrics metrics = EvaluateRecorded(trajectory, scenario, *profile, c.duration_s, c.trajectory_path);
   std::cout << FormatTable({metrics});
   if (!c.out_dir.empty()) {
     PrepareRunDirectory(c.out_dir);
@@ -154,6 +136,7 @@ int CmdEvaluate(const EvaluateCommand& c) {
     // The profile's risk changes are marked at their valves, with the share they gave.
     std::vector<plots::EventMarker> events;
     const std::vector<maps::Valve> valves = scenario.AllValves();
+    const auto schedule = ProfileSchedule(scenario, *profile);
     for (std::size_t k = 0; k < profile->events.size(); ++k) {
       const maps::RiskEvent& e = profile->events[k];
       const int valve = scenario.ValveIndex(e.valve);

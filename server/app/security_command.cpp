@@ -8,9 +8,11 @@
 
 #include <fmt/format.h>
 
+#include "agents/node/network.h"
 #include "maps/scenario/scenario.h"
 #include "proto/dds_config.h"
 #include "proto/security/security_files.h"
+#include "server/report/mission_file.h"
 
 namespace sage::server {
 
@@ -91,6 +93,19 @@ std::optional<proto::SecurityIdentity> MissionIdentity(const std::string& securi
     throw maps::ScenarioError(what + " = " + security_dir + ": " + e.what());
   }
   return proto::IdentityInDirectory(security_dir, role);
+}
+
+void WriteDdsConfigFiles(const std::string& run_dir, const maps::NetworkSettings& network, int domain_id,
+                         const std::string& security_dir) {
+  const std::optional<proto::SecurityIdentity> viewer =
+      security_dir.empty() ? std::nullopt
+                           : std::optional<proto::SecurityIdentity>(proto::IdentityInDirectory(security_dir, proto::SecurityRole::kViewer));
+  try {
+    WriteRunFile(run_dir, "cyclonedds.xml",
+                 proto::CycloneConfigDocument(agents::NetworkOf(network), domain_id, proto::kMaxLocalParticipants, viewer));
+  } catch (const std::exception& e) {
+    throw maps::ScenarioError(fmt::format("{}/cyclonedds.xml: {}", run_dir, e.what()));
+  }
 }
 
 }  // namespace sage::server

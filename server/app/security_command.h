@@ -4,6 +4,7 @@
 #include <optional>
 #include <string>
 
+#include "maps/scenario/scenario.h"
 #include "proto/access_policy.h"
 #include "server/app/options.h"
 
@@ -24,5 +25,13 @@ std::string MakeMissionSecurity(const std::string& dir, double mission_wall_s);
 /// the message ("--security", "mission.json security_dir").
 std::optional<proto::SecurityIdentity> MissionIdentity(const std::string& security_dir, proto::SecurityRole role,
                                                        int domain_id, const std::string& what = "--security");
+
+/// The run directory's cyclonedds.xml: the mission's Cyclone configuration (its network, domain
+/// `domain_id`), with the viewer identity of `security_dir` when the mission is secured, so that
+/// another tool joins it to read every topic (CYCLONEDDS_URI=file://RUN/cyclonedds.xml; ROS 2:
+/// ROS_DOMAIN_ID=domain_id, `ros2 topic echo /sage/mission_status`). Throws maps::ScenarioError
+/// with one line if it cannot be written or the network's interface is not on this machine.
+void WriteDdsConfigFiles(const std::string& run_dir, const maps::NetworkSettings& network, int domain_id,
+                         const std::string& security_dir);
 
 }  // namespace sage::server

@@ -6,16 +6,20 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
-#include <deque>
 #include <filesystem>
 #include <iostream>
 #include <map>
+#include <memory>
+#include <optional>
 #include <random>
+#include <string_view>
 #include <thread>
+#include <vector>
 
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
 
+#include "agents/node/network.h"
 #include "agents/node/wire.h"
 #include "maps/world.h"
 #include "proto/dds_config.h"
@@ -24,41 +28,24 @@
 #include "proto/mission_clock.h"
 #include "proto/qos.h"
 #include "proto/wire_size.h"
+#include "server/live/live_view.h"
+#include "server/live/mission_frames.h"
+#include "server/operator_requests.h"
 #include "server/report/checkpoint.h"
 #include "server/report/report.h"
+#include "server/node/server_door.h"
 #include "server/report/run_directory.h"
+#include "server/report/view_token.h"
 
 namespace sage::server {
 namespace {
 
-// Text from outside as it may appear in a log line: at most 64 characters, control characters
-// (newline, escape) as '?', so a sender cannot forge or break lines.
-std::string LogSafe(std::string_view text) {
-  std::string out(text.substr(0, 64));
-  for (char& c : out) {
-    if (static_cast<unsigned char>(c) < 0x20 || c == 0x7f) c = '?';
-  }
-  return text.size() > 64 ? out + "..." : out;
-}
-
-using proto::AsStringView;
 using proto::BorrowString;
 using proto::NowRealtimeNs;
 using SteadyClock = std::chrono::steady_clock;
 
 // Up to this many joins of one cycle are logged by name; more are summed up in one line.
 constexpr std::size_t kJoinsNamed = 5;
-
-// An operator's command the server executed, kept to answer its repeats (an operator sends a
-// command again, same stamp, until it is answered). Far more than a few seconds of commands.
-struct AnsweredCommand {
-  std::int64_t stamp_ns = 0;
-  std::string verb;
-  std::uint32_t count = 0;
-  std::uint32_t vehicle_id = 0;
-  OperatorAnswer answer;
-};
-constexpr std::size_t kAnsweredKept = 256;
 
 // The record, and the log lines an operator reads: joins, losses and risk changes as they
 // happen (joins of one cycle summed up when many).
@@ -71,6 +58,7 @@ class LoggedRecord final : public MissionRecorder {
   }
   void OnFleetEvent(const FleetEventRecord& e) override {
     run_.OnFleetEvent(e);
+    if (live_ != nullptr) live_->OnEvent(live::EventOf(e));
     if (e.what == "joined" || e.what == "rejoined") {
       joins_.push_back(e);
     } else if (e.vehicle_id >= 0) {
@@ -82,6 +70,7 @@ class LoggedRecord final : public MissionRecorder {
   void OnRegions(double t, const std::vector<RegionRecord>& r) override { run_.OnRegions(t, r); }
   void OnRiskEvent(const RiskEventRecord& e) override {
     run_.OnRiskEvent(e);
+    if (live_ != nullptr) live_->OnEvent(live::EventOf(e));
     spdlog::info("server: risk of {} set to {} by {} at t = {:.1f} s ({:.1f} % of the field's risk)", e.valve,
                  e.raw_weight, e.source, e.time_s, 100.0 * e.new_share);
   }
@@ -98,9 +87,12 @@ class LoggedRecord final : public MissionRecorder {
     }
     joins_.clear();
   }
+  /// The live view's event log hears the record's events from now on.
+  void ShowIn(live::LiveView* live) { live_ = live; }
 
  private:
   RunDirectory& run_;
+  live::LiveView* live_ = nullptr;
   std::vector<FleetEventRecord> joins_;
 };
 
@@ -146,9 +138,9 @@ int RunServerNode(const maps::Scenario& scenario, const ServerNodeOptions& optio
                                      checkpoint.time_s, core.time_s(), tail.samples.size()));
   }
 
-  proto::Participant participant(options.domain_id, proto::LocalhostConfigXml(proto::kMaxLocalParticipants,
-                                                                             proto::LoopbackDiscovery::kUnicastPeers,
-                                                                             options.security));
+  proto::Participant participant(options.domain_id,
+                                 proto::CycloneConfigXml(agents::NetworkOf(scenario.network), proto::kMaxLocalParticipants,
+                                                         options.security));
   {
     // Two servers on one domain would both adopt the same vehicles and clocks: refuse to be the
     // second. Asked before this server's own status writer exists; discovery on loopback takes
@@ -159,14 +151,48 @@ int RunServerNode(const maps::Scenario& scenario, const ServerNodeOptions& optio
                                             options.domain_id));
     }
   }
+  if (options.on_started) options.on_started();
+  // The live view: the page and the Foxglove WebSocket on 127.0.0.1, behind the mission's token
+  // (a new one for a new mission; a resumed mission keeps its own, so open pages go on).
+  std::unique_ptr<live::LiveView> live;
+  const live::MissionFrameMaker frames(scenario);
+  if (options.http_port || options.foxglove_port) {
+    live::LiveViewOptions view;
+    view.http_port = options.http_port;
+    view.foxglove_port = options.foxglove_port;
+    view.token = MissionToken(options.out_dir, options.resume);
+    live::LiveScene scene = live::SceneOf(scenario);
+    scene.controller = ToString(options.controller);
+    scene.profile = options.profile.empty() ? scenario.default_profile : options.profile;
+    // A resumed mission listens where it listened (open pages reconnect by themselves), if it can.
+    const std::optional<LiveEndpoints> before = options.resume ? ReadLiveEndpoints(options.out_dir) : std::nullopt;
+    if (before && view.http_port == 0 && before->http_port > 0) view.http_port = before->http_port;
+    if (before && view.foxglove_port == 0 && before->foxglove_port > 0) view.foxglove_port = before->foxglove_port;
+    try {
+      live = std::make_unique<live::LiveView>(scene, view);
+    } catch (const maps::ScenarioError& e) {
+      if (!before) throw;
+      spdlog::warn("server: the live view cannot listen where it did before the outage ({}); it takes free ports",
+                   e.what());
+      view.http_port = options.http_port;
+      view.foxglove_port = options.foxglove_port;
+      live = std::make_unique<live::LiveView>(scene, view);
+    }
+    record.ShowIn(live.get());
+    WriteLiveEndpoints(options.out_dir, live->http_port(), live->foxglove_port());
+    if (options.http_port) spdlog::info("server: live view: {}", live->PageUrl());
+    if (options.foxglove_port) spdlog::info("server: Foxglove (foxglove.websocket.v1): {}", live->FoxgloveUrl());
+  }
   proto::Reader<proto::VehicleState> states(participant, proto::VehicleStateRecordQos());
   proto::Reader<proto::VehicleCoverage> coverage(participant, proto::VehicleCoverageQos());
+  // The vehicles' leak-sensor scans (issue 9), where the scenario gives them sensors.
+  std::optional<proto::Reader<proto::Detection>> detections;
+  if (!scenario.sensors.empty()) detections.emplace(participant, proto::DetectionQos());
   proto::Reader<proto::RiskUpdate> risk_updates(participant, proto::RiskUpdateQos());
   proto::Writer<proto::RiskUpdateResult> risk_results(participant, proto::RiskUpdateResultQos());
   proto::Reader<proto::FleetCommand> commands(participant, proto::FleetCommandQos());
   proto::Writer<proto::FleetCommand> retire(participant, proto::FleetCommandQos());
   proto::Writer<proto::FleetCommandResult> command_results(participant, proto::FleetCommandResultQos());
-  std::deque<AnsweredCommand> answered;
   proto::Writer<proto::ErgodicTarget> targets(participant, proto::ErgodicTargetQos());
   proto::Writer<proto::FleetCoverage> fleet_coverage(participant, proto::FleetCoverageQos());
   proto::Writer<proto::MissionStatus> status(participant, proto::MissionStatusQos());
@@ -174,6 +200,7 @@ int RunServerNode(const maps::Scenario& scenario, const ServerNodeOptions& optio
   const double rate = scenario.control_rate_hz;
   const std::int64_t cycles_total = std::llround(scenario.duration_s * rate);
   const std::uint64_t instance = NewServerInstance();
+  ServerDoor door(core, instance, scenario.control_rate_hz);
   const std::uint32_t order = static_cast<std::uint32_t>(scenario.ergodic.basis_order);
   // The mission clock: cycle k is at mission time k / rate; a fresh mission's t = 0 is start_in_s
   // from now, a resumed mission's clock is set so that its first cycle is now. Vehicles step at
@@ -233,6 +260,42 @@ int RunServerNode(const maps::Scenario& scenario, const ServerNodeOptions& optio
     bytes_out += proto::WireBytes(r);
   };
 
+  // The server's order to the vehicle's host that it leave (an operator removed it).
+  auto send_retire = [&](std::uint32_t vehicle_id) {
+    proto::FleetCommand order{};
+    order.stamp_ns = NowRealtimeNs();
+    order.server_instance = instance;
+    std::string retire_verb = "retire";
+    order.verb = BorrowString(retire_verb);
+    order.vehicle_id = vehicle_id;
+    retire.Write(order);
+    ++messages_out;
+    bytes_out += proto::WireBytes(order);
+  };
+  // An operator's command from the page: the checks and answers of the door's (DDS) commands.
+  auto carry_out = [&](std::string_view verb, std::uint32_t count, std::uint32_t vehicle_id) {
+    if (verb == "stop") {
+      stop_requested = true;
+      return OperatorAnswer{true, "", 0.0, -1};
+    }
+    if (verb == "reserve") return core.ReserveIds(static_cast<int>(count));
+    const OperatorAnswer a = core.RemoveRequest(static_cast<int>(vehicle_id));
+    if (a.accepted) send_retire(vehicle_id);
+    return a;
+  };
+  // The page's removals are answered once the vehicle has gone, as `sage vehicle remove` waits.
+  struct PendingRemoval {
+    std::shared_ptr<live::PendingAction> action;
+    int id;
+    double told_at_s;
+    SteadyClock::time_point deadline;
+  };
+  constexpr double kRemovalWait_s = 5.0;
+  std::vector<PendingRemoval> removals;
+  const std::string run_dir = std::filesystem::absolute(options.out_dir).string();
+  double live_copy_ms = 0.0;  // the loop's part of the live view: copying the core's state
+  long live_frames = 0;
+
   // The mission's wall time runs from its first cycle's time (after the start-up lead).
   const auto wall_start = SteadyClock::now() + std::chrono::duration_cast<SteadyClock::duration>(
                                                    std::chrono::duration<double>(lead_s));
@@ -275,7 +338,7 @@ int RunServerNode(const maps::Scenario& scenario, const ServerNodeOptions& optio
         // sample of this mission's time line; the host follows this server within a cycle.
         if (m.server_instance != instance) return;
         heard_cycle[id] = m.cycle;
-        core.OnState(agents::wire::FromWire(m, rate));
+        door.TakeState(m, info.publication_handle);
         // A dispose or a lapsed lease that arrives while the vehicle's last state is still
         // unread comes as that (valid) sample with a not-alive instance state.
         if (info.instance_state == DDS_ALIVE_INSTANCE_STATE) return;
@@ -359,24 +422,25 @@ int RunServerNode(const maps::Scenario& scenario, const ServerNodeOptions& optio
       ++messages_in;
       if (!info.valid_data) return;
       bytes_in += proto::WireBytes(m);
-      core.OnCoverage(agents::wire::FromWire(m));
+      door.TakeCoverage(m, info.publication_handle);
     });
+    if (detections) {
+      take_all(*detections, [&](const proto::Detection& m, const dds_sample_info_t& info) {
+        ++messages_in;
+        if (!info.valid_data) return;
+        bytes_in += proto::WireBytes(m);
+        if (m.server_instance != instance) return;  // on another server's clock, as states
+        core.OnScan(agents::wire::FromWire(m, rate));
+      });
+    }
     risk_updates.TakeEach([&](const proto::RiskUpdate& r, const dds_sample_info_t& info) {
       ++messages_in;
       if (!info.valid_data) return;
       bytes_in += proto::WireBytes(r);
       // The sender is the DDS writer (its instance handle), which an update cannot name falsely.
-      const std::string source(AsStringView(r.source));
-      const std::string sender = fmt::format("{} (writer {:x})", LogSafe(source), info.publication_handle);
-      const std::uint64_t limited = core.risk_limits().refused(sender);
-      const OperatorAnswer a = core.OnRiskUpdate(std::string(AsStringView(r.valve)), r.weight, source, sender);
-      const bool newly_limited = core.risk_limits().refused(sender) > limited;
-      // A flood's refusals are logged at 1, 10, 100, ... per sender, not each.
-      const auto decade = [](std::uint64_t n) { while (n % 10 == 0 && n > 1) n /= 10; return n == 1; };
-      if (!a.accepted && (!newly_limited || decade(core.risk_limits().refused(sender)))) {
-        spdlog::warn("server: ignored a risk update from {}: {}{}", sender, a.reason,
-                     newly_limited ? fmt::format(" ({} refused so far)", core.risk_limits().refused(sender)) : "");
-      }
+      const std::optional<OperatorAnswer> answer = door.TakeRiskUpdate(r, info.publication_handle);
+      if (!answer) return;  // a flood's refusal, answered only at its 1st, 10th, 100th, ...
+      const OperatorAnswer& a = *answer;
       proto::RiskUpdateResult result{};
       result.update_stamp_ns = r.stamp_ns;
       result.valve = r.valve;
@@ -392,46 +456,62 @@ int RunServerNode(const maps::Scenario& scenario, const ServerNodeOptions& optio
       ++messages_in;
       if (!info.valid_data) return;
       bytes_in += proto::WireBytes(c);
-      const std::string_view verb = AsStringView(c.verb);
-      // An operator sends a command again until answered: a repeat is answered, not executed.
-      const auto repeat = std::find_if(answered.begin(), answered.end(), [&](const AnsweredCommand& done) {
-        return done.stamp_ns == c.stamp_ns && done.verb == verb && done.count == c.count &&
-               done.vehicle_id == c.vehicle_id;
-      });
-      if (repeat != answered.end()) {
-        answer_command(c, repeat->answer);
-        return;
-      }
-      const auto remember = [&](const OperatorAnswer& a) {
-        answered.push_back({c.stamp_ns, std::string(verb), c.count, c.vehicle_id, a});
-        if (answered.size() > kAnsweredKept) answered.pop_front();
-      };
-      if (verb == "stop") {
-        const OperatorAnswer a{true, "", 0.0, -1};
-        remember(a);
-        stop_requested = true;
-        answer_command(c, a);
-      } else if (verb == "remove") {
-        const OperatorAnswer a = core.RemoveRequest(static_cast<int>(c.vehicle_id));
-        remember(a);
-        if (a.accepted) {
-          proto::FleetCommand order{};
-          order.stamp_ns = NowRealtimeNs();
-          order.server_instance = instance;
-          std::string retire_verb = "retire";
-          order.verb = BorrowString(retire_verb);
-          order.vehicle_id = c.vehicle_id;
-          retire.Write(order);
-          ++messages_out;
-          bytes_out += proto::WireBytes(order);
-        }
-        answer_command(c, a);
-      } else if (verb == "reserve") {
-        const OperatorAnswer a = core.ReserveIds(static_cast<int>(c.count));
-        remember(a);
-        answer_command(c, a);
-      }
+      const CommandOutcome done = door.TakeCommand(c);
+      if (done.ignored) return;
+      stop_requested = stop_requested || done.stop;
+      if (done.retire) send_retire(c.vehicle_id);
+      answer_command(c, done.answer);
     });
+    if (live) {
+      // The page's requests, with the checks and answers of the operators' commands.
+      for (const std::shared_ptr<live::PendingAction>& action : live->TakeActions()) {
+        const live::ActionRequest& r = action->request();
+        try {
+          if (r.verb == "risk") {
+            CheckRiskRequest(scenario, r.valve, r.weight);
+            const OperatorAnswer a = core.OnRiskUpdate(r.valve, r.weight, "operator (live view)", "live view");
+            action->Answer(a.accepted, a.accepted ? RiskAppliedLine(r.valve, r.weight, t, a.new_share)
+                                                  : RiskRefusedLine(a.reason));
+          } else if (r.verb == "add") {
+            CheckAddCount(r.count);
+            if (!options.start_added_vehicles) {
+              action->Answer(false, "this server starts no agent hosts (run it with sage launch or sage server)");
+              continue;
+            }
+            const OperatorAnswer a = carry_out("reserve", static_cast<std::uint32_t>(r.count), 0);
+            action->Answer(a.accepted, a.accepted ? options.start_added_vehicles(a.first_id, r.count)
+                                                  : CommandRefusedLine(a.reason));
+          } else if (r.verb == "remove") {
+            CheckVehicleId(r.id);
+            const OperatorAnswer a = carry_out("remove", 0, static_cast<std::uint32_t>(r.id));
+            if (!a.accepted) {
+              action->Answer(false, CommandRefusedLine(a.reason));
+            } else {
+              removals.push_back({action, r.id, t,
+                                  SteadyClock::now() + std::chrono::duration_cast<SteadyClock::duration>(
+                                                           std::chrono::duration<double>(kRemovalWait_s))});
+            }
+          } else if (r.verb == "stop") {
+            carry_out("stop", 0, 0);
+            action->Answer(true, StopLine(t, run_dir));
+          } else {
+            action->Answer(false, "unknown request");
+          }
+        } catch (const std::exception& e) {  // a bad request, or a host that cannot be started
+          action->Answer(false, e.what());
+        }
+      }
+      std::erase_if(removals, [&](const PendingRemoval& p) {
+        const Roster::Member* m = core.roster().Find(p.id);
+        if (m != nullptr && m->status != Roster::Status::kAlive) {
+          p.action->Answer(true, VehicleLeftLine(p.id, p.told_at_s));
+          return true;
+        }
+        if (SteadyClock::now() < p.deadline) return false;
+        p.action->Answer(false, VehicleNotLeftLine(p.id, p.told_at_s, kRemovalWait_s));
+        return true;
+      });
+    }
 
     const CycleOutput out = core.Cycle(cycle);
     record.LogJoins(core.roster().alive_count());
@@ -455,6 +535,14 @@ int RunServerNode(const maps::Scenario& scenario, const ServerNodeOptions& optio
     }
     empty_warned = out.fleet_empty;
     run.Tick(core);
+    // The live view's frame, a copy of the core's state (at most ten a second); the view's own
+    // thread does the rest.
+    if (live && live->FrameDue()) {
+      const auto copy_start = SteadyClock::now();
+      live->Publish(frames.Make(core, last_cycle_ms, /*finished=*/false));
+      live_copy_ms += std::chrono::duration<double, std::milli>(SteadyClock::now() - copy_start).count();
+      ++live_frames;
+    }
     last_cycle_ms = std::chrono::duration<double, std::milli>(SteadyClock::now() - cycle_start).count();
     total_cycle_ms += last_cycle_ms;
     max_cycle_ms = std::max(max_cycle_ms, last_cycle_ms);
@@ -476,6 +564,14 @@ int RunServerNode(const maps::Scenario& scenario, const ServerNodeOptions& optio
   run.Finish(core, world, end_time, stopped_early);
   const double finish_s = std::chrono::duration<double>(SteadyClock::now() - finish_start).count();
   publish_status(cycle, end_time, true);
+  if (live) {
+    live->Publish(frames.Make(core, last_cycle_ms, /*finished=*/true));
+    for (const PendingRemoval& p : removals) {
+      p.action->Answer(false, fmt::format("the mission ended before vehicle {} left (told to at t = {:.1f} s)", p.id,
+                                          p.told_at_s));
+    }
+    live->Close("the mission has ended");
+  }
 
   const double mission_s = end_time - static_cast<double>(first_cycle) / rate;
   std::cout << FormatTable({core.Metrics(end_time)});
@@ -491,6 +587,11 @@ int RunServerNode(const maps::Scenario& scenario, const ServerNodeOptions& optio
                (messages_in + messages_out) / std::max(1e-9, wall_s), bytes_in / 1e6, bytes_out / 1e6,
                (bytes_in + bytes_out) / 1e6 / std::max(1e-9, wall_s), total_cycle_ms / std::max(1L, cycles_run), p99_ms,
                max_cycle_ms, peak_rss_mb, options.out_dir, finish_s);
+  if (live) {
+    // What the live view cost: the loop's copy (inside the cycle times above) and its own thread.
+    spdlog::info("server: live view: {} frames, {:.3f} ms a frame in the server's loop, {:.3f} ms in the view's thread",
+                 live_frames, live_copy_ms / std::max(1L, live_frames), live->publisher_ms_per_frame());
+  }
   // In lockstep the mission is the one sage run flies with the same scenario and seed.
   spdlog::info("server: {} of {} cycles in lockstep with the vehicles{}", cycles_run - cycles_not_in_step, cycles_run,
                cycles_not_in_step == 0

@@ -8,9 +8,9 @@
 // leases of that moment for losses: a vehicle heard again within two leases was never lost.
 // With `resume` it starts from the run directory's checkpoint and the record written after it.
 #include <atomic>
-#include <string>
-
+#include <functional>
 #include <optional>
+#include <string>
 
 #include "maps/scenario/scenario.h"
 #include "proto/dds_config.h"
@@ -34,6 +34,17 @@ struct ServerNodeOptions {
   double checkpoint_period_s = 2.0;  ///< wall seconds between checkpoints
   bool show_progress = true;       ///< a progress line on stderr
   const std::atomic<bool>* stop = nullptr;  ///< set (e.g. by SIGINT) to end the mission early
+  /// Called once the server knows it is the mission's only server (no other on its domain),
+  /// before the mission starts: where the sage command writes the files other tools join by.
+  std::function<void()> on_started;
+  /// The live view (server/live): the page's port and the Foxglove WebSocket's on 127.0.0.1
+  /// (0: any free one; none: off). The mission's token is in out_dir/live_token (0600).
+  std::optional<int> http_port = 0;
+  std::optional<int> foxglove_port = 0;
+  /// Starts an agent host for `count` vehicles an operator adds from the page, with the ids the
+  /// mission issued from `first_id`, and returns the one-line answer (the app gives the one
+  /// `sage vehicle add` uses); none: the page cannot add vehicles.
+  std::function<std::string(int first_id, int count)> start_added_vehicles;
 };
 
 /// Runs the mission to its end (or a stop) with the record in out_dir. Returns 0 on success.

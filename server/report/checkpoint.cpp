@@ -1,9 +1,11 @@
 #include "server/report/checkpoint.h"
 
+#include <cmath>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
+#include <limits>
 
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
@@ -163,7 +165,8 @@ Json MetricsStateJson(const MetricsAccumulator::State& m) {
           {"watched", Doubles(m.watched_until_s)}, {"unwatched_max", Doubles(m.longest_unwatched_s)},
           {"unwatched_sq", Doubles(m.unwatched_squares_s2)},
           {"outside", m.time_outside_s}, {"pinned", m.time_pinned_s}, {"sum_f", Doubles(m.sum_f)},
-          {"sum_dt", m.sum_dt}, {"over_time", over_time}, {"next_checkpoint", m.next_checkpoint},
+          {"sum_dt", m.sum_dt}, {"over_time", over_time}, {"metric_stride", m.metric_stride},
+          {"latest_metric", m.latest_metric}, {"next_checkpoint", m.next_checkpoint},
           {"schedule", Schedule(m.schedule)}, {"refused", m.refused}};
 }
 MetricsAccumulator::State ToMetrics(const Json& j) {
@@ -186,21 +189,129 @@ MetricsAccumulator::State ToMetrics(const Json& j) {
   m.sum_dt = j.at("sum_dt").get<double>();
   for (const Json& s : j.at("over_time")) m.metric_over_time.push_back({s.at(0).get<double>(), s.at(1).get<double>()});
   m.next_checkpoint = j.at("next_checkpoint").get<int>();
+  // Older checkpoints kept every sample of the metric, and their latest was the last kept.
+  m.metric_stride = j.value("metric_stride", 1);
+  m.latest_metric = j.contains("latest_metric") && j.at("latest_metric").is_number() ? j.at("latest_metric").get<double>()
+                    : m.metric_over_time.empty() ? std::numeric_limits<double>::quiet_NaN()
+                                                 : m.metric_over_time.back().ergodic_metric;
   m.schedule = ToSchedule(j.at("schedule"));
   m.refused = j.at("refused").get<std::size_t>();
   return m;
 }
 
+Json VisitsJson(const std::vector<VisitTracker::ValveVisits>& visits) {
+  Json out = Json::array();
+  for (const VisitTracker::ValveVisits& v : visits) {
+    out.push_back({{"n", v.count}, {"first", v.first_s}, {"folded_last", v.folded_last_s},
+                   {"folded_gap", v.folded_max_gap_s}, {"recent", Doubles(v.recent)}});
+  }
+  return out;
+}
+std::vector<VisitTracker::ValveVisits> ToVisits(const Json& j) {
+  std::vector<VisitTracker::ValveVisits> out;
+  for (const Json& v : j) {
+    VisitTracker::ValveVisits visits;
+    visits.count = v.at("n").get<std::size_t>();
+    visits.first_s = v.at("first").get<double>();
+    visits.folded_last_s = v.at("folded_last").get<double>();
+    visits.folded_max_gap_s = v.at("folded_gap").get<double>();
+    visits.recent = ToDoubles(v.at("recent"));
+    out.push_back(std::move(visits));
+  }
+  return out;
+}
+Json WatchesJson(const std::vector<VisitTracker::EventWatch>& watches) {
+  Json out = Json::array();
+  for (const VisitTracker::EventWatch& w : watches) {
+    out.push_back({{"valve", w.valve}, {"t", w.time_s}, {"before", w.before}, {"after", w.after},
+                   {"last_before", w.last_before_s}, {"first_after", w.first_after_s}, {"last_after", w.last_after_s}});
+  }
+  return out;
+}
+std::vector<VisitTracker::EventWatch> ToWatches(const Json& j) {
+  std::vector<VisitTracker::EventWatch> out;
+  for (const Json& w : j) {
+    out.push_back({w.at("valve").get<int>(), w.at("t").get<double>(), w.at("before").get<std::size_t>(),
+                   w.at("after").get<std::size_t>(), w.at("last_before").get<double>(),
+                   w.at("first_after").get<double>(), w.at("last_after").get<double>()});
+  }
+  return out;
+}
+
+// The risk loop: the leak belief's leaves, the scans waiting for their cycle, the scoring.
+Json RiskLoopJson(const RiskLoop::State& r) {
+  Json belief = Json::array();
+  for (const LeakBelief::Entry& e : r.belief) belief.push_back({e.cell.i, e.cell.j, e.evidence, e.time_s});
+  Json held = Json::array();
+  for (const agents::ScanReport& scan : r.held) {
+    std::vector<double> xy;
+    for (const Eigen::Vector2d& z : scan.detections_m) xy.insert(xy.end(), {z.x(), z.y()});
+    held.push_back({{"id", scan.id}, {"cycle", scan.cycle}, {"t", scan.time_s}, {"sensor", scan.sensor},
+                    {"p", Vec2(scan.position_m)}, {"h", scan.heading_rad}, {"z", Doubles(xy)}});
+  }
+  Json last = Json::array();
+  for (const auto& [key, cycle] : r.last_fused) last.push_back({key.first, key.second, cycle});
+  Json leaks = Json::array();
+  for (const RiskLoop::LeakTrack& l : r.leaks) {
+    leaks.push_back({std::isnan(l.detected_s) ? Json(nullptr) : Json(l.detected_s),
+                     std::isnan(l.confirmed_s) ? Json(nullptr) : Json(l.confirmed_s), l.detections});
+  }
+  Json alarms = Json::array();
+  for (const RiskLoop::Alarm& a : r.alarms) {
+    alarms.push_back({{"p", Vec2(a.anchor_m)}, {"raised", a.raised_s}, {"cleared", a.cleared_s},
+                      {"confirmed", a.confirmed}, {"leak", a.leak}});
+  }
+  Json written = Json::array();
+  for (const auto& [cell, value] : r.written) written.push_back({cell.i, cell.j, value});
+  return {{"belief", belief}, {"held", held}, {"last_fused", last}, {"leaks", leaks}, {"alarms", alarms},
+          {"false_detections", r.false_detections}, {"scans", r.scans}, {"written", written}};
+}
+RiskLoop::State ToRiskLoop(const Json& j) {
+  RiskLoop::State r;
+  for (const Json& e : j.at("belief")) {
+    r.belief.push_back({{e.at(0).get<int>(), e.at(1).get<int>()}, e.at(2).get<double>(), e.at(3).get<double>()});
+  }
+  for (const Json& h : j.at("held")) {
+    agents::ScanReport scan;
+    scan.id = h.at("id").get<int>();
+    scan.cycle = h.at("cycle").get<std::int64_t>();
+    scan.time_s = h.at("t").get<double>();
+    scan.sensor = h.at("sensor").get<int>();
+    scan.position_m = ToVec2(h.at("p"));
+    scan.heading_rad = h.at("h").get<double>();
+    const std::vector<double> xy = ToDoubles(h.at("z"));
+    for (std::size_t k = 0; k + 1 < xy.size(); k += 2) scan.detections_m.emplace_back(xy[k], xy[k + 1]);
+    r.held.push_back(std::move(scan));
+  }
+  for (const Json& l : j.at("last_fused")) r.last_fused[{l.at(0).get<int>(), l.at(1).get<int>()}] = l.at(2).get<std::int64_t>();
+  const auto time_or_nan = [](const Json& t) { return t.is_null() ? std::nan("") : t.get<double>(); };
+  for (const Json& l : j.at("leaks")) r.leaks.push_back({time_or_nan(l.at(0)), time_or_nan(l.at(1)), l.at(2).get<int>()});
+  for (const Json& a : j.at("alarms")) {
+    RiskLoop::Alarm alarm;
+    alarm.anchor_m = ToVec2(a.at("p"));
+    alarm.raised_s = a.at("raised").get<double>();
+    alarm.cleared_s = a.at("cleared").get<double>();
+    alarm.confirmed = a.at("confirmed").get<bool>();
+    alarm.leak = a.at("leak").get<int>();
+    r.alarms.push_back(alarm);
+  }
+  r.false_detections = j.at("false_detections").get<int>();
+  r.scans = j.at("scans").get<std::uint64_t>();
+  for (const Json& w : j.at("written")) r.written.push_back({{w.at(0).get<int>(), w.at(1).get<int>()}, w.at(2).get<float>()});
+  return r;
+}
+
 }  // namespace
 
 std::vector<std::uint8_t> EncodeCheckpoint(const MissionCheckpoint& c) {
-  Json visits = Json::array();
-  for (const auto& v : c.visit_times) visits.push_back(Doubles(v));
   const Json j = {{"format", "sage-checkpoint"}, {"version", kFormatVersion}, {"scenario_hash", c.scenario_hash},
                   {"profile", c.profile}, {"controller", c.controller}, {"cycle", c.cycle}, {"t", c.time_s},
                   {"fleet", FleetJson(c.fleet)}, {"roster", RosterJson(c.roster)}, {"metrics", MetricsStateJson(c.metrics)},
-                  {"disarmed", c.disarmed}, {"visit_times", visits}, {"rejected", c.rejected_samples},
-                  {"rejected_by_kind", c.rejected_by_kind}, {"rejected_by_sender", c.rejected_by_sender}};
+                  {"disarmed", c.disarmed}, {"visits", VisitsJson(c.visits)},
+                  {"visit_watches", WatchesJson(c.visit_watches)}, {"rejected", c.rejected_samples},
+                  {"rejected_by_kind", c.rejected_by_kind}, {"rejected_by_sender", c.rejected_by_sender},
+                  {"risk_layer_ot", Json::binary(std::vector<std::uint8_t>(c.risk_layer_ot.begin(), c.risk_layer_ot.end()))},
+                  {"risk_loop", RiskLoopJson(c.risk_loop)}};
   return Json::to_cbor(j);
 }
 
@@ -220,11 +331,26 @@ MissionCheckpoint DecodeCheckpoint(const std::vector<std::uint8_t>& bytes, const
     c.roster = ToRoster(j.at("roster"));
     c.metrics = ToMetrics(j.at("metrics"));
     c.disarmed = j.at("disarmed").get<std::vector<std::vector<int>>>();
-    for (const Json& v : j.at("visit_times")) c.visit_times.push_back(ToDoubles(v));
+    if (j.contains("visits")) {
+      c.visits = ToVisits(j.at("visits"));
+      c.visit_watches = ToWatches(j.at("visit_watches"));
+    } else {
+      // An older checkpoint kept every visit time: the record as the tracker keeps it now.
+      for (const Json& v : j.at("visit_times")) {
+        VisitTracker::ValveVisits visits;
+        for (const double t : ToDoubles(v)) visits.Add(t);
+        c.visits.push_back(std::move(visits));
+      }
+    }
     c.rejected_samples = j.at("rejected").get<std::size_t>();
     if (j.contains("rejected_by_kind")) {  // older checkpoints have the total only
       c.rejected_by_kind = j.at("rejected_by_kind").get<std::map<std::string, std::size_t>>();
       c.rejected_by_sender = j.at("rejected_by_sender").get<std::map<std::string, std::size_t>>();
+    }
+    if (j.contains("risk_loop")) {  // older checkpoints: no risk loop, the layer the prior alone
+      const auto& ot = j.at("risk_layer_ot").get_binary();
+      c.risk_layer_ot.assign(ot.begin(), ot.end());
+      c.risk_loop = ToRiskLoop(j.at("risk_loop"));
     }
     return c;
   } catch (const std::exception& e) {  // nlohmann's parse, type and out-of-range errors

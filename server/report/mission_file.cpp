@@ -40,8 +40,16 @@ void WriteMissionFile(const std::string& dir, const MissionFile& m) {
                                     {"run_dir", m.run_dir},        {"time_scale", m.time_scale},
                                     {"controller", m.controller},  {"profile", m.profile},
                                     {"launcher_pid", m.launcher_pid}, {"resumes", m.resumes},
-                                    {"security_dir", m.security_dir}};
+                                    {"security_dir", m.security_dir},
+                                    {"network",
+                                     {{"interface", m.network.interface_name},
+                                      {"peers", m.network.peers},
+                                      {"multicast", m.network.multicast}}}};
   detail::WriteAtomically((fs::path(dir) / "mission.json").string(), j.dump(2) + "\n");
+}
+
+void WriteRunFile(const std::string& dir, const std::string& name, const std::string& text) {
+  detail::WriteAtomically((fs::path(dir) / name).string(), text);
 }
 
 MissionFile ReadMissionFile(const std::string& dir) {
@@ -63,6 +71,15 @@ MissionFile ReadMissionFile(const std::string& dir) {
     m.launcher_pid = j.value("launcher_pid", -1);
     m.resumes = j.value("resumes", 0);
     m.security_dir = j.value("security_dir", std::string());  // absent in missions launched before DDS Security
+    if (j.contains("network")) {  // absent in missions of this machine alone launched before it
+      const nlohmann::json& n = j.at("network");
+      m.network.interface_name = n.value("interface", std::string("lo"));
+      m.network.peers = n.value("peers", std::vector<std::string>());
+      m.network.multicast = n.value("multicast", false);
+      if (const std::string problem = maps::NetworkProblem(m.network, file.string()); !problem.empty()) {
+        throw maps::ScenarioError(problem);
+      }
+    }
     return m;
   } catch (const nlohmann::json::exception& e) {
     throw maps::ScenarioError(file.string() + ": not a mission file: " + e.what());

@@ -20,12 +20,17 @@ struct MissionFile {
   int launcher_pid = -1;
   int resumes = 0;            ///< times the mission was resumed
   std::string security_dir;   ///< absolute DDS Security directory (sage security init); empty: plain DDS (--insecure)
+  maps::NetworkSettings network;  ///< where the mission's DDS traffic goes (the scenario's network)
 };
 
 /// Writes DIR/mission.json atomically. Throws std::runtime_error naming the file.
 void WriteMissionFile(const std::string& dir, const MissionFile& mission);
 /// Reads DIR/mission.json. Throws maps::ScenarioError with one line if it is missing or wrong.
 MissionFile ReadMissionFile(const std::string& dir);
+
+/// Writes DIR/NAME (a file of the run directory another tool reads, e.g. cyclonedds.xml)
+/// atomically. Throws std::runtime_error naming the file.
+void WriteRunFile(const std::string& dir, const std::string& name, const std::string& text);
 
 /// Writes DIR/scenario.yaml (the effective scenario every process of the mission reads)
 /// atomically. Throws std::runtime_error naming the file.

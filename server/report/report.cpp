@@ -202,7 +202,38 @@ std::string FormatTable(const std::vector<MissionMetrics>& runs) {
     table = BuildTable(runs, with_gaps, gap);
     if (widest_line(table) <= static_cast<std::size_t>(kTableWidth)) break;
   }
-  return table;
+  return table + FormatLeaks(runs);
+}
+
+std::string FormatLeaks(const std::vector<MissionMetrics>& runs) {
+  std::string out;
+  const auto after = [](double t, double start) {
+    return std::isfinite(t) ? fmt::format("{:.1f} s (+{:.1f} s)", t, t - start) : std::string("never");
+  };
+  for (const MissionMetrics& run : runs) {
+    if (!run.sensing && run.leaks.empty()) continue;
+    out += fmt::format("leaks ({}{}):{}\n", run.controller, run.profile.empty() ? "" : ", " + run.profile,
+                       run.leaks.empty() ? " none hidden" : "");
+    for (const LeakMetrics& leak : run.leaks) {
+      out += fmt::format("  {:<22} from {:6.1f} s: detected {}, confirmed {}, {} detection{}", leak.where, leak.start_s,
+                         after(leak.detected_s, leak.start_s), after(leak.confirmed_s, leak.start_s), leak.detections,
+                         leak.detections == 1 ? "" : "s");
+      if (std::isfinite(leak.visits_per_min_after_detection)) {
+        out += fmt::format("; then {:.1f} visits/min", leak.visits_per_min_after_detection);
+      }
+      out += "\n";
+    }
+    if (run.sensing) {
+      const FalseAlarmMetrics& fa = run.false_alarms;
+      out += fmt::format("  false alarms: {} raised, {} cleared{}, {} confirmed ({} false detections in {} scans)\n",
+                         fa.raised, fa.cleared,
+                         fa.cleared > 0 ? fmt::format(" (mean {:.1f} s, at most {:.1f} s)", fa.mean_time_to_clear_s,
+                                                      fa.max_time_to_clear_s)
+                                        : "",
+                         fa.confirmed, fa.detections, run.scans);
+    }
+  }
+  return out;
 }
 
 std::string MetricsJson(const MissionMetrics& metrics, const RunInfo* info) {
@@ -253,6 +284,32 @@ std::string MetricsJson(const MissionMetrics& metrics, const RunInfo* info) {
                      {"longest_gap_s", {{"median", number(metrics.longest_gap_median_s)},
                                         {"p90", number(metrics.longest_gap_p90_s)},
                                         {"max", number(metrics.longest_gap_max_s)}}}};
+  // Leak sensing (issue 9): every hidden leak, and (with sensors) the false alarms.
+  Json leaks = Json::array();
+  for (const LeakMetrics& l : metrics.leaks) {
+    leaks.push_back({{"where", l.where},
+                     {"position_m", {l.position_m.x(), l.position_m.y()}},
+                     {"valve", l.valve >= 0 ? Json(l.where) : Json(nullptr)},
+                     {"start_s", number(l.start_s)},
+                     {"strength", number(l.strength)},
+                     {"detected_s", number(l.detected_s)},
+                     {"confirmed_s", number(l.confirmed_s)},
+                     {"time_to_detection_s", number(l.detected_s - l.start_s)},
+                     {"time_to_confirmation_s", number(l.confirmed_s - l.start_s)},
+                     {"detections", l.detections},
+                     {"visits_per_min_after_detection", number(l.visits_per_min_after_detection)}});
+  }
+  json["leaks"] = leaks;
+  if (metrics.sensing) {
+    const FalseAlarmMetrics& fa = metrics.false_alarms;
+    json["false_alarms"] = {{"raised", fa.raised},
+                            {"cleared", fa.cleared},
+                            {"confirmed", fa.confirmed},
+                            {"mean_time_to_clear_s", number(fa.mean_time_to_clear_s)},
+                            {"max_time_to_clear_s", number(fa.max_time_to_clear_s)},
+                            {"detections", fa.detections}};
+    json["scans"] = metrics.scans;
+  }
   if (info != nullptr) {
     json["complete"] = info->complete;
     json["planned_duration_s"] = number(info->planned_duration_s);

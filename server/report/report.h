@@ -4,8 +4,10 @@
 // Fig. 1; metric.svg; revisits.svg; each also as PNG), and the terminal table in the layout of
 // the paper's Table 1.
 #include <cstdint>
+#include <iosfwd>
 #include <limits>
 #include <map>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -21,8 +23,12 @@ namespace sage::server {
 /// "--out = DIR: cannot write there: REASON".
 void PrepareRunDirectory(const std::string& dir);
 
-/// Table 1 layout: Valve | Weight | for each run: visits, interval; then corr and metric rows.
+/// Table 1 layout: Valve | Weight | for each run: visits, interval; then corr and metric rows;
+/// then, for runs with leak sensors or hidden leaks, FormatLeaks.
 std::string FormatTable(const std::vector<MissionMetrics>& runs);
+/// One line per hidden leak of each run (onset, first detection, confirmation, revisits after it)
+/// and its false alarms; empty when no run sensed or hid a leak.
+std::string FormatLeaks(const std::vector<MissionMetrics>& runs);
 
 /// How a run stands, for metrics.json: whether it is complete, and how it came to be.
 struct RunInfo {
@@ -58,6 +64,19 @@ void WriteTrajectoryCsv(const std::string& path, const Trajectory& trajectory);
 /// vehicle column may hold integers or names. Throws maps::ScenarioError with one line naming
 /// the file, the line and the problem.
 Trajectory ReadTrajectoryCsv(const std::string& path);
+/// The same from a stream; `path` names it in the errors.
+Trajectory ParseTrajectoryCsv(std::istream& in, const std::string& path);
+/// The normalised weights of a profile over time, as a mission without operators would have them:
+/// the profile's at t = 0, then after each of its timed events.
+std::vector<WeightChange> ProfileSchedule(const maps::Scenario& scenario, const maps::RiskProfile& profile);
+/// What `sage evaluate` computes: the metrics of a recorded trajectory (a vehicle's log, or ours)
+/// against `profile` of the scenario and its timed events, over [0, duration_s] (default: to the
+/// last sample), with at most max_checkpoints samples of the ergodic metric over time (a log of
+/// hours gets one every few seconds). Throws maps::ScenarioError (one line) for an empty
+/// trajectory or a duration that is not finite and > 0. `source` names the trajectory.
+MissionMetrics EvaluateRecorded(const Trajectory& trajectory, const maps::Scenario& scenario,
+                                const maps::RiskProfile& profile, std::optional<double> duration_s,
+                                const std::string& source, double max_checkpoints = 1e5);
 
 /// Writes the charts of a run into `dir` (plot, metric and revisits, each .svg and .png; see
 /// plots/mission_plots.h), each replaced atomically. Throws std::runtime_error naming the file.

@@ -19,6 +19,7 @@
 #include "maps/risk_layer.h"
 #include "server/report/atomic_write.h"
 #include "server/report/checkpoint.h"
+#include "server/report/record_csv.h"
 
 namespace sage::server {
 namespace {
@@ -66,41 +67,6 @@ void CutToLastLine(const std::string& path) {
   if (keep < text.size()) fs::resize_file(path, keep);
 }
 
-// Fields of one of our own CSV lines: plain fields split at commas, a quoted field taken whole.
-std::vector<std::string> SplitLine(std::string_view line) {
-  std::vector<std::string> fields;
-  std::size_t i = 0;
-  while (i <= line.size()) {
-    std::string field;
-    if (i < line.size() && line[i] == '"') {
-      ++i;
-      while (i < line.size()) {
-        if (line[i] == '"' && i + 1 < line.size() && line[i + 1] == '"') field += '"', i += 2;
-        else if (line[i] == '"') { ++i; break; }
-        else field += line[i++];
-      }
-      while (i < line.size() && line[i] != ',') ++i;
-    } else {
-      const std::size_t comma = std::min(line.find(',', i), line.size());
-      field = std::string(line.substr(i, comma - i));
-      i = comma;
-    }
-    fields.push_back(std::move(field));
-    if (i >= line.size()) break;
-    ++i;  // the comma
-  }
-  return fields;
-}
-
-double NumberField(const std::string& text, const std::string& path, int line) {
-  double value = 0.0;
-  const auto [ptr, ec] = std::from_chars(text.data(), text.data() + text.size(), value);
-  if (ec != std::errc() || ptr != text.data() + text.size()) {
-    throw maps::ScenarioError(fmt::format("{}:{}: '{}' is not a number", path, line, text));
-  }
-  return value;
-}
-
 // The lines of a file after its header, numbered from 2.
 std::vector<std::pair<int, std::string>> Lines(const std::string& path) {
   std::vector<std::pair<int, std::string>> lines;
@@ -112,12 +78,6 @@ std::vector<std::pair<int, std::string>> Lines(const std::string& path) {
     lines.emplace_back(number, text);
   }
   return lines;
-}
-
-// The risk layer no mission feeds yet: the valves' prior with no leaf changed.
-std::string PriorLayerBytes(const maps::World& world) {
-  return maps::RiskLayer::PriorOnlyOtBytes(
-      maps::RiskLayerOptions::Fitting(world.basis().width_m(), world.basis().height_m()));
 }
 
 }  // namespace
@@ -317,7 +277,7 @@ void RunDirectory::Finish(const MissionCore& core, const maps::World& world, dou
     contents.push_back(std::move(f.bytes));
   }
   contents.push_back(world.seabed().BinaryBytes());
-  contents.push_back(risk_layer ? risk_layer->OtBytes() : PriorLayerBytes(world));
+  contents.push_back((risk_layer ? *risk_layer : core.risk_layer()).OtBytes());
   contents.push_back(maps::EmitScenario(ran));
   contents.push_back(MetricsJson(metrics, &info));
   for (const char* name : kFinalFiles) paths.push_back((fs::path(dir_) / name).string());
@@ -340,11 +300,11 @@ RecordTail ReadRecordTail(const std::string& dir, double after_s) {
     // Only the rows after the checkpoint are parsed; the time is the first field.
     const std::size_t comma = text.find(',');
     if (comma == std::string::npos) throw maps::ScenarioError(fmt::format("{}:{}: not a trajectory row", trajectory, line));
-    if (NumberField(text.substr(0, comma), trajectory, line) <= after_s) continue;
-    const std::vector<std::string> f = SplitLine(text);
+    if (detail::NumberField(text.substr(0, comma), trajectory, line) <= after_s) continue;
+    const std::vector<std::string> f = detail::SplitCsvLine(text);
     if (f.size() != 9) throw maps::ScenarioError(fmt::format("{}:{}: {} fields, need 9", trajectory, line, f.size()));
     std::vector<double> v;
-    for (std::size_t i : {0, 2, 3, 4, 5, 6, 7, 8}) v.push_back(NumberField(f[i], trajectory, line));
+    for (std::size_t i : {0, 2, 3, 4, 5, 6, 7, 8}) v.push_back(detail::NumberField(f[i], trajectory, line));
     TrajectorySample s;
     s.time_s = v[0];
     s.position_m = {v[1], v[2]};
@@ -356,20 +316,20 @@ RecordTail ReadRecordTail(const std::string& dir, double after_s) {
   const std::string fleet = (fs::path(dir) / "fleet_events.csv").string();
   CutToLastLine(fleet);
   for (const auto& [line, text] : Lines(fleet)) {
-    const std::vector<std::string> f = SplitLine(text);
+    const std::vector<std::string> f = detail::SplitCsvLine(text);
     if (f.size() != 5) throw maps::ScenarioError(fmt::format("{}:{}: {} fields, need 5", fleet, line, f.size()));
-    const double t = NumberField(f[0], fleet, line);
+    const double t = detail::NumberField(f[0], fleet, line);
     if (t <= after_s) continue;
-    tail.fleet_events.push_back({t, f[1], static_cast<int>(NumberField(f[2], fleet, line)), f[3], f[4]});
+    tail.fleet_events.push_back({t, f[1], static_cast<int>(detail::NumberField(f[2], fleet, line)), f[3], f[4]});
   }
   const std::string risk = (fs::path(dir) / "risk_events.csv").string();
   CutToLastLine(risk);
   for (const auto& [line, text] : Lines(risk)) {
-    const std::vector<std::string> f = SplitLine(text);
+    const std::vector<std::string> f = detail::SplitCsvLine(text);
     if (f.size() != 5) throw maps::ScenarioError(fmt::format("{}:{}: {} fields, need 5", risk, line, f.size()));
-    const double t = NumberField(f[0], risk, line);
+    const double t = detail::NumberField(f[0], risk, line);
     if (t <= after_s) continue;
-    tail.risk_events.push_back({t, f[1], NumberField(f[2], risk, line), NumberField(f[3], risk, line), f[4]});
+    tail.risk_events.push_back({t, f[1], detail::NumberField(f[2], risk, line), detail::NumberField(f[3], risk, line), f[4]});
   }
   return tail;
 }

@@ -69,8 +69,8 @@ class RunDirectory final : public MissionRecorder {
   /// The mission ended at end_s (the planned end, or earlier if stopped): flushes and writes the
   /// final set. Throws std::runtime_error naming the file that could not be written (the partial
   /// set stays as it was). risk.ot is `risk_layer` as OctoMap .ot (a maps::RiskOcTree); without
-  /// one (no mission feeds a layer yet) it is the prior layer of `world`: the valves' field with
-  /// no leaf changed, a tree with no leaves.
+  /// one, the mission's live layer (MissionCore::risk_layer(): the leaves the risk loop raised; a
+  /// mission without sensors has none, a tree with no leaves).
   void Finish(const MissionCore& core, const maps::World& world, double end_s, bool stopped_early,
               const maps::RiskLayer* risk_layer = nullptr);
 

@@ -28,6 +28,16 @@ std::string_view Trim(std::string_view text) {
   return text.substr(begin, text.find_last_not_of(" \t\r") - begin + 1);
 }
 
+// A field of the file as an error shows it: control characters as '?', at most 64 characters, so
+// that the message stays one line (a NUL or ESC in a field had reached the terminal: found by the
+// CSV fuzzer).
+std::string Shown(std::string_view text) {
+  std::string out(text.substr(0, 64));
+  for (char& c : out)
+    if (static_cast<unsigned char>(c) < 0x20 || c == 0x7f) c = '?';
+  return text.size() > 64 ? out + "..." : out;
+}
+
 std::vector<std::string> SplitCsv(std::string_view line) {
   std::vector<std::string> fields;
   for (std::size_t start = 0;;) {
@@ -87,11 +97,14 @@ void WriteTrajectoryCsv(const std::string& path, const Trajectory& trajectory) {
 }
 
 Trajectory ReadTrajectoryCsv(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw maps::ScenarioError(fmt::format("{}: cannot read: {}", path, std::strerror(errno)));
+  return ParseTrajectoryCsv(in, path);
+}
+
+Trajectory ParseTrajectoryCsv(std::istream& in, const std::string& path) {
   using maps::ScenarioError;
   constexpr int kMaxVehicleId = 65535;  // ids index per-vehicle arrays downstream
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw ScenarioError(fmt::format("{}: cannot read: {}", path, std::strerror(errno)));
-
   std::string text;
   int line_number = 0;
   std::vector<std::string> header;
@@ -107,7 +120,7 @@ Trajectory ReadTrajectoryCsv(const std::string& path) {
   std::map<std::string, int> column_of;
   for (std::size_t c = 0; c < header.size(); ++c) {
     if (!column_of.emplace(header[c], static_cast<int>(c)).second) {
-      throw ScenarioError(fmt::format("{}:{}: duplicate column '{}'", path, line_number, header[c]));
+      throw ScenarioError(fmt::format("{}:{}: duplicate column '{}'", path, line_number, Shown(header[c])));
     }
   }
   for (const char* required : {"t", "vehicle", "x", "y"}) {
@@ -144,13 +157,14 @@ Trajectory ReadTrajectoryCsv(const std::string& path) {
       double value = 0.0;
       const auto [ptr, ec] = std::from_chars(begin, end, value);
       if (ptr != end || field.empty() || (ec != std::errc() && ec != std::errc::result_out_of_range)) {
-        throw ScenarioError(fmt::format("{}:{}: column '{}' = '{}': not a number", path, line_number, name, field));
+        throw ScenarioError(
+            fmt::format("{}:{}: column '{}' = '{}': not a number", path, line_number, name, Shown(field)));
       }
       // Out of range is an overflow (1e999, rejected below) or an underflow (1e-400, which
       // strtod rounds to a tiny or zero value, fine for a position or speed).
       if (ec == std::errc::result_out_of_range) value = std::strtod(field.c_str(), nullptr);
       if (!std::isfinite(value)) {
-        throw ScenarioError(fmt::format("{}:{}: column '{}' = '{}': not finite", path, line_number, name, field));
+        throw ScenarioError(fmt::format("{}:{}: column '{}' = '{}': not finite", path, line_number, name, Shown(field)));
       }
       return value;
     };
@@ -180,7 +194,7 @@ Trajectory ReadTrajectoryCsv(const std::string& path) {
       ParseInt(row.vehicle, &row.sample.vehicle);
       if (row.sample.vehicle < 0 || row.sample.vehicle > kMaxVehicleId) {
         throw ScenarioError(fmt::format("{}:{}: column 'vehicle' = '{}': must be an id in 0..{} or a name",
-                                        path, row.line, row.vehicle, kMaxVehicleId));
+                                        path, row.line, Shown(row.vehicle), kMaxVehicleId));
       }
     } else {
       const auto [it, added] = index_of_name.emplace(row.vehicle, static_cast<int>(index_of_name.size()));
@@ -198,7 +212,7 @@ Trajectory ReadTrajectoryCsv(const std::string& path) {
     if (first) continue;
     if (!(s.time_s > it->second.first)) {
       throw ScenarioError(fmt::format("{}:{}: t = {} for vehicle {} is not after its previous sample (t = {} on line {})",
-                                      path, rows[i].line, s.time_s, rows[i].vehicle, it->second.first,
+                                      path, rows[i].line, s.time_s, Shown(rows[i].vehicle), it->second.first,
                                       it->second.second));
     }
     it->second = {s.time_s, rows[i].line};
@@ -207,6 +221,33 @@ Trajectory ReadTrajectoryCsv(const std::string& path) {
     return a.time_s != b.time_s ? a.time_s < b.time_s : a.vehicle < b.vehicle;
   });
   return trajectory;
+}
+
+std::vector<WeightChange> ProfileSchedule(const maps::Scenario& scenario, const maps::RiskProfile& profile) {
+  std::vector<WeightChange> schedule;
+  Eigen::VectorXd raw = scenario.ProfileWeights(profile);
+  schedule.push_back({0.0, raw / raw.sum()});
+  for (const maps::RiskEvent& e : profile.events) {
+    raw[scenario.ValveIndex(e.valve)] = e.weight;
+    schedule.push_back({e.time_s, raw / raw.sum()});
+  }
+  return schedule;
+}
+
+MissionMetrics EvaluateRecorded(const Trajectory& trajectory, const maps::Scenario& scenario,
+                                const maps::RiskProfile& profile, std::optional<double> duration_s,
+                                const std::string& source, double max_checkpoints) {
+  if (trajectory.samples.empty()) throw maps::ScenarioError(source + ": no samples");
+  const std::vector<WeightChange> schedule = ProfileSchedule(scenario, profile);
+  const double last = trajectory.samples.back().time_s;
+  const double duration = duration_s.value_or(last > 0.0 ? last : 1.0 / scenario.control_rate_hz);
+  if (!(duration > 0.0) || !std::isfinite(duration)) {
+    throw maps::ScenarioError(fmt::format("--duration = {}: must be a finite number > 0", duration));
+  }
+  MetricsOptions options;
+  options.profile = profile.name;
+  options.metric_sample_period_s = std::max(1.0, duration / max_checkpoints);
+  return ComputeMetrics(trajectory, scenario, schedule, duration, options);
 }
 
 }  // namespace sage::server

@@ -136,6 +136,33 @@ TEST(FleetTourPlanner, LapTimeIsPlanGridPathLengthOverSpeedPlusWeightedWaits) {
   EXPECT_NEAR(plan.mean_lap_s, sum_lap / 6, 1e-12);
 }
 
+// Without legs (options.legs = false, what regions ask for) the plan is the same split, order
+// and weights, with no legs; each lap is priced on the grid distances, between the flown legs'
+// lap and 8.2 % above it (octile against the A*'s shortcut paths; 1e-9 s either way).
+TEST(FleetTourPlanner, WithoutLegsTheSamePlanPricedOnGridDistances) {
+  const OccupancyGrid grid = FieldGrid();
+  const Points valves = RandomFreePoints(grid, 36, 5);
+  const Eigen::VectorXd weights = RandomWeights(36, 6);
+  const std::vector<FleetVehicle> vehicles = Vehicles(6, 0.5);
+  FleetTourOptions options;
+  const FleetTourPlan flown = PlanFleetTours(grid, valves, weights, vehicles, 3.0, options);
+  options.legs = false;
+  const FleetTourPlan priced = PlanFleetTours(grid, valves, weights, vehicles, 3.0, options);
+  ASSERT_TRUE(priced.ok);
+  ASSERT_EQ(priced.vehicles.size(), flown.vehicles.size());
+  for (std::size_t k = 0; k < flown.vehicles.size(); ++k) {
+    const VehicleTour &a = flown.vehicles[k], &b = priced.vehicles[k];
+    EXPECT_EQ(b.valves, a.valves) << "vehicle " << k;
+    EXPECT_EQ(b.tour.order, a.tour.order) << "vehicle " << k;
+    EXPECT_EQ(b.weights, a.weights) << "vehicle " << k;
+    EXPECT_TRUE(b.tour.legs.empty()) << "vehicle " << k;
+    const double waits = a.lap_time_s - a.tour.length_m / vehicles[k].speed_mps;
+    const double flown_travel = a.lap_time_s - waits, priced_travel = b.lap_time_s - waits;
+    EXPECT_GE(priced_travel, flown_travel - 1e-9) << "vehicle " << k;
+    EXPECT_LE(priced_travel, 1.082 * flown_travel + 1e-9) << "vehicle " << k;
+  }
+}
+
 // Shortest closed tour length through the points `subset` of d (brute force over orders).
 double BruteForceTour(const std::vector<std::vector<double>>& d, std::vector<int> subset) {
   if (subset.size() <= 1) return 0.0;

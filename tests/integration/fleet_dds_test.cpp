@@ -47,6 +47,7 @@
 #include "proto/dds_endpoints.h"
 #include "proto/messages.h"
 #include "proto/qos.h"
+#include "tests/support/child_process.h"
 
 extern char** environ;
 
@@ -65,6 +66,8 @@ constexpr double kAstarLapS = 14.0;          // one A* lap of two_xt: 12.3 s wit
 // Process start and DDS discovery on a loaded 2-core machine: generous, never asserted as latency.
 constexpr auto kStartupTimeout = 20s;
 
+using sage::testing::ChildProcess;
+
 std::string Scenario(const std::string& file) { return std::string(SAGE_SOURCE_DIR) + "/scenarios/" + file; }
 std::string Num(double v) { return fmt::format("{}", v); }
 
@@ -79,110 +82,6 @@ long long RealtimeNs() {
   return std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::system_clock::now().time_since_epoch())
       .count();
 }
-
-// ---------------------------------------------------------------------------------------------
-// A child process of the `sage` binary, in a process group of its own (so that `sage launch` is
-// stopped with the server and agent hosts it started), stdout and stderr to one log file.
-class ChildProcess {
- public:
-  ChildProcess(std::string label, const std::vector<std::string>& args, const fs::path& log, const fs::path& cwd)
-      : label_(std::move(label)), log_(log) {
-    // posix_spawn rather than fork: this process may hold Cyclone participants (threads).
-    std::vector<std::string> all = {SAGE_BINARY};
-    all.insert(all.end(), args.begin(), args.end());
-    std::vector<char*> argv;
-    for (std::string& a : all) argv.push_back(a.data());
-    argv.push_back(nullptr);
-    command_line_ = fmt::format("{}", fmt::join(all, " "));
-
-    posix_spawn_file_actions_t actions;
-    posix_spawn_file_actions_init(&actions);
-    posix_spawn_file_actions_addopen(&actions, STDOUT_FILENO, log_.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-    posix_spawn_file_actions_adddup2(&actions, STDOUT_FILENO, STDERR_FILENO);
-    posix_spawn_file_actions_addchdir_np(&actions, cwd.c_str());
-    posix_spawnattr_t attr;
-    posix_spawnattr_init(&attr);
-    sigset_t none, defaults;
-    sigemptyset(&none);
-    sigemptyset(&defaults);
-    sigaddset(&defaults, SIGTERM);
-    sigaddset(&defaults, SIGINT);
-    posix_spawnattr_setsigmask(&attr, &none);
-    posix_spawnattr_setsigdefault(&attr, &defaults);
-    posix_spawnattr_setpgroup(&attr, 0);
-    posix_spawnattr_setflags(&attr, POSIX_SPAWN_SETPGROUP | POSIX_SPAWN_SETSIGMASK | POSIX_SPAWN_SETSIGDEF);
-    const int rc = posix_spawn(&pid_, all[0].c_str(), &actions, &attr, argv.data(), environ);
-    posix_spawn_file_actions_destroy(&actions);
-    posix_spawnattr_destroy(&attr);
-    if (rc != 0) throw std::runtime_error("posix_spawn " + command_line_ + ": " + std::strerror(rc));
-    running_ = true;
-    started_ = SteadyClock::now();
-  }
-  ~ChildProcess() { Stop(); }
-  ChildProcess(const ChildProcess&) = delete;
-  ChildProcess& operator=(const ChildProcess&) = delete;
-
-  pid_t pid() const { return pid_; }
-  const std::string& label() const { return label_; }
-  const fs::path& log() const { return log_; }
-  const std::string& command_line() const { return command_line_; }
-  std::string LogText() const { return ReadFile(log_); }
-
-  /// True while the process has not exited (reaps it when it has).
-  bool Running() {
-    if (!running_) return false;
-    int status = 0;
-    const pid_t r = waitpid(pid_, &status, WNOHANG);
-    if (r == pid_) Reaped(status);
-    return running_;
-  }
-
-  /// Waits up to `timeout` for the process to exit; its exit code (128 + signal when killed by
-  /// one), or nullopt if it is still running.
-  std::optional<int> WaitExit(SteadyClock::duration timeout) {
-    const auto deadline = SteadyClock::now() + timeout;
-    while (Running()) {
-      if (SteadyClock::now() >= deadline) return std::nullopt;
-      std::this_thread::sleep_for(20ms);
-    }
-    return exit_code_;
-  }
-
-  /// Sends `sig` to this process only.
-  void Signal(int sig) {
-    if (Running()) ::kill(pid_, sig);
-  }
-
-  /// SIGTERM to the process group (a clean stop), SIGKILL after `grace`, then reaped.
-  void Stop(SteadyClock::duration grace = 3s) {
-    if (!Running()) return;
-    ::kill(-pid_, SIGTERM);
-    if (WaitExit(grace)) return;
-    KillGroup();
-  }
-  /// SIGKILL to the whole process group and reap the leader.
-  void KillGroup() {
-    if (!running_) return;
-    ::kill(-pid_, SIGKILL);
-    int status = 0;
-    if (waitpid(pid_, &status, 0) == pid_) Reaped(status);
-  }
-  double WallSeconds() const { return std::chrono::duration<double>(SteadyClock::now() - started_).count(); }
-
- private:
-  void Reaped(int status) {
-    running_ = false;
-    exit_code_ = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + (WIFSIGNALED(status) ? WTERMSIG(status) : 0);
-  }
-
-  std::string label_;
-  fs::path log_;
-  std::string command_line_;
-  pid_t pid_ = -1;
-  bool running_ = false;
-  int exit_code_ = -1;
-  SteadyClock::time_point started_;
-};
 
 // ---------------------------------------------------------------------------------------------
 // The test's own view of a mission's domain: the server's MissionStatus (mission clock) and the
@@ -1205,7 +1104,7 @@ TEST_F(FleetDds, LaunchEndsWhenTheFleetIsGone) {
 
 // A flood of risk updates from an authenticated sender (this process, on the mission's operator
 // identity, writing as fast as it can) leaves another operator answered: an operator's update
-// during the flood is applied and answered within 1 s of its write, a `sage risk set` started
+// during the flood is applied and answered within 1 s of its write (median of five; each within 5 s), a `sage risk set` started
 // during it (its own process and secured handshake) succeeds, and the flood is refused beyond
 // its allowance and counted in metrics.json under its writer. (A probe's 3 million updates had
 // made every operator's command fail.)
@@ -1241,33 +1140,51 @@ TEST_F(FleetDds, RiskFloodLeavesAnOperatorAnswered) {
     }
   });
   std::this_thread::sleep_for(1s);
-  // An operator already on the domain: its update's answer, timed from the write.
+  // An operator already on the domain sends five updates, one after the other's answer, each
+  // timed from its write. Starvation (the probe's) leaves them unanswered; a single answer may
+  // still wait for a retransmission the flood's traffic forced, so the rule is on the median
+  // and every answer has to come within a few seconds.
   const std::string op_valve = "P2", op_source = "operator";
-  const auto sent = SteadyClock::now();
-  op.Write(proto::RiskUpdate{424242, proto::BorrowString(op_valve), 4.0, proto::BorrowString(op_source)});
-  std::optional<bool> applied;
-  while (!applied && SteadyClock::now() - sent < 10s) {
-    answers.WaitForData(5ms);
-    answers.TakeEach([&](const proto::RiskUpdateResult& r, const dds_sample_info_t& info) {
-      if (info.valid_data && r.update_stamp_ns == 424242 && proto::AsStringView(r.valve) == op_valve) applied = r.applied;
-    });
+  constexpr int kOperatorUpdates = 5;
+  std::vector<double> answer_s;
+  int applied = 0;
+  for (int k = 0; k < kOperatorUpdates; ++k) {
+    const long stamp = 424242 + k;
+    const auto sent = SteadyClock::now();
+    op.Write(proto::RiskUpdate{stamp, proto::BorrowString(op_valve), 2.0 + k % 3, proto::BorrowString(op_source)});
+    std::optional<bool> answer;
+    while (!answer && SteadyClock::now() - sent < 10s) {
+      answers.WaitForData(5ms);
+      answers.TakeEach([&](const proto::RiskUpdateResult& r, const dds_sample_info_t& info) {
+        if (info.valid_data && r.update_stamp_ns == stamp && proto::AsStringView(r.valve) == op_valve) answer = r.applied;
+      });
+    }
+    if (!answer) break;
+    applied += *answer ? 1 : 0;
+    answer_s.push_back(std::chrono::duration<double>(SteadyClock::now() - sent).count());
   }
-  const double answer_s = std::chrono::duration<double>(SteadyClock::now() - sent).count();
   // And one that starts now: `sage risk set` (a process, its own secured handshake).
   ChildProcess& risk = Start("risk", {"risk", "set", "P3", "5", "--mission", out.string()});
   const std::optional<int> risk_exit = risk.WaitExit(15s);
   const double command_s = risk.WallSeconds();
   stop = true;
   flooding.join();
-  ASSERT_TRUE(applied.has_value()) << "the operator's update was never answered during the flood";
-  EXPECT_TRUE(*applied);
-  EXPECT_LE(answer_s, 1.0) << "the operator waited " << answer_s << " s for the server's answer";
+  ASSERT_EQ(answer_s.size(), static_cast<std::size_t>(kOperatorUpdates))
+      << "an operator's update was never answered during the flood (answered: " << answer_s.size() << ")";
+  EXPECT_EQ(applied, kOperatorUpdates);
+  std::vector<double> sorted = answer_s;
+  std::ranges::sort(sorted);
+  const double median_s = sorted[sorted.size() / 2], max_s = sorted.back();
+  EXPECT_LE(median_s, 1.0) << "the operator waited " << fmt::format("{}", answer_s) << " s for the server's answers";
+  EXPECT_LE(max_s, 5.0) << "the operator waited " << fmt::format("{}", answer_s) << " s for the server's answers";
   ASSERT_TRUE(risk_exit.has_value()) << "sage risk set hung during the flood";
   EXPECT_EQ(*risk_exit, 0) << risk.LogText();
   EXPECT_TRUE(std::regex_search(risk.LogText(), std::regex(R"(P3: risk 5 applied at t = [0-9.]+ s)"))) << risk.LogText();
   EXPECT_GE(written.load(), 1000) << "the flood was no flood";
   Report("risk_flood_updates_written", static_cast<double>(written.load()), "updates (the flood)");
-  Report("risk_answer_during_flood_s", answer_s, "s wall (an operator's update to the server's answer, during the flood)");
+  Report("risk_answer_during_flood_median_s", median_s,
+         "s wall (an operator's update to the server's answer, during the flood; median of 5)");
+  Report("risk_answer_during_flood_max_s", max_s, "s wall (the slowest of the 5)");
   Report("risk_set_during_flood_wall_s", command_s, "s wall (sage risk set start to exit, during the flood)");
 
   ASSERT_EQ(WaitMissionEnd(launch, duration), std::optional<int>(0)) << launch.LogText();
@@ -1389,6 +1306,90 @@ TEST_F(FleetDds, LaunchFliesTheInProcessMission) {
   const std::string log = launch.LogText();
   EXPECT_NE(log.find("rov2 lost"), std::string::npos) << log;
   EXPECT_NE(log.find("rov5 joins at t = 10.0 s"), std::string::npos) << log;
+}
+
+// 13. A field of 1,000 valves or more is split in the background and the split taken at its due
+// cycle; the server's cycle that takes it can be long (it waits for the plan), and the hosts then
+// wait for that cycle's word too: the launch of a generated 1,050-valve field flies the
+// in-process mission sample for sample (a host had once steered a cycle on the server's word of
+// two cycles before, and every vehicle flew one cycle on its old target).
+TEST_F(FleetDds, LaunchOfALargeFieldFliesTheInProcessMission) {
+  const fs::path field = run_dir_ / "f1050.yaml";
+  ChildProcess& generate = Start("generate", {"field", "generate", "--xts", "300", "--valves", "1050", "--vehicles", "20",
+                                              "--seed", "4", "-o", field.string()});
+  ASSERT_EQ(generate.WaitExit(60s), std::optional<int>(0)) << generate.LogText();
+  const fs::path in_process = run_dir_ / "run", over_dds = run_dir_ / "launch";
+  ChildProcess& run = Start("run", {"run", field.string(), "--duration", "6", "--seed", "2", "--out", in_process.string()});
+  ASSERT_EQ(run.WaitExit(120s), std::optional<int>(0)) << run.LogText();
+  ChildProcess& launch = StartLaunch("launch", {field.string(), "--duration", "6", "--seed", "2", "--time-scale",
+                                                Num(kTimeScale), "--no-latest"},
+                                     over_dds, FreeDomainForLaunch(), run_dir_);
+  ASSERT_EQ(WaitMissionEnd(launch, 6.0), std::optional<int>(0)) << launch.LogText();
+  const auto samples = [](const fs::path& csv) {
+    std::istringstream in(ReadFile(csv));
+    std::vector<std::string> rows;
+    for (std::string line; std::getline(in, line);)
+      if (line.rfind("t,", 0) != 0 && line.rfind("0,", 0) != 0) rows.push_back(line);  // t = 0: only in-process
+    std::sort(rows.begin(), rows.end());
+    return rows;
+  };
+  const std::vector<std::string> a = samples(in_process / "trajectory.csv"), b = samples(over_dds / "trajectory.csv");
+  ASSERT_EQ(a.size(), 20u * 60u);
+  ASSERT_EQ(a.size(), b.size());
+  std::size_t differ = 0;
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    if (a[i] == b[i]) continue;
+    if (differ++ == 0) ADD_FAILURE() << "first differing sample:\n in-process " << a[i] << "\n over DDS   " << b[i];
+  }
+  EXPECT_EQ(differ, 0u);
+  // The split was taken at the same, due, cycle on both sides.
+  EXPECT_EQ(ReadFile(in_process / "regions.csv"), ReadFile(over_dds / "regions.csv"));
+}
+
+}  // namespace
+}  // namespace sage
+
+namespace sage {
+namespace {
+
+// 13. Leak detections over DDS (rt/sage/detection) are the ones the in-process mission hands over:
+// two_xt with its camera and a leak at P3 from 5 s, two vehicles, 40 s; the same trajectory, the
+// same scans fused, the leak detected and confirmed at the same times, the same false alarms.
+TEST_F(FleetDds, DetectionsOverDdsAreTheInProcessOnes) {
+  std::string text = ReadFile(Scenario("two_xt_leaks.yaml"));
+  const std::string from = "start_s: 120";
+  const auto at = text.find(from);
+  ASSERT_NE(at, std::string::npos);
+  text.replace(at, from.size(), "start_s: 5");
+  const fs::path scenario = run_dir_ / "two_xt_leak_soon.yaml";
+  std::ofstream(scenario) << text;
+  const fs::path in_process = run_dir_ / "run", over_dds = run_dir_ / "launch";
+  const std::vector<std::string> common = {"--duration", "40", "-n", "2", "--seed", "5"};
+  std::vector<std::string> run_args = {"run", scenario.string(), "--out", in_process.string()};
+  run_args.insert(run_args.end(), common.begin(), common.end());
+  ChildProcess& run = Start("run", run_args);
+  ASSERT_EQ(run.WaitExit(60s), std::optional<int>(0));
+  std::vector<std::string> launch_args = {scenario.string(), "--time-scale", Num(kTimeScale), "--no-latest"};
+  launch_args.insert(launch_args.end(), common.begin(), common.end());
+  ChildProcess& launch = StartLaunch("launch", launch_args, over_dds, FreeDomainForLaunch(), run_dir_);
+  ASSERT_EQ(WaitMissionEnd(launch, 40.0), std::optional<int>(0));
+  const Json ma = ReadJson(in_process / "metrics.json"), mb = ReadJson(over_dds / "metrics.json");
+  ASSERT_EQ(ma.at("leaks").size(), 1u);
+  EXPECT_TRUE(ma["leaks"][0].at("detected_s").is_number()) << "P3's leak is found in 35 s by two vehicles";
+  EXPECT_GT(ma.at("scans").get<int>(), 300);
+  EXPECT_EQ(ma.at("scans"), mb.at("scans"));
+  EXPECT_EQ(ma.at("leaks"), mb.at("leaks"));
+  EXPECT_EQ(ma.at("false_alarms"), mb.at("false_alarms"));
+  EXPECT_EQ(mb.at("rejected_samples"), 0);
+  const auto rows = [](const fs::path& csv) {
+    std::istringstream in(ReadFile(csv));
+    std::vector<std::string> out;
+    for (std::string line; std::getline(in, line);)
+      if (line.rfind("t,", 0) != 0 && line.rfind("0,", 0) != 0) out.push_back(line);  // t = 0: only in-process
+    std::sort(out.begin(), out.end());
+    return out;
+  };
+  EXPECT_EQ(rows(in_process / "trajectory.csv"), rows(over_dds / "trajectory.csv"));
 }
 
 }  // namespace

@@ -29,7 +29,7 @@ struct SourceFile {
 std::string LayerOf(const std::string& path) {
   static const std::vector<std::pair<std::string, std::string>> kFolders = {
       {"maps/scenario/", "scenario"}, {"maps/", "maps"},           {"agents/node/", "agents_node"},
-      {"agents/", "agents"},          {"proto/security/", "security"}, {"proto/", "proto"},         {"server/report/", "report"},
+      {"agents/", "agents"},          {"proto/security/", "security"}, {"proto/", "proto"},         {"server/report/", "report"}, {"server/live/", "live"},
       {"server/node/", "server_node"}, {"server/app/", "app"},     {"server/", "server"},
   };
   for (const auto& [folder, layer] : kFolders)
@@ -48,8 +48,10 @@ const std::map<std::string, std::set<std::string>>& AllowedLayers() {
       {"agents_node", {"scenario", "maps", "agents", "agents_node", "proto"}},
       {"server", {"scenario", "maps", "agents", "server"}},
       {"report", {"scenario", "maps", "agents", "server", "report"}},
-      {"server_node", {"scenario", "maps", "agents", "agents_node", "proto", "server", "report", "server_node"}},
-      {"app", {"scenario", "maps", "agents", "agents_node", "proto", "security", "server", "report", "server_node", "app"}},
+      {"live", {"scenario", "maps", "agents", "server", "report", "live"}},
+      {"server_node", {"scenario", "maps", "agents", "agents_node", "proto", "server", "report", "live", "server_node"}},
+      {"app", {"scenario", "maps", "agents", "agents_node", "proto", "security", "server", "report", "live", "server_node",
+               "app"}},
   };
   return kAllowed;
 }
@@ -59,7 +61,10 @@ const std::map<std::string, std::set<std::string>>& ExternalRules() {
   static const std::map<std::string, std::set<std::string>> kRules = {
       {"dds/", {"proto", "agents_node", "server_node", "app"}},  // Cyclone DDS: the transports
       {"CLI/", {"app"}},                                        // CLI11: the command line
-      {"nlohmann/", {"report"}},                                // JSON/CBOR: the run files
+      {"nlohmann/", {"report", "live"}},                        // JSON/CBOR: the run files, Foxglove's requests
+      {"httplib.h", {"live"}},                                  // the live view's web server
+      {"websocketpp/", {"live"}},                               // ... and its Foxglove WebSocket
+      {"asio", {"live"}},
       {"octomap/", {"maps"}},
       {"gdal", {"maps"}},                                       // GDAL: the seabed map files
       {"cpl_", {"maps"}},

@@ -3,9 +3,6 @@
 // from its coefficients, peaks at its heaviest valve, in the workspace frame.
 #include "maps/region.h"
 
-#include <cmath>
-
-#include <Eigen/Eigenvalues>
 #include <gtest/gtest.h>
 
 #include "maps/occupancy_grid.h"
@@ -79,23 +76,6 @@ TEST(Region, BlockedWaterIsTheGridsNotTheBoxs) {
   walled.basis().Evaluate(Eigen::Vector2d(21.5, 14.5) - box.origin_m, f);
   const double inside = walled.Coefficients(w).dot(f);
   EXPECT_LT(inside, 0.5 * open.dot(f)) << "the blocked water still holds most of its risk";
-}
-
-// A valve's target narrowed to a largest standard deviation: the covariance keeps its axes and
-// their ratio (eigenvectors and eigenvalue ratio, from Eigen's solver: an independent computation),
-// its larger eigenvalue becomes max_sigma^2 (1e-12 relative); one already narrower is kept as it is.
-TEST(Region, NarrowedTargetKeepsItsShapeAndCapsItsWidth) {
-  Eigen::Matrix2d rotated;
-  rotated << 0.09, 0.03, 0.03, 0.05;  // tilted, sigma 0.33 m and 0.19 m along its axes
-  const GaussianComponent valve{{3.0, 4.0}, rotated};
-  const GaussianComponent narrow = NarrowedTo(valve, 0.15);
-  EXPECT_EQ(narrow.mean_m, valve.mean_m);
-  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> before(valve.covariance_m2), after(narrow.covariance_m2);
-  EXPECT_NEAR(after.eigenvalues()[1], 0.15 * 0.15, 1e-12 * 0.0225);
-  EXPECT_NEAR(after.eigenvalues()[0] / after.eigenvalues()[1], before.eigenvalues()[0] / before.eigenvalues()[1], 1e-12);
-  EXPECT_NEAR(std::abs(after.eigenvectors().col(1).dot(before.eigenvectors().col(1))), 1.0, 1e-12);
-  const GaussianComponent slim{{1.0, 1.0}, 0.01 * Eigen::Matrix2d::Identity()};  // sigma 0.1 m
-  EXPECT_EQ(NarrowedTo(slim, 0.15).covariance_m2, slim.covariance_m2);
 }
 
 }  // namespace

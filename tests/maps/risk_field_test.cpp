@@ -3,6 +3,7 @@
 #include <cmath>
 #include <numbers>
 
+#include <Eigen/Eigenvalues>
 #include <Eigen/LU>
 #include <gtest/gtest.h>
 
@@ -111,6 +112,23 @@ TEST(RiskField, RejectsInvalidWeights) {
   EXPECT_THROW(field.SetWeights(Eigen::Vector2d(0.0, 0.0)), std::invalid_argument);
   EXPECT_THROW(field.SetWeights(Eigen::Vector2d(-1.0, 2.0)), std::invalid_argument);
   EXPECT_THROW(field.SetWeight(2, 1.0), std::out_of_range);
+}
+
+// A valve's target narrowed to a largest standard deviation: the covariance keeps its axes and
+// their ratio (eigenvectors and eigenvalue ratio, from Eigen's solver: an independent computation),
+// its larger eigenvalue becomes max_sigma^2 (1e-12 relative); one already narrower is kept as it is.
+TEST(RiskField, NarrowedTargetKeepsItsShapeAndCapsItsWidth) {
+  Eigen::Matrix2d rotated;
+  rotated << 0.09, 0.03, 0.03, 0.05;  // tilted, sigma 0.33 m and 0.19 m along its axes
+  const GaussianComponent valve{{3.0, 4.0}, rotated};
+  const GaussianComponent narrow = NarrowedTo(valve, 0.15);
+  EXPECT_EQ(narrow.mean_m, valve.mean_m);
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> before(valve.covariance_m2), after(narrow.covariance_m2);
+  EXPECT_NEAR(after.eigenvalues()[1], 0.15 * 0.15, 1e-12 * 0.0225);
+  EXPECT_NEAR(after.eigenvalues()[0] / after.eigenvalues()[1], before.eigenvalues()[0] / before.eigenvalues()[1], 1e-12);
+  EXPECT_NEAR(std::abs(after.eigenvectors().col(1).dot(before.eigenvectors().col(1))), 1.0, 1e-12);
+  const GaussianComponent slim{{1.0, 1.0}, 0.01 * Eigen::Matrix2d::Identity()};  // sigma 0.1 m
+  EXPECT_EQ(NarrowedTo(slim, 0.15).covariance_m2, slim.covariance_m2);
 }
 
 }  // namespace

@@ -13,6 +13,7 @@
 #include <openssl/x509_vfy.h>
 
 #include <algorithm>
+#include <ctime>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -120,20 +121,20 @@ TEST(AccessPolicy, EveryMissionTopicHasOneRule) {
 
 // The roles as designed: only the server publishes targets, coverage, status and answers; only
 // operators publish risk updates; fleet commands come from operators and the server; agent hosts
-// publish states and coverage; the viewer reads every topic and publishes none.
+// publish states, coverage and their sensors' scans; the viewer reads every topic and publishes none.
 TEST(AccessPolicy, RolesPublishAndReadWhatTheMissionNeeds) {
   EXPECT_EQ(Set(TopicsPublishedBy(SecurityRole::kServer)),
             (std::set<std::string>{kErgodicTargetTopic, kFleetCoverageTopic, kRiskUpdateResultTopic, kMissionStatusTopic,
                                    kFleetCommandTopic, kFleetCommandResultTopic}));
   EXPECT_EQ(Set(TopicsPublishedBy(SecurityRole::kOperator)), (std::set<std::string>{kRiskUpdateTopic, kFleetCommandTopic}));
   EXPECT_EQ(Set(TopicsPublishedBy(SecurityRole::kAgentHost)),
-            (std::set<std::string>{kVehicleStateTopic, kVehicleCoverageTopic}));
+            (std::set<std::string>{kVehicleStateTopic, kVehicleCoverageTopic, kDetectionTopic}));
   EXPECT_TRUE(TopicsPublishedBy(SecurityRole::kViewer).empty());
   EXPECT_EQ(TopicsSubscribedBy(SecurityRole::kViewer).size(), kMissionTopics.size());
   // What each process reads (server_node, agent_node, launch, operators).
   EXPECT_EQ(Set(TopicsSubscribedBy(SecurityRole::kServer)),
             (std::set<std::string>{kVehicleStateTopic, kVehicleCoverageTopic, kRiskUpdateTopic, kMissionStatusTopic,
-                                   kFleetCommandTopic}));
+                                   kFleetCommandTopic, kDetectionTopic}));
   EXPECT_EQ(Set(TopicsSubscribedBy(SecurityRole::kAgentHost)),
             (std::set<std::string>{kVehicleStateTopic, kErgodicTargetTopic, kFleetCoverageTopic, kMissionStatusTopic,
                                    kFleetCommandTopic}));
@@ -294,6 +295,33 @@ TEST(SecurityFiles, RefusesNonEmptyDirectoryAndNamesMissingFiles) {
     EXPECT_EQ(std::string(e.what()).rfind((dir / "viewer" / "key.pem").string() + ": cannot read it", 0), 0u) << e.what();
   }
   EXPECT_THROW(InitSecurityDirectory((temp.path / "other").string(), {.validity_days = 0}), std::invalid_argument);
+}
+
+// Cyclone refuses an expired identity only with "Failed to create participant" (a mission resumed
+// past its identities' 30 days had nothing else to go by): the check names the file and the day.
+TEST(SecurityFiles, ExpiredOrNotYetValidIdentitiesAreNamedWithTheirDates) {
+  const TempDir temp;
+  const fs::path dir = temp.path / "sec";
+  const SecurityDirectorySummary summary = InitSecurityDirectory(dir.string(), {.validity_days = 2, .keep_ca_key = false});
+  const std::time_t now = std::time(nullptr);
+  CheckSecurityDirectory(dir.string(), now);
+  CheckSecurityDirectory(dir.string(), now + 86400);
+  try {
+    CheckSecurityDirectory(dir.string(), now + 3 * 86400);
+    FAIL() << "an expired directory passed";
+  } catch (const SecurityError& e) {
+    const std::string message = e.what();
+    EXPECT_EQ(message.rfind((dir / "ca.pem").string() + ": the certificate expired on ", 0), 0u) << message;
+    EXPECT_NE(message.find(summary.not_after + " UTC"), std::string::npos) << message << " (" << summary.not_after << ")";
+    EXPECT_NE(message.find("sage security init"), std::string::npos);
+    EXPECT_EQ(message.find('\n'), std::string::npos);
+  }
+  try {
+    CheckSecurityDirectory(dir.string(), now - 2 * 3600);
+    FAIL() << "a directory not valid yet passed";
+  } catch (const SecurityError& e) {
+    EXPECT_NE(std::string(e.what()).find("is valid only from"), std::string::npos) << e.what();
+  }
 }
 
 }  // namespace

@@ -72,7 +72,8 @@ struct SecuredDomain {
 };
 
 using AllMessages = std::tuple<VehicleState, VehicleCoverage, ErgodicTarget, FleetCoverage, RiskUpdate, RiskUpdateResult,
-                               MissionStatus, FleetCommand, FleetCommandResult>;
+                               MissionStatus, FleetCommand, FleetCommandResult, Detection>;
+static_assert(std::tuple_size_v<AllMessages> == kMissionTopics.size(), "a message type for every mission topic");
 
 // Readers and writers on many topics, held type-erased, with their matched counts.
 struct Endpoints {
@@ -267,7 +268,7 @@ TEST(SecureDds, PlainParticipantNeitherReadsNorWritesAnyMissionTopic) {
   EXPECT_GT(from_operator, 0);
   EXPECT_GT(server_matched, 0);
   EXPECT_GT(host_matched, 0);
-  // The plain participants: each of their endpoints on the nine topics matched its plain peer
+  // The plain participants: each of their endpoints on the mission's topics matched its plain peer
   // only (one each), they read each other's status but never the server's, and the server took
   // no risk update from them.
   EXPECT_EQ(plain_writer_matched, static_cast<int>(kMissionTopics.size()));

@@ -97,6 +97,15 @@ TEST(WireBytes, ErgodicTargetMatchesCyclone) {
   ExpectSizesMatch(samples, &ErgodicTargetQos);
 }
 
+TEST(WireBytes, DetectionMatchesCyclone) {
+  const std::vector<std::vector<double>> xy = {{}, {1.0, 2.0}, {1.0, 2.0, 3.0, 4.0, 5.0, 6.0}};
+  std::vector<Detection> samples;
+  for (std::size_t i = 0; i < xy.size(); ++i) {
+    samples.push_back(Detection{static_cast<uint32_t>(i), 1, 2, 3, static_cast<uint32_t>(i), 1.0, 2.0, 0.5, BorrowSequence(xy[i])});
+  }
+  ExpectSizesMatch(samples, &DetectionQos);
+}
+
 TEST(WireBytes, FleetCoverageMatchesCyclone) {
   const std::vector<double> phi(400, 0.1), sums(400, 0.2), weights_odd(5, 0.2), weights_even(4, 0.25);
   const std::vector<uint32_t> ids_odd = {1, 2, 3}, ids_even = {1, 2};

@@ -1,5 +1,6 @@
 #include "server/metrics.h"
 
+#include <algorithm>
 #include <cmath>
 #include <random>
 #include <stdexcept>
@@ -98,8 +99,9 @@ TEST(VisitTracker, JitterInsideRearmRadiusCountsOnce) {
     visits += static_cast<int>(tracker.Update(0, {distances[k], 0.0}, k).size());
   }
   EXPECT_EQ(visits, 2);
-  ASSERT_EQ(tracker.visit_times()[0].size(), 2u);
-  EXPECT_EQ(tracker.visit_times()[0][0], 1.0);
+  ASSERT_EQ(tracker.visits()[0].recent.size(), 2u);
+  EXPECT_EQ(tracker.visits()[0].recent[0], 1.0);
+  EXPECT_EQ(tracker.visits()[0].count, 2u);
   EXPECT_EQ(tracker.LastVisit(0), 9.0);
 }
 
@@ -114,7 +116,7 @@ TEST(VisitTracker, VehiclesCountSeparately) {
   tracker.Forget(5);
   EXPECT_EQ(tracker.Update(5, {0.1, 0.0}, 5.0).size(), 1u);
   EXPECT_EQ(tracker.Update(2, {0.0, 0.2}, 6.0).size(), 0u);
-  EXPECT_EQ(tracker.visit_times()[0].size(), 3u);
+  EXPECT_EQ(tracker.visits()[0].count, 3u);
 }
 
 // Visits counted from each vehicle's disarmed valves and the valves near it equal the rule run
@@ -152,13 +154,16 @@ TEST(VisitTracker, AgreesWithEveryPairScanned) {
     ASSERT_EQ(tracker.Update(v, at[v], 0.1 * t), expected) << "sample " << t;
     visits += expected.size();
   }
-  EXPECT_EQ(tracker.visit_times(), times);
+  for (std::size_t i = 0; i < valves.size(); ++i) {
+    EXPECT_EQ(tracker.visits()[i].count, times[i].size());
+    EXPECT_EQ(tracker.visits()[i].recent, times[i]) << "valve " << i;  // fewer than kRecentVisits each
+  }
   EXPECT_GT(visits, 50u);  // the walks do pass valves
   // A checkpoint's arming state restores to the same counting.
   VisitTracker restored(valves, visit, rearm);
-  restored.Restore(tracker.disarmed(), tracker.visit_times());
+  restored.Restore(tracker.disarmed(), tracker.visits(), tracker.watches());
   for (int v = 0; v < 6; ++v) EXPECT_EQ(restored.Update(v, at[v], 400.0), tracker.Update(v, at[v], 400.0));
-  EXPECT_THROW(restored.Restore({{3, 2}}, tracker.visit_times()), std::invalid_argument);
+  EXPECT_THROW(restored.Restore({{3, 2}}, tracker.visits(), {}), std::invalid_argument);
 }
 
 // Through ComputeMetrics too: two vehicles, one entry each, are two visits and vehicle_count 2.
@@ -412,6 +417,99 @@ TEST(ComputeMetrics, UnwatchedStretchesFromPresence) {
   // Presence is sampled: each stretch is known to a sample (0.1 s).
   EXPECT_NEAR(p.valves[0].longest_unwatched_s, 12.0, 0.1 + 1e-9);
   EXPECT_NEAR(p.valves[0].unwatched_squares_s2, 12.0 * 12.0 + 6.0 * 6.0, 2 * 0.1 * 18.0);
+}
+
+// A valve's record stays kRecentVisits long however many visits come, and what it reports
+// (count, first, last, longest gap, mean interval) equals what every visit time kept would give:
+// a valve visited 5,000 times at uneven gaps, some of them arriving out of order.
+TEST(VisitTracker, RecordStaysBoundedAndItsFiguresExact) {
+  std::mt19937 rng(4);
+  std::uniform_real_distribution<double> gap(0.5, 12.0);
+  std::vector<double> times;
+  for (double t = 3.0; times.size() < 5000; t += gap(rng)) times.push_back(t);
+  times[2500] += 40.0;  // one long gap
+  std::sort(times.begin(), times.end());
+  VisitTracker::ValveVisits record;
+  std::vector<double> order = times;
+  for (std::size_t i = 0; i + 1 < order.size(); i += 7) std::swap(order[i], order[i + 1]);  // a late host
+  for (const double t : order) record.Add(t);
+  EXPECT_EQ(record.count, times.size());
+  EXPECT_EQ(record.recent.size(), VisitTracker::kRecentVisits);
+  EXPECT_TRUE(std::equal(record.recent.begin(), record.recent.end(), times.end() - VisitTracker::kRecentVisits));
+  EXPECT_EQ(record.first_s, times.front());
+  double longest = 0.0;
+  for (std::size_t i = 1; i + VisitTracker::kRecentVisits < times.size(); ++i) longest = std::max(longest, times[i] - times[i - 1]);
+  EXPECT_EQ(record.folded_max_gap_s, longest);
+  EXPECT_EQ(record.folded_last_s, times[times.size() - VisitTracker::kRecentVisits - 1]);
+}
+
+// Through the metrics: a vehicle circling one valve for 20,000 s, 2,000 visits: metrics.json's
+// figures are the same as of the whole list (computed here from the visit times), its list the
+// latest kRecentVisits, and the metric over time thinned to at most about kMetricSamplesKept.
+TEST(MetricsAccumulator, LongMissionsKeepTheirFiguresInBoundedMemory) {
+  maps::Scenario s = maps::LoadScenario(std::string(SAGE_SOURCE_DIR) + "/scenarios/two_xt.yaml");
+  const maps::SpectralBasis basis(s.workspace.width_m, s.workspace.height_m, s.ergodic.basis_order);
+  const maps::RiskField field = maps::RiskField::ForScenario(s, basis);
+  MetricsAccumulator metrics(s, basis, field);
+  metrics.OnWeights(0.0, Eigen::VectorXd::Ones(s.ValveCount()));
+  const Eigen::Vector2d valve = s.ValvePositions()[0];
+  std::vector<double> visits;
+  const double duration = 20000.0;
+  for (int k = 0; k <= static_cast<int>(duration * 10); ++k) {
+    const double t = k / 10.0;
+    // In the disc for 1 s of every 10 s, one 300 s absence (the longest gap).
+    const bool near = std::fmod(t, 10.0) < 1.0 && !(t > 7000.0 && t < 7300.0);
+    const Eigen::Vector2d at = near ? valve : Eigen::Vector2d(valve + Eigen::Vector2d(2.0, 0.0));
+    TrajectorySample sample;
+    sample.time_s = t;
+    sample.position_m = at;
+    const std::vector<int> visited = metrics.Add(sample);
+    if (std::find(visited.begin(), visited.end(), 0) != visited.end()) visits.push_back(t);
+    metrics.Advance(t);
+  }
+  ASSERT_GT(visits.size(), 1900u);
+  EXPECT_LE(metrics.state().metric_over_time.size(), MetricsAccumulator::kMetricSamplesKept);
+  EXPECT_GE(metrics.state().metric_over_time.size(), MetricsAccumulator::kMetricSamplesKept / 2);
+  const MissionMetrics m = metrics.Result(duration);
+  const ValveMetrics& p = m.valves[0];
+  EXPECT_EQ(p.visits, static_cast<int>(visits.size()));
+  EXPECT_EQ(p.visit_times_s.size(), VisitTracker::kRecentVisits);
+  EXPECT_EQ(p.visit_times_s.back(), visits.back());
+  double longest = std::max(visits.front(), duration - visits.back());
+  for (std::size_t i = 1; i < visits.size(); ++i) longest = std::max(longest, visits[i] - visits[i - 1]);
+  EXPECT_EQ(p.max_gap_s, longest);
+  EXPECT_NEAR(longest, 300.0, 1e-6);  // the absence: visits at 7,000 s and 7,300 s
+  EXPECT_DOUBLE_EQ(p.mean_interval_s, (visits.back() - visits.front()) / static_cast<double>(visits.size() - 1));
+  // Evenly thinned, in order, and the end's metric last.
+  const auto& over = m.metric_over_time;
+  for (std::size_t i = 1; i < over.size(); ++i) ASSERT_GT(over[i].time_s, over[i - 1].time_s);
+  EXPECT_EQ(over.back().time_s, duration);
+  EXPECT_EQ(metrics.latest_metric(), metrics.state().metric_over_time.back().ergodic_metric);
+}
+
+// A risk event's response from its watch equals the one from every visit time: next visit,
+// intervals before and after, with visits long past the event folded away.
+TEST(VisitTracker, WatchesAnswerEventsAsTheWholeListWould) {
+  VisitTracker tracker({Eigen::Vector2d(0, 0)}, 0.5, 1.0);
+  std::vector<double> times;
+  const auto visit = [&](double t) {
+    tracker.Update(0, {0.0, 0.0}, t);
+    tracker.Update(0, {3.0, 0.0}, t + 0.05);
+    times.push_back(t);
+  };
+  for (double t = 1.0; t < 100.0; t += 3.0) visit(t);
+  tracker.WatchAround(0, 100.0);
+  for (double t = 101.5; t < 1000.0; t += 2.0) visit(t);
+  MissionMetrics m;
+  m.events.push_back({100.0, "P1", 1.0});
+  FillEventResponses(tracker, m);
+  std::vector<double> before, after;
+  for (double t : times) (t < 100.0 ? before : after).push_back(t);
+  EXPECT_DOUBLE_EQ(m.events[0].time_to_next_visit_s, after.front() - 100.0);
+  EXPECT_DOUBLE_EQ(m.events[0].interval_before_s, (before.back() - before.front()) / (before.size() - 1));
+  EXPECT_DOUBLE_EQ(m.events[0].interval_after_s, (after.back() - after.front()) / (after.size() - 1));
+  EXPECT_EQ(tracker.visits()[0].count, times.size());
+  EXPECT_GT(times.size(), 2 * VisitTracker::kRecentVisits);
 }
 
 }  // namespace

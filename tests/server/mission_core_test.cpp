@@ -14,39 +14,16 @@
 #include "maps/world.h"
 #include "server/mission.h"
 #include "server/report/checkpoint.h"
+#include "tests/support/missions.h"
 
 namespace sage::server {
 namespace {
 
 const std::string kTwoXt = std::string(SAGE_SOURCE_DIR) + "/scenarios/two_xt.yaml";
 
+using testing::EventfulTwoXt;
 agents::StateReport State(int id, const std::string& name, std::int64_t cycle, Eigen::Vector2d position) {
-  agents::StateReport s;
-  s.id = id;
-  s.name = name;
-  s.cycle = cycle;
-  s.time_s = static_cast<double>(cycle) / 10.0;
-  s.state.position_m = position;
-  return s;
-}
-
-// three vehicles on two_xt, a fourth joining at 45 s and the second lost at 50 s: a mission
-// whose record after t = 40 holds joins, a loss and an operator's risk update.
-maps::Scenario EventfulTwoXt() {
-  maps::Scenario s = maps::WithDuration(maps::WithVehicleCount(maps::LoadScenario(kTwoXt), 3), 60.0);
-  maps::FleetEvent join;
-  join.time_s = 45.0;
-  join.kind = maps::FleetEvent::Kind::kJoin;
-  join.vehicle = s.vehicles[0];
-  join.vehicle.name = "late";
-  join.vehicle.start_m = {4.8, 0.6};
-  maps::FleetEvent lose;
-  lose.time_s = 50.0;
-  lose.kind = maps::FleetEvent::Kind::kLose;
-  lose.vehicle.name = s.vehicles[1].name;
-  s.fleet_events = {join, lose};
-  s.Validate();
-  return s;
+  return testing::VehicleState(id, name, cycle, position);
 }
 
 // Operators get the server's own answer: an unknown id, one that left, the last vehicle.
@@ -326,7 +303,8 @@ TEST(MissionCore, ResumeReplaysTheRecordToTheSameState) {
   EXPECT_EQ(resumed.Replay(samples, fleet, risk), original.core().cycle());
 
   const MissionCore& a = original.core();
-  EXPECT_EQ(resumed.metrics_accumulator().visits().visit_times(), a.metrics_accumulator().visits().visit_times());
+  EXPECT_EQ(resumed.metrics_accumulator().visits().visits(), a.metrics_accumulator().visits().visits());
+  EXPECT_EQ(resumed.metrics_accumulator().visits().watches(), a.metrics_accumulator().visits().watches());
   const MetricsAccumulator::State& ma = a.metrics_accumulator().state();
   const MetricsAccumulator::State& mb = resumed.metrics_accumulator().state();
   EXPECT_EQ(mb.sum_f, ma.sum_f);

@@ -9,6 +9,7 @@
 #include <Eigen/LU>
 #include <fmt/format.h>
 
+#include "maps/scenario/perception.h"
 #include "server/report/plots/mission_plots.h"
 #include "server/report/plots/nice_scale.h"
 #include "server/report/plots/render.h"
@@ -34,7 +35,8 @@ constexpr const char* kTrackColours[] = {"#1f77b4", "#9467bd", "#17becf", "#8c56
 constexpr const char* kStructureFill = "#404040";
 constexpr const char* kRiskMarker = "#e6550d";
 constexpr const char* kJoinMarker = "#2ca02c";
-constexpr const char* kLossMarker = "#d62728";
+constexpr const char* kLossMarker = "#111111";  // black: red crosses are the hidden leaks
+constexpr const char* kLeakMarker = "#dd0000";
 constexpr const char* kLeaveMarker = "#555555";
 
 std::string Seconds(double t) { return t >= 100.0 ? fmt::format("{:.0f} s", t) : fmt::format("{:.1f} s", t); }
@@ -251,6 +253,10 @@ std::string FieldPlotSvg(const MissionPlotInput& input, FieldPlotLayout* layout_
                       "<circle cx=\"18\" cy=\"0\" r=\"4.5\" fill=\"#8a8a8a\" stroke=\"#505050\"/>",
                       "flowline, boulder"});
   }
+  if (!scenario.leaks.empty()) {
+    legend.push_back({fmt::format("<path d=\"M6,-5L16,5M6,5L16,-5\" stroke=\"{}\" stroke-width=\"3\"/>", kLeakMarker),
+                      "hidden leak (onset)"});
+  }
   std::map<EventMarker::Kind, int> event_count;
   for (const EventMarker& e : input.events) ++event_count[e.kind];
   for (const auto& [kind, count] : event_count) {
@@ -458,6 +464,13 @@ std::string FieldPlotSvg(const MissionPlotInput& input, FieldPlotLayout* layout_
     if (keep_clear[i]) placer.AddObstacle(dot);
   }
   for (const EventMarker& e : input.events) placer.AddObstacle(Box::Around(px(e.position_m.x()), py(e.position_m.y()), 7.0));
+  // The hidden leaks (the scenario's; the server never knew them): a red cross each.
+  std::vector<Eigen::Vector2d> leaks_px;
+  for (const maps::LeakSpec& leak : scenario.leaks) {
+    const Eigen::Vector2d at = maps::LeakPosition(scenario, leak);
+    leaks_px.emplace_back(px(at.x()), py(at.y()));
+    placer.AddObstacle(Box::Around(leaks_px.back().x(), leaks_px.back().y(), 7.5));
+  }
   for (const int v : drawn) {
     placer.AddObstacle(Box::Around(px(paths.at(v).front().x()), py(paths.at(v).front().y()), 5.0));
     placer.AddObstacle(Box::Around(px(paths.at(v).back().x()), py(paths.at(v).back().y()), 5.0));
@@ -488,6 +501,11 @@ std::string FieldPlotSvg(const MissionPlotInput& input, FieldPlotLayout* layout_
   }
   // Event markers.
   for (const EventMarker& e : input.events) put("{}\n", MarkerSvg(e.kind, px(e.position_m.x()), py(e.position_m.y()), 9.0));
+  for (const Eigen::Vector2d& p : leaks_px) {
+    put("<path d=\"M{0:.1f},{1:.1f}l12,12M{0:.1f},{2:.1f}l12,-12\" stroke=\"white\" stroke-width=\"5\"/>"
+        "<path d=\"M{0:.1f},{1:.1f}l12,12M{0:.1f},{2:.1f}l12,-12\" stroke=\"{3}\" stroke-width=\"3\"/>\n",
+        p.x() - 6.0, p.y() - 6.0, p.y() + 6.0, kLeakMarker);
+  }
 
   // Labels, most important first: XT names, valves by weight, then events in time order.
   const double label_h = (kAscentEm + kDescentEm) * kLabelFont;
@@ -537,6 +555,16 @@ std::string FieldPlotSvg(const MissionPlotInput& input, FieldPlotLayout* layout_
       if (!place(layout.valve_markers[i], text, valves[i].name, "#111")) ++valve_labels_out;
     }
   };
+  // The hidden leaks' onsets first: what the mission was out to find (at most kMaxEventLabels).
+  int leak_labels_out = 0;
+  for (std::size_t k = 0; k < scenario.leaks.size(); ++k) {
+    const maps::LeakSpec& leak = scenario.leaks[k];
+    const std::string text = fmt::format("leak from {}", Seconds(leak.start_s));
+    if (static_cast<int>(k) >= kMaxEventLabels ||
+        !place(Box::Around(leaks_px[k].x(), leaks_px[k].y(), 7.5), text, "leak " + maps::LeakWhere(leak), kLeakMarker)) {
+      ++leak_labels_out;
+    }
+  }
   if (crowded) {
     label_valves();
     label_xts(false);
@@ -574,7 +602,7 @@ std::string FieldPlotSvg(const MissionPlotInput& input, FieldPlotLayout* layout_
     const std::string text = fmt::format("{} {} {}", e.who, ToString(e.kind), Seconds(e.time_s));
     if (!place(Box::Around(px(e.position_m.x()), py(e.position_m.y()), 7.0), text, e.who, colour)) ++event_labels_out;
   }
-  layout.labels_left_out = xt_labels_out + valve_labels_out + event_labels_out;
+  layout.labels_left_out = xt_labels_out + valve_labels_out + event_labels_out + leak_labels_out;
 
   // The map's frame, axes and scale bar.
   put("<rect x=\"{:.1f}\" y=\"{:.1f}\" width=\"{:.1f}\" height=\"{:.1f}\" fill=\"none\" stroke=\"#222\"/>\n", kLeft, kTop, map_w,
@@ -594,6 +622,11 @@ std::string FieldPlotSvg(const MissionPlotInput& input, FieldPlotLayout* layout_
     caption.insert(caption.begin(), fmt::format("{} vehicles; {} tracks shown ({}: vehicles with an event first, then spread "
                                                 "through the fleet).",
                                                 Grouped(layout.vehicles), layout.highlighted.size(), names));
+  }
+  if (!scenario.leaks.empty()) {
+    caption.push_back(fmt::format("Red crosses: the scenario's {} hidden leak{} with {} onset{}; the server never knew them.",
+                                  scenario.leaks.size(), scenario.leaks.size() == 1 ? "" : "s",
+                                  scenario.leaks.size() == 1 ? "its" : "their", scenario.leaks.size() == 1 ? "" : "s"));
   }
   if (!input.events.empty() || input.events_not_kept > 0) {
     std::string events = "Markers: where and when risk changed (at the valve), and where a vehicle joined (first seen), "

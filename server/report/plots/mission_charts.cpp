@@ -20,7 +20,7 @@ const char* MarkerColour(EventMarker::Kind kind) {
   switch (kind) {
     case EventMarker::Kind::kRisk: return "#e6550d";
     case EventMarker::Kind::kJoin: return "#2ca02c";
-    case EventMarker::Kind::kLoss: return "#d62728";
+    case EventMarker::Kind::kLoss: return "#111111";
     case EventMarker::Kind::kLeave: return "#555555";
   }
   return "#555555";

@@ -183,8 +183,10 @@ TEST_F(ReportTest, MetricsJsonHasEveryKey) {
   WriteMetricsJson(Path("metrics.json"), SampleMetrics());
   EXPECT_FALSE(fs::exists(Path("metrics.json.tmp")));
   const nlohmann::json j = nlohmann::json::parse(ReadText(Path("metrics.json")));
-  EXPECT_EQ(j.size(), 16u);
+  EXPECT_EQ(j.size(), 17u);
   EXPECT_EQ(j.at("controller"), "ergodic");
+  EXPECT_TRUE(j.at("leaks").is_array() && j.at("leaks").empty()) << "no leak hidden, no sensors: an empty list";
+  EXPECT_FALSE(j.contains("false_alarms"));
   for (const char* key : {"expected_detection_delay_s", "risk_weighted_interval_s", "dominant_interval_s"}) {
     EXPECT_TRUE(j.at(key).is_number()) << key;
   }

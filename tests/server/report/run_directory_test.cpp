@@ -23,6 +23,7 @@
 #include "server/mission_core.h"
 #include "server/report/checkpoint.h"
 #include "server/report/mission_file.h"
+#include "tests/support/missions.h"
 
 namespace sage::server {
 namespace {
@@ -30,12 +31,7 @@ namespace {
 namespace fs = std::filesystem;
 const std::string kTwoXt = std::string(SAGE_SOURCE_DIR) + "/scenarios/two_xt.yaml";
 
-std::string Read(const fs::path& path) {
-  std::ifstream in(path);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
+std::string Read(const fs::path& path) { return testing::ReadText(path); }
 
 class RunDirectoryTest : public ::testing::Test {
  protected:

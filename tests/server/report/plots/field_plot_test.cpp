@@ -16,6 +16,7 @@
 #include <gtest/gtest.h>
 
 #include "maps/scenario/field_generator.h"
+#include "maps/scenario/perception.h"
 #include "maps/scenario/scenario.h"
 #include "server/mission.h"
 #include "server/mission_core.h"
@@ -354,6 +355,39 @@ TEST(FieldPlot, CrowdedFieldLabelsTheHeaviestValves) {
   }
   EXPECT_GT(valve_labels, 10);
   EXPECT_EQ(Count(svg, "Of 350 valves, the 40 of highest weight are labelled"), 1);
+}
+
+// The scenario's hidden leaks (which the server never knew) are drawn as red crosses with their
+// onsets, in the legend and the caption; the onset labels keep clear of the others like any
+// label; in plot.png the cross's centre is the leak's red.
+TEST(FieldPlot, HiddenLeaksAsRedCrossesWithTheirOnsets) {
+  maps::Scenario s = FleetField().scenario;
+  maps::LeakSpec at_valve, on_seabed;
+  at_valve.valve = "P9";
+  at_valve.start_s = 300.0;
+  on_seabed.point_m = {4.2, 3.0};
+  on_seabed.start_s = 150.0;
+  s.leaks = {on_seabed, at_valve};
+  MissionPlotInput input = FleetField().Input();
+  input.scenario = &s;
+  FieldPlotLayout layout;
+  const std::string svg = FieldPlotSvg(input, &layout);
+  EXPECT_EQ(Count(svg, "stroke=\"#dd0000\" stroke-width=\"3\""), 3);  // two crosses and the legend's
+  EXPECT_EQ(Count(svg, ">hidden leak (onset)<"), 1);
+  EXPECT_EQ(Count(svg, "2 hidden leaks with their onsets"), 1);
+  int onsets = 0;
+  for (std::size_t i = 0; i < layout.labels.size(); ++i) {
+    const FieldPlotLayout::Label& a = layout.labels[i];
+    if (a.text == "leak from 150 s" || a.text == "leak from 300 s") ++onsets;
+    for (std::size_t j = i + 1; j < layout.labels.size(); ++j) EXPECT_FALSE(a.box.Overlaps(layout.labels[j].box)) << a.text;
+  }
+  EXPECT_EQ(onsets, 2);
+  const RgbaImage png = DecodePng(SvgToPng(svg));
+  const double x = layout.map.x0 + 4.2 * layout.px_per_m, y = layout.map.y1 - 3.0 * layout.px_per_m;
+  const std::uint8_t* p = png.At(static_cast<int>(std::lround(x)), static_cast<int>(std::lround(y)));
+  EXPECT_GT(p[0], 180) << int(p[0]) << "," << int(p[1]) << "," << int(p[2]);
+  EXPECT_LT(p[1], 80);
+  EXPECT_LT(p[2], 80);
 }
 
 // The record's copy stays within its budget however many vehicles and cycles: 10,000 vehicles

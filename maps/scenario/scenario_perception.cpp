@@ -1,0 +1,208 @@
+// Leaks, sensors and fusion in a scenario (maps/scenario/perception.h): their rules, where a
+// leak is, and random leaks drawn by seed for Monte Carlo runs.
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <random>
+#include <stdexcept>
+
+#include "maps/scenario/scenario.h"
+#include "maps/scenario/scenario_detail.h"
+
+namespace sage::maps {
+namespace {
+
+using detail::FormatNumber;
+using detail::OneLine;
+
+// A leak on open seabed keeps this clear of every structure's footprint (a hull's clearance)
+// and of the workspace's edge, and (random ones) this far from every valve.
+constexpr double kSeabedLeakClearance_m = 0.5;
+constexpr double kRandomSeabedFromValves_m = 1.0;
+
+double LeakLogit(double p) { return std::log(p / (1.0 - p)); }
+
+}  // namespace
+
+const char* ToString(SensorKind kind) { return kind == SensorKind::kSonar ? "sonar" : "camera"; }
+
+LeakSites ParseLeakSites(const std::string& text, const std::string& where) {
+  if (text == "valves") return LeakSites::kValves;
+  if (text == "valves-even") return LeakSites::kValvesEven;
+  if (text == "seabed") return LeakSites::kSeabed;
+  throw ScenarioError(OneLine(where + " = " + text + ": must be valves (by risk), valves-even or seabed"));
+}
+
+const char* ToString(LeakSites sites) {
+  switch (sites) {
+    case LeakSites::kValves: return "valves";
+    case LeakSites::kValvesEven: return "valves-even";
+    case LeakSites::kSeabed: return "seabed";
+  }
+  return "?";
+}
+
+Eigen::Vector2d LeakPosition(const Scenario& scenario, const LeakSpec& leak) {
+  if (leak.valve.empty()) return leak.point_m;
+  for (const ChristmasTree& tree : scenario.structures)
+    for (const Valve& valve : tree.valves)
+      if (valve.name == leak.valve) return valve.position_m;
+  throw std::out_of_range("leak at valve " + leak.valve + ": no such valve");
+}
+
+std::string LeakWhere(const LeakSpec& leak) {
+  if (!leak.valve.empty()) return leak.valve;
+  return "seabed (" + FormatNumber(std::round(leak.point_m.x() * 100.0) / 100.0) + ", " +
+         FormatNumber(std::round(leak.point_m.y() * 100.0) / 100.0) + ")";
+}
+
+namespace detail {
+
+void ValidatePerception(const Scenario& s, const std::string& file) {
+  const auto fail = [&](const std::string& field, const std::string& value, const std::string& rule) {
+    throw ScenarioError(OneLine(file + ": " + field + " = " + value + ": " + rule));
+  };
+  const auto in_range = [&](const std::string& field, double v, double lo, double hi, bool lo_open, bool hi_open,
+                            const std::string& rule) {
+    const bool ok = std::isfinite(v) && (lo_open ? v > lo : v >= lo) && (hi_open ? v < hi : v <= hi);
+    if (!ok) fail(field, FormatNumber(v), rule);
+  };
+  const auto positive = [&](const std::string& field, double v) {
+    in_range(field, v, 0.0, std::numeric_limits<double>::max(), true, false, "must be > 0");
+  };
+  if (s.sensors.size() > kMaxSensors) {
+    fail("sensors", std::to_string(s.sensors.size()) + " sensors", "at most " + std::to_string(kMaxSensors) + " a vehicle");
+  }
+  std::map<std::string, std::size_t> names;
+  for (std::size_t i = 0; i < s.sensors.size(); ++i) {
+    const SensorSpec& sensor = s.sensors[i];
+    const std::string path = "sensors[" + std::to_string(i) + "]";
+    if (sensor.name.empty() || sensor.name.size() > kMaxNameLength ||
+        std::any_of(sensor.name.begin(), sensor.name.end(),
+                    [](char ch) { return static_cast<unsigned char>(ch) < 0x20 || ch == 0x7f; })) {
+      fail(path + ".name", sensor.name.empty() ? "\"\"" : sensor.name.substr(0, 20),
+           "must be 1-64 characters without control characters");
+    }
+    if (const auto [it, inserted] = names.emplace(sensor.name, i); !inserted) {
+      fail(path + ".name", sensor.name, "duplicate name (also sensors[" + std::to_string(it->second) + "])");
+    }
+    if (sensor.kind != SensorKind::kCamera && sensor.kind != SensorKind::kSonar) {
+      fail(path + ".kind", std::to_string(static_cast<int>(sensor.kind)), "must be camera or sonar");
+    }
+    positive(path + ".range_m", sensor.range_m);
+    // A sensor's view is checked leaf by leaf each scan: a field's width at most.
+    in_range(path + ".range_m", sensor.range_m, 0.0,
+             std::max(1.0, std::hypot(s.workspace.width_m, s.workspace.height_m)), true, false,
+             "must be in (0, the workspace's diagonal]");
+    in_range(path + ".fov_deg", sensor.fov_deg, 0.0, 360.0, true, false, "must be in (0, 360] degrees");
+    in_range(path + ".p_detect", sensor.p_detect, 0.0, 1.0, true, false, "must be in (0, 1]");
+    positive(path + ".half_range_m", sensor.half_range_m);
+    in_range(path + ".false_alarms_per_s", sensor.false_alarms_per_s, 0.0, 100.0, false, false,
+             "must be in [0, 100] a second");
+    in_range(path + ".position_sigma_m", sensor.position_sigma_m, 0.0, 10.0, true, false, "must be in (0, 10] m");
+    in_range(path + ".rate_hz", sensor.rate_hz, 0.0, s.control_rate_hz, true, false,
+             "must be in (0, control_rate_hz = " + FormatNumber(s.control_rate_hz) + "] (scans fall on control cycles)");
+  }
+
+  if (s.leaks.size() > kMaxLeaks) {
+    fail("leaks", std::to_string(s.leaks.size()) + " leaks", "at most " + std::to_string(kMaxLeaks));
+  }
+  const Eigen::Vector2d workspace(s.workspace.width_m, s.workspace.height_m);
+  for (std::size_t i = 0; i < s.leaks.size(); ++i) {
+    const LeakSpec& leak = s.leaks[i];
+    const std::string path = "leaks[" + std::to_string(i) + "]";
+    if (!leak.valve.empty()) {
+      if (s.ValveIndex(leak.valve) < 0) fail(path + ".at.valve", leak.valve, "no such valve");
+    } else {
+      const Eigen::Vector2d& p = leak.point_m;
+      const std::string shown = "[" + FormatNumber(p.x()) + ", " + FormatNumber(p.y()) + "]";
+      if (!p.allFinite() || !(p.array() >= 0.0).all() || !(p.array() <= workspace.array()).all()) {
+        fail(path + ".at.point_m", shown, "must be inside the workspace");
+      }
+      for (const ChristmasTree& tree : s.structures) {
+        const Eigen::Vector2d half = tree.size_m / 2;
+        if (((p - tree.center_m).array().abs() < half.array()).all()) {
+          fail(path + ".at.point_m", shown, "lies inside the footprint of " + tree.name + " (no sensor could see it)");
+        }
+      }
+    }
+    in_range(path + ".start_s", leak.start_s, 0.0, s.duration_s, false, false,
+             "must be in [0, duration_s = " + FormatNumber(s.duration_s) + "]");
+    in_range(path + ".strength", leak.strength, 0.0, 1e6, true, false, "must be in (0, 1e6] (1 = nominal)");
+  }
+
+  const FusionSettings& f = s.fusion;
+  in_range("fusion.prior_probability", f.prior_probability, 0.0, 0.5, true, true, "must be in (0, 0.5)");
+  if (!(f.relax_time_s > 0.0)) fail("fusion.relax_time_s", FormatNumber(f.relax_time_s), "must be > 0 (.inf: never)");
+  in_range("fusion.confirm_probability", f.confirm_probability, f.prior_probability, 1.0, true, true,
+           "must be in (prior_probability, 1)");
+  in_range("fusion.alarm_probability", f.alarm_probability, f.prior_probability, f.confirm_probability, true, false,
+           "must be in (prior_probability, confirm_probability]");
+  in_range("fusion.leak_mass", f.leak_mass, 0.0, 1e6, false, false, "must be in [0, 1e6] (the valves' prior holds 1)");
+  in_range("fusion.spread_m", f.spread_m, 0.0, 10.0, false, false, "must be in [0, 10] m (0: the leaf alone)");
+  in_range("fusion.max_log_odds", f.max_log_odds, LeakLogit(f.confirm_probability), 30.0, true, false,
+           "must be in (logit(confirm_probability) = " + FormatNumber(LeakLogit(f.confirm_probability)) + ", 30]");
+  in_range("fusion.min_evidence", f.min_evidence, -30.0, 0.0, false, true, "must be in [-30, 0)");
+}
+
+}  // namespace detail
+
+Scenario WithRandomLeaks(const Scenario& scenario, int count, LeakSites sites) {
+  if (count < 0 || count > static_cast<int>(kMaxLeaks)) {
+    throw ScenarioError("--random-leaks = " + std::to_string(count) + ": must be in 0.." + std::to_string(kMaxLeaks));
+  }
+  Scenario out = scenario;
+  out.leaks.clear();
+  // SplitMix64 of the seed, then a stream of its own, so the leaks do not move with any other draw.
+  std::uint64_t z = scenario.seed + 0x9E3779B97F4A7C15ull * 0x4C45414Bull;  // "LEAK"
+  z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+  z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
+  std::mt19937_64 rng(z ^ (z >> 31));
+  const auto uniform = [&] { return static_cast<double>(rng() >> 11) * 0x1.0p-53; };
+  const std::vector<Valve> valves = scenario.AllValves();
+  Eigen::VectorXd weights = scenario.ProfileWeights(scenario.ProfileOrThrow(""));
+  if (sites == LeakSites::kValvesEven) weights.setOnes();
+  const double total = weights.sum();
+  const Eigen::Vector2d workspace(scenario.workspace.width_m, scenario.workspace.height_m);
+  const auto open_seabed = [&](const Eigen::Vector2d& p) {
+    if (!(p.array() >= kSeabedLeakClearance_m).all() || !(p.array() <= workspace.array() - kSeabedLeakClearance_m).all()) {
+      return false;
+    }
+    for (const ChristmasTree& tree : scenario.structures) {
+      const Eigen::Vector2d half = tree.size_m / 2 + Eigen::Vector2d::Constant(kSeabedLeakClearance_m);
+      if (((p - tree.center_m).array().abs() < half.array()).all()) return false;
+    }
+    for (const Valve& valve : valves)
+      if ((p - valve.position_m).norm() < kRandomSeabedFromValves_m) return false;
+    return true;
+  };
+  for (int n = 0; n < count; ++n) {
+    LeakSpec leak;
+    leak.start_s = scenario.duration_s * (0.1 + 0.8 * uniform());
+    if (sites != LeakSites::kSeabed) {
+      double pick = uniform() * total;
+      std::size_t i = 0;
+      while (i + 1 < valves.size() && pick >= weights[static_cast<Eigen::Index>(i)]) pick -= weights[static_cast<Eigen::Index>(i++)];
+      leak.valve = valves[i].name;
+    } else {
+      bool found = false;
+      for (int attempt = 0; attempt < 100000 && !found; ++attempt) {
+        leak.point_m = Eigen::Vector2d(uniform() * workspace.x(), uniform() * workspace.y());
+        // Rounded to the centimetre: the scenario file it goes into stays readable.
+        leak.point_m = (leak.point_m * 100.0).array().round() / 100.0;
+        found = open_seabed(leak.point_m);
+      }
+      if (!found) {
+        throw ScenarioError("--random-leaks: " + scenario.name + " has no open seabed " +
+                            FormatNumber(kRandomSeabedFromValves_m) + " m from every valve and " +
+                            FormatNumber(kSeabedLeakClearance_m) + " m from the structures and edges");
+      }
+    }
+    out.leaks.push_back(leak);
+  }
+  std::stable_sort(out.leaks.begin(), out.leaks.end(),
+                   [](const LeakSpec& a, const LeakSpec& b) { return a.start_s < b.start_s; });
+  return out;
+}
+
+}  // namespace sage::maps

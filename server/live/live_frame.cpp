@@ -1,0 +1,30 @@
+#include "server/live/live_frame.h"
+
+namespace sage::live {
+
+const char* ToString(VehicleStatus status) {
+  switch (status) {
+    case VehicleStatus::kAlive: return "alive";
+    case VehicleStatus::kStale: return "stale";
+    case VehicleStatus::kLost: return "lost";
+    case VehicleStatus::kLeft: return "left";
+  }
+  return "alive";
+}
+
+LiveScene SceneOf(const maps::Scenario& scenario) {
+  LiveScene scene;
+  scene.mission = scenario.name;
+  scene.width_m = scenario.workspace.width_m;
+  scene.height_m = scenario.workspace.height_m;
+  scene.duration_s = scenario.duration_s;
+  scene.visit_radius_m = scenario.visit_radius_m;
+  scene.assignment = maps::ToString(scenario.fleet.assignment);
+  for (const maps::ChristmasTree& xt : scenario.structures) {
+    scene.structures.push_back({xt.name, xt.center_m, xt.size_m});
+    for (const maps::Valve& v : xt.valves) scene.valves.push_back({v.name, xt.name, v.position_m, v.covariance_m2});
+  }
+  return scene;
+}
+
+}  // namespace sage::live

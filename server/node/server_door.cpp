@@ -1,0 +1,80 @@
+#include "server/node/server_door.h"
+
+#include <algorithm>
+
+#include <fmt/format.h>
+#include <spdlog/spdlog.h>
+
+#include "agents/node/wire.h"
+
+namespace sage::server {
+
+std::string ServerDoor::LogSafe(std::string_view text) {
+  std::string out(text.substr(0, 64));
+  for (char& c : out) {
+    if (static_cast<unsigned char>(c) < 0x20 || c == 0x7f) c = '?';
+  }
+  return text.size() > 64 ? out + "..." : out;
+}
+
+bool ServerDoor::TakeState(const proto::VehicleState& m, std::uint64_t writer) {
+  if (m.server_instance != instance_) return false;
+  return core_.OnState(agents::wire::FromWire(m, rate_), writer);
+}
+
+bool ServerDoor::TakeCoverage(const proto::VehicleCoverage& m, std::uint64_t writer) {
+  return core_.OnCoverage(agents::wire::FromWire(m), writer);
+}
+
+std::optional<OperatorAnswer> ServerDoor::TakeRiskUpdate(const proto::RiskUpdate& r, std::uint64_t writer) {
+  const std::string source(proto::AsStringView(r.source));
+  const std::string sender = fmt::format("{} (writer {:x})", LogSafe(source), writer);
+  const std::uint64_t limited = core_.risk_limits().refused(sender);
+  const OperatorAnswer a = core_.OnRiskUpdate(std::string(proto::AsStringView(r.valve)), r.weight, source, sender);
+  const std::uint64_t refused = core_.risk_limits().refused(sender);
+  const bool newly_limited = refused > limited;
+  // A flood's refusals are logged and answered at 1, 10, 100, ... per sender, not each: its
+  // answers would crowd other operators' answers out of the shared result topic.
+  const auto decade = [](std::uint64_t n) {
+    while (n % 10 == 0 && n > 1) n /= 10;
+    return n == 1;
+  };
+  if (newly_limited && !decade(refused)) return std::nullopt;
+  if (!a.accepted) {
+    spdlog::warn("server: ignored a risk update from {}: {}{}", sender, LogSafe(a.reason),
+                 newly_limited ? fmt::format(" ({} refused so far)", refused) : "");
+  }
+  return a;
+}
+
+CommandOutcome ServerDoor::TakeCommand(const proto::FleetCommand& c) {
+  CommandOutcome out;
+  const std::string_view verb = proto::AsStringView(c.verb);
+  const auto repeat = std::find_if(answered_.begin(), answered_.end(), [&](const AnsweredCommand& done) {
+    return done.stamp_ns == c.stamp_ns && done.verb == verb && done.count == c.count && done.vehicle_id == c.vehicle_id;
+  });
+  if (repeat != answered_.end()) {
+    out.answer = repeat->answer;
+    out.repeat = true;
+    return out;
+  }
+  if (verb == "stop") {
+    out.answer.accepted = true;
+    out.stop = true;
+  } else if (verb == "remove") {
+    out.answer = core_.RemoveRequest(static_cast<int>(c.vehicle_id));
+    out.retire = out.answer.accepted;
+  } else if (verb == "reserve") {
+    out.answer = core_.ReserveIds(static_cast<int>(c.count));
+  } else {
+    // The server's own "retire" orders come back on the topic it shares with the operators: no
+    // answer to those, nor to anything else that is not an operator's command.
+    out.ignored = true;
+    return out;
+  }
+  answered_.push_back({c.stamp_ns, std::string(verb), c.count, c.vehicle_id, out.answer});
+  if (answered_.size() > kAnsweredKept) answered_.pop_front();
+  return out;
+}
+
+}  // namespace sage::server

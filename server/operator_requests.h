@@ -1,0 +1,37 @@
+#pragma once
+// What an operator may ask of a running mission, checked before it reaches the server, and the
+// one-line answers they read, in one place for every way of asking: the `sage risk set`,
+// `sage vehicle add|remove` and `sage stop` commands (server/app/operators.cpp) and the live
+// view's buttons (server/node/server_node.cpp). The mission core's own checks (a valve's
+// weight, which vehicle may be taken out, how many may join) come after these in both paths.
+#include <string>
+
+#include "maps/scenario/scenario.h"
+
+namespace sage::server {
+
+/// A risk update an operator may send: a valve of this mission, a weight in [0, 1e12]. Throws
+/// maps::ScenarioError with the rule ("weight = -1: must be a number in [0, 1e12] ...",
+/// "valve = P9: not in this mission (valves: P1, P2, ...)").
+void CheckRiskRequest(const maps::Scenario& scenario, const std::string& valve, double weight);
+/// How many vehicles an operator may add at once: 1..10000. Throws maps::ScenarioError.
+void CheckAddCount(int count);
+/// A vehicle id an operator may name: >= 0. Throws maps::ScenarioError.
+void CheckVehicleId(int id);
+
+/// "P9: risk 20 applied at t = 31.2 s; now 41.7 % of the field's risk"
+std::string RiskAppliedLine(const std::string& valve, double weight, double time_s, double new_share);
+/// "the mission did not apply it: <reason>"
+std::string RiskRefusedLine(const std::string& reason);
+/// "the mission refused: <reason>" (a vehicle's removal or new ids refused)
+std::string CommandRefusedLine(const std::string& reason);
+/// "started agent host pid 4242 with 2 vehicle(s): rov9..rov10, ids 8..9 (log: DIR/agents-add-8.log)"
+std::string HostStartedLine(int pid, int count, int first_id, const std::string& log_path);
+/// "vehicle 3 left the mission (told to at t = 12.0 s)"
+std::string VehicleLeftLine(int id, double told_at_s);
+/// "vehicle 3 was told to leave at t = 12.0 s but had not left within 5 s"
+std::string VehicleNotLeftLine(int id, double told_at_s, double waited_s);
+/// "the mission stops at t = 40.1 s; its server writes runs/x"
+std::string StopLine(double time_s, const std::string& run_dir);
+
+}  // namespace sage::server

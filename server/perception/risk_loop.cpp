@@ -1,0 +1,334 @@
+#include "server/perception/risk_loop.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+
+#include <fmt/format.h>
+
+namespace sage::server {
+namespace {
+
+constexpr double kNotYet = std::numeric_limits<double>::quiet_NaN();
+// A scan's time is its cycle's (cycle / control rate) to within this (s).
+constexpr double kScanTimeSlack_s = 1e-6;
+// Its pose is its vehicle's state of the same cycle to within this (m, rad): the same numbers,
+// carried by two messages.
+constexpr double kScanPoseSlack = 1e-6;
+// A host may run at most this far ahead of the server's clock (s), as for states.
+constexpr double kScanMaxLead_s = 5.0;
+// Evidence of a leak worth less risk than this (the valves' prior holds 1) is not written to the layer.
+constexpr double kNegligibleMass = 1e-5;
+
+}  // namespace
+
+RiskLoop::RiskLoop(const maps::Scenario& scenario, const maps::World& world, maps::RiskLayer& layer)
+    : scenario_(scenario), world_(world), layer_(layer), belief_(scenario, world, layer.resolution_m()) {
+  // A detection belongs to a leak within three position sigmas of the noisiest sensor (at least
+  // half a metre: a few leaves).
+  for (const maps::SensorSpec& s : scenario.sensors) association_m_ = std::max(association_m_, 3.0 * s.position_sigma_m);
+  const std::vector<maps::Valve> valves = scenario.AllValves();
+  for (const maps::LeakSpec& leak : scenario.leaks) {
+    truth_.push_back({maps::LeakPosition(scenario, leak), leak.valve.empty() ? -1 : scenario.ValveIndex(leak.valve),
+                      leak.start_s});
+    leaks_.push_back({kNotYet, kNotYet, 0});
+  }
+}
+
+const char* RiskLoop::Take(const agents::ScanReport& s, double latest_s) {
+  const int sensors = static_cast<int>(belief_.sensors().size());
+  bool finite = s.position_m.allFinite() && std::isfinite(s.heading_rad) && std::isfinite(s.time_s);
+  for (const Eigen::Vector2d& z : s.detections_m) finite = finite && z.allFinite();
+  if (!finite) return "scan not finite";
+  if (s.sensor < 0 || s.sensor >= sensors) return "scan of no such sensor";
+  if (s.id < 0) return "scan of no vehicle (id < 0)";
+  if (s.cycle < 0 || s.time_s < 0.0) return "scan before the mission";
+  if (std::abs(s.time_s - static_cast<double>(s.cycle) / scenario_.control_rate_hz) > kScanTimeSlack_s) {
+    return "scan time not its cycle's";
+  }
+  if (s.time_s > latest_s + kScanMaxLead_s) return "scan ahead of the clock";
+  const maps::SensorModel& model = belief_.sensors()[static_cast<std::size_t>(s.sensor)];
+  if (!model.ScansAt(s.cycle)) return "scan off its sensor's schedule";
+  const Eigen::Vector2d workspace(scenario_.workspace.width_m, scenario_.workspace.height_m);
+  const auto inside = [&](const Eigen::Vector2d& p) { return (p.array() >= 0.0).all() && (p.array() <= workspace.array()).all(); };
+  if (!inside(s.position_m)) return "scan from outside the workspace";
+  if (s.detections_m.size() > kMaxDetectionsPerScan) return "scan with too many detections";
+  const double reach = model.spec().range_m + 4.0 * model.spec().position_sigma_m;
+  for (const Eigen::Vector2d& z : s.detections_m) {
+    if (!inside(z) || (z - s.position_m).norm() > reach) return "detection out of its sensor's reach";
+  }
+  const auto last = last_fused_.find({s.id, s.sensor});
+  if ((last != last_fused_.end() && s.cycle <= last->second) || held_keys_.count({s.id, s.sensor, s.cycle}) != 0) {
+    return "scan not after its vehicle's last";
+  }
+  held_keys_.insert({s.id, s.sensor, s.cycle});
+  held_.push_back(s);
+  return nullptr;
+}
+
+void RiskLoop::Fuse(std::int64_t cycle, double time_s, const Roster& roster, RejectionCounts& rejected) {
+  if (!sensing()) return;
+  std::vector<agents::ScanReport> due;
+  for (auto it = held_.begin(); it != held_.end();) {
+    if (it->cycle <= cycle) {
+      held_keys_.erase({it->id, it->sensor, it->cycle});
+      due.push_back(std::move(*it));
+      it = held_.erase(it);
+    } else {
+      ++it;
+    }
+  }
+  std::sort(due.begin(), due.end(), [](const agents::ScanReport& a, const agents::ScanReport& b) {
+    return std::tie(a.cycle, a.id, a.sensor) < std::tie(b.cycle, b.id, b.sensor);
+  });
+  std::vector<agents::ScanReport> fused;
+  for (agents::ScanReport& s : due) {
+    const Roster::Member* m = roster.Find(s.id);
+    const char* refusal = nullptr;
+    if (m == nullptr || m->status != Roster::Status::kAlive) {
+      refusal = "scan of no live vehicle";
+    } else if (m->has_state && m->last.cycle == s.cycle &&
+               ((m->last.state.position_m - s.position_m).norm() > kScanPoseSlack ||
+                std::abs(m->last.state.heading_rad - s.heading_rad) > kScanPoseSlack)) {
+      refusal = "scan pose not its vehicle's state";
+    } else if (const auto last = last_fused_.find({s.id, s.sensor}); last != last_fused_.end() && s.cycle <= last->second) {
+      refusal = "scan not after its vehicle's last";
+    }
+    if (refusal != nullptr) {
+      rejected.Count(refusal, fmt::format("vehicle {}", s.id));
+      continue;
+    }
+    last_fused_[{s.id, s.sensor}] = s.cycle;
+    belief_.Fuse(s.sensor, s.position_m, s.heading_rad, s.detections_m, s.time_s);
+    ++scans_;
+    fused.push_back(std::move(s));
+  }
+  Score(fused, time_s);
+}
+
+Eigen::VectorXd RiskLoop::ValveFactors(double time_s) const {
+  if (!steers()) return {};
+  Eigen::VectorXd factors = belief_.ValveFactors(time_s);
+  if ((factors.array() == 1.0).all()) return {};
+  return factors;
+}
+
+void RiskLoop::UpdateLayer(double time_s) {
+  if (!steers()) return;
+  belief_.DropRelaxed(time_s);
+  const double r = belief_.resolution_m();
+  const double p0 = scenario_.fusion.prior_probability;
+  if (kernel_.empty()) {
+    // The spread's offsets and Gaussian weights, once (leaves within 3 sigma; the leaf alone at sigma 0).
+    const double sigma = scenario_.fusion.spread_m;
+    const int reach = sigma > 0.0 ? static_cast<int>(std::ceil(3.0 * sigma / r)) : 0;
+    for (int di = -reach; di <= reach; ++di) {
+      for (int dj = -reach; dj <= reach; ++dj) {
+        const double d2 = (di * di + dj * dj) * r * r;
+        if (sigma > 0.0 && d2 > 9.0 * sigma * sigma) continue;
+        kernel_.push_back({di, dj, sigma > 0.0 ? std::exp(-0.5 * d2 / (sigma * sigma)) : 1.0});
+      }
+    }
+  }
+  const maps::OccupancyGrid& blocked = world_.blocked();
+  const auto reachable = [&](const LeakBelief::Cell& c) {
+    const std::uint64_t key = CellKey(c);
+    const auto known = reachable_.find(key);
+    if (known != reachable_.end()) return known->second;
+    const Eigen::Vector2i in_grid = blocked.CellOf(belief_.CentreOf(c));
+    return reachable_[key] = !blocked.Occupied(in_grid.x(), in_grid.y());
+  };
+  // Each leaf's evidence of a leak as a mass, spread as a Gaussian over the reachable leaves
+  // around it (no risk where no hull can be: SMC would push into the structure).
+  std::unordered_map<std::uint64_t, double> mass;
+  std::vector<std::pair<LeakBelief::Cell, double>> spread;
+  for (const LeakBelief::Cell& c : belief_.positive()) {
+    const double m = scenario_.fusion.leak_mass * (belief_.Probability(c, time_s) - p0);
+    // A leaf a hundred thousandth of the prior's mass above it steers nobody (and a false alarm's
+    // leaves take ten relaxation times to fall below the belief's own threshold).
+    if (!(m > kNegligibleMass)) continue;
+    spread.clear();
+    double total = 0.0;
+    for (const Offset& k : kernel_) {
+      const LeakBelief::Cell n{c.i + k.di, c.j + k.dj};
+      if (!belief_.OnGrid(n) || !reachable(n)) continue;
+      spread.emplace_back(n, k.weight);
+      total += k.weight;
+    }
+    for (const auto& [n, w] : spread) mass[CellKey(n)] += m * w / total;
+  }
+  // Into the layer, in a fixed order; a leaf is written again only when its excess moved by
+  // more than kRewrite of itself (relaxation moves every raised leaf a little every cycle, and
+  // each write costs the layer O(K^2)).
+  constexpr double kRewrite = 0.02;
+  std::vector<std::pair<std::uint64_t, float>> now;
+  now.reserve(mass.size());
+  for (const auto& [key, m] : mass) {
+    const float stored = static_cast<float>(m / (r * r));  // density (1/m^2); edge leaves are a little smaller
+    if (stored != 0.0f) now.emplace_back(key, stored);
+  }
+  std::sort(now.begin(), now.end());
+  std::vector<std::uint64_t> gone;
+  for (const auto& [key, value] : written_) {
+    if (!std::binary_search(now.begin(), now.end(), std::pair<std::uint64_t, float>(key, -std::numeric_limits<float>::infinity()),
+                            [](const auto& a, const auto& b) { return a.first < b.first; })) {
+      gone.push_back(key);
+    }
+  }
+  std::sort(gone.begin(), gone.end());
+  for (const std::uint64_t key : gone) {
+    layer_.SetExcess(belief_.CentreOf(KeyCell(key)), 0.0);
+    written_.erase(key);
+  }
+  for (const auto& [key, value] : now) {
+    const auto was = written_.find(key);
+    if (was != written_.end() && std::abs(value - was->second) <= kRewrite * std::abs(was->second)) continue;
+    layer_.SetExcess(belief_.CentreOf(KeyCell(key)), value);
+    written_[key] = value;
+  }
+}
+
+void RiskLoop::Score(const std::vector<agents::ScanReport>& fused, double time_s) {
+  const double a2 = association_m_ * association_m_;
+  for (const agents::ScanReport& s : fused) {
+    for (const Eigen::Vector2d& z : s.detections_m) {
+      bool of_a_leak = false;
+      for (std::size_t k = 0; k < truth_.size(); ++k) {
+        if (s.time_s + 1e-9 < truth_[k].start_s || (z - truth_[k].position_m).squaredNorm() > a2) continue;
+        of_a_leak = true;
+        ++leaks_[k].detections;
+        if (std::isnan(leaks_[k].detected_s)) leaks_[k].detected_s = s.time_s;
+      }
+      if (!of_a_leak) ++false_detections_;
+    }
+  }
+  const maps::FusionSettings& f = scenario_.fusion;
+  // The leaves above the prior now, with their posterior: all that can confirm or raise.
+  std::vector<std::pair<Eigen::Vector2d, double>> hot;
+  for (const LeakBelief::Cell& c : belief_.positive()) {
+    const double p = belief_.Probability(c, time_s);
+    if (p >= 0.5 * f.alarm_probability) hot.emplace_back(belief_.CentreOf(c), p);
+  }
+  for (std::size_t k = 0; k < truth_.size(); ++k) {
+    if (time_s + 1e-9 < truth_[k].start_s || !std::isnan(leaks_[k].confirmed_s)) continue;
+    for (const auto& [centre, p] : hot) {
+      if (p >= f.confirm_probability && (centre - truth_[k].position_m).squaredNorm() <= a2) {
+        leaks_[k].confirmed_s = time_s;
+        break;
+      }
+    }
+  }
+  // Alarms: a leaf at the alarm probability far from every open alarm raises one; an open alarm
+  // with no leaf near it at half that probability is cleared.
+  for (const auto& [centre, p] : hot) {
+    if (p < f.alarm_probability) continue;
+    Alarm* open = nullptr;
+    for (Alarm& alarm : alarms_) {
+      if (alarm.cleared_s < 0.0 && (alarm.anchor_m - centre).squaredNorm() <= a2) {
+        open = &alarm;
+        break;
+      }
+    }
+    if (open == nullptr) {
+      Alarm alarm;
+      alarm.anchor_m = centre;
+      alarm.raised_s = time_s;
+      for (std::size_t k = 0; k < truth_.size(); ++k) {
+        if (time_s + 1e-9 >= truth_[k].start_s && (centre - truth_[k].position_m).squaredNorm() <= a2) {
+          alarm.leak = static_cast<int>(k);
+          break;
+        }
+      }
+      alarms_.push_back(alarm);
+      open = &alarms_.back();
+    }
+    open->confirmed = open->confirmed || p >= f.confirm_probability;
+  }
+  for (Alarm& alarm : alarms_) {
+    if (alarm.cleared_s >= 0.0) continue;
+    const bool still = std::any_of(hot.begin(), hot.end(), [&](const auto& h) {
+      return (h.first - alarm.anchor_m).squaredNorm() <= a2;
+    });
+    if (!still) alarm.cleared_s = time_s;
+  }
+}
+
+void RiskLoop::Fill(MissionMetrics& metrics, double end_s) const {
+  metrics.sensing = sensing();
+  metrics.scans = scans_;
+  metrics.leaks.clear();
+  for (std::size_t k = 0; k < truth_.size(); ++k) {
+    const maps::LeakSpec& spec = scenario_.leaks[k];
+    LeakMetrics m;
+    m.where = maps::LeakWhere(spec);
+    m.position_m = truth_[k].position_m;
+    m.valve = truth_[k].valve;
+    m.start_s = spec.start_s;
+    m.strength = spec.strength;
+    // What happened by end_s (a partial metrics.json of a running mission reads the same loop).
+    m.detected_s = leaks_[k].detected_s <= end_s ? leaks_[k].detected_s : kNotYet;
+    m.confirmed_s = leaks_[k].confirmed_s <= end_s ? leaks_[k].confirmed_s : kNotYet;
+    m.detections = leaks_[k].detections;
+    if (m.valve >= 0 && !std::isnan(m.detected_s) && end_s > m.detected_s &&
+        static_cast<std::size_t>(m.valve) < metrics.valves.size()) {
+      const std::vector<double>& visits = metrics.valves[static_cast<std::size_t>(m.valve)].visit_times_s;
+      const auto after = std::count_if(visits.begin(), visits.end(),
+                                       [&](double t) { return t >= m.detected_s && t <= end_s; });
+      m.visits_per_min_after_detection = 60.0 * static_cast<double>(after) / (end_s - m.detected_s);
+    }
+    metrics.leaks.push_back(m);
+  }
+  FalseAlarmMetrics& fa = metrics.false_alarms;
+  fa = FalseAlarmMetrics{};
+  fa.detections = false_detections_;
+  double total_clear = 0.0, most = 0.0;
+  for (const Alarm& alarm : alarms_) {
+    if (alarm.leak >= 0 || alarm.raised_s > end_s) continue;
+    ++fa.raised;
+    fa.confirmed += alarm.confirmed ? 1 : 0;
+    if (alarm.cleared_s >= 0.0 && alarm.cleared_s <= end_s) {
+      ++fa.cleared;
+      total_clear += alarm.cleared_s - alarm.raised_s;
+      most = std::max(most, alarm.cleared_s - alarm.raised_s);
+    }
+  }
+  if (fa.cleared > 0) {
+    fa.mean_time_to_clear_s = total_clear / fa.cleared;
+    fa.max_time_to_clear_s = most;
+  }
+}
+
+RiskLoop::State RiskLoop::Checkpoint() const {
+  State s;
+  s.belief = belief_.Checkpoint();
+  s.held = held_;
+  s.last_fused = last_fused_;
+  s.leaks = leaks_;
+  s.alarms = alarms_;
+  s.false_detections = false_detections_;
+  s.scans = scans_;
+  for (const auto& [key, v] : written_) s.written.emplace_back(KeyCell(key), v);
+  std::sort(s.written.begin(), s.written.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+  return s;
+}
+
+void RiskLoop::Restore(const State& s) {
+  if (s.leaks.size() != truth_.size()) {
+    throw std::invalid_argument(fmt::format("risk loop: {} leaks in the checkpoint, {} in the scenario", s.leaks.size(),
+                                            truth_.size()));
+  }
+  belief_.Restore(s.belief);
+  held_ = s.held;
+  held_keys_.clear();
+  for (const agents::ScanReport& scan : held_) held_keys_.insert({scan.id, scan.sensor, scan.cycle});
+  last_fused_ = s.last_fused;
+  leaks_ = s.leaks;
+  alarms_ = s.alarms;
+  false_detections_ = s.false_detections;
+  scans_ = s.scans;
+  written_.clear();
+  for (const auto& [c, v] : s.written) written_[CellKey(c)] = v;
+}
+
+}  // namespace sage::server

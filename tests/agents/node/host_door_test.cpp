@@ -1,0 +1,176 @@
+// An agent host's door to DDS samples (agents/node/host_door.h), without a domain: words of the
+// server are taken only from the server the host follows, and a status, a retire order or a
+// neighbour's state that no mission's server or host would send is refused. The probe:
+// a forged MissionStatus with finished = true had sent every host home; a clock of time scale 0
+// or NaN would have been waited on forever.
+#include "agents/node/host_door.h"
+
+#include <gtest/gtest.h>
+
+#include <limits>
+#include <string>
+
+#include "maps/world.h"
+
+namespace sage::agents {
+namespace {
+
+constexpr std::uint64_t kServer = 0xabcdef;
+
+class HostDoorTest : public ::testing::Test {
+ protected:
+  HostDoorTest()
+      : scenario_(maps::LoadScenario(std::string(SAGE_SOURCE_DIR) + "/scenarios/fleet_field.yaml")),
+        world_(scenario_),
+        mission_(world_, scenario_, Guidance::kErgodic),
+        door_(mission_, maps::VehicleFingerprint(scenario_)) {
+    mission_.AddVehicle(0, scenario_.vehicles[0]);
+    mission_.AddVehicle(1, scenario_.vehicles[1]);
+  }
+  proto::MissionStatus Status(std::uint64_t instance, bool finished = false) const {
+    proto::MissionStatus s{};
+    s.server_instance = instance;
+    s.start_ns = 1'700'000'000'000'000'000;
+    s.time_scale = 1.0;
+    s.finished = finished;
+    s.vehicle_fingerprint = maps::VehicleFingerprint(scenario_);
+    return s;
+  }
+  proto::FleetCommand Retire(std::uint64_t instance, std::uint32_t id) {
+    proto::FleetCommand c{};
+    c.server_instance = instance;
+    c.verb = proto::BorrowString(retire_);
+    c.vehicle_id = id;
+    return c;
+  }
+  proto::VehicleState Neighbour(std::uint32_t id, std::int64_t cycle, double x) const {
+    proto::VehicleState m{};
+    m.vehicle_id = id;
+    m.server_instance = kServer;
+    m.cycle = cycle;
+    m.x_m = x;
+    m.y_m = 2.0;
+    return m;
+  }
+
+  maps::Scenario scenario_;
+  maps::World world_;
+  AgentMission mission_;
+  HostDoor door_;
+  std::string retire_ = "retire";
+};
+
+TEST_F(HostDoorTest, FollowsOneServerAndRefusesClocksThatCannotBe) {
+  proto::MissionStatus other_world = Status(kServer);
+  other_world.vehicle_fingerprint ^= 1;
+  EXPECT_FALSE(door_.TakeStatus(other_world));
+  EXPECT_TRUE(door_.other_world());
+  for (const double scale : {0.0, -1.0, std::numeric_limits<double>::quiet_NaN(), 1e9}) {
+    proto::MissionStatus s = Status(kServer);
+    s.time_scale = scale;
+    EXPECT_FALSE(door_.TakeStatus(s)) << scale;
+  }
+  proto::MissionStatus far = Status(kServer);
+  far.start_ns = std::numeric_limits<long long>::max();
+  EXPECT_FALSE(door_.TakeStatus(far));
+  EXPECT_EQ(door_.clock().instance, 0u);
+  EXPECT_EQ(door_.bad_statuses(), 5u);
+  ASSERT_TRUE(door_.TakeStatus(Status(kServer)));
+  EXPECT_EQ(door_.clock().instance, kServer);
+}
+
+// A status of another instance that says the mission is over is no server's first word: the host
+// stays (the probe's forged "finished" had ended every host); its own server's end ends it.
+TEST_F(HostDoorTest, OnlyTheFollowedServerEndsTheMission) {
+  ASSERT_TRUE(door_.TakeStatus(Status(kServer)));
+  EXPECT_FALSE(door_.TakeStatus(Status(kServer + 1, /*finished=*/true)));
+  EXPECT_FALSE(door_.finished());
+  EXPECT_EQ(door_.clock().instance, kServer);
+  EXPECT_TRUE(door_.TakeStatus(Status(kServer, /*finished=*/true)));
+  EXPECT_TRUE(door_.finished());
+}
+
+TEST_F(HostDoorTest, RetiresOnlyItsOwnVehiclesOnItsServersOrder) {
+  EXPECT_FALSE(door_.TakeCommand(Retire(kServer, 1))) << "an order before any server was followed";
+  ASSERT_TRUE(door_.TakeStatus(Status(kServer)));
+  EXPECT_FALSE(door_.TakeCommand(Retire(kServer + 1, 1)));
+  EXPECT_FALSE(door_.TakeCommand(Retire(kServer, 7)));
+  proto::FleetCommand stop = Retire(kServer, 1);
+  std::string verb = "stop";
+  stop.verb = proto::BorrowString(verb);
+  EXPECT_FALSE(door_.TakeCommand(stop));
+  EXPECT_EQ(door_.TakeCommand(Retire(kServer, 1)), std::optional<VehicleId>(1));
+}
+
+// Targets and snapshots of another server instance are not taken; those of the followed one are.
+TEST_F(HostDoorTest, TakesTheServersWordsOnlyFromItsServer) {
+  proto::FleetCoverage snapshot{};
+  snapshot.server_instance = kServer;
+  snapshot.cycle = 3;
+  EXPECT_FALSE(door_.TakeSnapshot(snapshot, 3)) << "taken before any server was followed";
+  ASSERT_TRUE(door_.TakeStatus(Status(kServer)));
+  snapshot.server_instance = kServer + 1;
+  EXPECT_FALSE(door_.TakeSnapshot(snapshot, 3));
+  snapshot.server_instance = kServer;
+  EXPECT_TRUE(door_.TakeSnapshot(snapshot, 3));
+  EXPECT_EQ(mission_.snapshot_cycle(), 3u);
+  proto::ErgodicTarget target{};
+  target.server_instance = kServer;
+  target.vehicle_id = 9;  // another host's vehicle
+  target.shared = true;
+  EXPECT_FALSE(door_.TakeTarget(target, 10));
+  target.vehicle_id = 1;
+  EXPECT_TRUE(door_.TakeTarget(target, 10));
+  target.server_instance = kServer + 1;
+  target.cycle = 10;
+  EXPECT_FALSE(door_.TakeTarget(target, 10));
+}
+
+// Other hosts' vehicles: the last few states each, none with no finite position (counted), not
+// this host's own, forgotten when lost or left.
+TEST_F(HostDoorTest, KeepsTheLastStatesOfOtherHostsVehicles) {
+  ASSERT_TRUE(door_.TakeStatus(Status(kServer)));
+  for (std::int64_t k = 0; k < 5; ++k) door_.TakeNeighbour(Neighbour(5, k, 1.0 + k), true, true);
+  door_.TakeNeighbour(Neighbour(0, 4, 3.0), true, true);  // this host's own vehicle
+  ASSERT_EQ(door_.others().size(), 1u);
+  EXPECT_EQ(door_.others().at(5).size(), HostDoor::kStatesKept);
+  ASSERT_EQ(door_.OthersAt(3).size(), 1u);
+  EXPECT_EQ(door_.OthersAt(3).front().x(), 4.0);
+  EXPECT_TRUE(door_.OthersAt(1).empty());
+  door_.TakeNeighbour(Neighbour(6, 4, std::numeric_limits<double>::infinity()), true, true);
+  EXPECT_EQ(door_.bad_neighbours(), 1u);
+  EXPECT_EQ(door_.others().count(6), 0u);
+  door_.TakeNeighbour(Neighbour(5, 5, 1.0), true, false);  // lost
+  EXPECT_TRUE(door_.others().empty());
+}
+
+// The probe's forged snapshot of mission time 1e300 (and one of cycle 2^64 - 1) from the followed
+// server's instance: refused as ahead of the host's clock, so the real ones after it are taken.
+TEST_F(HostDoorTest, WordsStampedFarAheadOfTheClockAreRefused) {
+  ASSERT_TRUE(door_.TakeStatus(Status(kServer)));
+  proto::FleetCoverage snapshot{};
+  snapshot.server_instance = kServer;
+  snapshot.cycle = 12;
+  snapshot.mission_time_s = 1e300;
+  EXPECT_FALSE(door_.TakeSnapshot(snapshot, 10));
+  snapshot.mission_time_s = 1.1;
+  snapshot.cycle = std::numeric_limits<std::uint64_t>::max();
+  EXPECT_FALSE(door_.TakeSnapshot(snapshot, 10));
+  proto::ErgodicTarget target{};
+  target.server_instance = kServer;
+  target.vehicle_id = 1;
+  target.shared = true;
+  target.cycle = 10 + 1000;
+  EXPECT_FALSE(door_.TakeTarget(target, 10));
+  EXPECT_EQ(door_.ahead_of_the_clock(), 3u);
+  snapshot.cycle = 11;
+  EXPECT_TRUE(door_.TakeSnapshot(snapshot, 10));
+  snapshot.cycle = 12;
+  snapshot.mission_time_s = 1.2;
+  EXPECT_TRUE(door_.TakeSnapshot(snapshot, 11)) << "a real snapshot after the forged ones";
+  target.cycle = 11;
+  EXPECT_TRUE(door_.TakeTarget(target, 10));
+}
+
+}  // namespace
+}  // namespace sage::agents

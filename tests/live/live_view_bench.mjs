@@ -1,0 +1,156 @@
+// What the live view costs and how fast it draws, measured (a benchmark: it prints and writes its
+// figures, it asserts nothing). The same mission is launched again and again: with the live view
+// off (--http off --foxglove off), on with nobody watching, and on with the page open in headless
+// chromium for the whole mission; for each, the server's own cycle time (mean and p99, from its
+// last lines), its real-time factor and lockstep, and with the page the page's own frame counter
+// (redraws a second) and the frames it received a second. The machine's load average is noted
+// before and after each run: on a shared machine the figures move with it.
+//
+//   build/bin/sage field generate --xts 300 --valves 1000 --vehicles 1000 --seed 1 -o /tmp/f1000.yaml
+//   node tests/live/live_view_bench.mjs --sage build/bin/sage --source-dir . --out /tmp/live_bench \
+//        --field /tmp/f1000.yaml --duration 60 --runs 2 [--configs off,idle,viewer,replay] [--secured]
+// (replay: the page alone, `sage view` of the run "off" just recorded, played at 1x, no mission running)
+import fs from "node:fs";
+import os from "node:os";
+import path from "node:path";
+import { chromium } from "playwright-core";
+import { execSync } from "node:child_process";
+import { CHROMIUM_FLAGS, freshDir, liveEndpoints, parseArgs, run, sleep, waitFor } from "./common.mjs";
+
+const args = parseArgs(process.argv);
+const out = freshDir(path.resolve(args.out));
+const field = path.resolve(args.field || path.join(args["source-dir"], "scenarios/fleet_large.yaml"));
+const duration = Number(args.duration || 60);
+const runs = Number(args.runs || 1);
+const configs = (args.configs || "off,idle,viewer").split(",");
+const extra = args.vehicles ? ["-n", args.vehicles] : [];
+const load = () => os.loadavg().map((x) => x.toFixed(2)).join(" ");
+// CPU seconds used so far by every chromium process (user + system).
+const chromiumCpu = () => {
+  try {
+    return Number(execSync("ps -C chromium -o cputimes= | awk '{s+=$1} END {print s+0}'").toString());
+  } catch (e) {
+    return NaN;
+  }
+};
+
+function serverFigures(output) {
+  const cycle = output.match(/server cycle ([0-9.]+) ms mean, ([0-9.]+) ms p99/);
+  const factor = output.match(/\(([0-9.]+)x real time\)/);
+  const lockstep = output.match(/(\d+) of (\d+) cycles in lockstep/);
+  const live = output.match(/live view: (\d+) frames, ([0-9.]+) ms a frame in the server's loop, ([0-9.]+) ms in the view's thread/);
+  return {
+    live_frames: live ? Number(live[1]) : 0,
+    loop_copy_ms: live ? Number(live[2]) : NaN,
+    view_thread_ms: live ? Number(live[3]) : NaN,
+    cycle_mean_ms: cycle ? Number(cycle[1]) : NaN,
+    cycle_p99_ms: cycle ? Number(cycle[2]) : NaN,
+    real_time_factor: factor ? Number(factor[1]) : NaN,
+    lockstep: lockstep ? `${lockstep[1]} of ${lockstep[2]}` : "?",
+  };
+}
+
+async function once(config, k) {
+  const dir = path.join(out, `${config}_${k}`);
+  const launchArgs = ["launch", field, ...extra, "--duration", String(duration), "--out", dir, "--no-latest"];
+  if (!args.secured) launchArgs.push("--insecure");
+  if (config === "off") launchArgs.push("--http", "off", "--foxglove", "off");
+  const before = load();
+  const started = Date.now();
+  const launch = run(args.sage, launchArgs);
+  const result = { config, run: k, load_before: before };
+  let browser = null;
+  const samples = [];
+  if (config === "viewer") {
+    const live = await liveEndpoints(dir);
+    browser = await chromium.launch({ executablePath: "/usr/bin/chromium", args: CHROMIUM_FLAGS });
+    const page = await browser.newPage({ viewport: { width: 1400, height: 820 } });
+    await page.goto(`http://127.0.0.1:${live.http_port}/#token=${live.token}`);
+    await page.waitForFunction(() => window.sageView && window.sageView.ready, null, { timeout: 120000 });
+    // One sample a second while the mission runs (the page's counters are over its last second).
+    const cpu0 = chromiumCpu(), wall0 = Date.now();
+    while (launch.exitCode === null) {
+      await sleep(1000);
+      try {
+        const v = await page.evaluate(() => ({ fps: window.sageView.fps, rate: window.sageView.updateRate,
+                                                vehicles: window.sageView.vehiclesShown, t: window.sageView.time }));
+        if (v.vehicles > 0) samples.push(v);
+      } catch (e) {
+        break;
+      }
+    }
+    result.chromium_cores = (chromiumCpu() - cpu0) / ((Date.now() - wall0) / 1000);
+    await page.screenshot({ path: path.join(out, `viewer_${k}.png`) }).catch(() => {});
+  }
+  const exit = await launch.exited;
+  if (browser) await browser.close();
+  Object.assign(result, serverFigures(launch.output), { exit: exit.code, wall_s: (Date.now() - started) / 1000, load_after: load() });
+  if (samples.length) {
+    // The first seconds are start-up (every host joining); the figures are of the steady part.
+    const steady = samples.filter((s) => s.vehicles === Math.max(...samples.map((x) => x.vehicles))).slice(2);
+    const fps = steady.map((s) => s.fps).sort((a, b) => a - b);
+    const rate = steady.map((s) => s.rate).sort((a, b) => a - b);
+    const pick = (xs, q) => xs[Math.min(xs.length - 1, Math.floor(q * xs.length))];
+    Object.assign(result, {
+      vehicles_shown: steady.length ? steady[0].vehicles : 0, seconds_sampled: steady.length,
+      fps_min: fps[0], fps_median: pick(fps, 0.5), fps_p10: pick(fps, 0.1),
+      updates_min: rate[0], updates_median: pick(rate, 0.5),
+    });
+  }
+  fs.writeFileSync(path.join(dir, "launch.log"), launch.output);
+  console.log(JSON.stringify(result));
+  return result;
+}
+
+// The page alone, with no mission running: `sage view` of a run just recorded, played at 1x.
+async function replay(dir, k) {
+  const before = load();
+  const viewer = run(args.sage, ["view", dir]);
+  const url = await waitFor("sage view's address", () => (viewer.output.match(/open (http:\/\/\S+)/) || [])[1], 300000);
+  const browser = await chromium.launch({ executablePath: "/usr/bin/chromium", args: CHROMIUM_FLAGS });
+  const page = await browser.newPage({ viewport: { width: 1400, height: 820 } });
+  await page.goto(url);
+  await page.waitForFunction(() => window.sageView && window.sageView.ready, null, { timeout: 60000 });
+  await page.selectOption("#speed", "1");
+  await page.click("#play");
+  await sleep(3000);
+  const cpu0 = chromiumCpu(), wall0 = Date.now();
+  const fps = [];
+  for (let i = 0; i < Math.min(40, duration - 5); i++) {
+    await sleep(1000);
+    fps.push(await page.evaluate(() => window.sageView.fps));
+  }
+  const cores = (chromiumCpu() - cpu0) / ((Date.now() - wall0) / 1000);
+  await browser.close();
+  viewer.kill("SIGINT");
+  await viewer.exited;
+  fps.sort((a, b) => a - b);
+  const result = { config: "replay", run: k, load_before: before, load_after: load(), chromium_cores: cores,
+                   fps_min: fps[0], fps_p10: fps[Math.floor(0.1 * fps.length)], fps_median: fps[Math.floor(0.5 * fps.length)],
+                   loop_copy_ms: NaN, cycle_mean_ms: "-", cycle_p99_ms: "-", real_time_factor: "-", lockstep: "-" };
+  console.log(JSON.stringify(result));
+  return result;
+}
+
+const results = [];
+for (let k = 0; k < runs; k++) {
+  for (const config of configs) {
+    results.push(config === "replay" ? await replay(path.join(out, `off_${k}`), k) : await once(config, k));
+  }
+}
+fs.writeFileSync(path.join(out, "live_view_bench.json"), JSON.stringify({ field, duration, results }, null, 2));
+const rows = results.map((r) =>
+  `| ${r.config} | ${r.run} | ${r.cycle_mean_ms} / ${r.cycle_p99_ms} | ${r.real_time_factor}x | ${r.lockstep} | ` +
+  `${r.fps_median === undefined ? "-" : `${r.fps_min.toFixed(1)} / ${r.fps_p10.toFixed(1)} / ${r.fps_median.toFixed(1)}`} | ` +
+  `${r.updates_median === undefined ? "-" : `${r.updates_min.toFixed(1)} / ${r.updates_median.toFixed(1)}`} | ` +
+  `${r.chromium_cores === undefined ? "-" : r.chromium_cores.toFixed(2)} | ` +
+  `${Number.isNaN(r.loop_copy_ms) ? "-" : `${r.loop_copy_ms} / ${r.view_thread_ms}`} | ${r.load_before} -> ${r.load_after} |`);
+const table = [
+  `${field}, ${duration} s per run`,
+  "",
+  "| live view | run | server cycle mean / p99 (ms) | real time | cycles in lockstep | page frames/s min / p10 / median | updates/s min / median | chromium (cores) | view's ms a frame: loop / own thread | load average before -> after |",
+  "|---|---:|---:|---:|---:|---:|---:|---:|---:|---|",
+  ...rows,
+].join("\n");
+fs.writeFileSync(path.join(out, "live_view_bench.md"), table + "\n");
+console.log(table);

@@ -1,0 +1,165 @@
+// Leaks, sensors and fusion in a scenario: read, written back exactly, checked with one line
+// naming the field, and random leaks drawn by seed (the same seed the same leaks; valves as often
+// as their risk; seabed points in open water).
+#include <cmath>
+#include <map>
+#include <string>
+
+#include <gtest/gtest.h>
+
+#include "maps/scenario/scenario.h"
+
+namespace sage::maps {
+namespace {
+
+const std::string kTwoXtLeaks = std::string(SAGE_SOURCE_DIR) + "/scenarios/two_xt_leaks.yaml";
+const std::string kTwoXt = std::string(SAGE_SOURCE_DIR) + "/scenarios/two_xt.yaml";
+
+std::string WithSection(const std::string& section) {
+  return R"(
+workspace: {width_m: 6, height_m: 5}
+structures:
+  - {name: XT, center_m: [3, 2.5], size_m: [0.5, 0.5], valves: [{name: P1, position_m: [3, 3.5]}, {name: P2, position_m: [3, 1.5]}]}
+vehicles: [{name: rov1, start_m: [0.5, 0.5]}]
+profiles: {p: {weights: {P1: 3, P2: 1}}}
+)" + section;
+}
+
+TEST(ScenarioPerception, TwoXtLeaksLoadsAndRoundTrips) {
+  const Scenario s = LoadScenario(kTwoXtLeaks);
+  ASSERT_EQ(s.sensors.size(), 1u);
+  EXPECT_EQ(s.sensors[0].name, "camera");
+  EXPECT_EQ(s.sensors[0].kind, SensorKind::kCamera);
+  ASSERT_EQ(s.leaks.size(), 1u);
+  EXPECT_EQ(s.leaks[0].valve, "P3");
+  EXPECT_EQ(LeakPosition(s, s.leaks[0]), s.AllValves()[2].position_m);
+  EXPECT_TRUE(s.fusion.steer);
+  const std::string text = EmitScenario(s);
+  const Scenario again = ParseScenario(text, s.source_path);
+  EXPECT_EQ(EmitScenario(again), text);
+  EXPECT_EQ(again.sensors[0].half_range_m, s.sensors[0].half_range_m);
+  EXPECT_EQ(again.leaks[0].start_s, s.leaks[0].start_s);
+  EXPECT_EQ(again.fusion, s.fusion);
+  // Without leak sensing a scenario writes what it always wrote: no sensors, leaks or fusion keys.
+  const std::string plain = EmitScenario(LoadScenario(kTwoXt));
+  EXPECT_EQ(plain.find("sensors"), std::string::npos);
+  EXPECT_EQ(plain.find("leaks"), std::string::npos);
+  EXPECT_EQ(plain.find("fusion"), std::string::npos);
+}
+
+TEST(ScenarioPerception, LeaksAtValvesAndPointsSortedByStart) {
+  const Scenario s = ParseScenario(WithSection(R"(
+leaks:
+  - {at: {point_m: [1.0, 4.0]}, start_s: 50, strength: 2}
+  - {at: {valve: P2}, start_s: 10}
+fusion: {steer: prior, relax_time_s: .inf}
+)"),
+                                   "x.yaml");
+  ASSERT_EQ(s.leaks.size(), 2u);
+  EXPECT_EQ(s.leaks[0].valve, "P2");
+  EXPECT_EQ(s.leaks[1].point_m, Eigen::Vector2d(1.0, 4.0));
+  EXPECT_EQ(s.leaks[1].strength, 2.0);
+  EXPECT_EQ(LeakWhere(s.leaks[1]), "seabed (1, 4)");
+  EXPECT_FALSE(s.fusion.steer);
+  EXPECT_TRUE(std::isinf(s.fusion.relax_time_s));
+  const Scenario again = ParseScenario(EmitScenario(s), "x.yaml");
+  EXPECT_EQ(EmitScenario(again), EmitScenario(s));
+  // The shorter mission drops the leaks it would never meet.
+  EXPECT_EQ(WithDuration(s, 30.0).leaks.size(), 1u);
+}
+
+// Each bad value: one line naming the file, the field (as in the YAML), the value and the rule.
+TEST(ScenarioPerception, BadInputsNameFieldAndRule) {
+  const std::map<std::string, std::string> cases = {
+      {"sensors: [{name: c, range_m: -1}]", "x.yaml: sensors[0].range_m = -1: must be > 0"},
+      {"sensors: [{name: c, fov_deg: 400}]", "x.yaml: sensors[0].fov_deg = 400: must be in (0, 360] degrees"},
+      {"sensors: [{name: c, p_detect: 1.5}]", "x.yaml: sensors[0].p_detect = 1.5: must be in (0, 1]"},
+      {"sensors: [{name: c, rate_hz: 50}]", "x.yaml: sensors[0].rate_hz = 50: must be in (0, control_rate_hz = 10]"},
+      {"sensors: [{name: c, kind: lidar}]", "x.yaml: sensors[0].kind = lidar: must be camera or sonar"},
+      {"sensors: [{name: c}, {name: c}]", "x.yaml: sensors[1].name = c: duplicate name (also sensors[0])"},
+      {"sensors: [{name: c, colour: red}]", "x.yaml: sensors[0].colour: unknown key"},
+      {"leaks: [{at: {valve: P9}, start_s: 1}]", "x.yaml: leaks[0].at.valve = P9: no such valve"},
+      {"leaks: [{at: {point_m: [3, 2.5]}, start_s: 1}]", "lies inside the footprint of XT"},
+      {"leaks: [{at: {point_m: [9, 1]}, start_s: 1}]", "x.yaml: leaks[0].at.point_m = [9, 1]: must be inside the workspace"},
+      {"leaks: [{at: {valve: P1, point_m: [1, 1]}, start_s: 1}]", "must give exactly one of valve, point_m"},
+      {"leaks: [{at: {flowline: F1, s_m: 3}, start_s: 1}]", "need the scenario's flowlines"},
+      {"leaks: [{at: {valve: P1}, start_s: 900}]", "x.yaml: leaks[0].start_s = 900: must be in [0, duration_s = 300]"},
+      {"leaks: [{at: {valve: P1}, start_s: 1, strength: 0}]", "x.yaml: leaks[0].strength = 0: must be in (0, 1e6]"},
+      {"leaks: [{at: {valve: P1}}]", "x.yaml: leaks[0].start_s: missing (required)"},
+      {"fusion: {prior_probability: 0.7}", "x.yaml: fusion.prior_probability = 0.7: must be in (0, 0.5)"},
+      {"fusion: {confirm_probability: 0.0005}", "x.yaml: fusion.confirm_probability = 5e-04: must be in (prior_probability, 1)"},
+      {"fusion: {alarm_probability: 0.95}", "x.yaml: fusion.alarm_probability = 0.95: must be in (prior_probability, confirm_probability]"},
+      {"fusion: {steer: maybe}", "x.yaml: fusion.steer = maybe: must be posterior"},
+      {"fusion: {min_evidence: 1}", "x.yaml: fusion.min_evidence = 1: must be in [-30, 0)"},
+      {"fusion: {max_log_odds: 1}", "x.yaml: fusion.max_log_odds = 1: must be in (logit(confirm_probability)"},
+  };
+  for (const auto& [section, expected] : cases) {
+    SCOPED_TRACE(section);
+    try {
+      ParseScenario(WithSection(section + "\n"), "x.yaml");
+      ADD_FAILURE() << "accepted";
+    } catch (const ScenarioError& e) {
+      const std::string what = e.what();
+      EXPECT_NE(what.find(expected), std::string::npos) << what;
+      EXPECT_EQ(what.find('\n'), std::string::npos);
+    }
+  }
+}
+
+// The same seed draws the same leaks; another seed others. Onsets in [0.1, 0.9] of the mission;
+// valves in proportion to the default profile's risk (P1 3 : P2 1, over 4,000 draws within 4
+// binomial sigmas of 3/4); valves-even alike; seabed points in open water, 1 m from every valve.
+TEST(ScenarioPerception, RandomLeaksByTheSeed) {
+  Scenario s = ParseScenario(WithSection(""), "x.yaml");
+  const Scenario a = WithRandomLeaks(s, 50, LeakSites::kValves);
+  const Scenario b = WithRandomLeaks(s, 50, LeakSites::kValves);
+  EXPECT_EQ(EmitScenario(a), EmitScenario(b));
+  s.seed = 2;
+  EXPECT_NE(EmitScenario(WithRandomLeaks(s, 50, LeakSites::kValves)), EmitScenario(a));
+  for (const LeakSpec& leak : a.leaks) {
+    EXPECT_GE(leak.start_s, 30.0);
+    EXPECT_LE(leak.start_s, 270.0);
+  }
+  s.seed = 11;
+  const Scenario many = WithRandomLeaks(s, 1000, LeakSites::kValves);
+  int p1 = 0;
+  for (const LeakSpec& leak : many.leaks) p1 += leak.valve == "P1" ? 1 : 0;
+  int total = 1000;
+  for (std::uint64_t seed = 12; seed < 15; ++seed) {
+    s.seed = seed;
+    for (const LeakSpec& leak : WithRandomLeaks(s, 1000, LeakSites::kValves).leaks) p1 += leak.valve == "P1" ? 1 : 0;
+    total += 1000;
+  }
+  EXPECT_NEAR(static_cast<double>(p1) / total, 0.75, 4.0 * std::sqrt(0.75 * 0.25 / total));
+  int even = 0;
+  for (const LeakSpec& leak : WithRandomLeaks(s, 1000, LeakSites::kValvesEven).leaks) even += leak.valve == "P1" ? 1 : 0;
+  EXPECT_NEAR(even / 1000.0, 0.5, 4.0 * std::sqrt(0.25 / 1000));
+  const Scenario seabed = WithRandomLeaks(s, 200, LeakSites::kSeabed);
+  for (const LeakSpec& leak : seabed.leaks) {
+    EXPECT_TRUE(leak.valve.empty());
+    for (const Eigen::Vector2d& v : s.ValvePositions()) EXPECT_GE((leak.point_m - v).norm(), 1.0);
+    EXPECT_FALSE(((leak.point_m - Eigen::Vector2d(3, 2.5)).array().abs() < 0.75).all()) << "near the XT";
+  }
+  EXPECT_NO_THROW(seabed.Validate());
+  EXPECT_THROW(WithRandomLeaks(s, -1, LeakSites::kValves), ScenarioError);
+  EXPECT_THROW(ParseLeakSites("sky", "--leak-sites"), ScenarioError);
+}
+
+// What the vehicles simulate is in their fingerprint (a host given other leaks or sensors would
+// fly another world); the server's fusion settings are not.
+TEST(ScenarioPerception, FingerprintHoldsSensorsAndLeaksNotFusion) {
+  const Scenario s = LoadScenario(kTwoXtLeaks);
+  Scenario other_fusion = s;
+  other_fusion.fusion.relax_time_s = 5.0;
+  EXPECT_EQ(VehicleFingerprint(other_fusion), VehicleFingerprint(s));
+  EXPECT_NE(ScenarioHash(other_fusion), ScenarioHash(s));
+  Scenario other_leak = s;
+  other_leak.leaks[0].start_s = 121.0;
+  EXPECT_NE(VehicleFingerprint(other_leak), VehicleFingerprint(s));
+  Scenario other_sensor = s;
+  other_sensor.sensors[0].range_m = 1.0;
+  EXPECT_NE(VehicleFingerprint(other_sensor), VehicleFingerprint(s));
+}
+
+}  // namespace
+}  // namespace sage::maps

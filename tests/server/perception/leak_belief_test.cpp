@@ -1,0 +1,105 @@
+// The leak belief's Bayesian update against a hand computation from the sensor's parameters (not
+// through SensorModel), the clamps, relaxation to the prior, what is out of view, the valves'
+// factors and a checkpoint's round trip.
+#include "server/perception/leak_belief.h"
+
+#include <cmath>
+
+#include <gtest/gtest.h>
+
+namespace sage::server {
+namespace {
+
+const std::string kTwoXtLeaks = std::string(SAGE_SOURCE_DIR) + "/scenarios/two_xt_leaks.yaml";
+
+double Logit(double p) { return std::log(p / (1 - p)); }
+
+class LeakBeliefTest : public ::testing::Test {
+ protected:
+  LeakBeliefTest() : scenario_(maps::LoadScenario(kTwoXtLeaks)), world_(scenario_), belief_(scenario_, world_, 0.2) {}
+  // The camera's numbers as the scenario gives them, computed here by hand.
+  double P(double d) const {
+    const maps::SensorSpec& c = scenario_.sensors[0];
+    return c.p_detect * std::pow(2.0, -(d / c.half_range_m) * (d / c.half_range_m));
+  }
+  double Kappa() const {
+    const maps::SensorSpec& c = scenario_.sensors[0];
+    const double period = std::round(scenario_.control_rate_hz / c.rate_hz) / scenario_.control_rate_hz;
+    return c.false_alarms_per_s * period / (0.5 * c.fov_deg * M_PI / 180.0 * c.range_m * c.range_m);
+  }
+  double Gauss(const Eigen::Vector2d& z, const Eigen::Vector2d& y) const {
+    const double s = scenario_.sensors[0].position_sigma_m;
+    return std::exp(-0.5 * (z - y).squaredNorm() / (s * s)) / (2 * M_PI * s * s);
+  }
+  maps::Scenario scenario_;
+  maps::World world_;
+  LeakBelief belief_;
+};
+
+// One scan from below P1 looking at it, with a detection at P1's leaf: that leaf's log-odds go up
+// by ln((1 - p) + p N / kappa), a leaf in view a metre off by ln(1 - p + p N' / kappa) (a miss,
+// nearly), one behind the vehicle not at all. 1e-12 relative.
+TEST_F(LeakBeliefTest, ScanUpdateMatchesHandComputation) {
+  EXPECT_NEAR(belief_.prior_log_odds(), Logit(scenario_.fusion.prior_probability), 1e-12);
+  const Eigen::Vector2d pose(2.0, 2.9);
+  const LeakBelief::Cell leak = belief_.CellOf({2.0, 3.45});
+  const Eigen::Vector2d c = belief_.CentreOf(leak);
+  EXPECT_NEAR(c.x(), 2.1, 1e-12);
+  EXPECT_NEAR(c.y(), 3.5, 1e-12);
+  const Eigen::Vector2d z(2.03, 3.47);
+  const int updated = belief_.Fuse(0, pose, M_PI / 2, {z}, 10.0);
+  EXPECT_GT(updated, 10);
+  const double expected = std::log((1 - P((c - pose).norm())) + P((c - pose).norm()) * Gauss(z, c) / Kappa());
+  EXPECT_NEAR(belief_.Evidence(leak, 10.0), expected, 1e-12 * std::abs(expected));
+  EXPECT_GT(belief_.Probability(leak, 10.0), scenario_.fusion.alarm_probability) << "one detection raises an alarm";
+
+  const LeakBelief::Cell side = belief_.CellOf({1.5, 3.7});
+  const Eigen::Vector2d cs = belief_.CentreOf(side);
+  ASSERT_LE((cs - pose).norm(), 1.2);
+  const double miss = std::log((1 - P((cs - pose).norm())) + P((cs - pose).norm()) * Gauss(z, cs) / Kappa());
+  EXPECT_NEAR(belief_.Evidence(side, 10.0), miss, 1e-12 * std::abs(miss));
+  EXPECT_LT(miss, 0.0);
+  EXPECT_EQ(belief_.Evidence(belief_.CellOf({2.0, 2.5}), 10.0), 0.0) << "behind the sensor (and inside XT-A)";
+  EXPECT_EQ(belief_.positive().count(leak), 1u);
+}
+
+// Seeing nothing, scan after scan: down by ln(1 - p) each, held at the floor (min_evidence); a
+// detection every scan: up to the ceiling max_log_odds; between scans back to the prior as
+// exp(-t / relax_time_s).
+TEST_F(LeakBeliefTest, ClampsAndRelaxation) {
+  const Eigen::Vector2d pose(2.0, 2.9);
+  const LeakBelief::Cell leak = belief_.CellOf({2.0, 3.45});
+  const double d = (belief_.CentreOf(leak) - pose).norm();
+  belief_.Fuse(0, pose, M_PI / 2, {}, 1.0);
+  EXPECT_NEAR(belief_.Evidence(leak, 1.0), std::log(1 - P(d)), 1e-12);
+  for (int k = 1; k < 20; ++k) belief_.Fuse(0, pose, M_PI / 2, {}, 1.0);
+  EXPECT_DOUBLE_EQ(belief_.Evidence(leak, 1.0), scenario_.fusion.min_evidence);
+  const double tau = scenario_.fusion.relax_time_s;
+  EXPECT_NEAR(belief_.Evidence(leak, 1.0 + tau), scenario_.fusion.min_evidence / std::exp(1.0), 1e-12);
+  // The valve's factor P / P0 < 1 while the evidence is negative.
+  const Eigen::VectorXd factors = belief_.ValveFactors(1.0);
+  const double p0 = scenario_.fusion.prior_probability;
+  const double p = 1.0 / (1.0 + std::exp(-(Logit(p0) + scenario_.fusion.min_evidence)));
+  EXPECT_NEAR(factors[0], p / p0, 1e-12);
+  EXPECT_EQ(factors[2], 1.0) << "P3 was not looked at";
+  for (int k = 0; k < 10; ++k) belief_.Fuse(0, pose, M_PI / 2, {belief_.CentreOf(leak)}, 2.0);
+  EXPECT_NEAR(belief_.LogOdds(leak, 2.0), scenario_.fusion.max_log_odds, 1e-12);
+}
+
+TEST_F(LeakBeliefTest, CheckpointRoundTrip) {
+  belief_.Fuse(0, {2.0, 2.9}, M_PI / 2, {{2.0, 3.45}}, 3.0);
+  belief_.Fuse(0, {3.6, 1.6}, -M_PI / 2, {}, 3.2);
+  LeakBelief again(scenario_, world_, 0.2);
+  again.Restore(belief_.Checkpoint());
+  ASSERT_EQ(again.Checkpoint().size(), belief_.Checkpoint().size());
+  for (const LeakBelief::Entry& e : belief_.Checkpoint()) {
+    EXPECT_EQ(again.Evidence(e.cell, 50.0), belief_.Evidence(e.cell, 50.0));
+  }
+  EXPECT_EQ(again.positive(), belief_.positive());
+  std::vector<LeakBelief::Entry> bad = belief_.Checkpoint();
+  bad[0].cell.i = 100000;
+  EXPECT_THROW(again.Restore(bad), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace sage::server

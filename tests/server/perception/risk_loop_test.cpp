@@ -1,0 +1,253 @@
+// The Bayesian risk loop in the mission core: scans checked at the door and counted when refused;
+// a detection raises the layer the vehicles steer on at once (shared, partition, regions); a
+// mission whose loop does not steer flies exactly as one without sensors; the same seed the same
+// leaks found at the same times; the loop and the layer through a checkpoint; metrics.json's leaks.
+#include "server/perception/risk_loop.h"
+
+#include <cmath>
+#include <sstream>
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include "maps/world.h"
+#include "server/mission.h"
+#include "server/mission_core.h"
+#include "server/report/checkpoint.h"
+#include "server/report/report.h"
+
+namespace sage::server {
+namespace {
+
+const std::string kTwoXt = std::string(SAGE_SOURCE_DIR) + "/scenarios/two_xt.yaml";
+const std::string kTwoXtLeaks = std::string(SAGE_SOURCE_DIR) + "/scenarios/two_xt_leaks.yaml";
+
+agents::StateReport State(int id, std::int64_t cycle, Eigen::Vector2d position, double heading = 0.0) {
+  agents::StateReport s;
+  s.id = id;
+  s.name = "rov" + std::to_string(id + 1);
+  s.cycle = cycle;
+  s.time_s = static_cast<double>(cycle) / 10.0;
+  s.state.position_m = position;
+  s.state.heading_rad = heading;
+  return s;
+}
+
+agents::ScanReport Scan(int id, std::int64_t cycle, Eigen::Vector2d position, double heading,
+                        std::vector<Eigen::Vector2d> detections = {}) {
+  agents::ScanReport s;
+  s.id = id;
+  s.cycle = cycle;
+  s.time_s = static_cast<double>(cycle) / 10.0;
+  s.sensor = 0;
+  s.position_m = position;
+  s.heading_rad = heading;
+  s.detections_m = std::move(detections);
+  return s;
+}
+
+// Density of phi_k on the basis at x: sum_k phi_k F_k(x).
+double DensityOf(const maps::SpectralBasis& basis, const Eigen::VectorXd& phi, const Eigen::Vector2d& x) {
+  Eigen::VectorXd f;
+  basis.Evaluate(x, f);
+  return phi.dot(f);
+}
+
+// Every kind of bad scan is refused, counted under its kind and its vehicle, and changes nothing.
+TEST(RiskLoop, ScansCheckedAtTheDoor) {
+  const maps::Scenario s = maps::LoadScenario(kTwoXtLeaks);
+  maps::World world(s);
+  MissionCore core(world, s, "", ControllerKind::kErgodic);
+  const Eigen::Vector2d at(2.0, 2.9);
+  ASSERT_TRUE(core.OnState(State(0, 0, at, M_PI / 2)));
+  core.Cycle(0);
+  ASSERT_TRUE(core.OnState(State(0, 2, at, M_PI / 2)));
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  std::vector<std::pair<agents::ScanReport, std::string>> bad;
+  auto scan = Scan(0, 2, at, M_PI / 2);
+  scan.position_m.x() = nan;
+  bad.emplace_back(scan, "scan not finite");
+  scan = Scan(0, 2, at, M_PI / 2, {{nan, 1.0}});
+  bad.emplace_back(scan, "scan not finite");
+  scan = Scan(0, 2, at, M_PI / 2);
+  scan.sensor = 3;
+  bad.emplace_back(scan, "scan of no such sensor");
+  bad.emplace_back(Scan(0, 3, at, M_PI / 2), "scan off its sensor's schedule");  // 5 Hz: even cycles
+  scan = Scan(0, 2, at, M_PI / 2);
+  scan.time_s = 7.0;
+  bad.emplace_back(scan, "scan time not its cycle's");
+  bad.emplace_back(Scan(0, 2000, at, M_PI / 2), "scan ahead of the clock");
+  bad.emplace_back(Scan(0, 2, {9.0, 1.0}, 0.0), "scan from outside the workspace");
+  bad.emplace_back(Scan(0, 2, at, M_PI / 2, {{5.0, 0.2}}), "detection out of its sensor's reach");
+  bad.emplace_back(Scan(0, 2, at, M_PI / 2, std::vector<Eigen::Vector2d>(65, at)), "scan with too many detections");
+  for (const auto& [s_bad, kind] : bad) {
+    SCOPED_TRACE(kind);
+    EXPECT_FALSE(core.OnScan(s_bad));
+  }
+  EXPECT_TRUE(core.OnScan(Scan(0, 2, at, M_PI / 2)));
+  EXPECT_FALSE(core.OnScan(Scan(0, 2, at, M_PI / 2))) << "the same scan twice";
+  // Known only at the cycle: a pose that is not its vehicle's state of that cycle, a vehicle unknown.
+  EXPECT_TRUE(core.OnScan(Scan(7, 2, at, M_PI / 2)));
+  core.Cycle(2);
+  ASSERT_TRUE(core.OnState(State(0, 4, at, M_PI / 2)));
+  EXPECT_TRUE(core.OnScan(Scan(0, 4, at + Eigen::Vector2d(0.1, 0.0), M_PI / 2)));
+  core.Cycle(4);
+  const RejectionCounts refused = core.rejections();
+  const auto& kinds = refused.by_kind();
+  for (const char* kind : {"scan not finite", "scan of no such sensor", "scan off its sensor's schedule",
+                           "scan time not its cycle's", "scan ahead of the clock", "scan from outside the workspace",
+                           "detection out of its sensor's reach", "scan with too many detections",
+                           "scan not after its vehicle's last", "scan of no live vehicle",
+                           "scan pose not its vehicle's state"}) {
+    EXPECT_EQ(kinds.count(kind), 1u) << kind;
+  }
+  EXPECT_EQ(kinds.at("scan not finite"), 2u);
+  EXPECT_EQ(refused.by_sender().at("vehicle 0"), 11u);
+  EXPECT_EQ(refused.by_sender().at("vehicle 7"), 1u);
+  EXPECT_EQ(core.Metrics(0.4).scans, 1u) << "only the good scan was fused";
+}
+
+// A detection raises the layer at once: the next snapshot's phi is the layer's, denser at the
+// leak; a scan that sees nothing only lowers (the valve it looked at weighs less) and raises no leaf.
+TEST(RiskLoop, ADetectionRaisesTheLayerAtOnce) {
+  const maps::Scenario s = maps::LoadScenario(kTwoXtLeaks);
+  maps::World world(s);
+  MissionCore core(world, s, "", ControllerKind::kErgodic);
+  const Eigen::Vector2d at(3.6, 1.6), p3(3.6, 0.9);
+  ASSERT_TRUE(core.OnState(State(0, 0, at, -M_PI / 2)));
+  const CycleOutput first = core.Cycle(0);
+  const double before = DensityOf(world.basis(), first.snapshot.phi, p3);
+  ASSERT_TRUE(core.OnState(State(0, 2, at, -M_PI / 2)));
+  ASSERT_TRUE(core.OnScan(Scan(0, 2, at, -M_PI / 2)));
+  const CycleOutput miss = core.Cycle(2);
+  EXPECT_EQ(core.risk_layer().nonzero_leaves(), 0);
+  EXPECT_LT(core.fleet().effective_weights()[2], 0.10) << "P3 just looked at weighs less than its 0.10";
+  EXPECT_LT(DensityOf(world.basis(), miss.snapshot.phi, p3), before);
+  ASSERT_TRUE(core.OnState(State(0, 4, at, -M_PI / 2)));
+  ASSERT_TRUE(core.OnScan(Scan(0, 4, at, -M_PI / 2, {p3})));
+  const CycleOutput hit = core.Cycle(4);
+  EXPECT_GT(core.risk_layer().nonzero_leaves(), 0);
+  EXPECT_GT(core.risk_layer().excess_mass(), 0.5);
+  EXPECT_GT(DensityOf(world.basis(), hit.snapshot.phi, p3), 2.0 * before);
+  EXPECT_EQ(hit.snapshot.phi, core.risk_layer().coefficients());
+  // After a look that saw nothing there, one detection is not yet an alarm; a second one is (one
+  // alarm: they are at the same place).
+  EXPECT_EQ(core.Metrics(0.4).false_alarms.raised, 0);
+  ASSERT_TRUE(core.OnState(State(0, 6, at, -M_PI / 2)));
+  ASSERT_TRUE(core.OnScan(Scan(0, 6, at, -M_PI / 2, {p3 + Eigen::Vector2d(0.02, 0.0)})));
+  core.Cycle(6);
+  const MissionMetrics m = core.Metrics(0.6);
+  ASSERT_EQ(m.leaks.size(), 1u);
+  EXPECT_TRUE(std::isnan(m.leaks[0].detected_s)) << "the scenario's leak at P3 starts at 120 s: this is a false alarm";
+  EXPECT_EQ(m.false_alarms.detections, 2);
+  EXPECT_EQ(m.false_alarms.raised, 1);
+  EXPECT_EQ(m.scans, 3u);
+}
+
+// Partition and regions get the layer's leaves too: the share or region holding P3 sees its
+// target denser there after a detection.
+TEST(RiskLoop, SharesAndRegionsSteerOnTheLayer) {
+  for (const maps::FleetAssignment assignment : {maps::FleetAssignment::kPartition, maps::FleetAssignment::kRegions}) {
+    SCOPED_TRACE(maps::ToString(assignment));
+    maps::Scenario s = maps::WithVehicleCount(maps::LoadScenario(kTwoXtLeaks), 2);
+    s.fleet.assignment = assignment;
+    maps::World world(s);
+    MissionCore core(world, s, "", ControllerKind::kErgodic);
+    const Eigen::Vector2d a(1.0, 1.0), b(3.6, 1.6), p3(3.6, 0.9);
+    std::map<int, agents::Assignment> last;
+    for (std::int64_t k = 0; k <= 40; ++k) {
+      core.OnState(State(0, k, a));
+      core.OnState(State(1, k, b, -M_PI / 2));
+      if (k == 40) ASSERT_TRUE(core.OnScan(Scan(1, k, b, -M_PI / 2, {p3})));
+      const CycleOutput out = core.Cycle(k);
+      for (const agents::Assignment& x : out.assignments) last[x.id] = x;
+    }
+    bool raised = false;
+    for (const auto& [id, x] : last) {
+      if (x.cycle != 41 || x.phi.size() == 0) continue;  // sent again at the detection's cycle
+      const bool region = x.region_order > 0;
+      const maps::SpectralBasis basis = region ? maps::SpectralBasis(x.region_size_m.x(), x.region_size_m.y(), x.region_order)
+                                               : world.basis();
+      const Eigen::Vector2d local = region ? Eigen::Vector2d(p3 - x.region_origin_m) : p3;
+      if (local.x() < 0 || local.y() < 0 || local.x() > basis.width_m() || local.y() > basis.height_m()) continue;
+      raised = raised || DensityOf(basis, x.phi, local) > 1.0;
+    }
+    EXPECT_TRUE(raised) << "no share's target was sent again, denser at P3";
+  }
+}
+
+// With sensors that only score (steer: prior) a mission flies exactly as without sensors: the
+// same trajectory sample for sample; and the loop's findings are the same for the same seed.
+TEST(RiskLoop, ScoringAloneFliesTheMissionAsWithoutSensors) {
+  maps::Scenario with = maps::LoadScenario(kTwoXtLeaks);
+  with.fusion.steer = false;
+  maps::Scenario without = with;
+  without.sensors.clear();
+  const MissionResult a = Mission(with, MissionOptions{}).Run();
+  const MissionResult b = Mission(without, MissionOptions{}).Run();
+  ASSERT_EQ(a.trajectory.samples.size(), b.trajectory.samples.size());
+  for (std::size_t i = 0; i < a.trajectory.samples.size(); ++i) {
+    ASSERT_EQ(a.trajectory.samples[i].position_m, b.trajectory.samples[i].position_m) << "sample " << i;
+  }
+  EXPECT_TRUE(a.metrics.sensing);
+  EXPECT_FALSE(b.metrics.sensing);
+  ASSERT_EQ(b.metrics.leaks.size(), 1u);
+  EXPECT_TRUE(std::isnan(b.metrics.leaks[0].detected_s)) << "without sensors nothing is seen";
+  // The same seed: the same scans, the same findings.
+  const MissionResult again = Mission(with, MissionOptions{}).Run();
+  EXPECT_FALSE(std::isnan(a.metrics.leaks[0].detected_s)) << "P3 is seen within the 180 s after its onset";
+  EXPECT_EQ(again.metrics.leaks[0].detected_s, a.metrics.leaks[0].detected_s);
+  EXPECT_EQ(again.metrics.leaks[0].detections, a.metrics.leaks[0].detections);
+  EXPECT_EQ(again.metrics.false_alarms.raised, a.metrics.false_alarms.raised);
+}
+
+// The Bayesian loop steering: the same seed flies the same mission and finds the same; a
+// checkpoint holds the belief and the layer, and a core restored from it stands where it stood.
+TEST(RiskLoop, SameSeedSameFindingsAndCheckpointRoundTrip) {
+  const maps::Scenario s = maps::WithDuration(maps::LoadScenario(kTwoXtLeaks), 200.0);
+  MissionOptions options;
+  Mission a(s, options), b(s, options);
+  while (a.Step()) b.Step();
+  const MissionMetrics ma = a.core().Metrics(200.0), mb = b.core().Metrics(200.0);
+  ASSERT_EQ(ma.leaks.size(), 1u);
+  EXPECT_FALSE(std::isnan(ma.leaks[0].detected_s)) << "the leak at P3 (from 120 s) is found within 80 s";
+  EXPECT_EQ(ma.leaks[0].detected_s, mb.leaks[0].detected_s);
+  EXPECT_EQ(ma.leaks[0].confirmed_s, mb.leaks[0].confirmed_s);
+  EXPECT_GT(a.core().risk_layer().nonzero_leaves(), 0);
+
+  const MissionCheckpoint c = DecodeCheckpoint(EncodeCheckpoint(a.core().Checkpoint()), "memory");
+  EXPECT_FALSE(c.risk_layer_ot.empty());
+  maps::World world(s);
+  MissionCore restored(world, s, "", ControllerKind::kErgodic);
+  restored.Restore(c);
+  EXPECT_EQ(restored.risk_layer().nonzero_leaves(), a.core().risk_layer().nonzero_leaves());
+  // The layer's excess (the prior's weights are the fleet server's, derived again at the next cycle).
+  const auto all = [](const Eigen::Vector2d&) { return true; };
+  double mass_x = 0.0, mass_y = 0.0;
+  const Eigen::VectorXd x = restored.risk_layer().ExcessOn(world.basis(), Eigen::Vector2d::Zero(), all, mass_x);
+  const Eigen::VectorXd y = a.core().risk_layer().ExcessOn(a.world().basis(), Eigen::Vector2d::Zero(), all, mass_y);
+  // Summed over the leaves in another order (the .ot's): equal to rounding.
+  EXPECT_LE((x - y).cwiseAbs().maxCoeff(), 1e-12 * y.cwiseAbs().maxCoeff());
+  EXPECT_NEAR(mass_x, mass_y, 1e-12 * mass_y);
+  EXPECT_GT(mass_y, 0.0);
+  const MissionMetrics mr = restored.Metrics(200.0);
+  EXPECT_EQ(mr.leaks[0].detected_s, ma.leaks[0].detected_s);
+  EXPECT_EQ(mr.leaks[0].detections, ma.leaks[0].detections);
+  EXPECT_EQ(mr.false_alarms.raised, ma.false_alarms.raised);
+  EXPECT_EQ(mr.scans, ma.scans);
+  const auto entries = restored.risk_loop().belief().Checkpoint();
+  ASSERT_EQ(entries.size(), a.core().risk_loop().belief().Checkpoint().size());
+
+  // metrics.json: leaks with where, start_s, detected_s, confirmed_s; false alarms; scans.
+  const nlohmann::json j = nlohmann::json::parse(MetricsJson(ma));
+  ASSERT_EQ(j.at("leaks").size(), 1u);
+  EXPECT_EQ(j["leaks"][0]["where"], "P3");
+  EXPECT_EQ(j["leaks"][0]["start_s"], 120.0);
+  EXPECT_EQ(j["leaks"][0]["detected_s"], ma.leaks[0].detected_s);
+  EXPECT_TRUE(j["leaks"][0].contains("confirmed_s"));
+  EXPECT_TRUE(j.contains("false_alarms"));
+  EXPECT_EQ(j["scans"], ma.scans);
+}
+
+}  // namespace
+}  // namespace sage::server

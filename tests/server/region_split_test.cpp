@@ -1,0 +1,108 @@
+// The regions' split planned off the cycle: its delay grows with the field from 1,000 valves (0
+// below), a split planned on a thread is the split planned in the cycle, and a mission on a large
+// field takes its split at the cycle fixed when it started, the same mission on every run.
+#include "server/region_split.h"
+
+#include <cmath>
+#include <string>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "maps/scenario/field_generator.h"
+#include "maps/world.h"
+#include "server/mission.h"
+
+namespace sage::server {
+namespace {
+
+// 0.3 ms of mission time a valve from 1,000 valves on, rounded up to whole cycles; 0 below.
+TEST(RegionSplit, DelayGrowsWithTheFieldFromAThousandValves) {
+  EXPECT_EQ(RegionSplitDelayCycles(35, 10.0), 0);
+  EXPECT_EQ(RegionSplitDelayCycles(999, 10.0), 0);
+  EXPECT_EQ(RegionSplitDelayCycles(1000, 10.0), 3);        // 0.3 s
+  EXPECT_EQ(RegionSplitDelayCycles(3500, 10.0), 11);       // 1.05 s
+  EXPECT_EQ(RegionSplitDelayCycles(35000, 10.0), 105);     // 10.5 s
+  EXPECT_EQ(RegionSplitDelayCycles(35000, 20.0), 210);
+}
+
+maps::Scenario Field(int xts, int valves, int vehicles, double duration_s) {
+  maps::FieldOptions options;
+  options.xts = xts;
+  options.valves = valves;
+  options.vehicles = vehicles;
+  options.seed = 4;
+  maps::Scenario s = maps::GenerateField(options);
+  s.duration_s = duration_s;
+  s.fleet_events.clear();
+  return s;
+}
+
+// The same input planned in the background and in the caller's thread: the same shares (valves,
+// laps) and the same targets (boxes, orders, coefficients bit for bit).
+TEST(RegionSplit, PlannedOnAThreadIsPlannedInTheCycle) {
+  const maps::Scenario s = Field(40, 130, 12, 10.0);
+  const maps::World world(s);
+  RegionSplitInput input;
+  for (int k = 0; k < 12; ++k) {
+    input.vehicle_ids.push_back(k);
+    input.vehicles.push_back({s.vehicles[k].start_m, s.vehicles[k].transit_speed_mps});
+  }
+  input.weights = Eigen::VectorXd::LinSpaced(130, 1.0, 3.0);
+  input.risk_share = 0.5;
+  PendingRegionSplit here(world.astar_grid(), world.blocked(), s, input, 7, false);
+  PendingRegionSplit there(world.astar_grid(), world.blocked(), s, input, 7, true);
+  const RegionSplit a = here.Take(), b = there.Take();
+  ASSERT_EQ(a.regions.size(), 12u);
+  ASSERT_EQ(b.regions.size(), 12u);
+  EXPECT_EQ(b.input.vehicle_ids, input.vehicle_ids);
+  const Eigen::VectorXd ones = Eigen::VectorXd::Ones(1);
+  for (std::size_t k = 0; k < 12; ++k) {
+    EXPECT_EQ(a.regions[k].valves, b.regions[k].valves) << k;
+    EXPECT_EQ(a.regions[k].lap_time_s, b.regions[k].lap_time_s) << k;
+    const maps::RegionBox &box_a = a.regions[k].field->box(), &box_b = b.regions[k].field->box();
+    EXPECT_EQ(box_a.origin_m, box_b.origin_m) << k;
+    EXPECT_EQ(box_a.size_m, box_b.size_m) << k;
+    const Eigen::VectorXd w = Eigen::VectorXd::Ones(static_cast<Eigen::Index>(a.regions[k].valves.size()));
+    EXPECT_EQ(a.regions[k].field->Coefficients(w), b.regions[k].field->Coefficients(w)) << k;
+  }
+}
+
+struct RegionTimes final : public MissionRecorder {
+  void OnSample(const TrajectorySample& s, const std::string&) override { samples.push_back(s); }
+  void OnFleetEvent(const FleetEventRecord& e) override {
+    if (e.what == "regions") notes.push_back(e.detail);
+  }
+  void OnRiskEvent(const RiskEventRecord&) override {}
+  void OnRegions(double t, const std::vector<RegionRecord>& r) override { splits.push_back({t, r.size()}); }
+  std::vector<TrajectorySample> samples;
+  std::vector<std::pair<double, std::size_t>> splits;
+  std::vector<std::string> notes;
+};
+
+// 1,050 valves: the first split starts when the fleet is in (t = 0) and is taken 4 cycles later
+// (0.3 ms x 1,050 = 0.315 s), not when its thread happens to end; the notes say so; two runs of
+// the mission are sample for sample the same.
+TEST(RegionSplit, ALargeFieldTakesItsSplitWhenDue) {
+  maps::Scenario s = Field(300, 1050, 20, 3.0);
+  s.fleet.assignment = maps::FleetAssignment::kRegions;
+  std::vector<RegionTimes> runs(2);
+  for (RegionTimes& record : runs) {
+    MissionOptions options;
+    options.recorder = &record;
+    options.keep_trajectory = false;
+    Mission(s, options).Run();
+  }
+  ASSERT_EQ(runs[0].splits.size(), 1u);
+  EXPECT_NEAR(runs[0].splits[0].first, 0.4, 1e-9);
+  EXPECT_EQ(runs[0].splits[0].second, 20u);
+  ASSERT_EQ(runs[0].notes.size(), 1u);
+  EXPECT_NE(runs[0].notes[0].find("planned over 0.4 s"), std::string::npos) << runs[0].notes[0];
+  ASSERT_EQ(runs[0].samples.size(), runs[1].samples.size());
+  for (std::size_t i = 0; i < runs[0].samples.size(); ++i) {
+    ASSERT_EQ(runs[0].samples[i].position_m, runs[1].samples[i].position_m) << "sample " << i;
+  }
+}
+
+}  // namespace
+}  // namespace sage::server
