@@ -42,14 +42,14 @@ LiveFrame MissionFrameMaker::Make(const server::MissionCore& core, double cycle_
   const Eigen::VectorXd& raw = core.fleet().raw_weights();
   const double total = raw.sum();
   const server::VisitTracker& visits = core.metrics_accumulator().visits();
-  const auto& times = visits.visit_times();
+  const auto& counts = visits.visits();
   frame.valves.resize(static_cast<std::size_t>(raw.size()));
   for (Eigen::Index i = 0; i < raw.size(); ++i) {
     ValveView& v = frame.valves[static_cast<std::size_t>(i)];
     v.raw_weight = raw[i];
     v.share = total > 0.0 ? raw[i] / total : 0.0;
     v.last_visit_s = visits.LastVisit(static_cast<int>(i));
-    v.visits = static_cast<std::size_t>(i) < times.size() ? static_cast<int>(times[static_cast<std::size_t>(i)].size()) : 0;
+    v.visits = static_cast<std::size_t>(i) < counts.size() ? static_cast<int>(counts[static_cast<std::size_t>(i)].count) : 0;
   }
   return frame;
 }

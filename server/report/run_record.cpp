@@ -154,6 +154,8 @@ RunRecord ReadRunRecord(const std::string& dir, std::size_t max_poses) {
                                                          record.scenario.control_rate_hz);
   const double reach = 10.0 * std::max(record.scenario.workspace.width_m, record.scenario.workspace.height_m) + 100.0;
   VisitTracker visits(record.scenario.ValvePositions(), record.scenario.visit_radius_m, record.scenario.rearm_radius_m);
+  // Every visit's time, for a replay at any moment (the tracker itself keeps a valve's latest).
+  record.visit_times.assign(record.scenario.ValvePositions().size(), {});
   std::unordered_map<std::string, int> index_of;
   std::vector<double> last_time, last_kept;
   std::vector<RecordedPose> last_pose;  // each vehicle's latest row, kept at the end if thinned away
@@ -189,7 +191,9 @@ RunRecord ReadRunRecord(const std::string& dir, std::size_t max_poses) {
     ++record.rows;
     record.end_s = std::max(record.end_s, t);
     const Eigen::Vector2d position(v[0], v[1]);
-    visits.Update(vehicle, position, t);
+    for (const int valve : visits.Update(vehicle, position, t)) {
+      record.visit_times[static_cast<std::size_t>(valve)].push_back(t);
+    }
     last_pose[vehicle] = {t, static_cast<float>(v[0]), static_cast<float>(v[1]), static_cast<float>(v[2])};
     if (t - last_kept[vehicle] >= record.pose_period_s - 1e-9 && poses < max_poses) {
       last_kept[vehicle] = t;
@@ -201,7 +205,8 @@ RunRecord ReadRunRecord(const std::string& dir, std::size_t max_poses) {
     if (record.tracks[i].empty() || record.tracks[i].back().time_s < last_pose[i].time_s) record.tracks[i].push_back(last_pose[i]);
   }
   record.cut_line = rows.cut();
-  record.visit_times = visits.visit_times();
+  // Rows come in time order per vehicle, not across vehicles: each valve's visits sorted.
+  for (std::vector<double>& times : record.visit_times) std::sort(times.begin(), times.end());
 
   RecordLines fleet((fs::path(dir) / "fleet_events.csv").string(), "t,event,vehicle_id,name,detail", /*required=*/false);
   while (fleet.Next(text)) {
