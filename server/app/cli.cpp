@@ -211,7 +211,7 @@ int RunCli(int argc, char** argv) {
 
   RunCommand run_cmd;
   CLI::App* run = app.add_subcommand("run", "Run one mission in-process; print the per-valve table (the paper's Table 1 "
-                                            "layout) and write DIR/metrics.json, trajectory.csv, plot.svg as it runs");
+                                            "layout) and write DIR/metrics.json, trajectory.csv as it runs, and the charts (plot, metric, revisits: .svg and .png) at the end");
   AddScenarioOverrides(*run, run_cmd.scenario, OverrideSet::kMission, "scenarios/two_xt.yaml");
   AddController(*run, run_cmd.controller);
   run->add_option("--out,-o", run_cmd.out_dir, "Run directory (default: runs/<scenario>_<profile>_<controller>)");
@@ -235,7 +235,7 @@ int RunCli(int argc, char** argv) {
   evaluate->add_option("--scenario,-s", eval_cmd.scenario_path, "Scenario YAML giving the valves and risk profiles")->required();
   evaluate->add_option("--profile,-p", eval_cmd.profile, "Risk profile (default: the scenario's default_profile)");
   evaluate->add_option("--duration", eval_cmd.duration_s, "Mission length in seconds (default: the last sample's time)");
-  evaluate->add_option("--out,-o", eval_cmd.out_dir, "Also write metrics.json and plot.svg here");
+  evaluate->add_option("--out,-o", eval_cmd.out_dir, "Also write metrics.json and the charts (plot, metric, revisits: .svg and .png) here");
 
   LaunchCommand launch_cmd;
   CLI::App* launch = app.add_subcommand("launch", "Run a fleet mission over Cyclone DDS: the server and agent hosts as "

@@ -94,7 +94,7 @@ int CmdRun(const RunCommand& c) {
   const MissionMetrics metrics = RunInto(scenario, kind, profile, dir);
   std::cout << FormatTable({metrics});
   PrintEventResponses(metrics);
-  spdlog::info("{:.0f} s mission simulated in {:.2f} s wall time; wrote {}/metrics.json, trajectory.csv, plot.svg",
+  spdlog::info("{:.0f} s mission simulated in {:.2f} s wall time; wrote {}/metrics.json, trajectory.csv, plot.svg and .png",
                scenario.duration_s, std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(),
                dir.string());
   return 0;
@@ -133,10 +133,19 @@ int CmdEvaluate(const EvaluateCommand& c) {
   if (!c.out_dir.empty()) {
     PrepareRunDirectory(c.out_dir);
     WriteMetricsJson((fs::path(c.out_dir) / "metrics.json").string(), metrics);
-    WritePlotSvg((fs::path(c.out_dir) / "plot.svg").string(), scenario, ProfileSchedule(scenario, *profile).back().weights,
-                 trajectory,
-                 fmt::format("{}: recorded trajectory {}", scenario.name, c.trajectory_path));
-    spdlog::info("wrote {}/metrics.json and plot.svg", c.out_dir);
+    // The profile's risk changes are marked at their valves, with the share they gave.
+    std::vector<plots::EventMarker> events;
+    const std::vector<maps::Valve> valves = scenario.AllValves();
+    const auto schedule = ProfileSchedule(scenario, *profile);
+    for (std::size_t k = 0; k < profile->events.size(); ++k) {
+      const maps::RiskEvent& e = profile->events[k];
+      const int valve = scenario.ValveIndex(e.valve);
+      events.push_back({plots::EventMarker::Kind::kRisk, e.time_s, valves[valve].position_m, e.valve,
+                        schedule[k + 1].weights[valve]});
+    }
+    WritePlots(c.out_dir, {&scenario, &metrics, &trajectory, std::move(events), 0,
+                           fmt::format("{}: recorded trajectory {}", scenario.name, c.trajectory_path)});
+    spdlog::info("wrote {}/metrics.json and the charts (plot, metric, revisits; .svg and .png)", c.out_dir);
   }
   return 0;
 }

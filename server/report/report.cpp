@@ -1,5 +1,5 @@
 // The terminal table in the layout of the paper's Table 1, and metrics.json. trajectory.csv and
-// plot.svg are written by trajectory_csv.cpp and plot_svg.cpp.
+// the charts are written by trajectory_csv.cpp and plot_files.cpp (drawn in plots/).
 #include "server/report/report.h"
 
 #include <algorithm>

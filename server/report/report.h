@@ -1,7 +1,8 @@
 #pragma once
-// The run directory a mission leaves behind: metrics.json, trajectory.csv and plot.svg
-// (trajectory over the risk field with XTs and valves, like the SAGE paper's Fig. 1), and the
-// terminal table in the layout of the paper's Table 1.
+// The run directory a mission leaves behind: metrics.json, trajectory.csv and the charts
+// (plot.svg, the trajectory over the risk field with XTs and valves, like the SAGE paper's
+// Fig. 1; metric.svg; revisits.svg; each also as PNG), and the terminal table in the layout of
+// the paper's Table 1.
 #include <cstdint>
 #include <iosfwd>
 #include <limits>
@@ -12,6 +13,7 @@
 
 #include "maps/scenario/scenario.h"
 #include "server/metrics.h"
+#include "server/report/plots/mission_plots.h"
 #include "server/trajectory.h"
 
 namespace sage::server {
@@ -76,11 +78,8 @@ MissionMetrics EvaluateRecorded(const Trajectory& trajectory, const maps::Scenar
                                 const maps::RiskProfile& profile, std::optional<double> duration_s,
                                 const std::string& source, double max_checkpoints = 1e5);
 
-/// SVG of the risk field (weights = normalised weights to draw), XT footprints, valves with
-/// their names and visit circles, and each vehicle's path in its own colour.
-std::string PlotSvg(const maps::Scenario& scenario, const Eigen::VectorXd& weights, const Trajectory& trajectory,
-                    const std::string& title);
-void WritePlotSvg(const std::string& path, const maps::Scenario& scenario, const Eigen::VectorXd& weights,
-                  const Trajectory& trajectory, const std::string& title);
+/// Writes the charts of a run into `dir` (plot, metric and revisits, each .svg and .png; see
+/// plots/mission_plots.h), each replaced atomically. Throws std::runtime_error naming the file.
+void WritePlots(const std::string& dir, const plots::MissionPlotInput& input);
 
 }  // namespace sage::server

@@ -37,8 +37,9 @@ constexpr const char* kTrajectoryHeader = "t,vehicle,x,y,heading,vx,vy,cmd_x,cmd
 constexpr const char* kFleetEventsHeader = "t,event,vehicle_id,name,detail\n";
 constexpr const char* kRiskEventsHeader = "t,valve,weight,share,source\n";
 constexpr const char* kRegionsHeader = "t,vehicle_id,name,x_m,y_m,width_m,height_m,order,valves\n";
-// The final set; metrics.json last, since "complete": true says the others are in place.
-constexpr const char* kFinalFiles[] = {"plot.svg", "seabed.bt", "risk.ot", "scenario.yaml", "metrics.json"};
+// The final set besides the charts; metrics.json last, since "complete": true says the others are in place.
+constexpr const char* kFinalFiles[] = {"seabed.bt", "risk.ot", "scenario.yaml", "metrics.json"};
+constexpr const char* kChartFiles[] = {"plot.svg", "plot.png", "metric.svg", "metric.png", "revisits.svg", "revisits.png"};
 
 // A CSV field for free text: quoted, inner quotes doubled, control characters as spaces, so a
 // name or reason can never start a new line or a new column.
@@ -82,14 +83,16 @@ std::vector<std::pair<int, std::string>> Lines(const std::string& path) {
 }  // namespace
 
 RunDirectory::RunDirectory(std::string dir, const maps::Scenario& scenario, RunDirectoryOptions options)
-    : dir_(std::move(dir)), scenario_(scenario), options_(std::move(options)) {
+    : dir_(std::move(dir)),
+      scenario_(scenario),
+      options_(std::move(options)),
+      plot_(scenario, options_.plot_points, options_.plot_events) {
   PrepareRunDirectory(dir_);
   if (!options_.resume) {
     // A new mission: nothing of an earlier one in this directory may pass for its results.
-    for (const char* name : {"metrics.json", "plot.svg", "seabed.bt", "risk.ot", kCheckpointFile}) {
-      std::error_code ignored;
-      fs::remove(fs::path(dir_) / name, ignored);
-    }
+    std::error_code ignored;
+    for (const char* name : {"metrics.json", "seabed.bt", "risk.ot", kCheckpointFile}) fs::remove(fs::path(dir_) / name, ignored);
+    for (const char* name : kChartFiles) fs::remove(fs::path(dir_) / name, ignored);
   }
   try {
     Open(trajectory_, "trajectory.csv", kTrajectoryHeader);
@@ -129,7 +132,7 @@ void RunDirectory::OnSample(const TrajectorySample& s, const std::string& name) 
   CollectRows();
   AppendTrajectoryRow(trajectory_.buffer, s, name);
   pending_until_s_ = std::max(pending_until_s_, s.time_s);
-  KeepForPlot(s, name);
+  plot_.OnSample(s, name);
 }
 
 void RunDirectory::OnSamples(const std::vector<TrajectorySample>& samples, const std::vector<const std::string*>& names) {
@@ -145,7 +148,7 @@ void RunDirectory::OnSamples(const std::vector<TrajectorySample>& samples, const
   for (const TrajectorySample& s : samples) {
     row_names.push_back(*names[s.vehicle]);
     pending_until_s_ = std::max(pending_until_s_, s.time_s);
-    KeepForPlot(s, row_names.back());
+    plot_.OnSample(s, row_names.back());
   }
   rows_ = std::async(std::launch::async, [samples, row_names = std::move(row_names)] {
     std::string rows;
@@ -159,6 +162,7 @@ void RunDirectory::CollectRows() {
 }
 
 void RunDirectory::OnFleetEvent(const FleetEventRecord& e) {
+  plot_.OnFleetEvent(e);
   // Names are made safe for the record when a vehicle joins (no separators, no control
   // characters); the detail is free text.
   fmt::format_to(std::back_inserter(fleet_events_.buffer), "{},{},{},{},{}\n", e.time_s, e.what, e.vehicle_id, e.name,
@@ -176,23 +180,9 @@ void RunDirectory::OnRegions(double time_s, const std::vector<RegionRecord>& reg
 }
 
 void RunDirectory::OnRiskEvent(const RiskEventRecord& e) {
+  plot_.OnRiskEvent(e);
   fmt::format_to(std::back_inserter(risk_events_.buffer), "{},{},{},{},{}\n", e.time_s, e.valve, e.raw_weight,
                  e.new_share, Quoted(e.source));
-}
-
-// Samples every plot_stride_-th cycle of each vehicle; the stride doubles whenever the copy
-// outgrows its budget, so a long or large mission still plots from evenly thinned tracks.
-void RunDirectory::KeepForPlot(const TrajectorySample& s, const std::string& name) {
-  const std::int64_t cycle = std::llround(s.time_s * scenario_.control_rate_hz);
-  if (cycle % plot_stride_ != 0) return;
-  if (static_cast<std::size_t>(s.vehicle) >= plot_.vehicle_names.size()) plot_.vehicle_names.resize(s.vehicle + 1);
-  plot_.vehicle_names[s.vehicle] = name;
-  plot_.samples.push_back(s);
-  if (plot_.samples.size() <= options_.plot_points) return;
-  plot_stride_ *= 2;
-  std::erase_if(plot_.samples, [&](const TrajectorySample& kept) {
-    return std::llround(kept.time_s * scenario_.control_rate_hz) % plot_stride_ != 0;
-  });
 }
 
 void RunDirectory::FlushOne(Appender& file) {
@@ -279,12 +269,17 @@ void RunDirectory::Finish(const MissionCore& core, const maps::World& world, dou
   const std::string title =
       fmt::format("{}: {} on '{}', {} vehicles, {:.0f} s", scenario_.name, ToString(core.controller()),
                   core.fleet().profile().name, core.roster().members().size(), end_s);
-  const std::string contents[] = {PlotSvg(scenario_, core.fleet().schedule().back().weights, plot_, title),
-                                  world.seabed().BinaryBytes(),
-                                  (risk_layer ? *risk_layer : core.risk_layer()).OtBytes(),
-                                  maps::EmitScenario(ran),
-                                  MetricsJson(core.Metrics(end_s), &info)};
-  std::vector<std::string> paths;
+  const MissionMetrics metrics = core.Metrics(end_s);
+  plots::MissionPlotInput plot{&scenario_, &metrics, &plot_.trajectory(), plot_.Events(), plot_.events_not_kept(), title};
+  std::vector<std::string> contents, paths;
+  for (plots::PlotFile& f : plots::MissionPlotFiles(plot)) {
+    paths.push_back((fs::path(dir_) / f.name).string());
+    contents.push_back(std::move(f.bytes));
+  }
+  contents.push_back(world.seabed().BinaryBytes());
+  contents.push_back((risk_layer ? *risk_layer : core.risk_layer()).OtBytes());
+  contents.push_back(maps::EmitScenario(ran));
+  contents.push_back(MetricsJson(metrics, &info));
   for (const char* name : kFinalFiles) paths.push_back((fs::path(dir_) / name).string());
   try {
     for (std::size_t i = 0; i < paths.size(); ++i) detail::WriteTemporary(paths[i], contents[i]);

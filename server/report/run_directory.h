@@ -3,8 +3,8 @@
 // process dies: trajectory.csv, fleet_events.csv and risk_events.csv are appended as things
 // happen and flushed at least every second (tail -f works); metrics.json is rewritten
 // atomically every few seconds with "complete": false, beside checkpoint.bin, the state a
-// resumed server starts from. At the end the final set (plot.svg, seabed.bt, risk.ot,
-// scenario.yaml, metrics.json with "complete": true) is written as temporaries and renamed into
+// resumed server starts from. At the end the final set (the charts plot, metric and revisits as
+// .svg and .png, seabed.bt, risk.ot, scenario.yaml, metrics.json with "complete": true) is written as temporaries and renamed into
 // place with metrics.json last, so a reader sees either the whole final set or the partial one.
 #include <chrono>
 #include <cstdint>
@@ -16,6 +16,7 @@
 #include "maps/scenario/scenario.h"
 #include "maps/world.h"
 #include "server/mission_core.h"
+#include "server/report/plots/plot_record.h"
 #include "server/report/report.h"
 #include "server/trajectory.h"
 
@@ -33,6 +34,7 @@ struct RunDirectoryOptions {
   std::size_t flush_bytes = 4u << 20;
   double checkpoint_period_s = 2.0;  ///< wall seconds between checkpoints and partial metrics
   std::size_t plot_points = 200000;  ///< trajectory samples kept in memory for the final plot
+  std::size_t plot_events = 2000;    ///< events kept to mark on it (the rest are counted)
   std::string transport = "in-process";
   bool resume = false;               ///< append to a crashed mission's record instead of starting one
   int resumes = 0;                   ///< how many times this mission was resumed before
@@ -90,7 +92,6 @@ class RunDirectory final : public MissionRecorder {
   void FlushOne(Appender& file);
   void StartCheckpoint(const MissionCore& core, bool wait);
   RunInfo Info(const MissionCore& core, bool complete, bool stopped_early) const;
-  void KeepForPlot(const TrajectorySample& sample, const std::string& name);
 
   std::string dir_;
   const maps::Scenario& scenario_;
@@ -100,9 +101,7 @@ class RunDirectory final : public MissionRecorder {
   double pending_until_s_ = -1.0, flushed_until_s_ = -1.0, checkpoint_time_s_ = -1.0;
   std::future<void> checkpoint_write_;  // the checkpoint is encoded and written off the cycle
   std::future<std::string> rows_;       // the last large cycle's trajectory rows, being formatted
-  Trajectory plot_;                     // a thinned copy for plot.svg
-  int plot_stride_ = 1;
-  std::map<int, std::int64_t> plot_cycles_;
+  plots::PlotRecord plot_;               // a thinned copy of the trajectory and the events, for the plots
 };
 
 /// What a crashed mission's record holds after its checkpoint (time_s): the samples, fleet

@@ -252,44 +252,6 @@ TEST_F(ReportTest, RunDirectoryIsPreparedOrRefusedUpFront) {
   }
 }
 
-// The SVG is one document: <svg ...> to </svg>\n, one polyline per vehicle (a long path decimated
-// to at most ~5000 points), one label per valve with its weight.
-TEST_F(ReportTest, PlotSvgHasPathsAndLabels) {
-  maps::Scenario scenario;
-  scenario.workspace = {12.0, 10.0};
-  maps::ChristmasTree a{"XT-A", {3.0, 5.0}, {1.5, 1.5}, 2.5, {}};
-  a.valves = {{"P1", {3.0, 6.2}, 0.25 * Eigen::Matrix2d::Identity()}, {"P2", {4.2, 5.0}, 0.25 * Eigen::Matrix2d::Identity()}};
-  maps::ChristmasTree b{"XT-B", {9.0, 5.0}, {1.5, 1.5}, 2.5, {}};
-  b.valves = {{"P3", {9.0, 3.8}, 0.25 * Eigen::Matrix2d::Identity()}};
-  scenario.structures = {a, b};
-  Trajectory trajectory = TwoVehicleTrajectory();
-  for (int k = 0; k < 20000; ++k) trajectory.samples.push_back({k * 0.01, 2, Eigen::Vector2d(0.5 + k * 1e-4, 9.0)});
-
-  WritePlotSvg(Path("plot.svg"), scenario, Eigen::Vector3d(0.55, 0.35, 0.10), trajectory, "ergodic <one_extreme>");
-  const std::string svg = ReadText(Path("plot.svg"));
-  const auto count = [&](const std::string& needle) {
-    int n = 0;
-    for (std::size_t at = svg.find(needle); at != std::string::npos; at = svg.find(needle, at + 1)) ++n;
-    return n;
-  };
-  EXPECT_EQ(svg.rfind("<svg", 0), 0u);
-  ASSERT_GE(svg.size(), 7u);
-  EXPECT_EQ(svg.substr(svg.size() - 7), "</svg>\n");
-  EXPECT_NE(svg.find("width=\"800\""), std::string::npos);
-  EXPECT_EQ(count("<polyline"), 3);
-  EXPECT_EQ(count(">P1 (0.55)<"), 1);
-  EXPECT_EQ(count(">P2 (0.35)<"), 1);
-  EXPECT_EQ(count(">P3 (0.10)<"), 1);
-  EXPECT_EQ(count(">rov1<"), 1);
-  EXPECT_EQ(count(">vehicle 2<"), 1);
-  EXPECT_EQ(count("ergodic &lt;one_extreme&gt;"), 1);
-  // The 20000-point path keeps at most 5001 points (each followed by a space or the quote).
-  const std::size_t last = svg.rfind("<polyline");
-  const std::string points = svg.substr(last, svg.find("/>", last) - last);
-  EXPECT_LE(std::count(points.begin(), points.end(), ','), 5001);
-  EXPECT_GT(std::count(points.begin(), points.end(), ','), 4000);
-}
-
 MissionMetrics AstarRun() {
   MissionMetrics m = SampleMetrics();
   m.controller = "astar";

@@ -76,7 +76,7 @@ TEST_F(RunDirectoryTest, PartialWhileRunningCompleteAtTheEnd) {
   EXPECT_TRUE(done.complete);
   EXPECT_DOUBLE_EQ(done.recorded_until_s, 20.0);
   EXPECT_FALSE(done.has_checkpoint);
-  for (const char* name : {"plot.svg", "seabed.bt", "risk.ot", "scenario.yaml", "metrics.json", "trajectory.csv",
+  for (const char* name : {"plot.svg", "plot.png", "metric.svg", "metric.png", "revisits.svg", "revisits.png", "seabed.bt", "risk.ot", "scenario.yaml", "metrics.json", "trajectory.csv",
                            "fleet_events.csv", "risk_events.csv"}) {
     EXPECT_TRUE(fs::exists(dir_ / name)) << name;
     EXPECT_FALSE(fs::exists(dir_ / (std::string(name) + ".tmp"))) << name;
@@ -106,6 +106,8 @@ TEST_F(RunDirectoryTest, FinalSetIsAllOrNothing) {
   EXPECT_FALSE(ReadRecordSummary(dir_.string()).complete);
   EXPECT_FALSE(fs::exists(dir_ / "plot.svg"));
   EXPECT_FALSE(fs::exists(dir_ / "plot.svg.tmp"));
+  EXPECT_FALSE(fs::exists(dir_ / "plot.png"));
+  EXPECT_FALSE(fs::exists(dir_ / "plot.png.tmp"));
   EXPECT_FALSE(fs::exists(dir_ / "metrics.json.tmp"));
 }
 
