@@ -12,6 +12,7 @@
 #include <nlohmann/json.hpp>
 
 #include "server/report/atomic_write.h"
+#include "server/report/plots/svg_writer.h"
 
 namespace sage::server {
 // Internals in a named namespace: this file shares a unity batch with the other report writers.
@@ -42,20 +43,6 @@ double Mean(const std::vector<double>& values) {
     }
   }
   return n > 0 ? sum / n : std::nan("");
-}
-
-std::string Escape(const std::string& text) {
-  std::string out;
-  for (const char c : text) {
-    switch (c) {
-      case '&': out += "&amp;"; break;
-      case '<': out += "&lt;"; break;
-      case '>': out += "&gt;"; break;
-      case '"': out += "&quot;"; break;
-      default: out += c;
-    }
-  }
-  return out;
 }
 
 std::string Seconds(double s) { return std::isfinite(s) ? fmt::format("{:.1f} s", s) : std::string("never"); }
@@ -219,7 +206,7 @@ std::string LeakBenchSvg(const std::vector<LeakSummary>& summaries, const std::v
   put("<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"{:.0f}\" height=\"{:.0f}\" viewBox=\"0 0 {:.0f} {:.0f}\" "
       "font-family=\"sans-serif\">\n", kWidthPx, kHeightPx, kWidthPx, kHeightPx);
   put("<rect width=\"100%\" height=\"100%\" fill=\"white\"/>\n");
-  put("<text x=\"{}\" y=\"28\" font-size=\"15\">{}</text>\n", kLeft, lr::Escape(title));
+  put("<text x=\"{}\" y=\"28\" font-size=\"15\">{}</text>\n", kLeft, plots::XmlEscape(title));
   put("<text x=\"{}\" y=\"46\" font-size=\"12\">fraction of leaks detected by a time after their onset</text>\n", kLeft);
   for (int k = 0; k <= 10; ++k) {
     const double t = x_max * k / 10.0, f = k / 10.0;
@@ -248,7 +235,7 @@ std::string LeakBenchSvg(const std::vector<LeakSummary>& summaries, const std::v
     const double ly = kTop + 16.0 + 20.0 * static_cast<double>(c);
     put("<line x1=\"{:.1f}\" y1=\"{:.1f}\" x2=\"{:.1f}\" y2=\"{:.1f}\" stroke=\"{}\" stroke-width=\"3\"/>\n", kLeft + kW + 16.0,
         ly, kLeft + kW + 40.0, ly, lr::Colour(c));
-    put("<text x=\"{:.1f}\" y=\"{:.1f}\" font-size=\"11\">{} ({}/{})</text>\n", kLeft + kW + 46.0, ly + 4.0, lr::Escape(s.description),
+    put("<text x=\"{:.1f}\" y=\"{:.1f}\" font-size=\"11\">{} ({}/{})</text>\n", kLeft + kW + 46.0, ly + 4.0, plots::XmlEscape(s.description),
         s.detected, s.leaks);
   }
   put("</svg>\n");

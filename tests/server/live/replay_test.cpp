@@ -106,7 +106,9 @@ TEST_F(ReplayTest, RiskAndVisitsAsTheMissionHadThem) {
     EXPECT_EQ(end.valves[i].visits, metrics["valves"][i]["visits"].get<int>()) << i;
     visits += end.valves[i].visits;
     const auto& times = metrics["valves"][i]["visit_times_s"];
-    if (!times.empty()) EXPECT_NEAR(end.valves[i].last_visit_s, times.back().get<double>(), 1e-9) << i;
+    if (!times.empty()) {
+      EXPECT_NEAR(end.valves[i].last_visit_s, times.back().get<double>(), 1e-9) << i;
+    }
   }
   EXPECT_GT(visits, 5);
   EXPECT_TRUE(end.finished);

@@ -158,7 +158,9 @@ TEST(RiskLoop, SharesAndRegionsSteerOnTheLayer) {
     for (std::int64_t k = 0; k <= 40; ++k) {
       core.OnState(State(0, k, a));
       core.OnState(State(1, k, b, -M_PI / 2));
-      if (k == 40) ASSERT_TRUE(core.OnScan(Scan(1, k, b, -M_PI / 2, {p3})));
+      if (k == 40) {
+        ASSERT_TRUE(core.OnScan(Scan(1, k, b, -M_PI / 2, {p3})));
+      }
       const CycleOutput out = core.Cycle(k);
       for (const agents::Assignment& x : out.assignments) last[x.id] = x;
     }
