@@ -709,8 +709,16 @@ TEST_F(FleetDds, OperatorRiskUpdateReachesServer) {
       c.count = 2;
       for (int i = 0; i < answers; ++i) commands.Write(c);
       std::vector<int> first_ids;
-      const auto deadline = SteadyClock::now() + 5s;
+      // As `sage vehicle add` does, the command goes again each second until answered (the
+      // writer may have matched a host's reader before the server's; the topic is volatile):
+      // every repeat has to get the first answer, never a second reservation.
+      const auto deadline = SteadyClock::now() + 10s;
+      auto resend_at = SteadyClock::now() + 1s;
       while (static_cast<int>(first_ids.size()) < answers && SteadyClock::now() < deadline) {
+        if (SteadyClock::now() >= resend_at) {
+          commands.Write(c);
+          resend_at += 1s;
+        }
         results.WaitForData(100ms);
         results.TakeEach([&](const proto::FleetCommandResult& r, const dds_sample_info_t& info) {
           if (info.valid_data && r.command_stamp_ns == stamp && r.accepted) first_ids.push_back(r.first_id);
@@ -720,10 +728,10 @@ TEST_F(FleetDds, OperatorRiskUpdateReachesServer) {
     };
     const long long stamp = RealtimeNs();
     const std::vector<int> twice = ask(stamp, 2), next = ask(stamp + 1, 1);
-    ASSERT_EQ(twice.size(), 2u);
-    ASSERT_EQ(next.size(), 1u);
-    EXPECT_EQ(twice[0], twice[1]) << "a repeated command was executed twice";
-    EXPECT_EQ(next[0], twice[0] + 2);
+    ASSERT_GE(twice.size(), 2u);
+    ASSERT_GE(next.size(), 1u);
+    for (const int first : twice) EXPECT_EQ(first, twice[0]) << "a repeated command was executed twice";
+    for (const int first : next) EXPECT_EQ(first, twice[0] + 2);
   }
 
   const std::optional<int> launch_exit = WaitMissionEnd(launch, duration);
