@@ -15,8 +15,17 @@ namespace sage::agents {
 /// The assignment of rows (clusters) 0..n-1 to distinct columns (vehicles) 0..m-1, n <= m, of
 /// least total cost(c, k): the Hungarian method in the potentials form of Kuhn-Munkres, O(n^2 m).
 /// Returns the vehicle of each cluster.
+/// A cost that is not a number below kMaxMatchCost (a vehicle reported at an absurd place, or
+/// one that cannot move) counts as kMaxMatchCost: with an infinite or NaN cost no column was ever
+/// found for a row and the search looped for ever (the server door's fuzzer hung the tour plan).
+inline constexpr double kMaxMatchCost = 1e100;
+
 template <typename Cost>
-std::vector<int> MinCostMatch(int n, int m, const Cost& cost) {
+std::vector<int> MinCostMatch(int n, int m, const Cost& raw_cost) {
+  const auto cost = [&](int c, int k) {
+    const double x = raw_cost(c, k);
+    return x >= -kMaxMatchCost && x <= kMaxMatchCost ? x : kMaxMatchCost;  // NaN fails both
+  };
   // Rows 1..n, columns 1..m; u, v the potentials, p[j] the row matched to column j, way[] the
   // alternating path.
   std::vector<double> u(n + 1, 0.0), v(m + 1, 0.0);

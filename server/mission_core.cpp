@@ -92,9 +92,17 @@ MissionCore::MissionCore(maps::World& world, const maps::Scenario& scenario, con
 bool MissionCore::OnState(const agents::StateReport& s, std::uint64_t writer) {
   const bool finite = s.state.position_m.allFinite() && s.state.velocity_mps.allFinite() &&
                       std::isfinite(s.state.heading_rad) && s.command_mps.allFinite() && std::isfinite(s.time_s);
+  // A vehicle flies inside the workspace (a little beyond its edge at most): one reported a whole
+  // workspace away from it is no vehicle of this mission (such a place, 1e154 m, had made the
+  // tour plan's matching costs infinite).
+  const double margin_m = std::max({scenario_.workspace.width_m, scenario_.workspace.height_m, 10.0});
+  const bool on_field = finite && s.state.position_m.x() > -margin_m && s.state.position_m.y() > -margin_m &&
+                        s.state.position_m.x() < scenario_.workspace.width_m + margin_m &&
+                        s.state.position_m.y() < scenario_.workspace.height_m + margin_m;
   const Roster::Member* known = roster_.Find(s.id);
   const bool joins = known == nullptr || known->status != Roster::Status::kAlive;
   const char* refusal = !finite                                                      ? "state not finite"
+                        : !on_field                                                    ? "state far outside the workspace"
                         : s.id < 0                                                     ? "state of no vehicle (id < 0)"
                         : s.id > kMaxVehicleId                                         ? "state of no vehicle (id too large)"
                         : s.time_s < 0.0                                               ? "state before the mission"

@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <set>
 #include <tuple>
 #include <numeric>
 #include <random>
@@ -456,6 +457,20 @@ TEST(GreedyMatch, NearbyShortlistsMatchAsPricingEveryVehicle) {
     ASSERT_EQ(GreedyMatchNear(centroids, at, fastest, cost), GreedyMatch(n, m, cost))
         << "trial " << trial << ": " << n << " clusters, " << m << " vehicles";
   }
+}
+
+// Costs that are not finite numbers (a vehicle at an absurd place) count as the largest cost:
+// every row still gets its own column, and the finite part is matched at least cost. (With an
+// infinite or NaN cost no column was ever found for the row and the search looped for ever.)
+TEST(MinCostMatch, CostsThatAreNotFiniteStillMatchEveryRow) {
+  const double inf = std::numeric_limits<double>::infinity(), nan = std::numeric_limits<double>::quiet_NaN();
+  const std::vector<std::vector<double>> cost = {{inf, 1.0, 5.0}, {nan, 2.0, 1.0}, {inf, inf, nan}};
+  const std::vector<int> got = MinCostMatch(3, 3, [&](int c, int k) { return cost[c][k]; });
+  ASSERT_EQ(got.size(), 3u);
+  EXPECT_EQ(std::set<int>(got.begin(), got.end()).size(), 3u) << "two rows on one column";
+  EXPECT_EQ(got[0], 1);  // rows 0 and 1 take their finite least-cost pair, row 2 the rest
+  EXPECT_EQ(got[1], 2);
+  EXPECT_EQ(got[2], 0);
 }
 
 // MinCostMatch against every assignment (all injections of n clusters into m vehicles, by

@@ -100,6 +100,14 @@ TEST(MissionCore, RefusesBadStatesAtTheDoor) {
   EXPECT_FALSE(core.OnState(State(0, "a", 0, {nan, 1.0})));
   EXPECT_FALSE(core.OnState(State(0, "a", 1000, {1.0, 1.0})));  // t = 100 s on a clock at 0
   EXPECT_EQ(core.rejected_samples(), 2u);
+  // A whole workspace beyond its edge (the fuzzer's 1e154 m had hung the tour plan) is refused;
+  // a vehicle just over the edge is not.
+  MissionCore other(world, s, "", ControllerKind::kAstar);
+  EXPECT_FALSE(other.OnState(State(0, "far", 0, {1e154, 1.0})));
+  EXPECT_FALSE(other.OnState(State(1, "far", 0, {1.0, -2.0 * s.workspace.width_m})));
+  EXPECT_TRUE(other.OnState(State(2, "edge", 0, {s.workspace.width_m + 0.5, 1.0})));
+  EXPECT_EQ(other.rejections().by_kind(), (std::map<std::string, std::size_t>{{"state far outside the workspace", 2}}));
+  other.Cycle(0);  // the tours planned for the one vehicle in, and over
   EXPECT_EQ(core.roster().members().size(), 0u);
   EXPECT_TRUE(core.OnState(State(0, "a", 3, {1.0, 1.0})));
   EXPECT_FALSE(core.OnState(State(0, "a", 2, {1.1, 1.0})));  // older than its last: not counted
