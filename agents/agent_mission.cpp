@@ -58,12 +58,19 @@ bool AgentMission::Refuse(std::string why) {
 
 std::string AgentMission::Refusal(const Assignment& a) const {
   const std::string who = fmt::format("assignment for vehicle {} (cycle {})", a.id, a.cycle);
+  // Bounds well beyond any real target, so that no product of them overflows to inf or NaN in
+  // the control law (the agent door's fuzzer steered a vehicle on a NaN command): a density's
+  // coefficients on a basis of unit norm stay below 2 / sqrt(area) (1e6 for a 4 um^2 box).
+  constexpr double kMaxPhi = 1e6, kMinRegion_m = 1e-3, kMinForgetting_s = 1e-3, kMaxTourWeight = 1e12;
   if (!a.phi.allFinite()) return who + ": phi is not finite";
+  if (a.phi.size() > 0 && a.phi.cwiseAbs().maxCoeff() > kMaxPhi) {
+    return who + fmt::format(": a phi coefficient is beyond +-{:g}", kMaxPhi);
+  }
   if (a.region_order != 0) {
     const maps::Workspace& w = scenario_.workspace;
     const Eigen::Vector2d hi = a.region_origin_m + a.region_size_m;
     constexpr double kSlack_m = 1e-6;
-    if (!a.region_origin_m.allFinite() || !a.region_size_m.allFinite() || (a.region_size_m.array() <= 0.0).any() ||
+    if (!a.region_origin_m.allFinite() || !a.region_size_m.allFinite() || (a.region_size_m.array() < kMinRegion_m).any() ||
         (a.region_origin_m.array() < -kSlack_m).any() || hi.x() > w.width_m + kSlack_m || hi.y() > w.height_m + kSlack_m) {
       return who + fmt::format(": region at ({}, {}) of {} x {} m is not inside the {} x {} m workspace",
                                a.region_origin_m.x(), a.region_origin_m.y(), a.region_size_m.x(), a.region_size_m.y(),
@@ -72,8 +79,10 @@ std::string AgentMission::Refusal(const Assignment& a) const {
     if (a.region_order < 1 || a.region_order > maps::SpectralBasis::kMaxOrder) {
       return who + fmt::format(": region basis order {} is outside 1..{}", a.region_order, maps::SpectralBasis::kMaxOrder);
     }
-    if (std::isnan(a.region_forgetting_s) || a.region_forgetting_s < 0.0) {
-      return who + fmt::format(": region forgetting time {} s is not >= 0 (0 = the scenario's)", a.region_forgetting_s);
+    if (std::isnan(a.region_forgetting_s) || a.region_forgetting_s < 0.0 ||
+        (a.region_forgetting_s > 0.0 && a.region_forgetting_s < kMinForgetting_s)) {
+      return who + fmt::format(": region forgetting time {} s is not 0 (the scenario's) or >= {:g} s",
+                               a.region_forgetting_s, kMinForgetting_s);
     }
     if (a.phi.size() != 0 && a.phi.size() != a.region_order * a.region_order) {
       return who + fmt::format(": phi has {} coefficients, its region's basis {}", a.phi.size(),
@@ -88,8 +97,9 @@ std::string AgentMission::Refusal(const Assignment& a) const {
       return who + fmt::format(": the tour names a valve outside 0..{}", valves - 1);
     }
     if (a.tour_weights.size() != static_cast<Eigen::Index>(a.tour.size()) || !a.tour_weights.allFinite() ||
-        (a.tour_weights.array() < 0.0).any() || !(a.tour_weights.sum() > 0.0)) {
-      return who + ": the tour's weights must be one per valve, finite, >= 0 and not all zero";
+        (a.tour_weights.array() < 0.0).any() || (a.tour_weights.array() > kMaxTourWeight).any() ||
+        !(a.tour_weights.sum() > 0.0)) {
+      return who + ": the tour's weights must be one per valve, in [0, 1e12] and not all zero";
     }
   }
   return {};
@@ -98,18 +108,24 @@ std::string AgentMission::Refusal(const Assignment& a) const {
 std::string AgentMission::Refusal(const FleetSnapshot& s) const {
   const std::string what = fmt::format("fleet snapshot of cycle {}", s.cycle);
   const Eigen::Index basis = host_.basis().size();
-  if (s.phi.size() != 0 && (s.phi.size() != basis || !s.phi.allFinite())) {
-    return what + fmt::format(": phi must be {} finite coefficients", basis);
+  // As for an assignment, bounds far beyond a real snapshot's keep every product finite; and a
+  // negative kernel time could cancel the vehicle's own (its coverage then divided by zero).
+  constexpr double kMaxPhi = 1e6, kMaxSum = 1e12, kMaxWeight = 1e12;
+  if (s.phi.size() != 0 && (s.phi.size() != basis || !s.phi.allFinite() || s.phi.cwiseAbs().maxCoeff() > kMaxPhi)) {
+    return what + fmt::format(": phi must be {} coefficients within +-{:g}", basis, kMaxPhi);
   }
-  if (s.coverage.sums.size() != 0 && (s.coverage.sums.size() != basis || !s.coverage.sums.allFinite())) {
-    return what + fmt::format(": the fleet's sums must be {} finite numbers", basis);
+  if (s.coverage.sums.size() != 0 && (s.coverage.sums.size() != basis || !s.coverage.sums.allFinite() ||
+                                      s.coverage.sums.cwiseAbs().maxCoeff() > kMaxSum)) {
+    return what + fmt::format(": the fleet's sums must be {} numbers within +-{:g}", basis, kMaxSum);
   }
-  if (!std::isfinite(s.coverage.time_s) || !std::isfinite(s.coverage.kernel_time_s)) {
-    return what + ": its times are not finite";
+  if (!std::isfinite(s.coverage.time_s) || !std::isfinite(s.coverage.kernel_time_s) || s.coverage.time_s < 0.0 ||
+      s.coverage.kernel_time_s < 0.0) {
+    return what + ": its times must be finite and >= 0";
   }
   const Eigen::Index valves = static_cast<Eigen::Index>(scenario_.ValveCount());
   if (s.valve_weights.size() != 0 &&
-      (s.valve_weights.size() != valves || !s.valve_weights.allFinite() || (s.valve_weights.array() < 0.0).any())) {
+      (s.valve_weights.size() != valves || !s.valve_weights.allFinite() || (s.valve_weights.array() < 0.0).any() ||
+       (s.valve_weights.array() > kMaxWeight).any())) {
     return what + fmt::format(": valve weights must be {} finite numbers >= 0", valves);
   }
   return {};

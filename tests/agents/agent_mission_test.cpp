@@ -64,7 +64,20 @@ TEST_F(AgentMissionDoor, RefusesMalformedAssignments) {
        [](Assignment& a) {
          a.region_order = 8, a.region_size_m = {2.0, 2.0}, a.phi.resize(0), a.region_forgetting_s = -5.0;
        },
-       "forgetting time -5 s is not >= 0"},
+       "forgetting time -5 s is not 0 (the scenario's) or >= 0.001 s"},
+      {"region forgetting too short",
+       [](Assignment& a) {
+         a.region_order = 8, a.region_size_m = {2.0, 2.0}, a.phi.resize(0), a.region_forgetting_s = 1e-300;
+       },
+       "is not 0 (the scenario's) or >= 0.001 s"},
+      {"region too small",
+       [](Assignment& a) {
+         a.region_order = 8, a.region_size_m = {1e-300, 2.0}, a.phi.resize(0);
+       },
+       "not inside"},
+      {"phi beyond its bound",
+       [](Assignment& a) { a.phi[0] = 1e300; },
+       "beyond +-1e+06"},
       {"region forgetting NaN",
        [](Assignment& a) {
          a.region_order = 8, a.region_size_m = {2.0, 2.0}, a.phi.resize(0);
@@ -121,9 +134,17 @@ TEST_F(AgentMissionDoor, RefusesMalformedSnapshots) {
   bad_sums.coverage.sums = Eigen::VectorXd::Ones(3);
   bad_weights.valve_weights[0] = -1.0;
   bad_time.coverage.time_s = std::numeric_limits<double>::quiet_NaN();
-  for (const FleetSnapshot* bad : {&bad_phi, &bad_sums, &bad_weights, &bad_time})
+  // Finite but impossible: a negative kernel time (it cancelled the vehicle's own and its
+  // command came out NaN, the fuzzer's input) and numbers near the double's range.
+  FleetSnapshot negative_kernel = s, huge_sums = s, huge_phi = s, huge_weights = s;
+  negative_kernel.coverage.kernel_time_s = -3.0;
+  huge_sums.coverage.sums = Eigen::VectorXd::Constant(mission_.host().basis().size(), 1e300);
+  huge_phi.phi[0] = 1e300;
+  huge_weights.valve_weights[0] = 1e300;
+  for (const FleetSnapshot* bad :
+       {&bad_phi, &bad_sums, &bad_weights, &bad_time, &negative_kernel, &huge_sums, &huge_phi, &huge_weights})
     EXPECT_FALSE(mission_.OnFleetSnapshot(*bad));
-  EXPECT_EQ(mission_.rejected(), 4u);
+  EXPECT_EQ(mission_.rejected(), 8u);
   EXPECT_FALSE(mission_.has_snapshot());  // nothing of them was kept
   EXPECT_TRUE(mission_.OnFleetSnapshot(s));
   EXPECT_TRUE(mission_.has_snapshot());
