@@ -1263,6 +1263,17 @@ TEST_F(FleetDds, LaunchedMissionIsSecuredByDefault) {
   EXPECT_FALSE(EventOf(ReadJson(out / "metrics.json"), "P3").has_value());
 }
 
+// A trajectory.csv's rows after t = 0 (the in-process record has a row at t = 0 a launch does
+// not), sorted: two records of one mission compare row for row.
+std::vector<std::string> TrajectoryRowsAfterStart(const fs::path& csv) {
+  std::istringstream in(ReadFile(csv));
+  std::vector<std::string> rows;
+  for (std::string line; std::getline(in, line);)
+    if (line.rfind("t,", 0) != 0 && line.rfind("0,", 0) != 0) rows.push_back(line);
+  std::sort(rows.begin(), rows.end());
+  return rows;
+}
+
 // 12. The same scenario and seed fly the same mission in-process and over DDS: fleet_field with
 // a vehicle joining at 10 s and one lost at 20 s, four agent hosts (the lost vehicle alone, the
 // joining one started ahead of its join) against sage run's one. Every sample of trajectory.csv
@@ -1288,15 +1299,7 @@ TEST_F(FleetDds, LaunchFliesTheInProcessMission) {
                                      over_dds, FreeDomainForLaunch(), cwd);
   ASSERT_EQ(WaitMissionEnd(launch, 30.0), std::optional<int>(0));
   EXPECT_FALSE(fs::exists(cwd / "runs" / "latest")) << "--no-latest: runs/latest was pointed at the mission";
-  const auto samples = [](const fs::path& csv) {
-    std::istringstream in(ReadFile(csv));
-    std::vector<std::string> rows;
-    for (std::string line; std::getline(in, line);)
-      if (line.rfind("t,", 0) != 0 && line.rfind("0,", 0) != 0) rows.push_back(line);  // t = 0: only in-process
-    std::sort(rows.begin(), rows.end());
-    return rows;
-  };
-  const std::vector<std::string> a = samples(in_process / "trajectory.csv"), b = samples(over_dds / "trajectory.csv");
+  const std::vector<std::string> a = TrajectoryRowsAfterStart(in_process / "trajectory.csv"), b = TrajectoryRowsAfterStart(over_dds / "trajectory.csv");
   ASSERT_GT(a.size(), 4u * 290u);
   EXPECT_EQ(a.size(), b.size());
   std::size_t differ = 0;
@@ -1333,15 +1336,7 @@ TEST_F(FleetDds, LaunchOfALargeFieldFliesTheInProcessMission) {
                                                 Num(kTimeScale), "--no-latest"},
                                      over_dds, FreeDomainForLaunch(), run_dir_);
   ASSERT_EQ(WaitMissionEnd(launch, 6.0), std::optional<int>(0)) << launch.LogText();
-  const auto samples = [](const fs::path& csv) {
-    std::istringstream in(ReadFile(csv));
-    std::vector<std::string> rows;
-    for (std::string line; std::getline(in, line);)
-      if (line.rfind("t,", 0) != 0 && line.rfind("0,", 0) != 0) rows.push_back(line);  // t = 0: only in-process
-    std::sort(rows.begin(), rows.end());
-    return rows;
-  };
-  const std::vector<std::string> a = samples(in_process / "trajectory.csv"), b = samples(over_dds / "trajectory.csv");
+  const std::vector<std::string> a = TrajectoryRowsAfterStart(in_process / "trajectory.csv"), b = TrajectoryRowsAfterStart(over_dds / "trajectory.csv");
   ASSERT_EQ(a.size(), 20u * 60u);
   ASSERT_EQ(a.size(), b.size());
   std::size_t differ = 0;
