@@ -15,6 +15,7 @@
 #include <utility>
 
 #include "agents/obstacle_filter.h"
+#include "agents/perception/gaze.h"
 #include "agents/physics_world.h"
 #include "agents/tour_controller.h"
 #include "agents/tour_planner.h"
@@ -133,6 +134,7 @@ struct AgentHost::Impl {
     double anchor_time_s = std::numeric_limits<double>::quiet_NaN();
     std::unique_ptr<ObstacleFilter> keep_clear;  // BlueROV2s: structures and edges (SMC), neighbours
     Eigen::Vector2d command = Eigen::Vector2d::Zero();
+    double heading = std::numeric_limits<double>::quiet_NaN();  // the gaze's; NaN: face the travel
   };
 
   const maps::Scenario& scenario;
@@ -142,6 +144,7 @@ struct AgentHost::Impl {
   const maps::OccupancyGrid& grid;       // obstacles inflated by the A* clearance
   PhysicsWorld world;
   std::vector<Eigen::Vector2d> valves;  // the scenario's valve positions (A* tours)
+  ValveGaze gaze;                       // where the sensors look (`gaze: valves`)
   std::vector<Vehicle> vehicles;
   std::unordered_map<VehicleId, std::size_t> position_of;  // id -> index into vehicles (a host runs hundreds)
   std::vector<Eigen::Vector2d> others;  // vehicles of other hosts
@@ -163,7 +166,8 @@ struct AgentHost::Impl {
         basis(w.basis()),
         clearance(w.clearance()),
         grid(w.astar_grid()),
-        world(s.workspace, s.structures, {}, host_detail::PhysicsShards(s), w.terrain_blocks()) {
+        world(s.workspace, s.structures, {}, host_detail::PhysicsShards(s), w.terrain_blocks()),
+        gaze(w, s) {
     control_dt = 1.0 / s.control_rate_hz;
     physics_substeps = std::max(1, static_cast<int>(std::lround(s.physics_rate_hz / s.control_rate_hz)));
     valves = s.ValvePositions();
@@ -442,7 +446,7 @@ void AgentHost::Step(double time_s) {
   // at the start of the cycle) and writes only its own vehicle, so the vehicles split over
   // threads in fixed contiguous blocks give the very commands one thread gives.
   const auto guide = [&](std::size_t begin, std::size_t end) {
-    std::vector<int> found;
+    std::vector<int> found, in_reach;
     for (std::size_t i = begin; i < end; ++i) {
       Impl::Vehicle& v = impl_->vehicles[i];
       const VehicleState state = impl_->world.State(v.body);
@@ -454,6 +458,18 @@ void AgentHost::Step(double time_s) {
                                           : (v.tour ? v.tour->Command(state, time_s) : Eigen::Vector2d::Zero());
       if (v.keep_clear) command = v.keep_clear->Apply(state.position_m, command, nearby);
       v.command = command;
+      if (impl_->gaze.active()) {
+        // An ergodic vehicle looks where its target weighs most (in its region's frame if it has
+        // one; a valve outside its box weighs nothing to it); a tour vehicle at the nearest valve.
+        ValveGaze::ValveWeight weight = nullptr;
+        if (v.ergodic) {
+          weight = [&v](int, const Eigen::Vector2d& valve_m) {
+            if (!v.region) return v.ergodic->TargetDensity(valve_m);
+            return v.region->Contains(valve_m) ? v.ergodic->TargetDensity(valve_m - v.region->origin_m) : 0.0;
+          };
+        }
+        v.heading = impl_->gaze.HeadingFor(state.position_m, in_reach, weight);
+      }
     }
   };
   const std::size_t n = impl_->vehicles.size();
@@ -468,7 +484,10 @@ void AgentHost::Step(double time_s) {
     };
     impl_->Pool().Run(part, parts);
   }
-  for (const Impl::Vehicle& v : impl_->vehicles) impl_->world.SetVelocityCommand(v.body, v.command);
+  for (const Impl::Vehicle& v : impl_->vehicles) {
+    impl_->world.SetVelocityCommand(v.body, v.command);
+    if (impl_->gaze.active()) impl_->world.SetHeadingCommand(v.body, v.heading);
+  }
   const double dt = impl_->control_dt / impl_->physics_substeps;
   const int shards = impl_->world.shard_count();
   const std::function<void(int)> step = [&](int k) { impl_->world.StepShard(k, dt, impl_->physics_substeps); };

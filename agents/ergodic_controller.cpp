@@ -51,6 +51,13 @@ Eigen::VectorXd ErgodicController::CoverageError() const {
 
 double ErgodicController::Metric() const { return basis_.Metric(CoverageError()); }
 
+double ErgodicController::TargetDensity(const Eigen::Vector2d& x_m) const {
+  if (target_.size() != basis_.size()) return 0.0;
+  Eigen::VectorXd f;
+  basis_.Evaluate(x_m, f);
+  return target_.dot(f);
+}
+
 Eigen::Vector2d ErgodicController::DeficitGradient(const maps::SpectralBasis::Trigonometry& t) const {
   // With b_k = Lambda_k / h_k (c_k - phi_k) and grad F_k = -(1/h_k) (kx_k1 sin_x[k1] cos_y[k2],
   // ky_k2 cos_x[k1] sin_y[k2]) (kx, ky: the wave numbers kappa),

@@ -50,6 +50,9 @@ class ErgodicController final : public VehicleController {
 
   /// c_k - phi_k as of the last Command (own plus fleet coverage).
   Eigen::VectorXd CoverageError() const;
+  /// The target's density sum_k phi_k F_k(x) at x (1/m^2; the controller's frame: a region
+  /// vehicle's box), 0 before any target.
+  double TargetDensity(const Eigen::Vector2d& x_m) const;
   /// Ergodic metric of CoverageError().
   double Metric() const;
   const CoverageAccumulator& coverage() const { return coverage_; }

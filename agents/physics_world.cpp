@@ -10,6 +10,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <numbers>
 #include <stdexcept>
 #include <string>
@@ -43,6 +44,7 @@ struct PhysicsWorld::Vehicle {
   b2Body* body = nullptr;  // owned by worlds_[shard]
   int shard = 0;
   Eigen::Vector2d command_mps = Eigen::Vector2d::Zero();
+  double heading_command_rad = std::numeric_limits<double>::quiet_NaN();  // NaN: face the travel
   // Single integrator: the pose is integrated here in double (x += u dt) and copied into Box2D,
   // so x' = u holds exactly rather than to Box2D's float precision.
   Eigen::Vector2d position_m = Eigen::Vector2d::Zero();
@@ -173,6 +175,8 @@ void PhysicsWorld::SetVelocityCommand(VehicleId id, const Eigen::Vector2d& veloc
   Find(id).command_mps = velocity_mps;
 }
 
+void PhysicsWorld::SetHeadingCommand(VehicleId id, double heading_rad) { Find(id).heading_command_rad = heading_rad; }
+
 void PhysicsWorld::ApplyBlueRov2Forces(Vehicle& vehicle) {
   const BlueRov2Params& p = rov_params_;
   b2Body* body = vehicle.body;
@@ -200,11 +204,14 @@ void PhysicsWorld::ApplyBlueRov2Forces(Vehicle& vehicle) {
       std::clamp(Drag(p.drag_linear_sway, p.drag_quadratic_sway, v_des) + mass_eff * k * (v_des - v),
                  -p.max_force_sway_n, p.max_force_sway_n);
 
-  // Heading loop: face the direction of travel (the camera looks ahead). r_des = k_psi e_psi,
-  //   N = I_eff 4 (r_des - r) + D_r(r_des), clamped to the torque limit. A vehicle that has not
-  // turned yet still strafes: the thrusters are vectored, so sway is commanded independently.
+  // Heading loop: face the direction of travel (the camera looks ahead), or the heading commanded
+  // (a gaze). r_des = k_psi e_psi, N = I_eff 4 (r_des - r) + D_r(r_des), clamped to the torque
+  // limit. A vehicle that has not turned yet still strafes: the thrusters are vectored, so sway
+  // is commanded independently.
   double r_des = 0.0;
-  if (cmd.norm() > kMinSpeedToTurnMps) {
+  if (std::isfinite(vehicle.heading_command_rad)) {
+    r_des = p.heading_gain_per_s * WrapAngle(vehicle.heading_command_rad - psi);
+  } else if (cmd.norm() > kMinSpeedToTurnMps) {
     const double heading_error = WrapAngle(std::atan2(cmd.y(), cmd.x()) - psi);
     r_des = p.heading_gain_per_s * heading_error;
   }
@@ -247,7 +254,11 @@ void PhysicsWorld::StepShard(int shard, double dt_s, int steps) {
       const Eigen::Vector2d& u = vehicle.command_mps;
       vehicle.position_m += u * dt_s;  // x' = u, explicit Euler is exact for a held command
       vehicle.velocity_mps = u;
-      if (u.squaredNorm() > 0.0) vehicle.heading_rad = std::atan2(u.y(), u.x());
+      if (std::isfinite(vehicle.heading_command_rad)) {
+        vehicle.heading_rad = WrapAngle(vehicle.heading_command_rad);
+      } else if (u.squaredNorm() > 0.0) {
+        vehicle.heading_rad = std::atan2(u.y(), u.x());
+      }
       vehicle.body->SetTransform(
           b2Vec2(static_cast<float>(vehicle.position_m.x()), static_cast<float>(vehicle.position_m.y())),
           static_cast<float>(vehicle.heading_rad));

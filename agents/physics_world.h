@@ -64,6 +64,10 @@ class PhysicsWorld {
 
   /// Desired world-frame velocity (m/s), held until the next call.
   void SetVelocityCommand(VehicleId id, const Eigen::Vector2d& velocity_mps);
+  /// Heading to hold (rad, world frame), held until the next call; NaN (the default): face the
+  /// direction of the velocity command. A BlueROV2 yaws to it while its vectored thrusters keep
+  /// the commanded velocity (surge and sway together); the point model takes it at once.
+  void SetHeadingCommand(VehicleId id, double heading_rad);
   /// Applies drag and thrust to every BlueROV2, then advances Box2D by dt_s (every shard).
   void Step(double dt_s);
   int shard_count() const;

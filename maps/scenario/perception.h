@@ -22,6 +22,17 @@ enum class SensorKind {
   kSonar,   ///< a forward-looking sonar: longer range, wider view, more false alarms
 };
 
+/// Where a vehicle's sensors look (`gaze:`). kTravel: along the direction of travel, the camera
+/// looking ahead (the default; missions fly as they always did). kValves: at the nearest valve
+/// within a sensor's range and in its line of sight; the BlueROV2 yaws to it while its vectored
+/// thrusters hold the commanded velocity, so the controller's path is the same command and only
+/// the heading differs (no valve in reach: along the travel again). A vehicle's gaze follows from
+/// its state alone, so it looks the same whichever host simulates it, resumed or not.
+enum class Gaze {
+  kTravel,
+  kValves,
+};
+
 /// A leak sensor every vehicle carries, looking along the vehicle's heading. A point y is in view
 /// of a vehicle at x with heading psi if |y - x| <= range_m, the bearing of y is within fov_deg / 2
 /// of psi, and the straight line x -> y crosses no structure of the seabed map (occlusion). An
@@ -103,6 +114,7 @@ LeakSites ParseLeakSites(const std::string& text, const std::string& where);
 const char* ToString(LeakSites sites);
 
 const char* ToString(SensorKind kind);
+const char* ToString(Gaze gaze);
 
 /// Most sensors a vehicle may carry, most leaks a scenario may hide.
 inline constexpr std::size_t kMaxSensors = 8;

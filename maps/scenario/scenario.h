@@ -302,6 +302,7 @@ struct Scenario {
   // Leak sensing (maps/scenario/perception.h): none of it by default, and then a mission flies
   // exactly as without.
   std::vector<SensorSpec> sensors;          ///< every vehicle carries each
+  Gaze gaze = Gaze::kTravel;                ///< where they look (needs sensors unless kTravel)
   std::vector<LeakSpec> leaks;              ///< hidden from the server; sorted by start on load
   FusionSettings fusion;
 

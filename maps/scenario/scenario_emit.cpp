@@ -187,6 +187,7 @@ std::string EmitScenario(const Scenario& s) {
     }
     out << YAML::EndSeq;
   }
+  if (s.gaze != Gaze::kTravel) key("gaze") << ToString(s.gaze);
   if (!s.leaks.empty()) {
     key("leaks") << YAML::BeginSeq;
     for (const LeakSpec& leak : s.leaks) {

@@ -376,6 +376,12 @@ void ReadPerception(const Reader& r, const YAML::Node& root, Scenario& s) {
     r.ExpectList(list, p);
     for (std::size_t i = 0; i < list.size(); ++i) s.leaks.push_back(ReadLeak(r, list[i], p + "[" + std::to_string(i) + "]"));
   });
+  r.Optional(root, "gaze", "", [&](const YAML::Node& n, const std::string& p) {
+    const std::string text = r.Text(n, p);
+    if (text == "travel") s.gaze = Gaze::kTravel;
+    else if (text == "valves") s.gaze = Gaze::kValves;
+    else r.Fail(p, n, "must be travel (look ahead) or valves (look at the nearest valve in reach)");
+  });
   r.Optional(root, "fusion", "", [&](const YAML::Node& n, const std::string& p) { ReadFusion(r, n, p, s.fusion); });
 }
 
@@ -384,7 +390,7 @@ Scenario ReadScenario(const Reader& r, const YAML::Node& root, const std::string
   r.ExpectMap(root, "", {"name", "workspace", "duration_s", "control_rate_hz", "physics_rate_hz",
                          "visit_radius_m", "rearm_radius_m", "seed", "start_jitter_m", "ergodic", "guard", "astar",
                          "structures", "vehicles", "default_profile", "profiles", "fleet", "fleet_events",
-                         "seabed", "flowlines", "boulders", "network", "sensors", "leaks", "fusion"});
+                         "seabed", "flowlines", "boulders", "network", "sensors", "gaze", "leaks", "fusion"});
   Scenario s;
   s.source_path = source;
   s.name = source.empty() ? "scenario" : std::filesystem::path(source).stem().string();

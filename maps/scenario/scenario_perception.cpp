@@ -25,6 +25,7 @@ double LeakLogit(double p) { return std::log(p / (1.0 - p)); }
 }  // namespace
 
 const char* ToString(SensorKind kind) { return kind == SensorKind::kSonar ? "sonar" : "camera"; }
+const char* ToString(Gaze gaze) { return gaze == Gaze::kValves ? "valves" : "travel"; }
 
 LeakSites ParseLeakSites(const std::string& text, const std::string& where) {
   if (text == "valves") return LeakSites::kValves;
@@ -72,6 +73,9 @@ void ValidatePerception(const Scenario& s, const std::string& file) {
   };
   if (s.sensors.size() > kMaxSensors) {
     fail("sensors", std::to_string(s.sensors.size()) + " sensors", "at most " + std::to_string(kMaxSensors) + " a vehicle");
+  }
+  if (s.gaze != Gaze::kTravel && s.sensors.empty()) {
+    fail("gaze", ToString(s.gaze), "needs sensors: the gaze turns the vehicles' sensors (without any: leave gaze out)");
   }
   std::map<std::string, std::size_t> names;
   for (std::size_t i = 0; i < s.sensors.size(); ++i) {

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <limits>
 #include <numbers>
 #include <stdexcept>
 #include <thread>
@@ -108,6 +109,36 @@ TEST(PhysicsWorld, BlueRov2TracksSurgeCommandWithDragBalancingThrust) {
   RunFor(world, 2.0);
   const double drag_n = 13.7 * 0.5 + 141.0 * 0.25;  // 42.1 N
   EXPECT_NEAR(world.Thrust(id).x(), drag_n, 0.05 * drag_n);
+}
+
+// A commanded heading (a gaze) is held while the vectored thrusters keep the commanded velocity:
+// flying along x while looking along y, the heading settles within 0.02 rad of pi/2 and the
+// velocity within 0.03 m/s of the command, the sway thrust carrying the drag (Y_vv v^2, 5 %).
+// NaN hands the heading back to the travel's direction.
+TEST(PhysicsWorld, BlueRov2HoldsACommandedHeadingWhileItFliesTheCommand) {
+  const BlueRov2Params p;
+  PhysicsWorld world({}, {});
+  const VehicleId id = world.AddVehicle(Spec(maps::MotionModel::kBlueRov2, {1.0, 5.0}));
+  world.SetVelocityCommand(id, {0.4, 0.0});
+  world.SetHeadingCommand(id, std::numbers::pi / 2);
+  RunFor(world, 8.0);
+  EXPECT_NEAR(world.State(id).heading_rad, std::numbers::pi / 2, 0.02);
+  EXPECT_NEAR(world.State(id).velocity_mps.x(), 0.4, 0.03);
+  EXPECT_NEAR(world.State(id).velocity_mps.y(), 0.0, 0.03);
+  // Travelling along +x with the body's x along +y: the body sways to its right (v = -0.4).
+  const double sway_drag_n = p.drag_linear_sway * 0.4 + p.drag_quadratic_sway * 0.16;
+  EXPECT_NEAR(-world.Thrust(id).y(), sway_drag_n, 0.05 * sway_drag_n);
+  world.SetHeadingCommand(id, std::numeric_limits<double>::quiet_NaN());
+  RunFor(world, 8.0);
+  EXPECT_NEAR(world.State(id).heading_rad, 0.0, 0.02);
+  EXPECT_NEAR(world.State(id).velocity_mps.x(), 0.4, 0.03);
+  // The point model takes the heading at once and still moves exactly u dt.
+  const VehicleId point = world.AddVehicle(Spec(maps::MotionModel::kSingleIntegrator, {1.0, 2.0}));
+  world.SetVelocityCommand(point, {0.5, 0.0});
+  world.SetHeadingCommand(point, -1.0);
+  world.Step(kDt);
+  EXPECT_DOUBLE_EQ(world.State(point).heading_rad, -1.0);
+  EXPECT_NEAR(world.State(point).position_m.x(), 1.0 + 0.5 * kDt, 1e-12);
 }
 
 // Full thrust saturates at the drag-law top speed: X_u u + X_uu u^2 = 113 N -> 0.848 m/s (3 %).

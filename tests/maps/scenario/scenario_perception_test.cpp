@@ -86,6 +86,8 @@ TEST(ScenarioPerception, BadInputsNameFieldAndRule) {
       {"leaks: [{at: {valve: P1}, start_s: 900}]", "x.yaml: leaks[0].start_s = 900: must be in [0, duration_s = 300]"},
       {"leaks: [{at: {valve: P1}, start_s: 1, strength: 0}]", "x.yaml: leaks[0].strength = 0: must be in (0, 1e6]"},
       {"leaks: [{at: {valve: P1}}]", "x.yaml: leaks[0].start_s: missing (required)"},
+      {"gaze: sideways", "x.yaml: gaze = sideways: must be travel (look ahead) or valves"},
+      {"gaze: valves", "x.yaml: gaze = valves: needs sensors"},
       {"fusion: {prior_probability: 0.7}", "x.yaml: fusion.prior_probability = 0.7: must be in (0, 0.5)"},
       {"fusion: {confirm_probability: 0.0005}", "x.yaml: fusion.confirm_probability = 5e-04: must be in (prior_probability, 1)"},
       {"fusion: {alarm_probability: 0.95}", "x.yaml: fusion.alarm_probability = 0.95: must be in (prior_probability, confirm_probability]"},
@@ -159,6 +161,21 @@ TEST(ScenarioPerception, FingerprintHoldsSensorsAndLeaksNotFusion) {
   Scenario other_sensor = s;
   other_sensor.sensors[0].range_m = 1.0;
   EXPECT_NE(VehicleFingerprint(other_sensor), VehicleFingerprint(s));
+  // Where the vehicles look is how they fly: every host must agree on it.
+  Scenario other_gaze = s;
+  other_gaze.gaze = Gaze::kValves;
+  EXPECT_NE(VehicleFingerprint(other_gaze), VehicleFingerprint(s));
+}
+
+// `gaze: valves` is read and written back; a scenario that leaves it out writes no gaze key.
+TEST(ScenarioPerception, GazeRoundTrips) {
+  EXPECT_EQ(LoadScenario(kTwoXtLeaks).gaze, Gaze::kTravel);
+  const Scenario s = ParseScenario(WithSection("sensors: [{name: c}]\ngaze: valves\n"), "x.yaml");
+  EXPECT_EQ(s.gaze, Gaze::kValves);
+  const std::string text = EmitScenario(s);
+  EXPECT_NE(text.find("gaze: valves"), std::string::npos);
+  EXPECT_EQ(ParseScenario(text, "x.yaml").gaze, Gaze::kValves);
+  EXPECT_EQ(EmitScenario(LoadScenario(kTwoXtLeaks)).find("gaze"), std::string::npos);
 }
 
 }  // namespace
