@@ -1,5 +1,6 @@
 // Compiled as C++17: see foxglove_socket.h.
 #include "server/live/foxglove_socket.h"
+#include "server/live/viewer_priority.h"
 
 #define ASIO_STANDALONE
 #include <websocketpp/config/asio_no_tls.hpp>
@@ -219,7 +220,10 @@ FoxgloveSocket::FoxgloveSocket(int port, std::string token, std::string server_n
   if (!ec) m.port = m.ws.get_local_endpoint(ec).port();
   if (!ec) m.ws.start_accept(ec);
   if (ec) throw std::runtime_error("cannot listen on 127.0.0.1:" + std::to_string(port) + ": " + ec.message());
-  m.thread = std::thread([&m] { m.ws.run(); });
+  m.thread = std::thread([&m] {
+    RunAtViewerPriority();
+    m.ws.run();
+  });
 }
 
 FoxgloveSocket::~FoxgloveSocket() {

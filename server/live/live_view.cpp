@@ -9,6 +9,7 @@
 #include <cmath>
 
 #include "server/live/foxglove_bridge.h"
+#include "server/live/viewer_priority.h"
 
 namespace sage::live {
 namespace {
@@ -34,7 +35,10 @@ LiveView::LiveView(LiveScene scene, LiveViewOptions options)
   scene_.mode = "live";
   scene_.actions = true;
   scene_json_ = live::SceneJson(scene_);
-  publisher_ = std::thread([this] { PublisherLoop(); });
+  publisher_ = std::thread([this] {
+    RunAtViewerPriority();
+    PublisherLoop();
+  });
   try {
     if (options_.http_port) {
       ViewServerOptions http;

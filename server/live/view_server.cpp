@@ -14,6 +14,7 @@
 #include "maps/scenario/scenario.h"
 #include "server/live/frame_json.h"
 #include "server/live/web_assets.h"
+#include "server/live/viewer_priority.h"
 #include "server/report/view_token.h"
 
 namespace sage::live {
@@ -87,7 +88,10 @@ ViewServer::ViewServer(ViewSource& source, ViewServerOptions options)
     throw maps::ScenarioError(fmt::format("--http = {}: cannot listen on 127.0.0.1:{} (in use? 0 takes any free port)",
                                           options_.port, options_.port));
   }
-  thread_ = std::thread([this] { http_->listen_after_bind(); });
+  thread_ = std::thread([this] {
+    RunAtViewerPriority();  // and the connection threads it starts
+    http_->listen_after_bind();
+  });
 }
 
 ViewServer::~ViewServer() {

@@ -8,8 +8,11 @@
 //
 //   build/bin/sage field generate --xts 300 --valves 1000 --vehicles 1000 --seed 1 -o /tmp/f1000.yaml
 //   node tests/live/live_view_bench.mjs --sage build/bin/sage --source-dir . --out /tmp/live_bench \
-//        --field /tmp/f1000.yaml --duration 60 --runs 2 [--configs off,idle,viewer,replay] [--secured]
-// (replay: the page alone, `sage view` of the run "off" just recorded, played at 1x, no mission running)
+//        --field /tmp/f1000.yaml --duration 60 --runs 2 [--configs off,idle,viewer,viewer-niced,replay] [--secured]
+//        [--page-fps N]
+// (replay: the page alone, `sage view` of the run "off" just recorded, played at 1x, no mission running;
+// viewer-niced: the page in a chromium run under `nice -n 19`, the browser taking only the CPU the
+// mission leaves, as a browser on the operator's own machine would take none of the mission's)
 import fs from "node:fs";
 import os from "node:os";
 import path from "node:path";
@@ -61,11 +64,18 @@ async function once(config, k) {
   const result = { config, run: k, load_before: before };
   let browser = null;
   const samples = [];
-  if (config === "viewer") {
+  if (config === "viewer" || config === "viewer-niced") {
     const live = await liveEndpoints(dir);
-    browser = await chromium.launch({ executablePath: "/usr/bin/chromium", args: CHROMIUM_FLAGS });
+    let executablePath = "/usr/bin/chromium";
+    if (config === "viewer-niced") {
+      executablePath = path.join(out, "chromium-niced");
+      fs.writeFileSync(executablePath, '#!/bin/sh\nexec nice -n 19 /usr/bin/chromium "$@"\n', { mode: 0o755 });
+    }
+    browser = await chromium.launch({ executablePath, args: CHROMIUM_FLAGS });
     const page = await browser.newPage({ viewport: { width: 1400, height: 820 } });
-    await page.goto(`http://127.0.0.1:${live.http_port}/#token=${live.token}`);
+    // --page-fps N: the page's own cap on redraws (#fps=N; the page's default is 30).
+    const fps = args["page-fps"] ? `&fps=${args["page-fps"]}` : "";
+    await page.goto(`http://127.0.0.1:${live.http_port}/#token=${live.token}${fps}`);
     await page.waitForFunction(() => window.sageView && window.sageView.ready, null, { timeout: 120000 });
     // One sample a second while the mission runs (the page's counters are over its last second).
     const cpu0 = chromiumCpu(), wall0 = Date.now();
@@ -80,7 +90,7 @@ async function once(config, k) {
       }
     }
     result.chromium_cores = (chromiumCpu() - cpu0) / ((Date.now() - wall0) / 1000);
-    await page.screenshot({ path: path.join(out, `viewer_${k}.png`) }).catch(() => {});
+    await page.screenshot({ path: path.join(out, `${config}_${k}.png`) }).catch(() => {});
   }
   const exit = await launch.exited;
   if (browser) await browser.close();
