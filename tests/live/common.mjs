@@ -8,9 +8,16 @@ import path from "node:path";
 
 export function parseArgs(argv) {
   const args = {};
-  for (let i = 2; i < argv.length; i += 2) {
+  // --name value, or a flag alone (--secured): followed by another option or nothing, it is true.
+  for (let i = 2; i < argv.length; i++) {
     if (!argv[i].startsWith("--")) throw new Error(`unexpected argument ${argv[i]}`);
-    args[argv[i].slice(2)] = argv[i + 1];
+    const value = argv[i + 1];
+    if (value === undefined || value.startsWith("--")) {
+      args[argv[i].slice(2)] = true;
+    } else {
+      args[argv[i].slice(2)] = value;
+      i++;
+    }
   }
   for (const key of ["sage", "source-dir", "out"]) {
     if (!args[key]) throw new Error(`give --${key}`);
