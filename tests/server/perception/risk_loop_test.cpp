@@ -180,9 +180,12 @@ TEST(RiskLoop, SharesAndRegionsSteerOnTheLayer) {
 
 // With sensors that only score (steer: prior) a mission flies exactly as without sensors: the
 // same trajectory sample for sample; and the loop's findings are the same for the same seed.
+// Looking ahead: a gaze turns the vehicles to what their sensors may see, a flight of its own by
+// design (ValveGaze.*), and without sensors there is nothing to turn.
 TEST(RiskLoop, ScoringAloneFliesTheMissionAsWithoutSensors) {
   maps::Scenario with = maps::LoadScenario(kTwoXtLeaks);
   with.fusion.steer = false;
+  with.gaze = maps::Gaze::kTravel;
   maps::Scenario without = with;
   without.sensors.clear();
   const MissionResult a = Mission(with, MissionOptions{}).Run();
