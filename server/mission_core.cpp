@@ -8,6 +8,8 @@
 
 #include <fmt/format.h>
 
+#include "maps/scenario/printable_text.h"
+
 namespace sage::server {
 namespace {
 
@@ -20,11 +22,9 @@ constexpr int kMaxIdsPerRequest = 10000;
 
 // A vehicle's name as the record keeps it: printable, no field separators, never empty.
 std::string SafeName(const std::string& name, int id) {
-  std::string out;
-  for (const char c : name.substr(0, 64)) {
-    const bool plain = static_cast<unsigned char>(c) >= 0x20 && c != 0x7f && c != ',' && c != '"';
-    out += plain ? c : '_';
-  }
+  // Printable UTF-8 (controls and stray bytes as '_'), at most 64 characters, no CSV separators.
+  std::string out = maps::PrintableUtf8(name, 64, '_', "");
+  std::replace_if(out.begin(), out.end(), [](char c) { return c == ',' || c == '"'; }, '_');
   const bool numeric = !out.empty() && out.find_first_not_of("0123456789") == std::string::npos;
   return out.empty() || numeric ? fmt::format("vehicle{}", id) : out;
 }

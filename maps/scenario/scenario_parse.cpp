@@ -18,6 +18,7 @@
 
 #include <yaml-cpp/yaml.h>
 
+#include "maps/scenario/printable_text.h"
 #include "maps/scenario/scenario_detail.h"
 
 namespace sage::maps {
@@ -492,6 +493,16 @@ std::string Position(const YAML::Mark& mark) {
 }  // namespace
 
 Scenario ParseScenario(const std::string& yaml_text, const std::string& source) {
+  // YAML is UTF-8 text; a stray byte would reach the names in logs, CSV and JSON (which refuses it).
+  if (const std::size_t bad = FirstNonUtf8(yaml_text); bad != std::string::npos) {
+    const std::size_t line_start = yaml_text.rfind('\n', bad == 0 ? 0 : bad - 1);
+    const std::size_t line = 1 + static_cast<std::size_t>(std::count(yaml_text.begin(), yaml_text.begin() + static_cast<std::ptrdiff_t>(bad), '\n'));
+    const std::size_t column = line_start == std::string::npos || bad == 0 ? bad + 1 : bad - line_start;
+    char hex[8];
+    std::snprintf(hex, sizeof hex, "0x%02X", static_cast<unsigned>(static_cast<unsigned char>(yaml_text[bad])));
+    throw ScenarioError(OneLine(source) + ": line " + std::to_string(line) + ", column " + std::to_string(column) +
+                        ": byte " + hex + " is not UTF-8 text (a scenario is UTF-8)");
+  }
   const Reader reader(source);
   Scenario scenario;
   try {

@@ -7,6 +7,7 @@
 #include <limits>
 
 #include "maps/scenario/scenario_detail.h"
+#include "maps/scenario/printable_text.h"
 
 namespace sage::maps {
 namespace {
@@ -64,6 +65,9 @@ class Checker {
     if (name.empty()) Fail(field, "\"\"", "must not be empty");
     if (name.size() > kMaxNameLength) {
       Fail(field, name.substr(0, 20) + "...", "must be at most " + std::to_string(kMaxNameLength) + " characters");
+    }
+    if (FirstNonUtf8(name) != std::string::npos) {
+      Fail(field, PrintableUtf8(name, 20), "must be UTF-8 text (a byte that is not shown as ?)");
     }
     const auto control = [](char ch) { return static_cast<unsigned char>(ch) < 0x20 || ch == 0x7f; };
     if (std::any_of(name.begin(), name.end(), control)) {

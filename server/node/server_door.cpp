@@ -6,16 +6,11 @@
 #include <spdlog/spdlog.h>
 
 #include "agents/node/wire.h"
+#include "maps/scenario/printable_text.h"
 
 namespace sage::server {
 
-std::string ServerDoor::LogSafe(std::string_view text) {
-  std::string out(text.substr(0, 64));
-  for (char& c : out) {
-    if (static_cast<unsigned char>(c) < 0x20 || c == 0x7f) c = '?';
-  }
-  return text.size() > 64 ? out + "..." : out;
-}
+std::string ServerDoor::LogSafe(std::string_view text) { return maps::PrintableUtf8(text, 64); }
 
 bool ServerDoor::TakeState(const proto::VehicleState& m, std::uint64_t writer) {
   if (m.server_instance != instance_) return false;
@@ -27,8 +22,9 @@ bool ServerDoor::TakeCoverage(const proto::VehicleCoverage& m, std::uint64_t wri
 }
 
 std::optional<OperatorAnswer> ServerDoor::TakeRiskUpdate(const proto::RiskUpdate& r, std::uint64_t writer) {
-  const std::string source(proto::AsStringView(r.source));
-  const std::string sender = fmt::format("{} (writer {:x})", LogSafe(source), writer);
+  // The source as the record keeps it (risk_events.csv, metrics.json): printable UTF-8.
+  const std::string source = LogSafe(proto::AsStringView(r.source));
+  const std::string sender = fmt::format("{} (writer {:x})", source, writer);
   const std::uint64_t limited = core_.risk_limits().refused(sender);
   const OperatorAnswer a = core_.OnRiskUpdate(std::string(proto::AsStringView(r.valve)), r.weight, source, sender);
   const std::uint64_t refused = core_.risk_limits().refused(sender);

@@ -161,6 +161,9 @@ TEST_F(ServerDoorTest, ACoverageReportOfTheLargestSeqFreezesNothing) {
 TEST(ServerDoor, LogSafeKeepsOneShortLine) {
   EXPECT_EQ(ServerDoor::LogSafe("a\nb\x1b"), "a?b?");
   EXPECT_EQ(ServerDoor::LogSafe(std::string(100, 'x')), std::string(64, 'x') + "...");
+  // Stray bytes and C1 controls too: what a sample names goes into metrics.json, which takes
+  // only UTF-8 (nlohmann::json throws on a 0xFF and the run's metrics were lost).
+  EXPECT_EQ(ServerDoor::LogSafe("op\xFF\xC2\x9B"), "op??");
 }
 
 }  // namespace
