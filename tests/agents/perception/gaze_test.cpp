@@ -21,6 +21,18 @@ namespace {
 
 const std::string kTwoXtLeaks = std::string(SAGE_SOURCE_DIR) + "/scenarios/two_xt_leaks.yaml";
 
+// Points of a grid of `step_m` over the workspace (the first at step_m / 2) in open water.
+std::vector<Eigen::Vector2d> OpenWaterGrid(const maps::World& world, const maps::Scenario& s, double step_m) {
+  std::vector<Eigen::Vector2d> points;
+  for (double x = step_m / 2; x < s.workspace.width_m; x += step_m) {
+    for (double y = step_m / 2; y < s.workspace.height_m; y += step_m) {
+      const Eigen::Vector2i cell = world.obstacles().CellOf({x, y});
+      if (!world.obstacles().Occupied(cell.x(), cell.y())) points.emplace_back(x, y);
+    }
+  }
+  return points;
+}
+
 maps::Scenario Looking(maps::Gaze gaze, double range_m = 1.2) {
   maps::Scenario s = maps::LoadScenario(kTwoXtLeaks);
   s.gaze = gaze;
@@ -41,33 +53,28 @@ TEST(ValveGaze, LooksAtTheNearestValveInSight) {
     const maps::SensorModel model(s.sensors[0], world.obstacles(), s.control_rate_hz);
     const std::vector<Eigen::Vector2d> valves = s.ValvePositions();
     std::vector<int> scratch;
-    for (double x = 0.025; x < s.workspace.width_m; x += 0.05) {
-      for (double y = 0.025; y < s.workspace.height_m; y += 0.05) {
-        const Eigen::Vector2d p(x, y);
-        const Eigen::Vector2i cell = world.obstacles().CellOf(p);
-        if (world.obstacles().Occupied(cell.x(), cell.y())) continue;
-        // Brute force: every valve, by distance, the first one in sight.
-        int expected = -1, nearest = -1;
-        double best = std::numeric_limits<double>::infinity(), nearest_d = best;
-        for (std::size_t k = 0; k < valves.size(); ++k) {
-          const double d = (valves[k] - p).norm();
-          if (d > range_m) continue;
-          if (d < nearest_d) nearest_d = d, nearest = static_cast<int>(k);
-          if (d < best && model.LineOfSight(p, valves[k])) best = d, expected = static_cast<int>(k);
-        }
-        const double heading = gaze.HeadingFor(p, scratch);
-        if (expected < 0) {
-          EXPECT_TRUE(std::isnan(heading)) << "at " << p.transpose();
-          ++none;
-          continue;
-        }
-        ++looked;
-        if (nearest != expected) ++nearest_hidden;
-        const Eigen::Vector2d to = valves[static_cast<std::size_t>(expected)] - p;
-        EXPECT_NEAR(heading, std::atan2(to.y(), to.x()), 1e-12) << "at " << p.transpose();
-        // Looking that way, the valve is in the sensor's view.
-        EXPECT_TRUE(model.InView(p, heading, valves[static_cast<std::size_t>(expected)])) << "at " << p.transpose();
+    for (const Eigen::Vector2d& p : OpenWaterGrid(world, s, 0.05)) {
+      // Brute force: every valve, by distance, the first one in sight.
+      int expected = -1, nearest = -1;
+      double best = std::numeric_limits<double>::infinity(), nearest_d = best;
+      for (std::size_t k = 0; k < valves.size(); ++k) {
+        const double d = (valves[k] - p).norm();
+        if (d > range_m) continue;
+        if (d < nearest_d) nearest_d = d, nearest = static_cast<int>(k);
+        if (d < best && model.LineOfSight(p, valves[k])) best = d, expected = static_cast<int>(k);
       }
+      const double heading = gaze.HeadingFor(p, scratch);
+      if (expected < 0) {
+        EXPECT_TRUE(std::isnan(heading)) << "at " << p.transpose();
+        ++none;
+        continue;
+      }
+      ++looked;
+      if (nearest != expected) ++nearest_hidden;
+      const Eigen::Vector2d to = valves[static_cast<std::size_t>(expected)] - p;
+      EXPECT_NEAR(heading, std::atan2(to.y(), to.x()), 1e-12) << "at " << p.transpose();
+      // Looking that way, the valve is in the sensor's view.
+      EXPECT_TRUE(model.InView(p, heading, valves[static_cast<std::size_t>(expected)])) << "at " << p.transpose();
     }
   }
   EXPECT_GT(looked, 2000);
@@ -88,26 +95,21 @@ TEST(ValveGaze, LooksWhereALookIsWorthMost) {
   for (const std::vector<double> weights : {std::vector<double>{1, 2, 3, 4, 5}, std::vector<double>{0, 1, 1, 1, 1}}) {
     const ValveGaze::ValveWeight weight = [&](int k, const Eigen::Vector2d&) { return weights[static_cast<std::size_t>(k)]; };
     int not_nearest = 0;
-    for (double x = 0.05; x < s.workspace.width_m; x += 0.1) {
-      for (double y = 0.05; y < s.workspace.height_m; y += 0.1) {
-        const Eigen::Vector2d p(x, y);
-        const Eigen::Vector2i cell = world.obstacles().CellOf(p);
-        if (world.obstacles().Occupied(cell.x(), cell.y())) continue;
-        int expected = -1, nearest = -1;
-        double best = -1.0, nearest_d = std::numeric_limits<double>::infinity();
-        for (std::size_t k = 0; k < valves.size(); ++k) {
-          const double d = (valves[k] - p).norm();
-          if (d > 2.5 || !model.LineOfSight(p, valves[k])) continue;
-          if (d < nearest_d) nearest_d = d, nearest = static_cast<int>(k);
-          const double worth = weights[k] * model.DetectionProbability(d);
-          if (worth > best) best = worth, expected = static_cast<int>(k);
-        }
-        const double heading = gaze.HeadingFor(p, scratch, weight);
-        if (expected < 0) continue;
-        if (expected != nearest) ++not_nearest;
-        const Eigen::Vector2d to = valves[static_cast<std::size_t>(expected)] - p;
-        EXPECT_NEAR(heading, std::atan2(to.y(), to.x()), 1e-12) << "at " << p.transpose();
+    for (const Eigen::Vector2d& p : OpenWaterGrid(world, s, 0.1)) {
+      int expected = -1, nearest = -1;
+      double best = -1.0, nearest_d = std::numeric_limits<double>::infinity();
+      for (std::size_t k = 0; k < valves.size(); ++k) {
+        const double d = (valves[k] - p).norm();
+        if (d > 2.5 || !model.LineOfSight(p, valves[k])) continue;
+        if (d < nearest_d) nearest_d = d, nearest = static_cast<int>(k);
+        const double worth = weights[k] * model.DetectionProbability(d);
+        if (worth > best) best = worth, expected = static_cast<int>(k);
       }
+      const double heading = gaze.HeadingFor(p, scratch, weight);
+      if (expected < 0) continue;
+      if (expected != nearest) ++not_nearest;
+      const Eigen::Vector2d to = valves[static_cast<std::size_t>(expected)] - p;
+      EXPECT_NEAR(heading, std::atan2(to.y(), to.x()), 1e-12) << "at " << p.transpose();
     }
     EXPECT_GT(not_nearest, 50) << "the weights must change some choices";
   }
