@@ -10,8 +10,8 @@
 // that passes one on the way to another, sees it only if the valve happens to lie ahead; the
 // BlueROV2's vectored thrusters let it yaw to the valve while it keeps its commanded velocity.
 //
-// The choice depends on the vehicle's position and target alone (no memory of its own): a vehicle looks the same
-// whichever host simulates it, in-process or over DDS, resumed or not.
+// The choice depends on the vehicle's position and target alone (no memory of its own): a vehicle
+// looks the same whichever host simulates it, in-process or over DDS, resumed or not.
 #include <cstddef>
 #include <functional>
 #include <optional>
