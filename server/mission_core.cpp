@@ -523,7 +523,8 @@ void MissionCore::TakeSplit(RegionSplit split) {
   Note("regions", fmt::format("{} regions for {} vehicles{}{}: up to {} valves and {:.1f} m a side each; the guard "
                               "boosts a valve after {:.0f}-{:.0f} s",
                               plan.shares.size(), split.input.vehicle_ids.size(),
-                              split.input.by_risk ? " (the risk moved)" : "",
+                              split.provisional ? " (provisional: each valve to its nearest vehicle while the split is planned)"
+                              : split.input.by_risk ? " (the risk moved)" : "",
                               planning_s > 0.0 ? fmt::format(", planned over {:.1f} s", planning_s) : std::string(),
                               most, largest, bounds.minCoeff(), bounds.maxCoeff()));
 }
@@ -582,6 +583,10 @@ void MissionCore::AssignRegions(const std::vector<int>& alive, CycleOutput& out)
     if (delay == 0) {
       TakeSplit(plan.pending->Take());
       plan.pending.reset();
+    } else if (plan.shares.empty()) {
+      // The first split of a large field: each valve to its nearest vehicle until it is due, not
+      // the field's shared basis (region_split.h).
+      TakeSplit(QuickRegionSplit(world_.blocked(), scenario_, {alive, FleetVehicles(alive), {}, 0.0, false}));
     }
   }
   // A target is sent again only when its own share's weights change: at fleet scale the guard

@@ -1,7 +1,12 @@
 #include "server/region_split.h"
 
+#include <algorithm>
 #include <cmath>
+#include <limits>
+#include <stdexcept>
 #include <utility>
+
+#include "maps/nearby_points.h"
 
 namespace sage::server {
 namespace {
@@ -14,7 +19,95 @@ constexpr int kMinOrder = 8, kMaxOrder = 20;
 // generated 10,000-vehicle field) and 0.9 s for 3,500, on one core of this 2-core machine.
 constexpr double kPlanSecondsPerValve = 0.3e-3;
 
+// A share's region: the box around its valves and their narrowed targets on the box's basis.
+PlannedRegion MakeRegion(std::vector<int> valve_indices, double lap_time_s, const std::vector<maps::Valve>& valves,
+                         const maps::Scenario& scenario, const maps::OccupancyGrid& blocked) {
+  const double target_sigma_m = kRegionTargetSigmaOfVisitRadius * scenario.visit_radius_m;
+  PlannedRegion region;
+  region.valves = std::move(valve_indices);
+  region.lap_time_s = lap_time_s;
+  std::vector<Eigen::Vector2d> points;
+  std::vector<maps::GaussianComponent> components;
+  for (int i : region.valves) {
+    points.push_back(valves[i].position_m);
+    components.push_back(maps::NarrowedTo({valves[i].position_m, valves[i].covariance_m2}, target_sigma_m));
+  }
+  const maps::RegionBox box =
+      maps::RegionAround(points, scenario.workspace, kMargin_m, kMinSide_m, kResolution_m, kMinOrder, kMaxOrder);
+  region.field = std::make_unique<maps::RegionField>(box, components, blocked);
+  return region;
+}
+
+// Index of the point of `index` (built over `points`) nearest to x, searching rings of
+// cell_m outward; ties to the lower index. points is never empty.
+int Nearest(const maps::NearbyPoints& index, const std::vector<Eigen::Vector2d>& points, double cell_m,
+            const Eigen::Vector2d& x, std::vector<int>& found) {
+  for (double radius = cell_m;; radius *= 2.0) {
+    index.Within(x, radius, found);
+    if (found.empty()) continue;
+    int best = found.front();
+    for (int k : found) {
+      const double d = (points[k] - x).squaredNorm(), b = (points[best] - x).squaredNorm();
+      if (d < b || (d == b && k < best)) best = k;
+    }
+    return best;  // every point outside the radius is farther than any inside it
+  }
+}
+
+// The closed tour through p taken nearest-first from p[0] (straight line, m).
+double NearestNeighbourTour(const std::vector<Eigen::Vector2d>& p) {
+  if (p.size() < 2) return 0.0;
+  std::vector<bool> done(p.size(), false);
+  std::size_t at = 0;
+  done[0] = true;
+  double length = 0.0;
+  for (std::size_t step = 1; step < p.size(); ++step) {
+    std::size_t next = 0;
+    double best = std::numeric_limits<double>::infinity();
+    for (std::size_t k = 0; k < p.size(); ++k) {
+      if (!done[k] && (p[k] - p[at]).norm() < best) best = (p[k] - p[at]).norm(), next = k;
+    }
+    length += best;
+    done[next] = true;
+    at = next;
+  }
+  return length + (p[at] - p[0]).norm();
+}
+
 }  // namespace
+
+RegionSplit QuickRegionSplit(const maps::OccupancyGrid& blocked, const maps::Scenario& scenario,
+                             RegionSplitInput input) {
+  const std::vector<maps::Valve> valves = scenario.AllValves();
+  const std::size_t n = input.vehicles.size();
+  if (n == 0 || valves.empty()) throw std::invalid_argument("QuickRegionSplit: no vehicles or no valves");
+  std::vector<Eigen::Vector2d> starts, valve_points;
+  for (const agents::FleetVehicle& v : input.vehicles) starts.push_back(v.position_m);
+  for (const maps::Valve& v : valves) valve_points.push_back(v.position_m);
+  // Cells of about one vehicle's (and one valve's) share of the field.
+  const double area = scenario.workspace.width_m * scenario.workspace.height_m;
+  const double vehicle_cell_m = std::max(1.0, std::sqrt(area / static_cast<double>(n)));
+  const double valve_cell_m = std::max(1.0, std::sqrt(area / static_cast<double>(valves.size())));
+  const maps::NearbyPoints by_vehicle(starts, vehicle_cell_m), by_valve(valve_points, valve_cell_m);
+  std::vector<std::vector<int>> shares(n);
+  std::vector<int> found;
+  for (std::size_t i = 0; i < valves.size(); ++i) {
+    shares[static_cast<std::size_t>(Nearest(by_vehicle, starts, vehicle_cell_m, valve_points[i], found))].push_back(
+        static_cast<int>(i));
+  }
+  RegionSplit split;
+  split.provisional = true;
+  split.regions.reserve(n);
+  for (std::size_t k = 0; k < n; ++k) {
+    if (shares[k].empty()) shares[k].push_back(Nearest(by_valve, valve_points, valve_cell_m, starts[k], found));
+    std::vector<Eigen::Vector2d> points;
+    for (int i : shares[k]) points.push_back(valve_points[static_cast<std::size_t>(i)]);
+    const double lap_s = NearestNeighbourTour(points) / input.vehicles[k].speed_mps + scenario.astar.wait_per_lap_s;
+    split.regions.push_back(MakeRegion(std::move(shares[k]), lap_s, valves, scenario, blocked));
+  }
+  split.input = std::move(input);
+  return split;
+}
 
 RegionSplit PlanRegionSplit(const maps::OccupancyGrid& astar_grid, const maps::OccupancyGrid& blocked,
                             const maps::Scenario& scenario, RegionSplitInput input) {
@@ -26,23 +119,10 @@ RegionSplit PlanRegionSplit(const maps::OccupancyGrid& astar_grid, const maps::O
   const agents::FleetTourPlan shares = agents::PlanFleetTours(astar_grid, scenario.ValvePositions(), input.weights,
                                                               input.vehicles, scenario.astar.wait_per_lap_s, options);
   const std::vector<maps::Valve> valves = scenario.AllValves();
-  const double target_sigma_m = kRegionTargetSigmaOfVisitRadius * scenario.visit_radius_m;
   RegionSplit split;
   split.regions.reserve(shares.vehicles.size());
   for (const agents::VehicleTour& share : shares.vehicles) {
-    PlannedRegion region;
-    region.valves = share.valves;
-    region.lap_time_s = share.lap_time_s;
-    std::vector<Eigen::Vector2d> points;
-    std::vector<maps::GaussianComponent> components;
-    for (int i : share.valves) {
-      points.push_back(valves[i].position_m);
-      components.push_back(maps::NarrowedTo({valves[i].position_m, valves[i].covariance_m2}, target_sigma_m));
-    }
-    const maps::RegionBox box =
-        maps::RegionAround(points, scenario.workspace, kMargin_m, kMinSide_m, kResolution_m, kMinOrder, kMaxOrder);
-    region.field = std::make_unique<maps::RegionField>(box, components, blocked);
-    split.regions.push_back(std::move(region));
+    split.regions.push_back(MakeRegion(share.valves, share.lap_time_s, valves, scenario, blocked));
   }
   split.input = std::move(input);
   return split;

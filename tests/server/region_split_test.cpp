@@ -3,7 +3,10 @@
 // field takes its split at the cycle fixed when it started, the same mission on every run.
 #include "server/region_split.h"
 
+#include <algorithm>
 #include <cmath>
+#include <limits>
+#include <random>
 #include <string>
 #include <vector>
 
@@ -80,9 +83,10 @@ struct RegionTimes final : public MissionRecorder {
   std::vector<std::string> notes;
 };
 
-// 1,050 valves: the first split starts when the fleet is in (t = 0) and is taken 4 cycles later
-// (0.3 ms x 1,050 = 0.315 s), not when its thread happens to end; the notes say so; two runs of
-// the mission are sample for sample the same.
+// 1,050 valves: the first split starts when the fleet is in (t = 0), the fleet flies the
+// provisional split from then, and the planned one is taken 4 cycles later (0.3 ms x 1,050 =
+// 0.315 s), not when its thread happens to end; the notes say so; two runs of the mission are
+// sample for sample the same.
 TEST(RegionSplit, ALargeFieldTakesItsSplitWhenDue) {
   maps::Scenario s = Field(300, 1050, 20, 3.0);
   s.fleet.assignment = maps::FleetAssignment::kRegions;
@@ -93,14 +97,77 @@ TEST(RegionSplit, ALargeFieldTakesItsSplitWhenDue) {
     options.keep_trajectory = false;
     Mission(s, options).Run();
   }
-  ASSERT_EQ(runs[0].splits.size(), 1u);
-  EXPECT_NEAR(runs[0].splits[0].first, 0.4, 1e-9);
+  ASSERT_EQ(runs[0].splits.size(), 2u);
+  EXPECT_NEAR(runs[0].splits[0].first, 0.0, 1e-9);
+  EXPECT_NEAR(runs[0].splits[1].first, 0.4, 1e-9);
   EXPECT_EQ(runs[0].splits[0].second, 20u);
-  ASSERT_EQ(runs[0].notes.size(), 1u);
-  EXPECT_NE(runs[0].notes[0].find("planned over 0.4 s"), std::string::npos) << runs[0].notes[0];
+  EXPECT_EQ(runs[0].splits[1].second, 20u);
+  ASSERT_EQ(runs[0].notes.size(), 2u);
+  EXPECT_NE(runs[0].notes[0].find("provisional"), std::string::npos) << runs[0].notes[0];
+  EXPECT_NE(runs[0].notes[1].find("planned over 0.4 s"), std::string::npos) << runs[0].notes[1];
   ASSERT_EQ(runs[0].samples.size(), runs[1].samples.size());
   for (std::size_t i = 0; i < runs[0].samples.size(); ++i) {
     ASSERT_EQ(runs[0].samples[i].position_m, runs[1].samples[i].position_m) << "sample " << i;
+  }
+}
+
+// The provisional split against brute force: every valve in the share of the vehicle nearest to
+// it (all vehicles searched), a vehicle with no valve nearer to it than to any other holding its
+// own nearest valve, and each lap the nearest-neighbour closed tour at its speed plus the waits.
+TEST(RegionSplit, ProvisionalSplitGivesEachValveItsNearestVehicle) {
+  const maps::Scenario s = Field(60, 200, 45, 10.0);
+  const maps::World world(s);
+  RegionSplitInput input;
+  std::mt19937_64 rng(11);
+  std::uniform_real_distribution<double> x(0.0, s.workspace.width_m), y(0.0, s.workspace.height_m);
+  for (int k = 0; k < 45; ++k) {
+    input.vehicle_ids.push_back(k);
+    input.vehicles.push_back({{x(rng), y(rng)}, 0.4 + 0.01 * k});
+  }
+  const RegionSplit split = QuickRegionSplit(world.blocked(), s, input);
+  ASSERT_TRUE(split.provisional);
+  ASSERT_EQ(split.regions.size(), 45u);
+  const std::vector<Eigen::Vector2d> valves = s.ValvePositions();
+  std::vector<int> owners(valves.size(), 0);
+  for (std::size_t i = 0; i < valves.size(); ++i) {
+    double best = std::numeric_limits<double>::infinity();
+    for (int k = 0; k < 45; ++k) {
+      const double d = (valves[i] - input.vehicles[k].position_m).squaredNorm();
+      if (d < best) best = d, owners[i] = k;
+    }
+  }
+  for (int k = 0; k < 45; ++k) {
+    const PlannedRegion& r = split.regions[k];
+    ASSERT_FALSE(r.valves.empty()) << k;
+    std::vector<int> expected;
+    for (std::size_t i = 0; i < valves.size(); ++i)
+      if (owners[i] == k) expected.push_back(static_cast<int>(i));
+    if (expected.empty()) {
+      double best = std::numeric_limits<double>::infinity();
+      int nearest = -1;
+      for (std::size_t i = 0; i < valves.size(); ++i) {
+        const double d = (valves[i] - input.vehicles[k].position_m).squaredNorm();
+        if (d < best) best = d, nearest = static_cast<int>(i);
+      }
+      expected.push_back(nearest);
+    }
+    EXPECT_EQ(r.valves, expected) << "vehicle " << k;
+    // Nearest-neighbour tour from the share's first valve, by brute force.
+    std::vector<int> left(r.valves.begin() + 1, r.valves.end());
+    Eigen::Vector2d at = valves[r.valves.front()];
+    double length = 0.0;
+    while (!left.empty()) {
+      auto next = std::min_element(left.begin(), left.end(), [&](int a, int b) {
+        return (valves[a] - at).norm() < (valves[b] - at).norm();
+      });
+      length += (valves[*next] - at).norm();
+      at = valves[*next];
+      left.erase(next);
+    }
+    length += (at - valves[r.valves.front()]).norm();
+    EXPECT_NEAR(r.lap_time_s, length / input.vehicles[k].speed_mps + s.astar.wait_per_lap_s, 1e-9) << k;
+    // Its box holds its valves.
+    for (int i : r.valves) EXPECT_TRUE(r.field->box().Contains(valves[i], 1e-9)) << k;
   }
 }
 
