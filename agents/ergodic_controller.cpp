@@ -41,6 +41,7 @@ void ErgodicController::SetFleetCoverage(const Eigen::VectorXd& sums, double tim
   if (sums.size() != basis_.size()) throw std::invalid_argument("ErgodicController::SetFleetCoverage: wrong size");
   fleet_sums_ = sums;
   fleet_time_s_ = time_s;
+  fleet_zero_ = (sums.array() == 0.0).all();
 }
 
 Eigen::VectorXd ErgodicController::CoverageError() const {
@@ -91,7 +92,11 @@ Eigen::Vector2d ErgodicController::DeficitGradient(const maps::SpectralBasis::Tr
     const double inv_time = 1.0 / total_time;
     const double* own = coverage_.sums().data();
     const double* fleet = fleet_sums_.data();
-    accumulate([&](int k) { return (own[k] + fleet[k]) * inv_time - phi[k]; });
+    if (fleet_zero_) {
+      accumulate([&](int k) { return own[k] * inv_time - phi[k]; });
+    } else {
+      accumulate([&](int k) { return (own[k] + fleet[k]) * inv_time - phi[k]; });
+    }
   } else {
     accumulate([&](int k) { return -phi[k]; });  // no coverage yet: c = 0
   }

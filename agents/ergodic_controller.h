@@ -71,6 +71,9 @@ class ErgodicController final : public VehicleController {
   Eigen::VectorXd target_;
   Eigen::VectorXd fleet_sums_;
   double fleet_time_s_ = 0.0;
+  // The fleet's sums are all zero (a vehicle alone: a region's or partition's): the law reads
+  // its own sums only, one K^2 array less a step (c_k is the same: S_k + 0 = S_k).
+  bool fleet_zero_ = true;
   Eigen::VectorXd lambda_over_h_;  // Lambda_k / h_k (1/m), fixed by the basis
   Eigen::Vector2d last_direction_ = Eigen::Vector2d::UnitX();
   bool has_direction_ = false;  // false until the first command: a vehicle at rest may head anywhere
