@@ -285,6 +285,10 @@ struct AgentHost::Impl {
     return const_cast<Vehicle&>(static_cast<const Impl*>(this)->Find(id));
   }
   const Vehicle& Find(VehicleId id) const {
+    // A host of ids 0..N-1 added in order (in-process) holds each at its id: no hash to look up.
+    if (id >= 0 && static_cast<std::size_t>(id) < vehicles.size() && vehicles[static_cast<std::size_t>(id)].id == id) {
+      return vehicles[static_cast<std::size_t>(id)];
+    }
     const auto at = position_of.find(id);
     if (at == position_of.end()) throw std::out_of_range("AgentHost: no vehicle with id " + std::to_string(id));
     return vehicles[at->second];

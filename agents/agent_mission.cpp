@@ -31,7 +31,10 @@ void AgentMission::AddVehicle(VehicleId id, const maps::VehicleSpec& spec, const
     placed.start_m = maps::JitteredStart(spec, scenario_.seed, id, scenario_.start_jitter_m);
   }
   host_.AddVehicle(id, placed);
-  Member& member = members_[id];
+  // Hosts add their vehicles in ascending ids: appended, but kept in order whatever comes.
+  const auto at = std::lower_bound(members_.begin(), members_.end(), id,
+                                   [](const auto& m, VehicleId value) { return m.first < value; });
+  Member& member = at != members_.end() && at->first == id ? at->second : members_.insert(at, {id, Member{}})->second;
   member.name = spec.name;
   if (resume != nullptr && resume->coverage.seq > 0) {
     host_.RestoreCoverage(id, resume->coverage.sums, resume->coverage.kernel_time_s);
@@ -40,8 +43,36 @@ void AgentMission::AddVehicle(VehicleId id, const maps::VehicleSpec& spec, const
 }
 
 void AgentMission::RemoveVehicle(VehicleId id) {
-  if (members_.erase(id) == 0) throw std::out_of_range("AgentMission: no vehicle " + std::to_string(id));
+  const std::ptrdiff_t at = MemberIndex(id);
+  if (at < 0) throw std::out_of_range("AgentMission: no vehicle " + std::to_string(id));
+  members_.erase(members_.begin() + at);
   host_.RemoveVehicle(id);
+}
+
+std::ptrdiff_t AgentMission::MemberIndex(VehicleId id) const {
+  // A fleet of ids 0..N-1 on one host (in-process) holds each at its id.
+  if (id >= 0 && static_cast<std::size_t>(id) < members_.size() && members_[static_cast<std::size_t>(id)].first == id) {
+    return id;
+  }
+  const auto at = std::lower_bound(members_.begin(), members_.end(), id,
+                                   [](const auto& m, VehicleId value) { return m.first < value; });
+  return at != members_.end() && at->first == id ? at - members_.begin() : -1;
+}
+
+AgentMission::Member* AgentMission::FindMember(VehicleId id) {
+  const std::ptrdiff_t at = MemberIndex(id);
+  return at < 0 ? nullptr : &members_[static_cast<std::size_t>(at)].second;
+}
+
+const AgentMission::Member* AgentMission::FindMember(VehicleId id) const {
+  const std::ptrdiff_t at = MemberIndex(id);
+  return at < 0 ? nullptr : &members_[static_cast<std::size_t>(at)].second;
+}
+
+const std::string& AgentMission::Name(VehicleId id) const {
+  const Member* member = FindMember(id);
+  if (member == nullptr) throw std::out_of_range("AgentMission: no vehicle " + std::to_string(id));
+  return member->name;
 }
 
 std::vector<VehicleId> AgentMission::ids() const {
@@ -132,10 +163,10 @@ std::string AgentMission::Refusal(const FleetSnapshot& s) const {
 }
 
 bool AgentMission::OnAssignment(const Assignment& assignment) {
-  auto it = members_.find(assignment.id);
-  if (it == members_.end()) return false;
+  Member* found = FindMember(assignment.id);
+  if (found == nullptr) return false;
   if (std::string why = Refusal(assignment); !why.empty()) return Refuse(std::move(why));
-  Member& m = it->second;
+  Member& m = *found;
   if (m.has_assignment && assignment.cycle < m.own_cycle && !new_server_) return false;
   m.has_assignment = true;
   m.shared = assignment.shared;

@@ -163,6 +163,10 @@ PhysicsWorld::Vehicle& PhysicsWorld::Find(VehicleId id) {
 }
 
 const PhysicsWorld::Vehicle& PhysicsWorld::Find(VehicleId id) const {
+  // Ids count up from 0, so a vehicle is at its id until one before it is removed.
+  if (id >= 0 && static_cast<std::size_t>(id) < vehicles_.size() && vehicles_[static_cast<std::size_t>(id)].id == id) {
+    return vehicles_[static_cast<std::size_t>(id)];
+  }
   auto it = std::lower_bound(vehicles_.begin(), vehicles_.end(), id,
                              [](const Vehicle& v, VehicleId value) { return v.id < value; });
   if (it == vehicles_.end() || it->id != id) {

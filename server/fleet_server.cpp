@@ -19,6 +19,7 @@ FleetServer::FleetServer(maps::World& world, const maps::Scenario& scenario, con
 
 void FleetServer::AddVehicle(int id, const std::string& name) {
   auto [it, inserted] = vehicles_.try_emplace(id);
+  if (inserted) Index(id, it->second);
   if (!inserted && it->second.alive) return;
   it->second.name = name;
   it->second.alive = true;
@@ -46,9 +47,21 @@ std::vector<int> FleetServer::alive() const {
 
 const std::string& FleetServer::Name(int id) const { return vehicles_.at(id).name; }
 
-void FleetServer::SetPosition(int id, const Eigen::Vector2d& position_m) {
+void FleetServer::Index(int id, VehicleRecord& v) {
+  if (id < 0 || id >= kDenseIds) return;
+  if (static_cast<std::size_t>(id) >= by_id_.size()) by_id_.resize(static_cast<std::size_t>(id) + 1, nullptr);
+  by_id_[static_cast<std::size_t>(id)] = &v;
+}
+
+FleetServer::VehicleRecord* FleetServer::FindRecord(int id) {
+  if (id >= 0 && id < kDenseIds) return static_cast<std::size_t>(id) < by_id_.size() ? by_id_[static_cast<std::size_t>(id)] : nullptr;
   auto it = vehicles_.find(id);
-  if (it != vehicles_.end() && it->second.alive) it->second.position_m = position_m;
+  return it == vehicles_.end() ? nullptr : &it->second;
+}
+
+void FleetServer::SetPosition(int id, const Eigen::Vector2d& position_m) {
+  VehicleRecord* v = FindRecord(id);
+  if (v != nullptr && v->alive) v->position_m = position_m;
 }
 
 bool FleetServer::OnCoverage(int id, std::uint64_t seq, double stamp_s, double kernel_time_s,
@@ -59,6 +72,7 @@ bool FleetServer::OnCoverage(int id, std::uint64_t seq, double stamp_s, double k
   // Late or duplicated: the newer totals are already in. A restarted vehicle counts from 1 again
   // but stamps later: its new running sums replace the old ones.
   if (v.reported && seq <= v.report.seq && !(seq < v.report.seq && stamp_s > v.report.stamp_s)) return false;
+  if (!v.reported) ++reporters_;
   v.reported = true;
   v.report.seq = seq;
   v.report.stamp_s = stamp_s;
@@ -200,8 +214,10 @@ int FleetServer::Cycle(double time_s) {
   if (partition_dirty_) Repartition();
 
   std::map<int, const maps::CoverageReport*> reports;
-  for (const auto& [id, v] : vehicles_)
-    if (v.reported) reports[id] = &v.report;
+  if (reporters_ > 0) {
+    for (const auto& [id, v] : vehicles_)
+      if (v.reported) reports[id] = &v.report;
+  }
   coverage_ = maps::SumFleetCoverage(reports, time_s, basis().size(), scenario_.ergodic.forgetting_time_s);
   return fired;
 }
@@ -259,6 +275,12 @@ void FleetServer::Restore(const State& state) {
   responses_ = state.responses;
   next_event_ = state.next_event;
   vehicles_ = state.vehicles;
+  reporters_ = 0;
+  by_id_.clear();
+  for (auto& [id, v] : vehicles_) {
+    reporters_ += v.reported ? 1 : 0;
+    Index(id, v);
+  }
   time_s_ = state.time_s;
   partition_dirty_ = true;
   effective_.resize(0);  // derived again (guard, visits) on the next cycle

@@ -140,6 +140,12 @@ class FleetServer {
   Eigen::VectorXd revisit_bounds_;
   Eigen::VectorXd weight_factors_;
   std::map<int, VehicleRecord> vehicles_;
+  // vehicles_ by id below kDenseIds, for the per-state lookups (a map node never moves).
+  static constexpr int kDenseIds = 1 << 20;
+  std::vector<VehicleRecord*> by_id_;
+  void Index(int id, VehicleRecord& v);
+  VehicleRecord* FindRecord(int id);
+  std::size_t reporters_ = 0;  // vehicles with a report (regions and tours have none: no walk of vehicles_)
   Eigen::VectorXd raw_weights_;
   Eigen::VectorXd effective_;
   std::vector<WeightChange> schedule_;

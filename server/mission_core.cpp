@@ -116,10 +116,7 @@ bool MissionCore::OnState(const agents::StateReport& s, std::uint64_t writer) {
   if (joins) {
     // Names reach logs and CSV files: made safe, and unique (another vehicle's name gets its id).
     std::string name = known != nullptr ? known->name : SafeName(s.name, s.id);
-    if (known == nullptr) {
-      for (const auto& [other_id, other] : roster_.members())
-        if (other.name == name) name = fmt::format("{}#{}", name, s.id);
-    }
+    if (known == nullptr && roster_.NameTaken(name)) name = fmt::format("{}#{}", name, s.id);
     const FleetEventRecord* joined = roster_.Join(s.id, name, next_time_s());
     fleet_.AddVehicle(s.id, name);
     Record(joined);
@@ -593,10 +590,11 @@ void MissionCore::AssignRegions(const std::vector<int>& alive, CycleOutput& out)
   // boosts some valve somewhere nearly every cycle, and re-sending every share then was 21 of the
   // 22 MB/s a 1,000-vehicle mission sent.
   const Eigen::VectorXd& weights = fleet_.effective_weights();
+  auto found = plan.shares.begin();  // both ascending by id: walked together, not looked up
   for (int id : alive) {
     Roster::Member& m = *roster_.Find(id);
-    const auto found = plan.shares.find(id);
-    if (found == plan.shares.end()) {
+    while (found != plan.shares.end() && found->first < id) ++found;
+    if (found == plan.shares.end() || found->first != id) {
       // Not in the split yet (it is coming): the field's shared target meanwhile.
       if (m.target_sent) continue;
       agents::Assignment a;

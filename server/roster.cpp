@@ -18,7 +18,9 @@ const FleetEventRecord* Roster::Join(int id, const std::string& name, double tim
     ReserveUpTo(id + 1);
   }
   if (rejoined && m.status == Status::kLost && lost_count_ > 0) --lost_count_;
+  if (rejoined && m.name != name) names_taken_.erase(m.name);  // names are unique: it was its own
   m.name = name;
+  Index(m);
   m.status = Status::kAlive;
   alive_stale_ = names_stale_ = true;
   m.joined_s = time_s;
@@ -42,12 +44,17 @@ const FleetEventRecord* Roster::Leave(int id, bool lost, double time_s) {
   return &event_;
 }
 
-Roster::Member* Roster::Find(int id) {
-  auto it = members_.find(id);
-  return it == members_.end() ? nullptr : &it->second;
+void Roster::Index(Member& m) {
+  names_taken_.insert(m.name);
+  if (m.id < 0 || m.id >= kDenseIds) return;
+  if (static_cast<std::size_t>(m.id) >= by_id_.size()) by_id_.resize(static_cast<std::size_t>(m.id) + 1, nullptr);
+  by_id_[static_cast<std::size_t>(m.id)] = &m;
 }
 
+Roster::Member* Roster::Find(int id) { return const_cast<Member*>(static_cast<const Roster*>(this)->Find(id)); }
+
 const Roster::Member* Roster::Find(int id) const {
+  if (id >= 0 && id < kDenseIds) return static_cast<std::size_t>(id) < by_id_.size() ? by_id_[static_cast<std::size_t>(id)] : nullptr;
   auto it = members_.find(id);
   return it == members_.end() ? nullptr : &it->second;
 }
@@ -88,6 +95,9 @@ const FleetEventRecord* Roster::Note(double time_s, std::string what, std::strin
 
 void Roster::Restore(State state) {
   members_ = std::move(state.members);
+  by_id_.clear();
+  names_taken_.clear();
+  for (auto& [id, m] : members_) Index(m);
   next_id_ = state.next_id;
   lost_count_ = state.lost_count;
   alive_count_ = 0;

@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <map>
 #include <string>
+#include <unordered_set>
 #include <vector>
 
 #include <Eigen/Core>
@@ -41,6 +42,8 @@ class Roster {
 
   /// first_free_id: the first id the server may issue (after the scenario's vehicles and joins).
   explicit Roster(int first_free_id = 0) : next_id_(first_free_id) {}
+  Roster(const Roster&) = delete;  // Find's index points into members_
+  Roster& operator=(const Roster&) = delete;
 
   /// Vehicle `id` was heard of (its first state, or again after it was gone). Returns the event
   /// to record, or nullptr if it was already alive.
@@ -51,6 +54,8 @@ class Roster {
 
   Member* Find(int id);
   const Member* Find(int id) const;
+  /// Whether some member (alive or gone) goes by `name`.
+  bool NameTaken(const std::string& name) const { return names_taken_.count(name) != 0; }
   /// Ascending ids, kept between changes of who is in (a 10,000-vehicle fleet walked its map of
   /// members for them every cycle).
   const std::vector<int>& alive() const;
@@ -80,6 +85,12 @@ class Roster {
 
  private:
   std::map<int, Member> members_;
+  // Find's index: member by id for ids below kDenseIds (a map node never moves), the rest by
+  // the map (a 10,000-vehicle cycle looked each vehicle up in the map several times).
+  static constexpr int kDenseIds = 1 << 20;
+  std::vector<Member*> by_id_;
+  std::unordered_set<std::string> names_taken_;
+  void Index(Member& m);
   int next_id_ = 0;
   std::size_t alive_count_ = 0;
   std::size_t lost_count_ = 0;

@@ -152,3 +152,40 @@ TEST_F(AgentMissionDoor, RefusesMalformedSnapshots) {
 
 }  // namespace
 }  // namespace sage::agents
+
+namespace sage::agents {
+namespace {
+
+// Vehicles added out of id order (a host's runtime joins) are kept, reported and removed by id:
+// the states come in ascending ids, each the vehicle of its id, and a removed one is gone.
+TEST(AgentMissionMembers, OutOfOrderIdsAreReportedAscendingAndRemovedById) {
+  const maps::Scenario scenario = maps::LoadScenario(kTwoXt);
+  const maps::World world(scenario);
+  AgentMission mission(world, scenario, Guidance::kErgodic);
+  const std::vector<VehicleId> added = {5, 2, 9, 0, 7};
+  for (VehicleId id : added) {
+    maps::VehicleSpec spec = scenario.vehicles.front();
+    spec.name = "rov" + std::to_string(id);
+    mission.AddVehicle(id, spec);
+  }
+  EXPECT_EQ(mission.ids(), (std::vector<VehicleId>{0, 2, 5, 7, 9}));
+  for (VehicleId id : added) {
+    EXPECT_TRUE(mission.Contains(id));
+    EXPECT_EQ(mission.Name(id), "rov" + std::to_string(id));
+  }
+  EXPECT_FALSE(mission.Contains(1));
+  EXPECT_THROW(mission.Name(1), std::out_of_range);
+  mission.RemoveVehicle(5);
+  EXPECT_THROW(mission.RemoveVehicle(5), std::out_of_range);
+  const AgentMission::CycleOutput out = mission.Step(0);
+  ASSERT_EQ(out.states.size(), 4u);
+  const std::vector<VehicleId> expected = {0, 2, 7, 9};
+  for (std::size_t k = 0; k < expected.size(); ++k) {
+    EXPECT_EQ(out.states[k].id, expected[k]);
+    EXPECT_EQ(out.states[k].name, "rov" + std::to_string(expected[k]));
+    EXPECT_EQ(out.states[k].state.position_m, mission.host().State(expected[k]).position_m);
+  }
+}
+
+}  // namespace
+}  // namespace sage::agents
