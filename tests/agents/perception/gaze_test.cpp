@@ -92,7 +92,7 @@ TEST(ValveGaze, LooksWhereALookIsWorthMost) {
   const maps::SensorModel model(s.sensors[0], world.obstacles(), s.control_rate_hz);
   const std::vector<Eigen::Vector2d> valves = s.ValvePositions();
   std::vector<int> scratch;
-  for (const std::vector<double> weights : {std::vector<double>{1, 2, 3, 4, 5}, std::vector<double>{0, 1, 1, 1, 1}}) {
+  for (const std::vector<double>& weights : {std::vector<double>{1, 2, 3, 4, 5}, std::vector<double>{0, 1, 1, 1, 1}}) {
     const ValveGaze::ValveWeight weight = [&](int k, const Eigen::Vector2d&) { return weights[static_cast<std::size_t>(k)]; };
     int not_nearest = 0;
     for (const Eigen::Vector2d& p : OpenWaterGrid(world, s, 0.1)) {
