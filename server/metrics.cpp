@@ -63,6 +63,7 @@ VisitTracker::VisitTracker(std::vector<Eigen::Vector2d> valves, double visit_rad
       rearm_radius_m_(rearm_radius_m),
       nearby_(valves_, visit_radius_m > 0.0 && std::isfinite(visit_radius_m) ? visit_radius_m : 1.0),
       visits_(valves_.size()),
+      last_visit_s_(valves_.size(), -std::numeric_limits<double>::infinity()),
       watches_of_(valves_.size()) {
   if (!(visit_radius_m_ > 0.0) || !(rearm_radius_m_ >= visit_radius_m_)) {
     throw std::invalid_argument("VisitTracker: need 0 < visit_radius <= rearm_radius");
@@ -103,6 +104,7 @@ void VisitTracker::EventWatch::Count(double visit_s) {
 
 void VisitTracker::Record(int valve, double time_s) {
   visits_[valve].Add(time_s);
+  last_visit_s_[valve] = visits_[valve].last_s();
   for (const std::size_t i : watches_of_[valve]) watches_[i].Count(time_s);
 }
 
@@ -164,6 +166,8 @@ void VisitTracker::Restore(std::vector<std::vector<int>> disarmed, std::vector<V
   }
   disarmed_ = std::move(disarmed);
   visits_ = std::move(visits);
+  last_visit_s_.resize(visits_.size());
+  for (std::size_t i = 0; i < visits_.size(); ++i) last_visit_s_[i] = visits_[i].last_s();
   watches_ = std::move(watches);
   watches_of_ = std::move(of);
 }
@@ -172,7 +176,7 @@ void VisitTracker::Forget(int vehicle) {
   if (vehicle >= 0 && static_cast<std::size_t>(vehicle) < disarmed_.size()) disarmed_[vehicle].clear();
 }
 
-double VisitTracker::LastVisit(int valve) const { return visits_.at(static_cast<std::size_t>(valve)).last_s(); }
+double VisitTracker::LastVisit(int valve) const { return last_visit_s_.at(static_cast<std::size_t>(valve)); }
 
 void FillEventResponses(const VisitTracker& visits, MissionMetrics& metrics) {
   const std::size_t n = std::min(metrics.events.size(), visits.watches().size());

@@ -605,7 +605,8 @@ void MissionCore::AssignRegions(const std::vector<int>& alive, CycleOutput& out)
       continue;
     }
     RegionShare& share = found->second;
-    Eigen::VectorXd own(static_cast<Eigen::Index>(share.valves.size()));
+    Eigen::VectorXd& own = share_weights_scratch_;  // no allocation a share a cycle
+    own.resize(static_cast<Eigen::Index>(share.valves.size()));
     for (std::size_t k = 0; k < share.valves.size(); ++k) own[static_cast<Eigen::Index>(k)] = weights[share.valves[k]];
     // Age weighting: w (1 + age / (L lap)); a valve just seen weighs its risk, one unseen for a
     // lap twice that (L = 1). A leak is as likely to have started at a valve as its risk and the

@@ -282,6 +282,7 @@ class MissionCore {
     std::size_t pending_risk_seen = 0;            // schedule entries when it started
   };
   RegionPlan region_plan_;
+  Eigen::VectorXd share_weights_scratch_;  // AssignRegions: a share's valve weights
 };
 
 /// Angle (rad, 0..pi) between two commanded velocities; 0 if either is (near) zero. The

@@ -157,11 +157,17 @@ TEST(VisitTracker, AgreesWithEveryPairScanned) {
   for (std::size_t i = 0; i < valves.size(); ++i) {
     EXPECT_EQ(tracker.visits()[i].count, times[i].size());
     EXPECT_EQ(tracker.visits()[i].recent, times[i]) << "valve " << i;  // fewer than kRecentVisits each
+    // The last visit, as kept for the age weighting, and the same in a restored copy.
+    EXPECT_EQ(tracker.LastVisit(static_cast<int>(i)),
+              times[i].empty() ? -std::numeric_limits<double>::infinity() : times[i].back()) << "valve " << i;
   }
   EXPECT_GT(visits, 50u);  // the walks do pass valves
-  // A checkpoint's arming state restores to the same counting.
+  // A checkpoint's arming state restores to the same counting, and the same last visits.
   VisitTracker restored(valves, visit, rearm);
   restored.Restore(tracker.disarmed(), tracker.visits(), tracker.watches());
+  for (std::size_t i = 0; i < valves.size(); ++i) {
+    EXPECT_EQ(restored.LastVisit(static_cast<int>(i)), tracker.LastVisit(static_cast<int>(i))) << "valve " << i;
+  }
   for (int v = 0; v < 6; ++v) EXPECT_EQ(restored.Update(v, at[v], 400.0), tracker.Update(v, at[v], 400.0));
   EXPECT_THROW(restored.Restore({{3, 2}}, tracker.visits(), {}), std::invalid_argument);
 }
