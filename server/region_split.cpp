@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <future>
 #include <limits>
 #include <stdexcept>
 #include <utility>
@@ -97,13 +98,26 @@ RegionSplit QuickRegionSplit(const maps::OccupancyGrid& blocked, const maps::Sce
   }
   RegionSplit split;
   split.provisional = true;
-  split.regions.reserve(n);
-  for (std::size_t k = 0; k < n; ++k) {
-    if (shares[k].empty()) shares[k].push_back(Nearest(by_valve, valve_points, valve_cell_m, starts[k], found));
-    std::vector<Eigen::Vector2d> points;
-    for (int i : shares[k]) points.push_back(valve_points[static_cast<std::size_t>(i)]);
-    const double lap_s = NearestNeighbourTour(points) / input.vehicles[k].speed_mps + scenario.astar.wait_per_lap_s;
-    split.regions.push_back(MakeRegion(std::move(shares[k]), lap_s, valves, scenario, blocked));
+  split.regions.resize(n);
+  // The regions' bases and targets are most of the work (1.9 s of the 10,000-vehicle field's,
+  // in one server cycle): built on two threads, each region by itself, so the same either way.
+  const auto build = [&](std::size_t begin, std::size_t end) {
+    std::vector<int> near;
+    for (std::size_t k = begin; k < end; ++k) {
+      if (shares[k].empty()) shares[k].push_back(Nearest(by_valve, valve_points, valve_cell_m, starts[k], near));
+      std::vector<Eigen::Vector2d> points;
+      for (int i : shares[k]) points.push_back(valve_points[static_cast<std::size_t>(i)]);
+      const double lap_s = NearestNeighbourTour(points) / input.vehicles[k].speed_mps + scenario.astar.wait_per_lap_s;
+      split.regions[k] = MakeRegion(std::move(shares[k]), lap_s, valves, scenario, blocked);
+    }
+  };
+  constexpr std::size_t kTwoThreadsFrom = 256;
+  if (n >= kTwoThreadsFrom) {
+    auto half = std::async(std::launch::async, build, n / 2, n);
+    build(0, n / 2);
+    half.get();
+  } else {
+    build(0, n);
   }
   split.input = std::move(input);
   return split;

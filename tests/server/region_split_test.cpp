@@ -8,6 +8,7 @@
 #include <limits>
 #include <random>
 #include <string>
+#include <tuple>
 #include <vector>
 
 #include <gtest/gtest.h>
@@ -114,60 +115,63 @@ TEST(RegionSplit, ALargeFieldTakesItsSplitWhenDue) {
 // The provisional split against brute force: every valve in the share of the vehicle nearest to
 // it (all vehicles searched), a vehicle with no valve nearer to it than to any other holding its
 // own nearest valve, and each lap the nearest-neighbour closed tour at its speed plus the waits.
+// 45 vehicles (one thread) and 300 (two threads build the regions).
 TEST(RegionSplit, ProvisionalSplitGivesEachValveItsNearestVehicle) {
-  const maps::Scenario s = Field(60, 200, 45, 10.0);
-  const maps::World world(s);
-  RegionSplitInput input;
-  std::mt19937_64 rng(11);
-  std::uniform_real_distribution<double> x(0.0, s.workspace.width_m), y(0.0, s.workspace.height_m);
-  for (int k = 0; k < 45; ++k) {
-    input.vehicle_ids.push_back(k);
-    input.vehicles.push_back({{x(rng), y(rng)}, 0.4 + 0.01 * k});
-  }
-  const RegionSplit split = QuickRegionSplit(world.blocked(), s, input);
-  ASSERT_TRUE(split.provisional);
-  ASSERT_EQ(split.regions.size(), 45u);
-  const std::vector<Eigen::Vector2d> valves = s.ValvePositions();
-  std::vector<int> owners(valves.size(), 0);
-  for (std::size_t i = 0; i < valves.size(); ++i) {
-    double best = std::numeric_limits<double>::infinity();
-    for (int k = 0; k < 45; ++k) {
-      const double d = (valves[i] - input.vehicles[k].position_m).squaredNorm();
-      if (d < best) best = d, owners[i] = k;
+  for (const auto& [xts, valve_count, n] : {std::tuple{60, 200, 45}, std::tuple{200, 700, 300}}) {
+    const maps::Scenario s = Field(xts, valve_count, n, 10.0);
+    const maps::World world(s);
+    RegionSplitInput input;
+    std::mt19937_64 rng(11);
+    std::uniform_real_distribution<double> x(0.0, s.workspace.width_m), y(0.0, s.workspace.height_m);
+    for (int k = 0; k < n; ++k) {
+      input.vehicle_ids.push_back(k);
+      input.vehicles.push_back({{x(rng), y(rng)}, 0.4 + 0.01 * k});
     }
-  }
-  for (int k = 0; k < 45; ++k) {
-    const PlannedRegion& r = split.regions[k];
-    ASSERT_FALSE(r.valves.empty()) << k;
-    std::vector<int> expected;
-    for (std::size_t i = 0; i < valves.size(); ++i)
-      if (owners[i] == k) expected.push_back(static_cast<int>(i));
-    if (expected.empty()) {
+    const RegionSplit split = QuickRegionSplit(world.blocked(), s, input);
+    ASSERT_TRUE(split.provisional);
+    ASSERT_EQ(split.regions.size(), static_cast<std::size_t>(n));
+    const std::vector<Eigen::Vector2d> valves = s.ValvePositions();
+    std::vector<int> owners(valves.size(), 0);
+    for (std::size_t i = 0; i < valves.size(); ++i) {
       double best = std::numeric_limits<double>::infinity();
-      int nearest = -1;
-      for (std::size_t i = 0; i < valves.size(); ++i) {
+      for (int k = 0; k < n; ++k) {
         const double d = (valves[i] - input.vehicles[k].position_m).squaredNorm();
-        if (d < best) best = d, nearest = static_cast<int>(i);
+        if (d < best) best = d, owners[i] = k;
       }
-      expected.push_back(nearest);
     }
-    EXPECT_EQ(r.valves, expected) << "vehicle " << k;
-    // Nearest-neighbour tour from the share's first valve, by brute force.
-    std::vector<int> left(r.valves.begin() + 1, r.valves.end());
-    Eigen::Vector2d at = valves[r.valves.front()];
-    double length = 0.0;
-    while (!left.empty()) {
-      auto next = std::min_element(left.begin(), left.end(), [&](int a, int b) {
-        return (valves[a] - at).norm() < (valves[b] - at).norm();
-      });
-      length += (valves[*next] - at).norm();
-      at = valves[*next];
-      left.erase(next);
+    for (int k = 0; k < n; ++k) {
+      const PlannedRegion& r = split.regions[k];
+      ASSERT_FALSE(r.valves.empty()) << k;
+      std::vector<int> expected;
+      for (std::size_t i = 0; i < valves.size(); ++i)
+        if (owners[i] == k) expected.push_back(static_cast<int>(i));
+      if (expected.empty()) {
+        double best = std::numeric_limits<double>::infinity();
+        int nearest = -1;
+        for (std::size_t i = 0; i < valves.size(); ++i) {
+          const double d = (valves[i] - input.vehicles[k].position_m).squaredNorm();
+          if (d < best) best = d, nearest = static_cast<int>(i);
+        }
+        expected.push_back(nearest);
+      }
+      EXPECT_EQ(r.valves, expected) << "vehicle " << k;
+      // Nearest-neighbour tour from the share's first valve, by brute force.
+      std::vector<int> left(r.valves.begin() + 1, r.valves.end());
+      Eigen::Vector2d at = valves[r.valves.front()];
+      double length = 0.0;
+      while (!left.empty()) {
+        auto next = std::min_element(left.begin(), left.end(), [&](int a, int b) {
+          return (valves[a] - at).norm() < (valves[b] - at).norm();
+        });
+        length += (valves[*next] - at).norm();
+        at = valves[*next];
+        left.erase(next);
+      }
+      length += (at - valves[r.valves.front()]).norm();
+      EXPECT_NEAR(r.lap_time_s, length / input.vehicles[k].speed_mps + s.astar.wait_per_lap_s, 1e-9) << k;
+      // Its box holds its valves.
+      for (int i : r.valves) EXPECT_TRUE(r.field->box().Contains(valves[i], 1e-9)) << k;
     }
-    length += (at - valves[r.valves.front()]).norm();
-    EXPECT_NEAR(r.lap_time_s, length / input.vehicles[k].speed_mps + s.astar.wait_per_lap_s, 1e-9) << k;
-    // Its box holds its valves.
-    for (int i : r.valves) EXPECT_TRUE(r.field->box().Contains(valves[i], 1e-9)) << k;
   }
 }
 
