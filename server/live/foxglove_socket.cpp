@@ -8,7 +8,9 @@
 
 #include <algorithm>
 #include <atomic>
+#include <chrono>
 #include <cstring>
+#include <future>
 #include <map>
 #include <mutex>
 #include <stdexcept>
@@ -228,12 +230,24 @@ FoxgloveSocket::FoxgloveSocket(int port, std::string token, std::string server_n
 
 FoxgloveSocket::~FoxgloveSocket() {
   Impl& m = *impl_;
-  websocketpp::lib::error_code ec;
-  m.ws.stop_listening(ec);
-  {
-    std::lock_guard<std::mutex> lock(m.mutex);
-    for (const auto& [h, subscriptions] : m.clients) m.ws.close(h, websocketpp::close::status::going_away, "mission ended", ec);
-  }
+  // The acceptor is the socket thread's (asio's objects are not thread-safe). Closed from here,
+  // it raced that thread: the aborted accept's handler (websocketpp's handle_accept) re-arms the
+  // accept while websocketpp still says it is listening, and asio's start_op found the acceptor's
+  // descriptor gone under its lock (SIGSEGV at the server's teardown, now and then on a loaded
+  // machine). So the thread stops listening and closes the clients itself, then the loop stops.
+  std::promise<void> closed;
+  asio::post(m.ws.get_io_service(), [&m, &closed] {
+    websocketpp::lib::error_code ec;
+    m.ws.stop_listening(ec);
+    {
+      std::lock_guard<std::mutex> lock(m.mutex);
+      for (const auto& [h, subscriptions] : m.clients) m.ws.close(h, websocketpp::close::status::going_away, "mission ended", ec);
+    }
+    closed.set_value();
+  });
+  // Bounded: if the thread never got to it, the endpoint's destructor closes the acceptor after
+  // the join below, with no thread left to race.
+  closed.get_future().wait_for(std::chrono::seconds(2));
   m.ws.stop();
   if (m.thread.joinable()) m.thread.join();
 }
