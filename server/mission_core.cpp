@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <optional>
 #include <sstream>
 #include <stdexcept>
 
@@ -573,6 +574,11 @@ void MissionCore::AssignRegions(const std::vector<int>& alive, CycleOutput& out)
     // its plan is due (RegionSplitDelayCycles) while the fleet flies its old regions on.
     RegionSplitInput input{alive, FleetVehicles(alive), fleet_.schedule().back().weights, scenario_.fleet.risk_share, by_risk};
     const std::int64_t delay = RegionSplitDelayCycles(scenario_.ValvePositions().size(), scenario_.control_rate_hz);
+    // The first split of a large field: each valve to its nearest vehicle until it is due, not
+    // the field's shared basis (region_split.h); made before the planning thread starts, so that
+    // its two threads have the cores.
+    std::optional<RegionSplit> provisional;
+    if (delay > 0 && plan.shares.empty()) provisional = QuickRegionSplit(world_.blocked(), scenario_, input);
     plan.pending = std::make_unique<PendingRegionSplit>(world_.astar_grid(), world_.blocked(), scenario_, std::move(input),
                                                         cycle_ + delay, delay > 0);
     plan.pending_started_s = time_s_;
@@ -580,10 +586,8 @@ void MissionCore::AssignRegions(const std::vector<int>& alive, CycleOutput& out)
     if (delay == 0) {
       TakeSplit(plan.pending->Take());
       plan.pending.reset();
-    } else if (plan.shares.empty()) {
-      // The first split of a large field: each valve to its nearest vehicle until it is due, not
-      // the field's shared basis (region_split.h).
-      TakeSplit(QuickRegionSplit(world_.blocked(), scenario_, {alive, FleetVehicles(alive), {}, 0.0, false}));
+    } else if (provisional) {
+      TakeSplit(std::move(*provisional));
     }
   }
   // A target is sent again only when its own share's weights change: at fleet scale the guard
