@@ -40,19 +40,26 @@ PlannedRegion MakeRegion(std::vector<int> valve_indices, double lap_time_s, cons
 }
 
 // Index of the point of `index` (built over `points`) nearest to x, searching rings of
-// cell_m outward; ties to the lower index. points is never empty.
-int Nearest(const maps::NearbyPoints& index, const std::vector<Eigen::Vector2d>& points, double cell_m,
+// cell_m outward up to `reach_m`, then all points; ties to the lower index. points is never empty.
+int Nearest(const maps::NearbyPoints& index, const std::vector<Eigen::Vector2d>& points, double cell_m, double reach_m,
             const Eigen::Vector2d& x, std::vector<int>& found) {
-  for (double radius = cell_m;; radius *= 2.0) {
-    index.Within(x, radius, found);
-    if (found.empty()) continue;
-    int best = found.front();
-    for (int k : found) {
-      const double d = (points[k] - x).squaredNorm(), b = (points[best] - x).squaredNorm();
-      if (d < b || (d == b && k < best)) best = k;
+  const auto nearest_of = [&](const auto& candidates) {
+    int best = -1;
+    double best_d = std::numeric_limits<double>::infinity();
+    for (int k : candidates) {
+      const double d = (points[static_cast<std::size_t>(k)] - x).squaredNorm();
+      if (best < 0 || d < best_d || (d == best_d && k < best)) best = k, best_d = d;
     }
-    return best;  // every point outside the radius is farther than any inside it
+    return best;
+  };
+  for (double radius = cell_m; radius <= reach_m; radius *= 2.0) {
+    index.Within(x, radius, found);
+    // Every point outside the radius is farther than any inside it.
+    if (!found.empty()) return nearest_of(found);
   }
+  found.resize(points.size());  // nothing within reach (x off the field): all of them
+  for (std::size_t k = 0; k < points.size(); ++k) found[k] = static_cast<int>(k);
+  return std::max(0, nearest_of(found));
 }
 
 // The closed tour through p taken nearest-first from p[0] (straight line, m).
@@ -90,10 +97,11 @@ RegionSplit QuickRegionSplit(const maps::OccupancyGrid& blocked, const maps::Sce
   const double vehicle_cell_m = std::max(1.0, std::sqrt(area / static_cast<double>(n)));
   const double valve_cell_m = std::max(1.0, std::sqrt(area / static_cast<double>(valves.size())));
   const maps::NearbyPoints by_vehicle(starts, vehicle_cell_m), by_valve(valve_points, valve_cell_m);
+  const double reach_m = 2.0 * std::hypot(scenario.workspace.width_m, scenario.workspace.height_m);
   std::vector<std::vector<int>> shares(n);
   std::vector<int> found;
   for (std::size_t i = 0; i < valves.size(); ++i) {
-    shares[static_cast<std::size_t>(Nearest(by_vehicle, starts, vehicle_cell_m, valve_points[i], found))].push_back(
+    shares[static_cast<std::size_t>(Nearest(by_vehicle, starts, vehicle_cell_m, reach_m, valve_points[i], found))].push_back(
         static_cast<int>(i));
   }
   RegionSplit split;
@@ -104,7 +112,7 @@ RegionSplit QuickRegionSplit(const maps::OccupancyGrid& blocked, const maps::Sce
   const auto build = [&](std::size_t begin, std::size_t end) {
     std::vector<int> near;
     for (std::size_t k = begin; k < end; ++k) {
-      if (shares[k].empty()) shares[k].push_back(Nearest(by_valve, valve_points, valve_cell_m, starts[k], near));
+      if (shares[k].empty()) shares[k].push_back(Nearest(by_valve, valve_points, valve_cell_m, reach_m, starts[k], near));
       std::vector<Eigen::Vector2d> points;
       for (int i : shares[k]) points.push_back(valve_points[static_cast<std::size_t>(i)]);
       const double lap_s = NearestNeighbourTour(points) / input.vehicles[k].speed_mps + scenario.astar.wait_per_lap_s;

@@ -175,5 +175,23 @@ TEST(RegionSplit, ProvisionalSplitGivesEachValveItsNearestVehicle) {
   }
 }
 
+// A vehicle far off the field (beyond the rings searched) still gets the valve nearest to it, and
+// no valve: the other vehicle, on the field, is nearer to every one.
+TEST(RegionSplit, ProvisionalSplitReachesAVehicleFarOffTheField) {
+  const maps::Scenario s = Field(10, 30, 2, 10.0);
+  const maps::World world(s);
+  RegionSplitInput input;
+  input.vehicle_ids = {0, 1};
+  const Eigen::Vector2d far(-5.0 * s.workspace.width_m, -5.0 * s.workspace.height_m);
+  input.vehicles = {{s.vehicles[0].start_m, 0.5}, {far, 0.5}};
+  const RegionSplit split = QuickRegionSplit(world.blocked(), s, input);
+  const std::vector<Eigen::Vector2d> valves = s.ValvePositions();
+  int nearest = 0;
+  for (int i = 1; i < static_cast<int>(valves.size()); ++i)
+    if ((valves[i] - far).norm() < (valves[nearest] - far).norm()) nearest = i;
+  EXPECT_EQ(split.regions[1].valves, std::vector<int>{nearest});
+  EXPECT_EQ(split.regions[0].valves.size(), valves.size());
+}
+
 }  // namespace
 }  // namespace sage::server
