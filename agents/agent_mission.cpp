@@ -32,8 +32,7 @@ void AgentMission::AddVehicle(VehicleId id, const maps::VehicleSpec& spec, const
   }
   host_.AddVehicle(id, placed);
   // Hosts add their vehicles in ascending ids: appended, but kept in order whatever comes.
-  const auto at = std::lower_bound(members_.begin(), members_.end(), id,
-                                   [](const auto& m, VehicleId value) { return m.first < value; });
+  const auto at = members_.begin() + Slot(id);
   Member& member = at != members_.end() && at->first == id ? at->second : members_.insert(at, {id, Member{}})->second;
   member.name = spec.name;
   if (resume != nullptr && resume->coverage.seq > 0) {
@@ -49,19 +48,23 @@ void AgentMission::RemoveVehicle(VehicleId id) {
   host_.RemoveVehicle(id);
 }
 
-std::ptrdiff_t AgentMission::MemberIndex(VehicleId id) const {
+std::ptrdiff_t AgentMission::Slot(VehicleId id) const {
   // A fleet of ids 0..N-1 on one host (in-process) holds each at its id.
   if (id >= 0 && static_cast<std::size_t>(id) < members_.size() && members_[static_cast<std::size_t>(id)].first == id) {
     return id;
   }
-  const auto at = std::lower_bound(members_.begin(), members_.end(), id,
-                                   [](const auto& m, VehicleId value) { return m.first < value; });
-  return at != members_.end() && at->first == id ? at - members_.begin() : -1;
+  return std::lower_bound(members_.begin(), members_.end(), id,
+                          [](const auto& m, VehicleId value) { return m.first < value; }) -
+         members_.begin();
+}
+
+std::ptrdiff_t AgentMission::MemberIndex(VehicleId id) const {
+  const std::ptrdiff_t at = Slot(id);
+  return static_cast<std::size_t>(at) < members_.size() && members_[static_cast<std::size_t>(at)].first == id ? at : -1;
 }
 
 AgentMission::Member* AgentMission::FindMember(VehicleId id) {
-  const std::ptrdiff_t at = MemberIndex(id);
-  return at < 0 ? nullptr : &members_[static_cast<std::size_t>(at)].second;
+  return const_cast<Member*>(std::as_const(*this).FindMember(id));
 }
 
 const AgentMission::Member* AgentMission::FindMember(VehicleId id) const {

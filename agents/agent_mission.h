@@ -108,6 +108,7 @@ class AgentMission {
   // By id, ascending, in one block: walked three times a cycle, where a std::map's 10,000 nodes
   // scattered over the heap had cost a cache miss a step (4 ms of a 10,000-vehicle cycle).
   std::vector<std::pair<VehicleId, Member>> members_;
+  std::ptrdiff_t Slot(VehicleId id) const;         // where id is or would go in members_
   std::ptrdiff_t MemberIndex(VehicleId id) const;  // into members_, -1 if none
   Member* FindMember(VehicleId id);
   const Member* FindMember(VehicleId id) const;

@@ -19,7 +19,7 @@ FleetServer::FleetServer(maps::World& world, const maps::Scenario& scenario, con
 
 void FleetServer::AddVehicle(int id, const std::string& name) {
   auto [it, inserted] = vehicles_.try_emplace(id);
-  if (inserted) Index(id, it->second);
+  if (inserted) by_id_.Add(id, it->second);
   if (!inserted && it->second.alive) return;
   it->second.name = name;
   it->second.alive = true;
@@ -47,20 +47,8 @@ std::vector<int> FleetServer::alive() const {
 
 const std::string& FleetServer::Name(int id) const { return vehicles_.at(id).name; }
 
-void FleetServer::Index(int id, VehicleRecord& v) {
-  if (id < 0 || id >= kDenseIds) return;
-  if (static_cast<std::size_t>(id) >= by_id_.size()) by_id_.resize(static_cast<std::size_t>(id) + 1, nullptr);
-  by_id_[static_cast<std::size_t>(id)] = &v;
-}
-
-FleetServer::VehicleRecord* FleetServer::FindRecord(int id) {
-  if (id >= 0 && id < kDenseIds) return static_cast<std::size_t>(id) < by_id_.size() ? by_id_[static_cast<std::size_t>(id)] : nullptr;
-  auto it = vehicles_.find(id);
-  return it == vehicles_.end() ? nullptr : &it->second;
-}
-
 void FleetServer::SetPosition(int id, const Eigen::Vector2d& position_m) {
-  VehicleRecord* v = FindRecord(id);
+  VehicleRecord* v = by_id_.Find(vehicles_, id);
   if (v != nullptr && v->alive) v->position_m = position_m;
 }
 
@@ -275,12 +263,9 @@ void FleetServer::Restore(const State& state) {
   responses_ = state.responses;
   next_event_ = state.next_event;
   vehicles_ = state.vehicles;
+  by_id_.Rebuild(vehicles_);
   reporters_ = 0;
-  by_id_.clear();
-  for (auto& [id, v] : vehicles_) {
-    reporters_ += v.reported ? 1 : 0;
-    Index(id, v);
-  }
+  for (const auto& [id, v] : vehicles_) reporters_ += v.reported ? 1 : 0;
   time_s_ = state.time_s;
   partition_dirty_ = true;
   effective_.resize(0);  // derived again (guard, visits) on the next cycle

@@ -16,6 +16,7 @@
 #include "maps/coverage.h"
 #include "maps/risk_field.h"
 #include "maps/scenario/scenario.h"
+#include "server/id_index.h"
 #include "maps/spectral_basis.h"
 #include "maps/world.h"
 #include "server/metrics.h"
@@ -140,11 +141,7 @@ class FleetServer {
   Eigen::VectorXd revisit_bounds_;
   Eigen::VectorXd weight_factors_;
   std::map<int, VehicleRecord> vehicles_;
-  // vehicles_ by id below kDenseIds, for the per-state lookups (a map node never moves).
-  static constexpr int kDenseIds = 1 << 20;
-  std::vector<VehicleRecord*> by_id_;
-  void Index(int id, VehicleRecord& v);
-  VehicleRecord* FindRecord(int id);
+  IdIndex<VehicleRecord> by_id_;  // vehicles_', for the per-state lookups
   std::size_t reporters_ = 0;  // vehicles with a report (regions and tours have none: no walk of vehicles_)
   Eigen::VectorXd raw_weights_;
   Eigen::VectorXd effective_;

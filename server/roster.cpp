@@ -16,11 +16,12 @@ const FleetEventRecord* Roster::Join(int id, const std::string& name, double tim
     m.id = id;
     m.index = static_cast<int>(members_.size()) - 1;
     ReserveUpTo(id + 1);
+    by_id_.Add(id, m);
   }
   if (rejoined && m.status == Status::kLost && lost_count_ > 0) --lost_count_;
   if (rejoined && m.name != name) names_taken_.erase(m.name);  // names are unique: it was its own
   m.name = name;
-  Index(m);
+  names_taken_.insert(m.name);
   m.status = Status::kAlive;
   alive_stale_ = names_stale_ = true;
   m.joined_s = time_s;
@@ -44,20 +45,9 @@ const FleetEventRecord* Roster::Leave(int id, bool lost, double time_s) {
   return &event_;
 }
 
-void Roster::Index(Member& m) {
-  names_taken_.insert(m.name);
-  if (m.id < 0 || m.id >= kDenseIds) return;
-  if (static_cast<std::size_t>(m.id) >= by_id_.size()) by_id_.resize(static_cast<std::size_t>(m.id) + 1, nullptr);
-  by_id_[static_cast<std::size_t>(m.id)] = &m;
-}
+Roster::Member* Roster::Find(int id) { return by_id_.Find(members_, id); }
 
-Roster::Member* Roster::Find(int id) { return const_cast<Member*>(static_cast<const Roster*>(this)->Find(id)); }
-
-const Roster::Member* Roster::Find(int id) const {
-  if (id >= 0 && id < kDenseIds) return static_cast<std::size_t>(id) < by_id_.size() ? by_id_[static_cast<std::size_t>(id)] : nullptr;
-  auto it = members_.find(id);
-  return it == members_.end() ? nullptr : &it->second;
-}
+const Roster::Member* Roster::Find(int id) const { return by_id_.Find(members_, id); }
 
 const std::vector<int>& Roster::alive() const {
   if (alive_stale_) {
@@ -95,9 +85,9 @@ const FleetEventRecord* Roster::Note(double time_s, std::string what, std::strin
 
 void Roster::Restore(State state) {
   members_ = std::move(state.members);
-  by_id_.clear();
+  by_id_.Rebuild(members_);
   names_taken_.clear();
-  for (auto& [id, m] : members_) Index(m);
+  for (const auto& [id, m] : members_) names_taken_.insert(m.name);
   next_id_ = state.next_id;
   lost_count_ = state.lost_count;
   alive_count_ = 0;

@@ -12,6 +12,7 @@
 #include <Eigen/Core>
 
 #include "agents/fleet_messages.h"
+#include "server/id_index.h"
 
 namespace sage::server {
 
@@ -85,12 +86,8 @@ class Roster {
 
  private:
   std::map<int, Member> members_;
-  // Find's index: member by id for ids below kDenseIds (a map node never moves), the rest by
-  // the map (a 10,000-vehicle cycle looked each vehicle up in the map several times).
-  static constexpr int kDenseIds = 1 << 20;
-  std::vector<Member*> by_id_;
+  IdIndex<Member> by_id_;  // Find's (a 10,000-vehicle cycle looked each vehicle up several times)
   std::unordered_set<std::string> names_taken_;
-  void Index(Member& m);
   int next_id_ = 0;
   std::size_t alive_count_ = 0;
   std::size_t lost_count_ = 0;

@@ -63,17 +63,16 @@ class Checker {
   // character (a valve named with a newline or ESC forged log lines and broke fleet_events.csv).
   void Name(const std::string& field, const std::string& name) const {
     if (name.empty()) Fail(field, "\"\"", "must not be empty");
+    // Shown as printable UTF-8 (a cut never splits a character, a control shows as ?).
     if (name.size() > kMaxNameLength) {
-      Fail(field, name.substr(0, 20) + "...", "must be at most " + std::to_string(kMaxNameLength) + " characters");
+      Fail(field, PrintableUtf8(name, 20), "must be at most " + std::to_string(kMaxNameLength) + " characters");
     }
     if (FirstNonUtf8(name) != std::string::npos) {
       Fail(field, PrintableUtf8(name, 20), "must be UTF-8 text (a byte that is not shown as ?)");
     }
     const auto control = [](char ch) { return static_cast<unsigned char>(ch) < 0x20 || ch == 0x7f; };
     if (std::any_of(name.begin(), name.end(), control)) {
-      std::string shown = name;
-      std::replace_if(shown.begin(), shown.end(), control, '?');
-      Fail(field, shown, "must not hold control characters (newline, tab, escape: shown as ?)");
+      Fail(field, PrintableUtf8(name, kMaxNameLength), "must not hold control characters (newline, tab, escape: shown as ?)");
     }
   }
   // A valid name not used before by another entry of the same kind.
@@ -243,12 +242,8 @@ bool OnlyOf(const std::string& text, const std::string& punctuation) {
   });
 }
 
-// Shown in a one-line error: control characters as '?', at most 64 characters.
-std::string Shown(const std::string& text) {
-  std::string out = text.substr(0, 64);
-  std::replace_if(out.begin(), out.end(), [](char ch) { return static_cast<unsigned char>(ch) < 0x20 || ch == 0x7f; }, '?');
-  return out.empty() ? "\"\"" : text.size() > 64 ? out + "..." : out;
-}
+// Shown in a one-line error: printable UTF-8, control characters as '?', at most 64 characters.
+std::string Shown(const std::string& text) { return text.empty() ? "\"\"" : PrintableUtf8(text, 64); }
 
 }  // namespace
 
