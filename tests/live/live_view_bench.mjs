@@ -12,8 +12,17 @@
 //        [--page-fps N]
 // (replay: the page alone, `sage view` of the run "off" just recorded, played at 1x, no mission running;
 // viewer-niced: the page in a chromium run under `nice -n 19`, the browser taking only the CPU the
-// mission leaves, as a browser on the operator's own machine would take none of the mission's)
+// mission leaves, as a browser on the operator's own machine would take none of the mission's;
+// viewer-user / viewer-user-niced: the same as viewer / viewer-niced with chromium run as the
+// unprivileged user nobody, as an operator's browser runs. Run as root, chromium raises its own
+// display and compositor threads to nice -8 (its thread priorities; root may lower a nice value),
+// above the mission's processes, and resets the nice 19 of viewer-niced; an unprivileged
+// chromium cannot. Each run notes the lowest nice value seen among chromium's threads;
+// stream: no browser, a client that reads the page's event stream (/api/stream, every frame the
+// server sends a page) and draws nothing — the server's whole work for a watching page, as for a
+// page on the operator's own machine, without a renderer on the mission's cores.)
 import fs from "node:fs";
+import http from "node:http";
 import os from "node:os";
 import path from "node:path";
 import { chromium } from "playwright-core";
@@ -26,6 +35,13 @@ const field = path.resolve(args.field || path.join(args["source-dir"], "scenario
 const duration = Number(args.duration || 60);
 const runs = Number(args.runs || 1);
 const configs = (args.configs || "off,idle,viewer").split(",");
+const KNOWN_CONFIGS = ["off", "idle", "stream", "viewer", "viewer-niced", "viewer-user", "viewer-user-niced", "replay"];
+for (const config of configs) {
+  if (!KNOWN_CONFIGS.includes(config)) {
+    console.error(`--configs: ${config}: not one of ${KNOWN_CONFIGS.join(", ")}`);
+    process.exit(2);
+  }
+}
 const extra = args.vehicles ? ["-n", args.vehicles] : [];
 const load = () => os.loadavg().map((x) => x.toFixed(2)).join(" ");
 // CPU seconds used so far by every chromium process (user + system).
@@ -36,6 +52,34 @@ const chromiumCpu = () => {
     return NaN;
   }
 };
+
+// The lowest nice value among chromium's threads now (Infinity if none runs).
+const chromiumLowestNice = () => {
+  try {
+    return Number(execSync("ps -eLo ni=,comm= | awk '$2 == \"chromium\" && (m == \"\" || $1 < m) {m = $1} END {print m == \"\" ? \"inf\" : m}'").toString());
+  } catch (e) {
+    return Infinity;
+  }
+};
+
+// The chromium a configuration runs: Debian's, or a wrapper that lowers its priority and/or drops
+// root. Unprivileged, chromium gets the profile directory playwright made for it and a home there.
+function chromiumFor(config) {
+  if (config === "viewer") return "/usr/bin/chromium";
+  const niced = config.endsWith("-niced") ? "nice -n 19 " : "";
+  const user = config.startsWith("viewer-user");
+  const wrapper = path.join(out, `chromium-${config}`);
+  const body = user
+    ? [
+        "#!/bin/sh",
+        'profile=$(printf "%s\\n" "$@" | sed -n "s/^--user-data-dir=//p" | head -1)',
+        '[ -n "$profile" ] && chown -R nobody:nogroup "$profile"',
+        `HOME="\${profile:-/tmp}" exec ${niced}setpriv --reuid=nobody --regid=nogroup --clear-groups --inh-caps=-all --bounding-set=-all /usr/bin/chromium "$@"`,
+      ]
+    : ["#!/bin/sh", `exec ${niced}/usr/bin/chromium "$@"`];
+  fs.writeFileSync(wrapper, body.join("\n") + "\n", { mode: 0o755 });
+  return wrapper;
+}
 
 function serverFigures(output) {
   const cycle = output.match(/server cycle ([0-9.]+) ms mean, ([0-9.]+) ms p99/);
@@ -64,14 +108,26 @@ async function once(config, k) {
   const result = { config, run: k, load_before: before };
   let browser = null;
   const samples = [];
-  if (config === "viewer" || config === "viewer-niced") {
+  let stream = null;
+  if (config === "stream") {
     const live = await liveEndpoints(dir);
-    let executablePath = "/usr/bin/chromium";
-    if (config === "viewer-niced") {
-      executablePath = path.join(out, "chromium-niced");
-      fs.writeFileSync(executablePath, '#!/bin/sh\nexec nice -n 19 /usr/bin/chromium "$@"\n', { mode: 0o755 });
-    }
-    browser = await chromium.launch({ executablePath, args: CHROMIUM_FLAGS });
+    stream = { frames: 0, bytes: 0, request: null };
+    await new Promise((resolve, reject) => {
+      stream.request = http.get({ host: "127.0.0.1", port: live.http_port, path: `/api/stream?token=${live.token}` }, (res) => {
+        if (res.statusCode !== 200) reject(new Error(`/api/stream answered ${res.statusCode}`));
+        res.on("data", (chunk) => {
+          stream.bytes += chunk.length;
+          stream.frames += chunk.toString().split("\ndata: ").length - 1 + (chunk.toString().startsWith("data: ") ? 1 : 0);
+        });
+        res.on("end", () => {});
+        resolve();
+      });
+      stream.request.on("error", () => {});
+    });
+  }
+  if (config.startsWith("viewer")) {
+    const live = await liveEndpoints(dir);
+    browser = await chromium.launch({ executablePath: chromiumFor(config), args: CHROMIUM_FLAGS });
     const page = await browser.newPage({ viewport: { width: 1400, height: 820 } });
     // --page-fps N: the page's own cap on redraws (#fps=N; the page's default is 30).
     const fps = args["page-fps"] ? `&fps=${args["page-fps"]}` : "";
@@ -79,8 +135,10 @@ async function once(config, k) {
     await page.waitForFunction(() => window.sageView && window.sageView.ready, null, { timeout: 120000 });
     // One sample a second while the mission runs (the page's counters are over its last second).
     const cpu0 = chromiumCpu(), wall0 = Date.now();
+    let lowestNice = Infinity;
     while (launch.exitCode === null) {
       await sleep(1000);
+      lowestNice = Math.min(lowestNice, chromiumLowestNice());
       try {
         const v = await page.evaluate(() => ({ fps: window.sageView.fps, rate: window.sageView.updateRate,
                                                 vehicles: window.sageView.vehiclesShown, t: window.sageView.time }));
@@ -90,10 +148,15 @@ async function once(config, k) {
       }
     }
     result.chromium_cores = (chromiumCpu() - cpu0) / ((Date.now() - wall0) / 1000);
+    result.chromium_lowest_nice = lowestNice;
     await page.screenshot({ path: path.join(out, `${config}_${k}.png`) }).catch(() => {});
   }
   const exit = await launch.exited;
   if (browser) await browser.close();
+  if (stream) {
+    stream.request.destroy();
+    Object.assign(result, { stream_frames: stream.frames, stream_mb: stream.bytes / 1e6 });
+  }
   Object.assign(result, serverFigures(launch.output), { exit: exit.code, wall_s: (Date.now() - started) / 1000, load_after: load() });
   if (samples.length) {
     // The first seconds are start-up (every host joining); the figures are of the steady part.
@@ -152,14 +215,16 @@ fs.writeFileSync(path.join(out, "live_view_bench.json"), JSON.stringify({ field,
 const rows = results.map((r) =>
   `| ${r.config} | ${r.run} | ${r.cycle_mean_ms} / ${r.cycle_p99_ms} | ${r.real_time_factor}x | ${r.lockstep} | ` +
   `${r.fps_median === undefined ? "-" : `${r.fps_min.toFixed(1)} / ${r.fps_p10.toFixed(1)} / ${r.fps_median.toFixed(1)}`} | ` +
-  `${r.updates_median === undefined ? "-" : `${r.updates_min.toFixed(1)} / ${r.updates_median.toFixed(1)}`} | ` +
+  `${r.stream_frames !== undefined ? `${(r.stream_frames / duration).toFixed(1)} a second read (${r.stream_mb.toFixed(1)} MB)`
+    : r.updates_median === undefined ? "-" : `${r.updates_min.toFixed(1)} / ${r.updates_median.toFixed(1)}`} | ` +
   `${r.chromium_cores === undefined ? "-" : r.chromium_cores.toFixed(2)} | ` +
+  `${r.chromium_lowest_nice === undefined ? "-" : r.chromium_lowest_nice} | ` +
   `${Number.isNaN(r.loop_copy_ms) ? "-" : `${r.loop_copy_ms} / ${r.view_thread_ms}`} | ${r.load_before} -> ${r.load_after} |`);
 const table = [
   `${field}, ${duration} s per run`,
   "",
-  "| live view | run | server cycle mean / p99 (ms) | real time | cycles in lockstep | page frames/s min / p10 / median | updates/s min / median | chromium (cores) | view's ms a frame: loop / own thread | load average before -> after |",
-  "|---|---:|---:|---:|---:|---:|---:|---:|---:|---|",
+  "| live view | run | server cycle mean / p99 (ms) | real time | cycles in lockstep | page frames/s min / p10 / median | updates/s min / median | chromium (cores) | chromium's lowest nice | view's ms a frame: loop / own thread | load average before -> after |",
+  "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|",
   ...rows,
 ].join("\n");
 fs.writeFileSync(path.join(out, "live_view_bench.md"), table + "\n");
