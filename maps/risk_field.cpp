@@ -95,19 +95,38 @@ Eigen::VectorXd RiskField::GaussianCoefficients(const SpectralBasis& basis, cons
   // product of cosines splits into the two sign patterns (kappa1, +-kappa2):
   //   phi_k = (1/h_k) (1/2) sum_{s=+-1} cos(kappa1 mu1 + s kappa2 mu2) exp(-q_s^T Sigma q_s / 2).
   // This integrates over the whole plane, i.e. it is exact for the Gaussian mirrored into the box.
+  // With cos(A +- B) = cos A cos B -+ sin A sin B the cosines come from 2K per-axis values
+  // rather than 2K^2 calls, and exp(-q^T Sigma q / 2) = e_x(kappa1) e_y(kappa2) exp(-+kappa1
+  // kappa2 sigma12); without correlation (every valve's covariance is diagonal) the two patterns
+  // add to e_x e_y cos A cos B, which is separable: O(K) transcendental calls, not O(K^2). A
+  // 10,000-vehicle field's 35,000 valves at K = 64 took ~3 s of cosines before the first cycle.
   const int order = basis.order();
   Eigen::VectorXd phi(basis.size());
   const double s11 = g.covariance_m2(0, 0);
   const double s12 = 0.5 * (g.covariance_m2(0, 1) + g.covariance_m2(1, 0));
   const double s22 = g.covariance_m2(1, 1);
+  Eigen::ArrayXd cos_x(order), sin_x(order), exp_x(order), cos_y(order), sin_y(order), exp_y(order);
+  for (int k = 0; k < order; ++k) {
+    const double a = basis.kappa_x()[k], b = basis.kappa_y()[k];
+    cos_x[k] = std::cos(a * g.mean_m.x()), sin_x[k] = std::sin(a * g.mean_m.x());
+    cos_y[k] = std::cos(b * g.mean_m.y()), sin_y[k] = std::sin(b * g.mean_m.y());
+    exp_x[k] = std::exp(-0.5 * a * a * s11), exp_y[k] = std::exp(-0.5 * b * b * s22);
+  }
   for (int k1 = 0; k1 < order; ++k1) {
     const double a = basis.kappa_x()[k1];
     for (int k2 = 0; k2 < order; ++k2) {
-      const double b = basis.kappa_y()[k2];
-      const double quad_diag = a * a * s11 + b * b * s22;
-      const double plus = std::cos(a * g.mean_m.x() + b * g.mean_m.y()) * std::exp(-0.5 * (quad_diag + 2 * a * b * s12));
-      const double minus = std::cos(a * g.mean_m.x() - b * g.mean_m.y()) * std::exp(-0.5 * (quad_diag - 2 * a * b * s12));
       const int i = SpectralBasis::Index(k1, k2, order);
+      const double cc = cos_x[k1] * cos_y[k2];
+      if (s12 == 0.0) {
+        phi[i] = exp_x[k1] * exp_y[k2] * cc / basis.normalizers()[i];
+        continue;
+      }
+      // Correlated: each pattern's exponent whole (a product of factors could overflow where
+      // the exponent cannot: |kappa1 kappa2 sigma12| <= q^T Sigma q / 2).
+      const double b = basis.kappa_y()[k2], ss = sin_x[k1] * sin_y[k2];
+      const double quad_diag = a * a * s11 + b * b * s22;
+      const double plus = (cc - ss) * std::exp(-0.5 * (quad_diag + 2 * a * b * s12));
+      const double minus = (cc + ss) * std::exp(-0.5 * (quad_diag - 2 * a * b * s12));
       phi[i] = 0.5 * (plus + minus) / basis.normalizers()[i];
     }
   }

@@ -48,6 +48,21 @@ TEST(RiskField, ClosedFormMatchesWholePlaneQuadrature) {
   EXPECT_LT((closed - quad).cwiseAbs().maxCoeff(), 1e-7);
 }
 
+// Without correlation (every valve's covariance) the closed form takes its separable path: the
+// same whole-plane quadrature, isotropic and not, agrees to 1e-7.
+TEST(RiskField, UncorrelatedClosedFormMatchesWholePlaneQuadrature) {
+  const SpectralBasis basis(7.0, 5.0, 12);
+  for (const Eigen::Vector2d& sigma : {Eigen::Vector2d(0.3, 0.3), Eigen::Vector2d(0.45, 0.2)}) {
+    GaussianComponent g;
+    g.mean_m = Eigen::Vector2d(4.1, 2.3);
+    g.covariance_m2 = sigma.cwiseAbs2().asDiagonal();
+    const Eigen::VectorXd closed = RiskField::GaussianCoefficients(basis, g);
+    const Eigen::VectorXd quad = QuadratureCoefficients(basis, g, 4.1 - 8 * sigma.x(), 4.1 + 8 * sigma.x(),
+                                                        2.3 - 8 * sigma.y(), 2.3 + 8 * sigma.y(), 800);
+    EXPECT_LT((closed - quad).cwiseAbs().maxCoeff(), 1e-7) << "sigma " << sigma.transpose();
+  }
+}
+
 // Against quadrature of the box-truncated Gaussian the closed form differs by the mass outside
 // the box folded back in. For a valve 1.0 m (2.5 sigma_x) from the nearest wall the folded mass
 // is ~1e-2 of the total, and |F_k| <= 2 / sqrt(area), so the difference is bounded by
