@@ -120,6 +120,10 @@ struct AgentHost::Impl {
   struct Vehicle {
     VehicleId id = 0;
     VehicleId body = 0;  // PhysicsWorld's id
+    // SMC guidance (Guidance::kErgodic). Its controller on the field's basis is made when first
+    // needed: a region's vehicle never uses it, and at K = 64 it is five 4,096-coefficient arrays
+    // (1.6 GB and ~5 s of page faults before the first cycle of a 10,000-vehicle field).
+    bool smc = false;
     std::unique_ptr<ErgodicController> ergodic;
     std::unique_ptr<TourController> tour;
     std::vector<int> tour_valves;  // A*: its tour's valves in visiting order (indices into the scenario's)
@@ -223,8 +227,17 @@ struct AgentHost::Impl {
 
   // SMC on the field's basis, or on the vehicle's region's: there the controller sees positions
   // relative to the box, and a vehicle outside it first flies a grid path to the box's centre.
+  // The vehicle's SMC controller; on the field's basis, made now if it has none yet.
+  ErgodicController& Controller(Vehicle& v) {
+    if (!v.ergodic) {
+      v.ergodic = std::make_unique<ErgodicController>(basis, v.speed_mps, scenario.ergodic.forgetting_time_s,
+                                                      scenario.ergodic.min_turn_radius_m);
+    }
+    return *v.ergodic;
+  }
+
   Eigen::Vector2d ErgodicCommand(Vehicle& v, const VehicleState& state, double time_s) {
-    if (!v.region) return v.ergodic->Command(state, time_s);
+    if (!v.region) return Controller(v).Command(state, time_s);
     constexpr double kInside_m = 0.3;  // within this of the box counts as in it
     // In its box the filter keeps it there; on the way the workspace's edges are the bounds (the
     // box's would push it straight at the box, through whatever stands between).
@@ -306,9 +319,7 @@ void AgentHost::AddVehicle(VehicleId id, const maps::VehicleSpec& spec) {
   v.body = impl_->world.AddVehicle(spec);
   v.speed_mps = spec.transit_speed_mps;
   if (impl_->guidance == Guidance::kErgodic) {
-    v.ergodic = std::make_unique<ErgodicController>(impl_->basis, spec.transit_speed_mps,
-                                                    impl_->scenario.ergodic.forgetting_time_s,
-                                                    impl_->scenario.ergodic.min_turn_radius_m);
+    v.smc = true;
     if (spec.model == maps::MotionModel::kBlueRov2) {
       v.keep_clear = std::make_unique<ObstacleFilter>(impl_->clearance, impl_->scenario.workspace);
     }
@@ -357,7 +368,7 @@ void AgentHost::SetTour(VehicleId id, const std::vector<int>& valves, const Eige
 
 void AgentHost::SetRegion(VehicleId id, const maps::RegionBox& box, double forgetting_time_s) {
   Impl::Vehicle& v = impl_->Find(id);
-  if (!v.ergodic) return;
+  if (!v.smc) return;
   const double forgetting_s = forgetting_time_s > 0.0 ? forgetting_time_s : impl_->scenario.ergodic.forgetting_time_s;
   if (v.region && v.region->origin_m == box.origin_m && v.region->size_m == box.size_m && v.region->order == box.order &&
       v.ergodic->coverage().forgetting_time_s() == forgetting_s) {
@@ -404,9 +415,9 @@ int AgentHost::vehicle_count() const { return static_cast<int>(impl_->vehicles.s
 
 void AgentHost::SetTarget(VehicleId id, const VehicleTarget& target) {
   Impl::Vehicle& v = impl_->Find(id);
-  if (!v.ergodic) return;  // an A* vehicle follows its tour
+  if (!v.smc) return;  // an A* vehicle follows its tour
   const int size = v.region_basis ? v.region_basis->size() : impl_->basis.size();
-  v.ergodic->SetTarget(target.phi);
+  impl_->Controller(v).SetTarget(target.phi);
   if (target.fleet_sums.size() == size) {
     v.ergodic->SetFleetCoverage(target.fleet_sums, target.fleet_time_s);
   } else {
@@ -458,7 +469,7 @@ void AgentHost::Step(double time_s) {
       if (v.tour) v.tour->SetNearby(nearby);
       if (v.transit) v.transit->SetNearby(nearby);
       // An A* vehicle holds station until it has a tour.
-      Eigen::Vector2d command = v.ergodic ? impl_->ErgodicCommand(v, state, time_s)
+      Eigen::Vector2d command = v.smc ? impl_->ErgodicCommand(v, state, time_s)
                                           : (v.tour ? v.tour->Command(state, time_s) : Eigen::Vector2d::Zero());
       if (v.keep_clear) command = v.keep_clear->Apply(state.position_m, command, nearby);
       v.command = command;
@@ -466,8 +477,9 @@ void AgentHost::Step(double time_s) {
         // An ergodic vehicle looks where its target weighs most (in its region's frame if it has
         // one; a valve outside its box weighs nothing to it); a tour vehicle at the nearest valve.
         ValveGaze::ValveWeight weight = nullptr;
-        if (v.ergodic) {
+        if (v.smc) {
           weight = [&v](int, const Eigen::Vector2d& valve_m) {
+            if (!v.ergodic) return 0.0;  // no target yet
             if (!v.region) return v.ergodic->TargetDensity(valve_m);
             return v.region->Contains(valve_m) ? v.ergodic->TargetDensity(valve_m - v.region->origin_m) : 0.0;
           };
@@ -517,7 +529,7 @@ const CoverageAccumulator* AgentHost::Coverage(VehicleId id) const {
 
 void AgentHost::RestoreCoverage(VehicleId id, const Eigen::VectorXd& sums, double kernel_time_s) {
   Impl::Vehicle& v = impl_->Find(id);
-  if (v.ergodic) v.ergodic->RestoreCoverage(sums, kernel_time_s);
+  if (v.smc) impl_->Controller(v).RestoreCoverage(sums, kernel_time_s);
 }
 
 const maps::SpectralBasis& AgentHost::basis() const { return impl_->basis; }

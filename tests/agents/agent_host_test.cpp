@@ -247,6 +247,43 @@ TEST(AgentHost, RegionVehicleFliesThereAndCoversItsValves) {
   for (int k = 0; k < 3; ++k) EXPECT_GE(passes[k], 2) << "valve P" << k + 3;
 }
 
+// An SMC vehicle's controller on the field's basis is made when first needed: none before its
+// first step (a region's vehicle never has one: its coverage is on its region's basis from the
+// start), one at its first step or target, and a restored vehicle gets its sums back on the
+// field's basis. A tour vehicle has no SMC coverage at all.
+TEST(AgentHost, FieldBasisControllerIsMadeWhenFirstNeeded) {
+  const maps::Scenario s = maps::LoadScenario(kTwoXt);
+  const maps::World world(s);
+  AgentHost host(world, s, Guidance::kErgodic);
+  host.AddVehicle(1, Rov("region", {0.7, 0.6}));
+  host.AddVehicle(2, Rov("field", {4.9, 3.7}));
+  host.AddVehicle(3, Rov("restored", {0.6, 3.7}));
+  EXPECT_EQ(host.Coverage(1), nullptr);
+  EXPECT_EQ(host.Coverage(2), nullptr);
+  const int field_size = host.basis().size();
+  const maps::RegionBox box{Eigen::Vector2d(4.0, 1.0), Eigen::Vector2d(2.5, 2.5), 8};
+  host.SetRegion(1, box);
+  ASSERT_NE(host.Coverage(1), nullptr);
+  EXPECT_EQ(host.Coverage(1)->sums().size(), 64);
+  Eigen::VectorXd sums = Eigen::VectorXd::LinSpaced(field_size, 0.1, 0.5);
+  host.RestoreCoverage(3, sums, 4.0);
+  ASSERT_NE(host.Coverage(3), nullptr);
+  EXPECT_EQ(host.Coverage(3)->sums(), sums);
+  EXPECT_DOUBLE_EQ(host.Coverage(3)->time_s(), 4.0);
+  host.Step(0.0);
+  host.Step(host.control_period_s());
+  ASSERT_NE(host.Coverage(2), nullptr);
+  EXPECT_EQ(host.Coverage(2)->sums().size(), field_size);
+  EXPECT_GT(host.Coverage(2)->time_s(), 0.0);  // it steered on the field's basis and covered
+  EXPECT_EQ(host.Coverage(1)->sums().size(), 64);  // the region's vehicle stays on its own basis
+
+  AgentHost tours(world, s, Guidance::kAstar);
+  tours.AddVehicle(1, Rov("tour", {0.7, 0.6}));
+  tours.RestoreCoverage(1, sums, 4.0);
+  tours.Step(0.0);
+  EXPECT_EQ(tours.Coverage(1), nullptr);
+}
+
 // A tour vehicle whose way north runs past an XT with a vehicle parked at the valves on either
 // side of it (fleet_large's XT-39, where a 100-vehicle tour fleet once jammed for the whole
 // mission): pinned, it re-plans round the parked vehicles and reaches its valve, P233 12.5 m
