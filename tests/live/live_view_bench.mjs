@@ -8,7 +8,7 @@
 //
 //   build/bin/sage field generate --xts 300 --valves 1000 --vehicles 1000 --seed 1 -o /tmp/f1000.yaml
 //   node tests/live/live_view_bench.mjs --sage build/bin/sage --source-dir . --out /tmp/live_bench \
-//        --field /tmp/f1000.yaml --duration 60 --runs 2 [--configs off,idle,viewer,viewer-niced,replay] [--secured]
+//        --field /tmp/f1000.yaml --duration 60 --runs 2 [--configs off,idle,stream,viewer,viewer-niced,viewer-user,viewer-user-niced,replay] [--secured]
 //        [--page-fps N]
 // (replay: the page alone, `sage view` of the run "off" just recorded, played at 1x, no mission running;
 // viewer-niced: the page in a chromium run under `nice -n 19`, the browser taking only the CPU the
