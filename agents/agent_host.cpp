@@ -225,8 +225,6 @@ struct AgentHost::Impl {
     return near;
   }
 
-  // SMC on the field's basis, or on the vehicle's region's: there the controller sees positions
-  // relative to the box, and a vehicle outside it first flies a grid path to the box's centre.
   // The vehicle's SMC controller; on the field's basis, made now if it has none yet.
   ErgodicController& Controller(Vehicle& v) {
     if (!v.ergodic) {
@@ -236,6 +234,8 @@ struct AgentHost::Impl {
     return *v.ergodic;
   }
 
+  // SMC on the field's basis, or on the vehicle's region's: there the controller sees positions
+  // relative to the box, and a vehicle outside it first flies a grid path to the box's centre.
   Eigen::Vector2d ErgodicCommand(Vehicle& v, const VehicleState& state, double time_s) {
     if (!v.region) return Controller(v).Command(state, time_s);
     constexpr double kInside_m = 0.3;  // within this of the box counts as in it
