@@ -85,6 +85,12 @@ struct FusionSettings {
   double spread_m = 0.3;
   double max_log_odds = 4.6;         ///< the posterior's ceiling (logit 0.99), > logit(confirm_probability)
   double min_evidence = -3.0;        ///< the floor of log-odds below the prior (a valve at most e^-3 lighter), < 0
+  /// How a leaf looked at and found clean comes back to the prior. false (relax): its log-odds
+  /// relax as exp(-t / relax_time_s), as a detection's do. true (onset): leaks begin in a leaf at
+  /// the hazard P0 / relax_time_s a second, so the chance that one began since the look grows
+  /// linearly, P(t) = min(P0, P_after + P0 t / relax_time_s): a valve not looked at for a while
+  /// weighs in proportion to how long, as an inspection schedule's "longest waiting" rule.
+  bool onset_regrowth = false;
 
   bool operator==(const FusionSettings&) const = default;
 };

@@ -218,6 +218,7 @@ std::string EmitScenario(const Scenario& s) {
     number("spread_m", f.spread_m);
     number("max_log_odds", f.max_log_odds);
     number("min_evidence", f.min_evidence);
+    key("regrowth") << (f.onset_regrowth ? "onset" : "relax");
     out << YAML::EndMap;
   }
   out << YAML::EndMap;

@@ -351,7 +351,7 @@ LeakSpec ReadLeak(const Reader& r, const YAML::Node& node, const std::string& pa
 
 void ReadFusion(const Reader& r, const YAML::Node& node, const std::string& path, FusionSettings& f) {
   r.ExpectMap(node, path, {"steer", "prior_probability", "relax_time_s", "confirm_probability", "alarm_probability",
-                           "leak_mass", "spread_m", "max_log_odds", "min_evidence"});
+                           "leak_mass", "spread_m", "max_log_odds", "min_evidence", "regrowth"});
   r.Optional(node, "steer", path, [&](const YAML::Node& n, const std::string& p) {
     const std::string text = r.Text(n, p);
     if (text == "posterior") f.steer = true;
@@ -366,6 +366,12 @@ void ReadFusion(const Reader& r, const YAML::Node& node, const std::string& path
   r.OptionalNumber(node, "spread_m", path, f.spread_m);
   r.OptionalNumber(node, "max_log_odds", path, f.max_log_odds);
   r.OptionalNumber(node, "min_evidence", path, f.min_evidence);
+  r.Optional(node, "regrowth", path, [&](const YAML::Node& n, const std::string& p) {
+    const std::string text = r.Text(n, p);
+    if (text == "relax") f.onset_regrowth = false;
+    else if (text == "onset") f.onset_regrowth = true;
+    else r.Fail(p, n, "must be relax (back to the prior exponentially) or onset (linearly, at the leak onset hazard)");
+  });
 }
 
 void ReadPerception(const Reader& r, const YAML::Node& root, Scenario& s) {

@@ -47,6 +47,12 @@ Eigen::Vector2d LeakBelief::CentreOf(Cell c) const {
 double LeakBelief::Relaxed(const Value& v, double time_s) const {
   const double tau = scenario_.fusion.relax_time_s;
   if (!std::isfinite(tau) || time_s <= v.time_s) return v.evidence;
+  if (v.evidence < 0.0 && scenario_.fusion.onset_regrowth) {
+    // Leaks that began since the look, at the hazard P0 / tau: P grows linearly back to P0.
+    const double p = LeakLogistic(prior_ + v.evidence) + prior_probability_ * (time_s - v.time_s) / tau;
+    if (p >= prior_probability_) return 0.0;
+    return std::log(p / (1.0 - p)) - prior_;
+  }
   return v.evidence * std::exp(-(time_s - v.time_s) / tau);
 }
 

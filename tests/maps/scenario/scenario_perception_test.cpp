@@ -62,6 +62,7 @@ fusion: {steer: prior, relax_time_s: .inf}
   EXPECT_EQ(LeakWhere(s.leaks[1]), "seabed (1, 4)");
   EXPECT_FALSE(s.fusion.steer);
   EXPECT_TRUE(std::isinf(s.fusion.relax_time_s));
+  EXPECT_FALSE(s.fusion.onset_regrowth) << "relax unless asked";
   const Scenario again = ParseScenario(EmitScenario(s), "x.yaml");
   EXPECT_EQ(EmitScenario(again), EmitScenario(s));
   // The shorter mission drops the leaks it would never meet.
@@ -94,6 +95,7 @@ TEST(ScenarioPerception, BadInputsNameFieldAndRule) {
       {"fusion: {steer: maybe}", "x.yaml: fusion.steer = maybe: must be posterior"},
       {"fusion: {min_evidence: 1}", "x.yaml: fusion.min_evidence = 1: must be in [-30, 0)"},
       {"fusion: {max_log_odds: 1}", "x.yaml: fusion.max_log_odds = 1: must be in (logit(confirm_probability)"},
+      {"fusion: {regrowth: linear}", "x.yaml: fusion.regrowth = linear: must be relax"},
   };
   for (const auto& [section, expected] : cases) {
     SCOPED_TRACE(section);

@@ -86,6 +86,37 @@ TEST_F(LeakBeliefTest, ClampsAndRelaxation) {
   EXPECT_NEAR(belief_.LogOdds(leak, 2.0), scenario_.fusion.max_log_odds, 1e-12);
 }
 
+// regrowth: onset. A leaf looked at and found clean comes back as leaks begin, at the hazard
+// P0 / tau: P(t) = P_after + P0 t / tau, linear (not the log-odds' exponential), exactly the prior
+// from tau (1 - P_after / P0) on; the valve's factor follows. A detection still relaxes as before.
+TEST_F(LeakBeliefTest, OnsetRegrowthIsLinearInProbability) {
+  maps::Scenario with_onset = scenario_;  // the fixture's belief keeps relax (it holds scenario_)
+  with_onset.fusion.onset_regrowth = true;
+  LeakBelief onset(with_onset, world_, 0.2);
+  const Eigen::Vector2d pose(2.0, 2.9);
+  const LeakBelief::Cell leak = onset.CellOf({2.0, 3.45});
+  for (int k = 0; k < 20; ++k) onset.Fuse(0, pose, M_PI / 2, {}, 1.0);
+  const double p0 = scenario_.fusion.prior_probability, tau = scenario_.fusion.relax_time_s;
+  const double after = 1.0 / (1.0 + std::exp(-(Logit(p0) + scenario_.fusion.min_evidence)));
+  for (const double t : {0.0, 5.0, 0.3 * tau, 0.9 * tau * (1 - after / p0)}) {
+    SCOPED_TRACE(t);
+    const double p = after + p0 * t / tau;
+    EXPECT_NEAR(onset.Probability(leak, 1.0 + t), p, 1e-12 * p);
+    EXPECT_NEAR(onset.ValveFactors(1.0 + t)[0], p / p0, 1e-9);
+  }
+  const double back = 1.0 + tau * (1 - after / p0);
+  EXPECT_EQ(onset.Evidence(leak, back + 1e-6), 0.0);
+  EXPECT_EQ(onset.ValveFactors(back + 1e-6)[0], 1.0);
+  // Against relax: the same look, the same floor, a different way back (relax: still below at tau).
+  for (int k = 0; k < 20; ++k) belief_.Fuse(0, pose, M_PI / 2, {}, 1.0);
+  EXPECT_LT(belief_.Evidence(leak, back + 1e-6), -0.5);
+  // A detection's evidence relaxes exponentially under either.
+  onset.Fuse(0, pose, M_PI / 2, {onset.CentreOf(leak)}, 200.0);
+  const double raised = onset.Evidence(leak, 200.0);
+  ASSERT_GT(raised, 0.0);
+  EXPECT_NEAR(onset.Evidence(leak, 200.0 + tau), raised / std::exp(1.0), 1e-12 * raised);
+}
+
 TEST_F(LeakBeliefTest, CheckpointRoundTrip) {
   belief_.Fuse(0, {2.0, 2.9}, M_PI / 2, {{2.0, 3.45}}, 3.0);
   belief_.Fuse(0, {3.6, 1.6}, -M_PI / 2, {}, 3.2);
