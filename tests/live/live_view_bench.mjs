@@ -129,7 +129,7 @@ async function once(config, k) {
     const live = await liveEndpoints(dir);
     browser = await chromium.launch({ executablePath: chromiumFor(config), args: CHROMIUM_FLAGS });
     const page = await browser.newPage({ viewport: { width: 1400, height: 820 } });
-    // --page-fps N: the page's own cap on redraws (#fps=N; the page's default is 30).
+    // --page-fps N: the page's own cap on redraws (#fps=N; the page's default is 30, 12 over 300 vehicles).
     const fps = args["page-fps"] ? `&fps=${args["page-fps"]}` : "";
     await page.goto(`http://127.0.0.1:${live.http_port}/#token=${live.token}${fps}`);
     await page.waitForFunction(() => window.sageView && window.sageView.ready, null, { timeout: 120000 });
