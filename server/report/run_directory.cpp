@@ -2,6 +2,7 @@
 
 #include <fcntl.h>
 #include <sys/stat.h>
+#include <time.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -25,6 +26,14 @@ namespace sage::server {
 namespace {
 
 namespace fs = std::filesystem;
+
+// CPU seconds the calling thread has used: what a checkpoint costs the machine, whatever else
+// runs beside it.
+double ThreadCpuSeconds() {
+  timespec t{};
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
+  return static_cast<double>(t.tv_sec) + 1e-9 * static_cast<double>(t.tv_nsec);
+}
 
 // One trajectory.csv row; "{}" prints the shortest text that parses back to the same double.
 void AppendTrajectoryRow(std::string& out, const TrajectorySample& s, const std::string& name) {
@@ -226,7 +235,11 @@ std::size_t RunDirectory::buffered_bytes() const {
 
 void RunDirectory::Tick(const MissionCore& core) {
   const auto now = std::chrono::steady_clock::now();
-  if (std::chrono::duration<double>(now - last_checkpoint_).count() >= options_.checkpoint_period_s) {
+  if (checkpoint_write_.valid() && checkpoint_write_.wait_for(std::chrono::seconds(0)) == std::future_status::ready) {
+    checkpoint_cost_s_ += checkpoint_write_.get();  // rethrows its error
+  }
+  if (std::chrono::duration<double>(now - last_checkpoint_).count() >=
+      std::max(options_.checkpoint_period_s, kCheckpointCostRatio * checkpoint_cost_s_)) {
     StartCheckpoint(core, /*wait=*/false);
   } else if (std::chrono::duration<double>(now - last_flush_).count() >= options_.flush_period_s ||
              buffered_bytes() >= options_.flush_bytes) {
@@ -249,14 +262,19 @@ void RunDirectory::StartCheckpoint(const MissionCore& core, bool wait) {
   }
   last_checkpoint_ = std::chrono::steady_clock::now();
   checkpoint_time_s_ = core.time_s();
+  const double copy_from = ThreadCpuSeconds();
   // Copies taken now, on the mission's thread; encoding (metrics.json of 35,000 valves took 125 ms)
   // and writing happen off it.
   MissionCheckpoint checkpoint = core.Checkpoint();
   MissionMetrics metrics = core.Metrics(core.time_s());
+  RunInfo partial = Info(core, false, false);
+  checkpoint_cost_s_ = ThreadCpuSeconds() - copy_from;  // the writing's share is added when it ends
   checkpoint_write_ = std::async(std::launch::async, [dir = dir_, checkpoint = std::move(checkpoint),
-                                                      metrics = std::move(metrics), partial = Info(core, false, false)] {
+                                                      metrics = std::move(metrics), partial = std::move(partial)] {
+    const double from = ThreadCpuSeconds();
     WriteCheckpoint(dir, checkpoint);
     detail::WriteAtomically((fs::path(dir) / "metrics.json").string(), MetricsJson(metrics, &partial));
+    return ThreadCpuSeconds() - from;
   });
 }
 

@@ -26,13 +26,20 @@ class RiskLayer;
 
 namespace sage::server {
 
+/// A checkpoint's cost is held to 1 / kCheckpointCostRatio of one core (RunDirectoryOptions).
+inline constexpr double kCheckpointCostRatio = 20.0;
+
 struct RunDirectoryOptions {
   double flush_period_s = 1.0;       ///< wall seconds between flushes of the appended files
   /// ... or sooner, at the end of the cycle that leaves more than this many bytes of rows waiting:
   /// a mission simulated far faster than real time (fleet_field runs at ~3,600x) had held an hour
   /// of trajectory rows (30 MB) between flushes, and all of a short mission's until its end.
   std::size_t flush_bytes = 4u << 20;
-  double checkpoint_period_s = 2.0;  ///< wall seconds between checkpoints and partial metrics
+  /// Wall seconds between checkpoints and partial metrics, at least; a checkpoint whose making
+  /// cost c CPU-seconds (the copies on the mission's thread, encoding and writing off it) is
+  /// followed by the next no sooner than kCheckpointCostRatio c later: a 10,000-vehicle
+  /// checkpoint costs ~0.5 s, and every 2 s it took a sixth of the mission's CPU.
+  double checkpoint_period_s = 2.0;
   std::size_t plot_points = 200000;  ///< trajectory samples kept in memory for the final plot
   std::size_t plot_events = 2000;    ///< events kept to mark on it (the rest are counted)
   std::string transport = "in-process";
@@ -99,7 +106,8 @@ class RunDirectory final : public MissionRecorder {
   Appender trajectory_, fleet_events_, risk_events_, regions_;
   std::chrono::steady_clock::time_point last_flush_, last_checkpoint_;
   double pending_until_s_ = -1.0, flushed_until_s_ = -1.0, checkpoint_time_s_ = -1.0;
-  std::future<void> checkpoint_write_;  // the checkpoint is encoded and written off the cycle
+  double checkpoint_cost_s_ = 0.0;        // CPU seconds the last checkpoint took, copies and writing
+  std::future<double> checkpoint_write_;  // the checkpoint is encoded and written off the cycle (its CPU seconds)
   std::future<std::string> rows_;       // the last large cycle's trajectory rows, being formatted
   plots::PlotRecord plot_;               // a thinned copy of the trajectory and the events, for the plots
 };
