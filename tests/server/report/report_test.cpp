@@ -1,11 +1,14 @@
 #include "server/report/report.h"
 
+#include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
 
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
@@ -289,6 +292,48 @@ TEST(FormatTable, PaperLayout) {
   EXPECT_NE(three.find("ergodic (one_extreme)"), std::string::npos) << three;
   EXPECT_NE(three.find("0.40"), std::string::npos) << three;
   EXPECT_LE(widest(three), 100u) << three;
+}
+
+// A large field's table lists the 40 valves with the longest gap in any run, longest first,
+// and says where the others are; up to 300 valves it lists every one, in scenario order. Weights
+// below 0.01 keep two significant digits.
+TEST(FormatTable, LargeFieldListsLongestGaps) {
+  const auto field = [](int valves, std::uint64_t salt) {
+    MissionMetrics m = SampleMetrics();
+    m.valves.clear();
+    for (int i = 0; i < valves; ++i) {
+      // A gap per valve from a scrambled order (no ties), different per run.
+      const double gap = static_cast<double>((static_cast<std::uint64_t>(i) * 7919u + salt) % 100003u) / 100.0;
+      m.valves.push_back({fmt::format("P{}", i + 1), 1.0 / valves, 2, 10.0, gap, 0.0, {}});
+    }
+    return m;
+  };
+  const auto rows_of = [](const std::string& table) {
+    std::vector<std::string> names;
+    std::size_t start = 0;
+    for (std::size_t end; (end = table.find('\n', start)) != std::string::npos; start = end + 1) {
+      const std::string line = table.substr(start, end - start);
+      if (line.rfind("P", 0) == 0) names.push_back(line.substr(0, line.find(' ')));
+    }
+    return names;
+  };
+  const MissionMetrics a = field(2000, 11), b = field(2000, 5077);
+  const std::string table = FormatTable({a, b});
+  const std::vector<std::string> listed = rows_of(table);
+  // Brute force: the 40 largest of max(gap in a, gap in b).
+  std::vector<std::pair<double, int>> worst;
+  for (int i = 0; i < 2000; ++i) worst.push_back({std::max(a.valves[i].max_gap_s, b.valves[i].max_gap_s), i});
+  std::sort(worst.begin(), worst.end(),
+            [](const auto& x, const auto& y) { return x.first > y.first || (x.first == y.first && x.second < y.second); });
+  ASSERT_EQ(listed.size(), 40u) << table;
+  for (int k = 0; k < 40; ++k) EXPECT_EQ(listed[k], a.valves[worst[k].second].name) << k;
+  EXPECT_NE(table.find("(40 of 2000 valves listed: the longest gaps; every valve is in metrics.json"), std::string::npos);
+  EXPECT_NE(table.find("0.0005 "), std::string::npos) << "a weight below 0.01 keeps two significant digits";
+
+  const std::vector<std::string> all = rows_of(FormatTable({field(300, 11)}));
+  ASSERT_EQ(all.size(), 300u);
+  EXPECT_EQ(all.front(), "P1");
+  EXPECT_EQ(all.back(), "P300");
 }
 
 }  // namespace
