@@ -139,11 +139,11 @@ std::string WeightText(double w) { return w >= 0.01 || w <= 0.0 ? fmt::format("{
 
 std::string Seconds(double s) { return std::isfinite(s) ? fmt::format("{:.1f} s", s) : "---"; }
 
-// The valves a table lists, as indices into the first run's: every valve up to kTableRows, beyond
-// the kTableRowsOfLarge with the longest gap in any run, longest first (ties in scenario order).
-std::vector<std::size_t> ListedValves(const std::vector<MissionMetrics>& runs,
-                                      const std::vector<std::vector<const ValveMetrics*>>& matched) {
-  const std::size_t m = runs.front().valves.size();
+// The valves a table lists, as indices into the first run's (matched: each run's valve for each of
+// them, or null): every valve up to kTableRows, beyond the kTableRowsOfLarge with the longest gap
+// in any run, longest first (ties in scenario order).
+std::vector<std::size_t> ListedValves(const std::vector<std::vector<const ValveMetrics*>>& matched) {
+  const std::size_t m = matched.front().size();
   std::vector<std::size_t> listed(m);
   for (std::size_t i = 0; i < m; ++i) listed[i] = i;
   if (m <= kTableRows) return listed;
@@ -172,7 +172,7 @@ std::string BuildTable(const std::vector<MissionMetrics>& runs, bool with_gaps, 
       row.push_back(it == by_name.end() ? nullptr : it->second);
     }
   }
-  const std::vector<std::size_t> listed = ListedValves(runs, matched);
+  const std::vector<std::size_t> listed = ListedValves(matched);
   const std::size_t rows = listed.size();
   // One Weight column if every run prints the same weights (the paper's case), else one per run.
   bool same_profile = true, same_weights = true;

@@ -18,7 +18,7 @@
   // Redraws a second at most: frames come ten a second and vehicles move smoothly between them at
   // 30; more would only take CPU from the mission on the same machine. Over LARGE_FLEET vehicles
   // the page draws 12 a second: a thousand-vehicle overview reads as well, and a page on the
-  // mission's own 2-core machine then costs its server's cycle +12 % instead of +33-42 % (README,
+  // mission's own 2-core machine then costs its server's cycle +10-18 % instead of +33-42 % (README,
   // live view). The address may ask for another cap (#fps=30, 1..60).
   const fpsAsked = Number(new URLSearchParams(location.hash.slice(1)).get("fps"));
   const LARGE_FLEET = 300;
