@@ -158,21 +158,25 @@ std::vector<std::size_t> ListedValves(const std::vector<std::vector<const ValveM
   return listed;
 }
 
-std::string BuildTable(const std::vector<MissionMetrics>& runs, bool with_gaps, std::size_t gap) {
-  const MissionMetrics& first = runs.front();
-  // Each run's valve for each of the first run's, by name (runs of one scenario list the same
-  // valves; found through a hash map: a name search per valve was 1.2e9 compares at 35,000).
+// Each run's valve for each of the first run's, by name (runs of one scenario list the same
+// valves; found through a hash map: a name search per valve was 1.2e9 compares at 35,000).
+std::vector<std::vector<const ValveMetrics*>> MatchValves(const std::vector<MissionMetrics>& runs) {
   std::vector<std::vector<const ValveMetrics*>> matched;
   for (const MissionMetrics& run : runs) {
     std::unordered_map<std::string_view, const ValveMetrics*> by_name;
     for (const ValveMetrics& v : run.valves) by_name.emplace(v.name, &v);
     auto& row = matched.emplace_back();
-    for (const ValveMetrics& v : first.valves) {
+    for (const ValveMetrics& v : runs.front().valves) {
       const auto it = by_name.find(v.name);
       row.push_back(it == by_name.end() ? nullptr : it->second);
     }
   }
-  const std::vector<std::size_t> listed = ListedValves(matched);
+  return matched;
+}
+
+std::string BuildTable(const std::vector<MissionMetrics>& runs, const std::vector<std::vector<const ValveMetrics*>>& matched,
+                       const std::vector<std::size_t>& listed, bool with_gaps, std::size_t gap) {
+  const MissionMetrics& first = runs.front();
   const std::size_t rows = listed.size();
   // One Weight column if every run prints the same weights (the paper's case), else one per run.
   bool same_profile = true, same_weights = true;
@@ -239,9 +243,11 @@ std::string FormatTable(const std::vector<MissionMetrics>& runs) {
     return widest;
   };
   // To fit the terminal, drop the longest-gap column first, then tighten the column spacing.
+  const std::vector<std::vector<const ValveMetrics*>> matched = MatchValves(runs);
+  const std::vector<std::size_t> listed = ListedValves(matched);
   std::string table;
   for (const auto& [with_gaps, gap] : {std::pair{true, 2}, std::pair{false, 2}, std::pair{false, 1}}) {
-    table = BuildTable(runs, with_gaps, gap);
+    table = BuildTable(runs, matched, listed, with_gaps, gap);
     if (widest_line(table) <= static_cast<std::size_t>(kTableWidth)) break;
   }
   return table + FormatLeaks(runs);
