@@ -137,6 +137,7 @@ bool MissionCore::OnState(const agents::StateReport& s, std::uint64_t writer) {
   }
   m.last = s;
   m.has_state = true;
+  roster_.Heard(m);
   fleet_.SetPosition(s.id, s.state.position_m);
   if (s.time_s <= scenario_.duration_s + 1e-9) {
     samples_.push_back({s.time_s, m.index, s.state.position_m, s.state.heading_rad, s.state.velocity_mps, s.command_mps});
@@ -800,6 +801,7 @@ std::int64_t MissionCore::Replay(const std::vector<std::pair<TrajectorySample, s
       m->last.state.heading_rad = s.heading_rad;
       m->last.command_mps = s.command_mps;
       m->has_state = true;
+      roster_.Heard(*m);
       fleet_.SetPosition(m->id, s.position_m);
       samples_.push_back(s);
     }

@@ -23,7 +23,7 @@ const FleetEventRecord* Roster::Join(int id, const std::string& name, double tim
   m.name = name;
   names_taken_.insert(m.name);
   m.status = Status::kAlive;
-  alive_stale_ = names_stale_ = true;
+  alive_stale_ = names_stale_ = glances_stale_ = true;
   m.joined_s = time_s;
   m.target_sent = false;
   ++alive_count_;
@@ -35,7 +35,7 @@ const FleetEventRecord* Roster::Leave(int id, bool lost, double time_s) {
   Member* m = Find(id);
   if (m == nullptr || m->status != Status::kAlive) return nullptr;
   m->status = lost ? Status::kLost : Status::kLeft;
-  alive_stale_ = true;
+  alive_stale_ = glances_stale_ = true;
   m->gone_s = time_s;
   --alive_count_;
   if (lost) ++lost_count_;
@@ -69,6 +69,40 @@ const std::vector<const std::string*>& Roster::names_by_index() const {
   return names_;
 }
 
+namespace {
+
+void Glimpse(const Roster::Member& m, Roster::Glance& g) {
+  g.has_state = m.has_state;
+  g.x_m = static_cast<float>(m.last.state.position_m.x());
+  g.y_m = static_cast<float>(m.last.state.position_m.y());
+  g.heading_rad = static_cast<float>(m.last.state.heading_rad);
+  g.heard_s = m.last.time_s;
+}
+
+}  // namespace
+
+const std::vector<Roster::Glance>& Roster::glances() const {
+  if (glances_stale_) {
+    glances_.resize(members_.size());
+    glance_of_index_.resize(members_.size());
+    std::size_t k = 0;
+    for (const auto& [id, m] : members_) {
+      Glance& g = glances_[k];
+      g.id = id;
+      g.status = m.status;
+      g.name = m.name;
+      Glimpse(m, g);
+      glance_of_index_[static_cast<std::size_t>(m.index)] = k++;
+    }
+    glances_stale_ = false;
+  }
+  return glances_;
+}
+
+void Roster::Heard(const Member& m) {
+  if (!glances_stale_) Glimpse(m, glances_[glance_of_index_[static_cast<std::size_t>(m.index)]]);
+}
+
 int Roster::ReserveIds(int count) {
   if (count < 1) throw std::invalid_argument("Roster::ReserveIds: count must be >= 1");
   const int first = next_id_;
@@ -92,7 +126,7 @@ void Roster::Restore(State state) {
   lost_count_ = state.lost_count;
   alive_count_ = 0;
   for (const auto& [id, m] : members_) alive_count_ += m.status == Status::kAlive ? 1 : 0;
-  alive_stale_ = names_stale_ = true;
+  alive_stale_ = names_stale_ = glances_stale_ = true;
 }
 
 }  // namespace sage::server

@@ -62,6 +62,23 @@ class Roster {
   const std::vector<int>& alive() const;
   /// Each member's name by its record index (valid until the next Join or Restore).
   const std::vector<const std::string*>& names_by_index() const;
+
+  /// A member as the live view shows it. The glances sit in one compact array in ascending id,
+  /// kept as states arrive (Heard), so that a frame copies it instead of walking the members:
+  /// at 1,000 vehicles that walk, cold after the cycle's own work, took 0.13-0.19 ms of the
+  /// server's loop a frame.
+  struct Glance {
+    int id = 0;
+    Status status = Status::kAlive;
+    bool has_state = false;
+    float x_m = 0.0f, y_m = 0.0f, heading_rad = 0.0f;  ///< of its latest state
+    double heard_s = 0.0;                               ///< mission time of its latest state
+    std::string name;
+  };
+  /// Every member's glance, ascending id (valid until the next Join, Leave or Restore).
+  const std::vector<Glance>& glances() const;
+  /// m's latest state (m.last, m.has_state) changed: its glance follows.
+  void Heard(const Member& m);
   std::size_t alive_count() const { return alive_count_; }
   std::size_t lost_count() const { return lost_count_; }
   const std::map<int, Member>& members() const { return members_; }
@@ -95,7 +112,9 @@ class Roster {
   // Derived from members_, made again on first use after a change.
   mutable std::vector<int> alive_;
   mutable std::vector<const std::string*> names_;
-  mutable bool alive_stale_ = true, names_stale_ = true;
+  mutable std::vector<Glance> glances_;
+  mutable std::vector<std::size_t> glance_of_index_;  // a member's record index -> its glance
+  mutable bool alive_stale_ = true, names_stale_ = true, glances_stale_ = true;
 };
 
 }  // namespace sage::server

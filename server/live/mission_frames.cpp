@@ -20,24 +20,23 @@ LiveFrame MissionFrameMaker::Make(const server::MissionCore& core, double cycle_
   frame.finished = finished;
   frame.ergodic_metric = core.ergodic_metric();
   frame.cycle_ms = cycle_ms;
-  const auto& members = core.roster().members();
-  frame.vehicles.reserve(members.size());
-  for (const auto& [id, m] : members) {
-    VehicleView v;
-    v.id = id;
-    v.name = m.name;
-    v.x_m = static_cast<float>(m.last.state.position_m.x());
-    v.y_m = static_cast<float>(m.last.state.position_m.y());
-    v.heading_rad = static_cast<float>(m.last.state.heading_rad);
-    switch (m.status) {
+  const auto& glances = core.roster().glances();
+  frame.vehicles.resize(glances.size());
+  for (std::size_t i = 0; i < glances.size(); ++i) {
+    const server::Roster::Glance& g = glances[i];
+    VehicleView& v = frame.vehicles[i];
+    v.id = g.id;
+    v.name = g.name;
+    v.x_m = g.x_m;
+    v.y_m = g.y_m;
+    v.heading_rad = g.heading_rad;
+    switch (g.status) {
       case server::Roster::Status::kAlive:
-        v.status = !m.has_state || frame.time_s - m.last.time_s > stale_after_s_ ? VehicleStatus::kStale
-                                                                                 : VehicleStatus::kAlive;
+        v.status = !g.has_state || frame.time_s - g.heard_s > stale_after_s_ ? VehicleStatus::kStale : VehicleStatus::kAlive;
         break;
       case server::Roster::Status::kLost: v.status = VehicleStatus::kLost; break;
       case server::Roster::Status::kLeft: v.status = VehicleStatus::kLeft; break;
     }
-    frame.vehicles.push_back(std::move(v));
   }
   const Eigen::VectorXd& raw = core.fleet().raw_weights();
   const double total = raw.sum();

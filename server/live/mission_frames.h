@@ -1,6 +1,6 @@
 #pragma once
 // Frames of a running mission, made from its mission core's public state on the server's own
-// loop (a copy of positions and weights, about a microsecond a vehicle): every vehicle the
+// loop (a copy of the roster's compact glances and the valves' weights): every vehicle the
 // roster knows with its last state, greyed when it has not been heard for a while (stale) or is
 // lost or gone; each valve's weight, share, visits and last visit; the clock and the metric.
 // Also the event log's lines for the record's events, the same words live and in a replay.
