@@ -51,10 +51,14 @@ Eigen::Vector2d ObstacleFilter::Apply(const Eigen::Vector2d& x_m, const Eigen::V
     u += speed * std::clamp((reach - distance) / (reach - near), 0.0, 1.0) * away;
   }
 
-  const double distance = field_.Distance(x_m);
-  if (distance < settings_.influence_m) {
-    const Eigen::Vector2d away = field_.AwayFromObstacle(x_m);
-    if (!away.isZero()) u = Slide(u, speed, away, distance, settings_.influence_m, settings_.clearance_m, &tangent_sign_);
+  // Most of a large field is open water: the coarse table answers there without the exact
+  // lookup's cache miss (bit for bit the same commands).
+  if (!field_.FartherThan(x_m, settings_.influence_m)) {
+    const double distance = field_.Distance(x_m);
+    if (distance < settings_.influence_m) {
+      const Eigen::Vector2d away = field_.AwayFromObstacle(x_m);
+      if (!away.isZero()) u = Slide(u, speed, away, distance, settings_.influence_m, settings_.clearance_m, &tangent_sign_);
+    }
   }
 
   // Each workspace edge within reach (two at a corner): signed distance, negative outside.

@@ -68,14 +68,19 @@ PhysicsWorld::PhysicsWorld(const maps::Workspace& /*workspace*/,
     // pass over every vehicle was a fifth of the physics at 10,000 vehicles.
     world->SetContinuousPhysics(false);
     // Every shard holds every structure: a vehicle meets the seabed's XTs whichever it is in.
-    for (const maps::ChristmasTree& tree : structures) {
+    // One static body, a box fixture per XT: Box2D walks its list of bodies several times a
+    // step (islands, forces, fixture sync), and 10,000 XTs as bodies of their own were 10,000
+    // visits each time in every shard.
+    if (!structures.empty()) {
       b2BodyDef def;
       def.type = b2_staticBody;
-      def.position.Set(static_cast<float>(tree.center_m.x()), static_cast<float>(tree.center_m.y()));
       b2Body* body = world->CreateBody(&def);
-      b2PolygonShape box;
-      box.SetAsBox(static_cast<float>(0.5 * tree.size_m.x()), static_cast<float>(0.5 * tree.size_m.y()));
-      body->CreateFixture(&box, 0.0f);
+      for (const maps::ChristmasTree& tree : structures) {
+        b2PolygonShape box;
+        box.SetAsBox(static_cast<float>(0.5 * tree.size_m.x()), static_cast<float>(0.5 * tree.size_m.y()),
+                     b2Vec2(static_cast<float>(tree.center_m.x()), static_cast<float>(tree.center_m.y())), 0.0f);
+        body->CreateFixture(&box, 0.0f);
+      }
     }
     // The blocked seabed: one static body, a box fixture per rectangle of blocked cells (a
     // vehicle glances off the rock as off a structure).

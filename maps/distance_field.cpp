@@ -67,6 +67,36 @@ DistanceField::DistanceField(const OccupancyGrid& grid)
           any ? std::sqrt(d[i]) * resolution_m_ : std::numeric_limits<double>::infinity();
     }
   }
+  // The blocks' least distances, over the cells a point in the block interpolates between.
+  if (cols_ <= 0 || rows_ <= 0) return;
+  const int block_cols = (cols_ + kBlockCells - 1) / kBlockCells;
+  block_rows_ = (rows_ + kBlockCells - 1) / kBlockCells;
+  block_least_m_.assign(static_cast<std::size_t>(block_cols) * block_rows_, std::numeric_limits<float>::infinity());
+  for (int bi = 0; bi < block_cols; ++bi) {
+    for (int bj = 0; bj < block_rows_; ++bj) {
+      double least = std::numeric_limits<double>::infinity();
+      for (int i = bi * kBlockCells; i <= std::min((bi + 1) * kBlockCells, cols_ - 1); ++i) {
+        for (int j = bj * kBlockCells; j <= std::min((bj + 1) * kBlockCells, rows_ - 1); ++j) {
+          least = std::min(least, distance_m_[i * rows_ + j]);
+        }
+      }
+      float rounded = static_cast<float>(least);
+      if (static_cast<double>(rounded) > least) rounded = std::nextafter(rounded, -std::numeric_limits<float>::infinity());
+      block_least_m_[static_cast<std::size_t>(bi) * block_rows_ + bj] = rounded;
+    }
+  }
+}
+
+bool DistanceField::FartherThan(const Eigen::Vector2d& x_m, double d) const {
+  if (block_least_m_.empty() || !x_m.allFinite()) return false;
+  // The cells Distance interpolates between: floor(g) and the next, clamped to the grid.
+  const double gx = std::clamp(x_m.x() / resolution_m_ - 0.5, -1.0, static_cast<double>(cols_));
+  const double gy = std::clamp(x_m.y() / resolution_m_ - 0.5, -1.0, static_cast<double>(rows_));
+  const int i = std::clamp(static_cast<int>(std::floor(gx)), 0, cols_ - 1);
+  const int j = std::clamp(static_cast<int>(std::floor(gy)), 0, rows_ - 1);
+  const double least = block_least_m_[static_cast<std::size_t>(i / kBlockCells) * block_rows_ + j / kBlockCells];
+  // A bilinear mean of values >= least is >= least up to a few ulps of rounding.
+  return least * (1.0 - 1e-9) >= d;
 }
 
 double DistanceField::At(int i, int j) const {

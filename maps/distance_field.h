@@ -24,6 +24,13 @@ class DistanceField {
   /// Unit vector pointing away from the nearest obstacle (central differences of Distance);
   /// zero where the field is flat or infinite.
   Eigen::Vector2d AwayFromObstacle(const Eigen::Vector2d& x_m) const;
+  /// True only where Distance(x) >= d for certain, from a coarse table of each block's least
+  /// distance (kBlockCells cells a side, ~100 kB a km^2): the obstacle filter asks it before the
+  /// exact lookup, which on a large field is a cache miss into a grid of ~100 MB. False says
+  /// nothing: look Distance up.
+  bool FartherThan(const Eigen::Vector2d& x_m, double d) const;
+
+  static constexpr int kBlockCells = 8;
 
   double resolution_m() const { return resolution_m_; }
 
@@ -34,6 +41,10 @@ class DistanceField {
   int rows_;
   double resolution_m_;
   std::vector<double> distance_m_;  // i * rows_ + j
+  int block_rows_ = 0;
+  // Per block (bi * block_rows_ + bj), the least distance over its cells and the next row and
+  // column of cells (the bilinear stencil of a point in the block reaches them), rounded down.
+  std::vector<float> block_least_m_;
 };
 
 }  // namespace sage::maps

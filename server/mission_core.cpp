@@ -512,8 +512,9 @@ void MissionCore::TakeSplit(RegionSplit split) {
     records.push_back(std::move(record));
     most = std::max(most, share.valves.size());
     largest = std::max(largest, share.field->box().size_m.maxCoeff());
-    plan.shares[id] = std::move(share);
+    plan.shares.emplace_back(id, std::move(share));
   }
+  std::sort(plan.shares.begin(), plan.shares.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
   plan.planned_for = split.input.vehicle_ids;
   plan.risk_seen = plan.pending_risk_seen;
   fleet_.SetRevisitBounds(bounds);

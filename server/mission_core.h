@@ -276,7 +276,9 @@ class MissionCore {
     double changed_s = -1.0;
     double first_join_s = -1.0;
     std::size_t risk_seen = 0;  // schedule entries looked at for a re-split
-    std::map<int, RegionShare> shares;
+    // By vehicle id, ascending: walked every cycle beside the live ids (a map's nodes were a cache
+    // miss each at 10,000 vehicles).
+    std::vector<std::pair<int, RegionShare>> shares;
     std::unique_ptr<PendingRegionSplit> pending;  // a split being planned, taken at its due cycle
     double pending_started_s = 0.0;
     std::size_t pending_risk_seen = 0;            // schedule entries when it started
