@@ -25,7 +25,7 @@ class DistanceField {
   /// zero where the field is flat or infinite.
   Eigen::Vector2d AwayFromObstacle(const Eigen::Vector2d& x_m) const;
   /// True only where Distance(x) >= d for certain, from a coarse table of each block's least
-  /// distance (kBlockCells cells a side, ~100 kB a km^2): the obstacle filter asks it before the
+  /// distance (kBlockCells cells a side: 1 MB a km^2 at 0.25 m cells): the obstacle filter asks it before the
   /// exact lookup, which on a large field is a cache miss into a grid of ~100 MB. False says
   /// nothing: look Distance up.
   bool FartherThan(const Eigen::Vector2d& x_m, double d) const;
