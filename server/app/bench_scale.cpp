@@ -141,15 +141,27 @@ ScaleRow MeasureInproc(const std::string& field_path, ControllerKind kind, doubl
   Progress progress(label);
   const long cycles = std::lround(duration_s * scenario.control_rate_hz);
   const long report_every = std::max(1L, cycles / 100);
-  rusage before{}, after{};
+  rusage before{}, middle{}, after{};
   getrusage(RUSAGE_SELF, &before);
   const auto loop_start = Clock::now();
+  auto middle_at = loop_start;
+  const long middle_cycle = cycles / 2;
   long cycle = 0;
   while (mission.Step()) {
     if (++cycle % report_every == 0) progress.Show(static_cast<double>(cycle) / cycles, duration_s);
+    if (cycle == middle_cycle) {
+      getrusage(RUSAGE_SELF, &middle);
+      middle_at = Clock::now();
+    }
   }
   run.loop_wall_s = Since(loop_start);
   getrusage(RUSAGE_SELF, &after);
+  if (middle_cycle > 0 && cycle > middle_cycle) {
+    // Step n advances the mission from (n - 1) / rate to n / rate; the loop's last cycle is t = duration.
+    run.late_mission_s = scenario.duration_s - static_cast<double>(middle_cycle) / scenario.control_rate_hz;
+    run.late_wall_s = Since(middle_at);
+    run.late_cpu_s = CpuSeconds(after) - CpuSeconds(middle);
+  }
   progress.Show(1.0, duration_s);
   run.mission_s = scenario.duration_s;  // cycles 0 .. duration x rate: t = 0 to the end
   run.cpu_s = CpuSeconds(after) - CpuSeconds(before);

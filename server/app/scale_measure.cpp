@@ -148,6 +148,10 @@ ScaleRow InprocRow(ScaleRow row, const InprocRun& run) {
     row.server_cycle_max_ms = 1e3 * *std::max_element(run.server_cycle_s.begin(), run.server_cycle_s.end());
   }
   FillCpu(row, run.cpu_s, run.mission_s, "the mission loop of the process that ran it (RUSAGE_SELF)");
+  if (run.late_mission_s > 0.0 && run.late_wall_s > 0.0) {
+    row.real_time_factor_late = run.late_mission_s / run.late_wall_s;
+    row.cpu_s_per_vehicle_s_late = run.late_cpu_s / (row.vehicles * run.late_mission_s);
+  }
   row.peak_rss_mb = run.peak_rss_mb;
   row.all_moved_after_s = run.all_moved_s;
   row.vehicles_never_moved = run.never_moved;

@@ -88,6 +88,9 @@ struct InprocRun {
   double loop_wall_s = 0.0;   ///< wall seconds of the stepping loop
   double setup_wall_s = 0.0;  ///< wall seconds to build the Mission
   double cpu_s = 0.0;         ///< user + system CPU seconds of the loop (RUSAGE_SELF after - before)
+  /// The loop's second half: the mission seconds, wall and CPU seconds from its middle cycle to
+  /// the end (0 mission seconds: not measured).
+  double late_mission_s = 0.0, late_wall_s = 0.0, late_cpu_s = 0.0;
   double peak_rss_mb = 0.0;   ///< ru_maxrss of the process
   std::vector<double> server_cycle_s;  ///< each MissionCore::Cycle's wall time
   double all_moved_s = std::numeric_limits<double>::quiet_NaN();
@@ -95,7 +98,8 @@ struct InprocRun {
   MissionMetrics metrics;
 };
 /// `base` (vehicles, controller, field columns) with the in-process figures: real-time factor
-/// mission_s / loop_wall_s, cycle mean, p99 (nearest rank) and max, CPU per vehicle-second.
+/// mission_s / loop_wall_s, cycle mean, p99 (nearest rank) and max, CPU per vehicle-second; the
+/// real-time factor and CPU per vehicle-second of the second half.
 ScaleRow InprocRow(ScaleRow base, const InprocRun& run);
 
 /// A launch as bench_scale measured it.

@@ -39,11 +39,13 @@ void VisitFields(Row& r, Visit&& v) {
   v("wall_s", r.wall_s);
   v("setup_wall_s", r.setup_wall_s);
   v("real_time_factor", r.real_time_factor);
+  v("real_time_factor_late", r.real_time_factor_late);
   v("server_cycle_mean_ms", r.server_cycle_mean_ms);
   v("server_cycle_p99_ms", r.server_cycle_p99_ms);
   v("server_cycle_max_ms", r.server_cycle_max_ms);
   v("cpu_s", r.cpu_s);
   v("cpu_s_per_vehicle_s", r.cpu_s_per_vehicle_s);
+  v("cpu_s_per_vehicle_s_late", r.cpu_s_per_vehicle_s_late);
   v("cpu_scope", r.cpu_scope);
   v("peak_rss_mb", r.peak_rss_mb);
   v("server_peak_rss_mb", r.server_peak_rss_mb);
@@ -114,10 +116,16 @@ std::vector<ScaleRow> Sorted(std::vector<ScaleRow> rows) {
 
 std::string TableText(const std::vector<ScaleRow>& rows) {
   std::string out =
-      "| vehicles | transport | controller | real-time factor | server cycle mean / p99 / max | CPU per vehicle-s | peak RSS | "
+      "| vehicles | transport | controller | real-time factor (2nd half) | server cycle mean / p99 / max | CPU per vehicle-s "
+      "(2nd half) | peak RSS | "
       "DDS at the server | all moved by | unvisited valves | longest gap median / p90 / max | risk-weighted interval | "
       "expected detection delay | dominant valve interval | corr(visits, weight) |\n"
       "|---:|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n";
+  // A whole-mission figure and, where measured, its second half's in brackets.
+  const auto with_late = [](const std::string& whole, double late, const std::string& late_text) {
+    return std::isfinite(late) ? fmt::format("{} ({})", whole, late_text) : whole;
+  };
+  const auto cpu_ms = [](double s) { return std::isfinite(s) ? fmt::format("{} ms", Ms(1e3 * s)) : std::string("-"); };
   for (const ScaleRow& r : Sorted(rows)) {
     std::string rss = Mb(r.peak_rss_mb);
     if (r.transport == "dds" && std::isfinite(r.server_peak_rss_mb)) {
@@ -137,9 +145,10 @@ std::string TableText(const std::vector<ScaleRow>& rows) {
                                  ? fmt::format("{:+.2f}", r.visit_weight_correlation)
                                  : (r.unvisited_valves >= 0 ? "undefined" : "-");
     out += fmt::format("| {} | {} | {} | {} | {} / {} / {} ms | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |\n",
-                       Thousands(r.vehicles), r.transport, ControllerLabel(r), Factor(r.real_time_factor),
+                       Thousands(r.vehicles), r.transport, ControllerLabel(r),
+                       with_late(Factor(r.real_time_factor), r.real_time_factor_late, Factor(r.real_time_factor_late)),
                        Ms(r.server_cycle_mean_ms), Ms(r.server_cycle_p99_ms), Ms(r.server_cycle_max_ms),
-                       std::isfinite(r.cpu_s_per_vehicle_s) ? fmt::format("{} ms", Ms(1e3 * r.cpu_s_per_vehicle_s)) : "-",
+                       with_late(cpu_ms(r.cpu_s_per_vehicle_s), r.cpu_s_per_vehicle_s_late, cpu_ms(r.cpu_s_per_vehicle_s_late)),
                        rss, dds, moved, r.unvisited_valves >= 0 ? std::to_string(r.unvisited_valves) : "-", gaps,
                        Secs(r.risk_weighted_interval_s), Secs(r.expected_detection_delay_s), Secs(r.dominant_interval_s),
                        corr);
@@ -213,12 +222,15 @@ std::string ScaleMarkdown(const std::vector<ScaleRow>& rows, const std::string& 
   out += internal::TableText(rows);
   out +=
       "\n- **real-time factor**: mission seconds per wall second of the mission loop (over DDS the server's loop, "
-      "paced to real time, so at most 1.00x: below it the server fell behind).\n"
+      "paced to real time, so at most 1.00x: below it the server fell behind). In brackets, in-process: the same "
+      "over the mission's second half alone, the start-up plans (a large field's first split, the first paths into "
+      "the regions or tours) behind it: what each further second of a long mission costs.\n"
       "- **server cycle**: in-process, the wall time of MissionCore::Cycle; over DDS, the server's whole cycle "
       "(taking every sample, the core's cycle, publishing, the record); mean, nearest-rank p99 and max (a "
       "mean above the p99 is a few long cycles: the first plan of regions or tours).\n"
       "- **CPU per vehicle-s**: user + system CPU seconds / (vehicles x mission seconds). In-process: the mission "
-      "loop of the process that ran it (getrusage RUSAGE_SELF before and after). Over DDS: every process of the "
+      "loop of the process that ran it (getrusage RUSAGE_SELF before and after; in brackets, from half way to the "
+      "end). Over DDS: every process of the "
       "launch from start to exit (launcher, server, agent hosts; wait4 on the launcher), set-up and final writes "
       "included.\n"
       "- **peak RSS**: ru_maxrss. In-process: the process that ran the mission (forked from the benchmark, so its "

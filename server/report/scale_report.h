@@ -31,9 +31,14 @@ struct ScaleRow {
   double wall_s = kNaN;         ///< wall seconds of the mission loop
   double setup_wall_s = kNaN;   ///< inproc: wall seconds to build the mission before its loop
   double real_time_factor = kNaN;  ///< mission_s / wall_s
+  /// inproc: the same over the mission's second half alone, once the start-up plans (the first
+  /// split of a large field, the first paths into the regions or tours) are behind: what an hour's
+  /// mission costs a second
+  double real_time_factor_late = kNaN;
   double server_cycle_mean_ms = kNaN, server_cycle_p99_ms = kNaN, server_cycle_max_ms = kNaN;
   double cpu_s = kNaN;          ///< user + system CPU seconds measured (see cpu_scope)
   double cpu_s_per_vehicle_s = kNaN;  ///< cpu_s / (vehicles x mission_s)
+  double cpu_s_per_vehicle_s_late = kNaN;  ///< inproc: the same over the mission's second half
   std::string cpu_scope;        ///< what cpu_s covers, in words
   double peak_rss_mb = kNaN;    ///< inproc: the process's; dds: the largest process of the launch
   double server_peak_rss_mb = kNaN;      ///< dds: the server's own (its summary line)

@@ -3,7 +3,8 @@
 // (own + fleet time), B = sum_k Lambda_k (c_k - phi_k) grad F_k(x), the direction -B/|B|) at
 // K = 10, 20 and 40, as the paper runs it (no forgetting, one vehicle) and as fleet_field runs it
 // (60 s forgetting, the rest of the fleet's coverage, a 0.3 m turning radius); and the phi_k
-// update after one valve's weight changes (O(M K^2) re-weighting of cached vectors).
+// update after one valve's weight changes (O(M K^2) re-weighting of cached vectors); and the
+// region step of 1 to 10,000 vehicles taken in turn (what the caches cost a large fleet).
 // The server adding one vehicle sample to the fleet's coverage sum (K = 20 and 64).
 // Also one grid path (A*, shortcut) of a vehicle to a valve 10-40 m away on a generated 1,000-XT
 // field, and 20-100 m away on a 10,000-XT one, as every vehicle plans when it is sent to its
@@ -88,6 +89,47 @@ void BM_SmcStepFleet(benchmark::State& state) {
   StepAlong(state, controller, basis);
 }
 BENCHMARK(BM_SmcStepFleet)->Arg(10)->Arg(20)->Arg(40);
+
+// The step as a large fleet runs it in regions: N vehicles, each with a basis of its own (a
+// 4.5 x 4.5 m box at K = 18, a 10,000-vehicle field's typical region) and 60 s forgetting,
+// stepped in turn, one step per iteration. Against N = 1 this is what a vehicle's step pays when
+// the fleet's coefficient arrays no longer fit in the caches (at K = 18 a vehicle's coverage,
+// target and Lambda/h arrays are 7.8 kB; 10,000 of them are 78 MB): the growth of the mission's
+// CPU per vehicle-second from 100 to 10,000 vehicles.
+void BM_SmcStepManyVehicles(benchmark::State& state) {
+  const int vehicles = static_cast<int>(state.range(0));
+  constexpr int kOrder = 18;
+  constexpr double kBox_m = 4.5;
+  struct Vehicle {
+    std::unique_ptr<SpectralBasis> basis;
+    std::unique_ptr<ErgodicController> controller;
+    VehicleState state;
+  };
+  std::vector<Vehicle> fleet(static_cast<std::size_t>(vehicles));
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> jitter(-0.05, 0.05);
+  for (Vehicle& v : fleet) {
+    // Boxes a few cm apart in size, as the regions' are: no two vehicles share a basis.
+    v.basis = std::make_unique<SpectralBasis>(kBox_m + jitter(rng), kBox_m + jitter(rng), kOrder);
+    const RiskField field(*v.basis, RandomValves(3, kBox_m - 0.1, kBox_m - 0.1));
+    v.controller = std::make_unique<ErgodicController>(*v.basis, 0.7, 60.0, 0.3);
+    v.controller->SetTarget(field.coefficients());
+    v.state.position_m = {0.6 + 3.0 * (jitter(rng) + 0.05), 0.6};
+  }
+  std::size_t next = 0;
+  double t = 0.0;
+  for (auto _ : state) {
+    Vehicle& v = fleet[next];
+    const Eigen::Vector2d u = v.controller->Command(v.state, t);
+    v.state.position_m += 0.1 * u;
+    v.state.position_m = v.state.position_m.cwiseMax(0.1).cwiseMin(kBox_m - 0.2);
+    benchmark::DoNotOptimize(v.state.position_m.data());
+    if (++next == fleet.size()) next = 0, t += 0.1;
+  }
+  state.counters["vehicles"] = vehicles;
+  state.counters["K"] = kOrder;
+}
+BENCHMARK(BM_SmcStepManyVehicles)->Arg(1)->Arg(100)->Arg(1000)->Arg(10000);
 
 // The server's fleet metric: every vehicle's sample adds dt F_k(x) to the fleet's coverage sum,
 // each cycle (K = 64 on a generated 10,000-vehicle field: 4,096 terms a sample).

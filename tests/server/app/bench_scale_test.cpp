@@ -185,6 +185,9 @@ TEST(InprocRow, FiguresFromTheRun) {
   run.mission_s = 60.0;
   run.loop_wall_s = 20.0;
   run.cpu_s = 30.0;
+  run.late_mission_s = 30.0;  // the second half: 30 mission s in 8 wall s on 12 CPU s
+  run.late_wall_s = 8.0;
+  run.late_cpu_s = 12.0;
   run.peak_rss_mb = 123.0;
   for (int i = 1; i <= 100; ++i) run.server_cycle_s.push_back(i * 1e-3);  // 1..100 ms
   run.all_moved_s = 0.4;
@@ -204,6 +207,8 @@ TEST(InprocRow, FiguresFromTheRun) {
   EXPECT_NEAR(row.server_cycle_p99_ms, 99.0, 1e-9);
   EXPECT_NEAR(row.server_cycle_max_ms, 100.0, 1e-9);
   EXPECT_DOUBLE_EQ(row.cpu_s_per_vehicle_s, 30.0 / 600.0);
+  EXPECT_DOUBLE_EQ(row.real_time_factor_late, 30.0 / 8.0);
+  EXPECT_DOUBLE_EQ(row.cpu_s_per_vehicle_s_late, 12.0 / 300.0);
   EXPECT_DOUBLE_EQ(row.peak_rss_mb, 123.0);
   EXPECT_DOUBLE_EQ(row.all_moved_after_s, 0.4);
   EXPECT_EQ(row.unvisited_valves, 3);

@@ -31,6 +31,10 @@ ScaleRow Row(int vehicles, const std::string& transport, const std::string& cont
   r.server_cycle_p99_ms = 2 * cycle_ms;
   r.server_cycle_max_ms = 3 * cycle_ms;
   r.cpu_s_per_vehicle_s = 3e-4;
+  if (transport == "inproc") {  // the second half is measured in-process only
+    r.real_time_factor_late = 2.0 * rtf;
+    r.cpu_s_per_vehicle_s_late = 2e-4;
+  }
   r.peak_rss_mb = 40.0;
   r.unvisited_valves = 2;
   r.longest_gap_median_s = 20.0;
@@ -110,7 +114,9 @@ TEST(ScaleTable, OneRowPerRunErgodicNextToTours) {
   for (const std::string& line : lines) EXPECT_EQ(columns(line), columns(lines[0])) << line;
   EXPECT_NE(lines[2].find("| - |"), std::string::npos);  // in-process: no DDS column
   EXPECT_NE(lines[6].find("1,500/s, 2.10 MB/s"), std::string::npos) << lines[6];
-  EXPECT_NE(lines[2].find("15308x"), std::string::npos) << lines[2];
+  EXPECT_NE(lines[2].find("| 15308x (30616x) |"), std::string::npos) << lines[2];  // the second half in brackets
+  EXPECT_NE(lines[2].find("| 0.300 ms (0.200 ms) |"), std::string::npos) << lines[2];
+  EXPECT_NE(lines[6].find("| 1.00x |"), std::string::npos) << lines[6];  // over DDS: none
   const std::string md = ScaleMarkdown(rows, "Command: `sage bench scale`.");
   EXPECT_NE(md.find("Command: `sage bench scale`."), std::string::npos);
   EXPECT_NE(md.find(table), std::string::npos);
