@@ -66,8 +66,8 @@ int SnapCell(const maps::OccupancyGrid& grid, const Eigen::Vector2d& x_m) {
 // both orthogonal cells) are kUnreachable apart without a search.
 class ValveDistances {
  public:
-  ValveDistances(const maps::OccupancyGrid& grid, const Points& valves)
-      : grid_(grid), pad_rows_(grid.rows() + 2), r_(grid.resolution_m()), cells_((grid.cols() + 2) * pad_rows_),
+  ValveDistances(const maps::OccupancyGrid& grid, const Points& valves, const std::atomic<bool>* cancel = nullptr)
+      : cancel_(cancel), grid_(grid), pad_rows_(grid.rows() + 2), r_(grid.resolution_m()), cells_((grid.cols() + 2) * pad_rows_),
         free_(cells_, 0), component_(cells_, -1), stamp_(cells_, 0), g_(cells_) {
     // One cell of occupied padding: no bounds checks in the searches.
     for (int i = 0; i < grid.cols(); ++i) {
@@ -130,7 +130,16 @@ class ValveDistances {
     return AStar(start, goal);
   }
 
+  // Asked at each search and every kPopsBetweenChecks cells of one (a search across a large field
+  // pops millions).
+  void ThrowIfCancelled() const {
+    if (cancel_ != nullptr && cancel_->load(std::memory_order_relaxed)) throw PlanCancelled();
+  }
+  static constexpr std::uint32_t kPopsBetweenChecks = 1u << 16;
+
   double AStar(int start, int goal) {
+    ThrowIfCancelled();
+    std::uint32_t pops = 0;
     ++generation_;
     const int gi = goal / pad_rows_, gj = goal % pad_rows_;
     const auto h = [&](int c) { return Octile(c / pad_rows_ - gi, c % pad_rows_ - gj); };
@@ -149,6 +158,7 @@ class ValveDistances {
     while (!open.empty()) {
       const Entry e = open.top();
       open.pop();
+      if (++pops % kPopsBetweenChecks == 0) ThrowIfCancelled();
       if (Compare(e.g, g_[e.cell]) > 0) continue;  // stale entry
       if (e.cell == goal) return e.g.Metres(r_);
       for (const Step& step : steps_) {
@@ -162,6 +172,7 @@ class ValveDistances {
     return kUnreachable;  // not reached: the component check comes first
   }
 
+  const std::atomic<bool>* cancel_;
   const maps::OccupancyGrid& grid_;
   int pad_rows_;
   double r_;
@@ -789,7 +800,7 @@ FleetTourPlan Plan(const maps::OccupancyGrid& grid, const Points& valves_m, cons
   if (!(options.weight_exponent >= 0.0) || !std::isfinite(options.weight_exponent)) {
     throw std::invalid_argument("PlanFleetTours: weight_exponent must be finite and >= 0");
   }
-  ValveDistances dist(grid, valves_m);
+  ValveDistances dist(grid, valves_m, options.cancel);
   Points centres;  // the search works on the cells' centres, where d is measured
   for (int v = 0; v < m; ++v) centres.push_back(dist.centre(v));
   std::mt19937_64 rng(options.seed);

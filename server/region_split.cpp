@@ -7,6 +7,8 @@
 #include <stdexcept>
 #include <utility>
 
+#include <fmt/format.h>
+
 #include "maps/nearby_points.h"
 
 namespace sage::server {
@@ -132,8 +134,9 @@ RegionSplit QuickRegionSplit(const maps::OccupancyGrid& blocked, const maps::Sce
 }
 
 RegionSplit PlanRegionSplit(const maps::OccupancyGrid& astar_grid, const maps::OccupancyGrid& blocked,
-                            const maps::Scenario& scenario, RegionSplitInput input) {
+                            const maps::Scenario& scenario, RegionSplitInput input, const std::atomic<bool>* cancel) {
   agents::FleetTourOptions options;
+  options.cancel = cancel;
   options.seed = scenario.seed;
   options.weight_exponent = 1.0;
   options.risk_share = input.risk_share;
@@ -155,15 +158,29 @@ std::int64_t RegionSplitDelayCycles(std::size_t valve_count, double control_rate
   return static_cast<std::int64_t>(std::ceil(kPlanSecondsPerValve * static_cast<double>(valve_count) * control_rate_hz));
 }
 
+std::string FleetTooSmallForField(std::size_t valves, std::size_t vehicles) {
+  if (valves < static_cast<std::size_t>(kBackgroundFromValves)) return "";
+  const std::size_t least = (valves + kMostValvesPerVehicle - 1) / kMostValvesPerVehicle;
+  if (vehicles >= least) return "";
+  return fmt::format(
+      "{} vehicles for {} valves: regions and tours are planned for at most {} valves a vehicle on a field of {} valves "
+      "or more (fewer vehicles would plan for hours); fly at least {} (-n {}), or --assignment shared",
+      vehicles, valves, kMostValvesPerVehicle, kBackgroundFromValves, least, least);
+}
+
 PendingRegionSplit::PendingRegionSplit(const maps::OccupancyGrid& astar_grid, const maps::OccupancyGrid& blocked,
                                        const maps::Scenario& scenario, RegionSplitInput input, std::int64_t due_cycle,
                                        bool in_background)
     : due_cycle_(due_cycle) {
-  auto plan = [&astar_grid, &blocked, &scenario, input = std::move(input)]() mutable {
-    return PlanRegionSplit(astar_grid, blocked, scenario, std::move(input));
+  auto plan = [&astar_grid, &blocked, &scenario, input = std::move(input), cancel = cancel_.get()]() mutable {
+    return PlanRegionSplit(astar_grid, blocked, scenario, std::move(input), cancel);
   };
   split_ = std::async(in_background ? std::launch::async : std::launch::deferred, std::move(plan));
 }
+
+// The future's destructor then joins a thread that is at most one grid search (or 65,536 of its
+// cells) from giving up; its PlanCancelled stays in the future, never taken.
+PendingRegionSplit::~PendingRegionSplit() { cancel_->store(true, std::memory_order_relaxed); }
 
 RegionSplit PendingRegionSplit::Take() { return split_.get(); }
 

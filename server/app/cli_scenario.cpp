@@ -8,6 +8,7 @@
 #include <spdlog/spdlog.h>
 
 #include "maps/seabed/seabed_obstacles.h"
+#include "server/region_split.h"
 
 namespace sage::server {
 
@@ -121,6 +122,12 @@ maps::Scenario LoadWithOverrides(const ScenarioOverrides& o) {
                  maps::ToString(scenario.fleet.assignment));
   }
   return scenario;
+}
+
+void CheckFleetFitsField(const maps::Scenario& scenario, bool tours) {
+  if (!tours && scenario.fleet.assignment != maps::FleetAssignment::kRegions) return;
+  const std::string why = FleetTooSmallForField(static_cast<std::size_t>(scenario.ValveCount()), scenario.vehicles.size());
+  if (!why.empty()) throw maps::ScenarioError(why);
 }
 
 }  // namespace sage::server

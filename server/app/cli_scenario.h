@@ -51,4 +51,9 @@ struct ScenarioOverrides {
 /// the option, and the result passes the same validation as a file.
 maps::Scenario LoadWithOverrides(const ScenarioOverrides& o);
 
+/// Refuses (maps::ScenarioError, one line) a fleet too small for its field when the mission would
+/// plan regions (the ergodic fleet's assignment) or tours (`tours`: -c astar): see
+/// FleetTooSmallForField (server/region_split.h).
+void CheckFleetFitsField(const maps::Scenario& scenario, bool tours);
+
 }  // namespace sage::server

@@ -82,6 +82,7 @@ void CheckPortFree(const std::string& flag, int port) {
 int CmdServer(const ServerCommand& c) {
   const std::atomic<bool>* stop = StopOnSignals();
   const maps::Scenario scenario = LoadWithOverrides(c.scenario);
+  CheckFleetFitsField(scenario, ParseControllerKind(c.controller) == ControllerKind::kAstar);
   ServerNodeOptions options;
   options.domain_id = c.domain;
   options.security = MissionIdentity(c.security_dir, proto::SecurityRole::kServer, c.domain);

@@ -136,7 +136,9 @@ int Launch(const LaunchCommand& c) {
     mission.controller = c.controller;
     mission.profile = c.scenario.profile;
   }
-  ParseControllerKind(mission.controller);  // checked before anything starts
+  // Checked before anything starts (a resumed mission was when it was launched).
+  const bool tours = ParseControllerKind(mission.controller) == ControllerKind::kAstar;
+  if (!resume) CheckFleetFitsField(scenario, tours);
 
   // DDS Security unless --insecure: the identities given with --security, or new ones for this
   // mission in its run directory; a resumed mission keeps its own (mission.json).

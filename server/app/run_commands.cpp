@@ -88,6 +88,7 @@ MissionMetrics RunInto(const maps::Scenario& scenario, ControllerKind kind, cons
 int CmdRun(const RunCommand& c) {
   const maps::Scenario scenario = LoadWithOverrides(c.scenario);
   const ControllerKind kind = ParseControllerKind(c.controller);
+  CheckFleetFitsField(scenario, kind == ControllerKind::kAstar);
   const std::string profile = c.scenario.profile.empty() ? scenario.default_profile : c.scenario.profile;
   const fs::path dir = c.out_dir.empty() ? DefaultOutDir(scenario, profile, ToString(kind)) : c.out_dir;
   const auto start = std::chrono::steady_clock::now();
@@ -102,6 +103,7 @@ int CmdRun(const RunCommand& c) {
 
 int CmdCompare(const RunCommand& c) {
   maps::Scenario scenario = LoadWithOverrides(c.scenario);
+  CheckFleetFitsField(scenario, /*tours=*/true);  // compare flies the A* tours too
   const std::string profile = c.scenario.profile.empty() ? scenario.default_profile : c.scenario.profile;
   const fs::path dir = c.out_dir.empty() ? DefaultOutDir(scenario, profile, "compare") : c.out_dir;
   PrepareRunDirectory(dir.string());

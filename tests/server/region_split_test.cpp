@@ -4,6 +4,7 @@
 #include "server/region_split.h"
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <limits>
 #include <random>
@@ -28,6 +29,20 @@ TEST(RegionSplit, DelayGrowsWithTheFieldFromAThousandValves) {
   EXPECT_EQ(RegionSplitDelayCycles(3500, 10.0), 11);       // 1.05 s
   EXPECT_EQ(RegionSplitDelayCycles(35000, 10.0), 105);     // 10.5 s
   EXPECT_EQ(RegionSplitDelayCycles(35000, 20.0), 210);
+}
+
+// Below the background split's 1,000 valves any fleet plans; from there at most 100 valves a
+// vehicle, and the refusal names the fleet that would do.
+TEST(RegionSplit, AFleetTooSmallForALargeFieldIsRefusedWithTheSizeThatWouldDo) {
+  EXPECT_EQ(FleetTooSmallForField(999, 1), "");
+  EXPECT_EQ(FleetTooSmallForField(1000, 10), "");
+  EXPECT_EQ(FleetTooSmallForField(35000, 350), "");
+  EXPECT_EQ(FleetTooSmallForField(35000, 10000), "");
+  const std::string why = FleetTooSmallForField(35000, 349);
+  EXPECT_NE(why.find("349 vehicles for 35000 valves"), std::string::npos) << why;
+  EXPECT_NE(why.find("(-n 350)"), std::string::npos) << why;
+  EXPECT_EQ(why.find('\n'), std::string::npos);  // one line
+  EXPECT_NE(FleetTooSmallForField(1001, 10).find("(-n 11)"), std::string::npos);  // rounded up
 }
 
 maps::Scenario Field(int xts, int valves, int vehicles, double duration_s) {
@@ -69,6 +84,29 @@ TEST(RegionSplit, PlannedOnAThreadIsPlannedInTheCycle) {
     EXPECT_EQ(box_a.size_m, box_b.size_m) << k;
     const Eigen::VectorXd w = Eigen::VectorXd::Ones(static_cast<Eigen::Index>(a.regions[k].valves.size()));
     EXPECT_EQ(a.regions[k].field->Coefficients(w), b.regions[k].field->Coefficients(w)) << k;
+  }
+}
+
+// A split dropped before it is taken gives its plan up: the flag its PendingRegionSplit sets
+// makes the planner throw at its next grid search (valves of one XT need one: their rectangle
+// holds the XT); a flag left down plans the split it would without one.
+TEST(RegionSplit, ACancelledPlanStopsAtItsNextSearch) {
+  const maps::Scenario s = Field(40, 130, 12, 10.0);
+  const maps::World world(s);
+  RegionSplitInput input;
+  for (int k = 0; k < 12; ++k) {
+    input.vehicle_ids.push_back(k);
+    input.vehicles.push_back({s.vehicles[k].start_m, s.vehicles[k].transit_speed_mps});
+  }
+  input.weights = Eigen::VectorXd::Ones(130);
+  const std::atomic<bool> up(true), down(false);
+  EXPECT_THROW(PlanRegionSplit(world.astar_grid(), world.blocked(), s, input, &up), agents::PlanCancelled);
+  const RegionSplit with_flag = PlanRegionSplit(world.astar_grid(), world.blocked(), s, input, &down);
+  const RegionSplit without = PlanRegionSplit(world.astar_grid(), world.blocked(), s, input);
+  ASSERT_EQ(with_flag.regions.size(), without.regions.size());
+  for (std::size_t k = 0; k < without.regions.size(); ++k) {
+    EXPECT_EQ(with_flag.regions[k].valves, without.regions[k].valves) << k;
+    EXPECT_EQ(with_flag.regions[k].lap_time_s, without.regions[k].lap_time_s) << k;
   }
 }
 

@@ -5,6 +5,8 @@
 
 #include <gtest/gtest.h>
 
+#include "maps/scenario/field_generator.h"
+
 namespace sage::server {
 namespace {
 
@@ -82,6 +84,35 @@ TEST(ScenarioOverrides, BadValuesNameTheOption) {
       EXPECT_NE(std::string(e.what()).find(c.expected), std::string::npos) << e.what();
     }
   }
+}
+
+// Regions or tours on a field of 1,000 valves or more want a vehicle per 100 valves: refused
+// before anything runs (ten vehicles on the 35,000-valve field had planned for hours); the shared
+// basis plans nothing and is let through, and so is a fleet of the size the refusal names.
+TEST(CheckFleetFitsField, RefusesRegionsAndToursForAFleetFarSmallerThanItsField) {
+  maps::FieldOptions options;
+  options.xts = 300;
+  options.valves = 1050;
+  options.vehicles = 10;
+  options.seed = 3;
+  maps::Scenario s = maps::GenerateField(options);
+  ASSERT_EQ(s.ValveCount(), 1050);
+  s.fleet.assignment = maps::FleetAssignment::kRegions;
+  try {
+    CheckFleetFitsField(s, false);
+    ADD_FAILURE() << "10 vehicles on 1,050 valves accepted";
+  } catch (const maps::ScenarioError& e) {
+    EXPECT_NE(std::string(e.what()).find("fly at least 11 (-n 11)"), std::string::npos) << e.what();
+  }
+  EXPECT_THROW(CheckFleetFitsField(s, true), maps::ScenarioError);  // the tours alike
+  s.fleet.assignment = maps::FleetAssignment::kShared;
+  EXPECT_NO_THROW(CheckFleetFitsField(s, false));
+  EXPECT_THROW(CheckFleetFitsField(s, true), maps::ScenarioError);
+  s.vehicles.push_back(s.vehicles.back());
+  s.vehicles.back().name += "b";
+  s.fleet.assignment = maps::FleetAssignment::kRegions;
+  EXPECT_NO_THROW(CheckFleetFitsField(s, true));
+  EXPECT_NO_THROW(CheckFleetFitsField(maps::LoadScenario(kFleetField), true));  // 20 valves: planned at once
 }
 
 }  // namespace
