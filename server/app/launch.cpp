@@ -123,6 +123,8 @@ int Launch(const LaunchCommand& c) {
     mission.resumes = previous.resumes + 1;
   } else {
     scenario = LoadWithOverrides(c.scenario);
+    // Before the run directory is made: a refused mission leaves nothing behind.
+    CheckFleetFitsField(scenario, ParseControllerKind(c.controller) == ControllerKind::kAstar);
     maps::CheckSeabedModel(scenario);  // a bad seabed map is refused here, naming the user's file, not by the server
     out_dir = c.out_dir.empty() ? (fs::path("runs") / (scenario.name + "_launch")).string() : c.out_dir;
     CheckRunDirectoryFree(out_dir);
@@ -136,9 +138,7 @@ int Launch(const LaunchCommand& c) {
     mission.controller = c.controller;
     mission.profile = c.scenario.profile;
   }
-  // Checked before anything starts (a resumed mission was when it was launched).
-  const bool tours = ParseControllerKind(mission.controller) == ControllerKind::kAstar;
-  if (!resume) CheckFleetFitsField(scenario, tours);
+  ParseControllerKind(mission.controller);  // checked before anything starts
 
   // DDS Security unless --insecure: the identities given with --security, or new ones for this
   // mission in its run directory; a resumed mission keeps its own (mission.json).

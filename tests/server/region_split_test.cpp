@@ -57,16 +57,22 @@ maps::Scenario Field(int xts, int valves, int vehicles, double duration_s) {
   return s;
 }
 
+// A split's input for every vehicle of the scenario where it starts.
+RegionSplitInput EveryVehicleAtItsStart(const maps::Scenario& s) {
+  RegionSplitInput input;
+  for (std::size_t k = 0; k < s.vehicles.size(); ++k) {
+    input.vehicle_ids.push_back(static_cast<int>(k));
+    input.vehicles.push_back({s.vehicles[k].start_m, s.vehicles[k].transit_speed_mps});
+  }
+  return input;
+}
+
 // The same input planned in the background and in the caller's thread: the same shares (valves,
 // laps) and the same targets (boxes, orders, coefficients bit for bit).
 TEST(RegionSplit, PlannedOnAThreadIsPlannedInTheCycle) {
   const maps::Scenario s = Field(40, 130, 12, 10.0);
   const maps::World world(s);
-  RegionSplitInput input;
-  for (int k = 0; k < 12; ++k) {
-    input.vehicle_ids.push_back(k);
-    input.vehicles.push_back({s.vehicles[k].start_m, s.vehicles[k].transit_speed_mps});
-  }
+  RegionSplitInput input = EveryVehicleAtItsStart(s);
   input.weights = Eigen::VectorXd::LinSpaced(130, 1.0, 3.0);
   input.risk_share = 0.5;
   PendingRegionSplit here(world.astar_grid(), world.blocked(), s, input, 7, false);
@@ -93,11 +99,7 @@ TEST(RegionSplit, PlannedOnAThreadIsPlannedInTheCycle) {
 TEST(RegionSplit, ACancelledPlanStopsAtItsNextSearch) {
   const maps::Scenario s = Field(40, 130, 12, 10.0);
   const maps::World world(s);
-  RegionSplitInput input;
-  for (int k = 0; k < 12; ++k) {
-    input.vehicle_ids.push_back(k);
-    input.vehicles.push_back({s.vehicles[k].start_m, s.vehicles[k].transit_speed_mps});
-  }
+  RegionSplitInput input = EveryVehicleAtItsStart(s);
   input.weights = Eigen::VectorXd::Ones(130);
   const std::atomic<bool> up(true), down(false);
   EXPECT_THROW(PlanRegionSplit(world.astar_grid(), world.blocked(), s, input, &up), agents::PlanCancelled);
