@@ -4,6 +4,7 @@
 #include <cmath>
 #include <random>
 #include <sstream>
+#include <stdexcept>
 #include <string>
 
 #include <gtest/gtest.h>
@@ -32,6 +33,33 @@ RiskField TwoValves(const SpectralBasis& basis) {
 }
 
 double MaxAbs(const Eigen::VectorXd& v) { return v.cwiseAbs().maxCoeff(); }
+
+// An agent host's world (WorldUse::kVehicles) has the same maps and basis as the mission's, cell
+// for cell, and neither the seabed OctoMap nor the risk field: asking for them is a logic error,
+// not a silently empty map.
+TEST(World, ForVehiclesHasTheMissionsMapsAndNoOctoMapOrRiskField) {
+  const Scenario scenario = TwoXt();
+  const World mission(scenario);
+  const World vehicles(scenario, WorldUse::kVehicles);
+  ASSERT_EQ(vehicles.obstacles().cols(), mission.obstacles().cols());
+  ASSERT_EQ(vehicles.obstacles().rows(), mission.obstacles().rows());
+  int occupied = 0;
+  for (int i = 0; i < mission.obstacles().cols(); ++i) {
+    for (int j = 0; j < mission.obstacles().rows(); ++j) {
+      ASSERT_EQ(vehicles.obstacles().Occupied(i, j), mission.obstacles().Occupied(i, j));
+      ASSERT_EQ(vehicles.astar_grid().Occupied(i, j), mission.astar_grid().Occupied(i, j));
+      occupied += mission.obstacles().Occupied(i, j);
+    }
+  }
+  EXPECT_GT(occupied, 0);  // two XTs stand in it
+  const Eigen::Vector2d near_xt = scenario.AllValves()[0].position_m;
+  EXPECT_EQ(vehicles.clearance().Distance(near_xt), mission.clearance().Distance(near_xt));
+  EXPECT_EQ(vehicles.basis().size(), mission.basis().size());
+  EXPECT_GT(mission.risk().component_count(), 0);
+  EXPECT_THROW((void)vehicles.risk(), std::logic_error);
+  EXPECT_GT(mission.seabed().resolution_m(), 0.0);
+  EXPECT_THROW((void)vehicles.seabed(), std::logic_error);
+}
 
 // A layer nothing has changed is its prior: phi_k equals the scenario's RiskField's (blocked
 // water excluded) exactly, since the excess is an exact zero; and after a raise relaxed back
