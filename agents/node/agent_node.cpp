@@ -39,6 +39,9 @@ int RunAgentNode(const maps::Scenario& scenario, const AgentNodeOptions& options
   // its world is 0.19 GB, and eight hosts share the machine.
   malloc_trim(0);
   AgentMission mission(world, scenario, options.guidance);
+  // The guidance of a cycle on the machine's cores (a thread per 256 vehicles at most; the
+  // commands are the same for any count): one host of many vehicles rather than many hosts.
+  mission.SetThreads(static_cast<int>(std::max(1u, std::thread::hardware_concurrency())));
   for (std::size_t i = 0; i < options.vehicles.size(); ++i) {
     const VehicleResume* resume = i < options.resume.size() && options.resume[i] ? &*options.resume[i] : nullptr;
     mission.AddVehicle(static_cast<VehicleId>(options.ids[i]), options.vehicles[i], resume);

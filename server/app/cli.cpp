@@ -248,7 +248,7 @@ int RunCli(int argc, char** argv) {
       ->check(MustBeTimeScale)
       ->capture_default_str();
   launch->add_option("--out,-o", launch_cmd.out_dir, "Run directory (default: runs/<scenario>_launch)");
-  launch->add_option("--hosts", launch_cmd.hosts, "Agent host processes (default: one per 250 vehicles)")->check(MustBePositive);
+  launch->add_option("--hosts", launch_cmd.hosts, "Agent host processes for the fleet (default: one per 10,000 vehicles; on one machine more only multiply the DDS samples each host reads)")->check(MustBePositive);
   launch->add_option("--domain", launch_cmd.domain,
                      "DDS domain id 0..230 (secured, the default) or 0..232 (--insecure) (default: a free one, reserved "
                      "machine-wide)");

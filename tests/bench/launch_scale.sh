@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Fleet missions over Cyclone DDS at scale: `sage launch` on scenarios/fleet_large.yaml with N
-# vehicles (agent hosts of up to 250 vehicles each), at real time. Prints and appends to
+# vehicles (agent hosts of up to 10,000 vehicles each, sage launch's default), at real time. Prints and appends to
 # BUILD_DIR/launch_scale.md: the real-time factor the server kept, its cycle time, and the DDS message
 # rate it saw. Usage: tests/bench/launch_scale.sh [BUILD_DIR] [N ...]   (default: build 100 1000)
 # Missions are secured (DDS Security, sage launch's default); LAUNCH_FLAGS=--insecure runs them plain.
