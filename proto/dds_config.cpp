@@ -59,6 +59,15 @@ std::string InterfaceAddress(const std::string& name) {
   return found;
 }
 
+std::string WithBatchedWrites(const std::string& config_xml) {
+  static constexpr std::string_view kInternal = "<Internal>";
+  const std::size_t at = config_xml.find(kInternal);
+  if (at == std::string::npos) throw std::invalid_argument("WithBatchedWrites: not a SAGE Cyclone configuration (no <Internal>)");
+  std::string xml = config_xml;
+  xml.insert(at + kInternal.size(), "<WriteBatch>true</WriteBatch>");
+  return xml;
+}
+
 std::string CycloneConfigXml(const NetworkConfig& network, int max_participants,
                              const std::optional<SecurityIdentity>& security) {
   if (max_participants < 1 || max_participants > kMaxLocalParticipants) {

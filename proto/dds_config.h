@@ -78,6 +78,13 @@ std::string InterfaceAddress(const std::string& name);
 std::string CycloneConfigXml(const NetworkConfig& network, int max_participants,
                              const std::optional<SecurityIdentity>& security = std::nullopt);
 
+/// `config_xml` (from CycloneConfigXml) with Cyclone's write batching on (Internal/WriteBatch):
+/// a writer's samples wait in its packer until Writer::Flush (or the packet is full) and go out
+/// many to a datagram. For a process that writes a burst each cycle and flushes every writer
+/// after it (an agent host: a state per vehicle). Throws std::invalid_argument for XML not made
+/// by CycloneConfigXml.
+std::string WithBatchedWrites(const std::string& config_xml);
+
 /// The same as a whole Cyclone configuration document for domain `domain_id` (what a run
 /// directory's cyclonedds.xml holds, for `CYCLONEDDS_URI=file://...` of other tools).
 std::string CycloneConfigDocument(const NetworkConfig& network, int domain_id, int max_participants,

@@ -59,6 +59,8 @@ void WriterCore::Dispose(const void* key_sample) {
   CheckDds(dds_dispose(writer_.get(), key_sample), "dds_dispose(" + topic_name_ + ")");
 }
 
+void WriterCore::Flush() { dds_write_flush(writer_.get()); }
+
 void WriterCore::Unregister(const void* key_sample) {
   CheckDds(dds_unregister_instance(writer_.get(), key_sample),
            "dds_unregister_instance(" + topic_name_ + ")");

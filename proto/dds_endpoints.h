@@ -64,6 +64,7 @@ class WriterCore {
   void Write(const void* sample);
   void Dispose(const void* key_sample);
   void Unregister(const void* key_sample);
+  void Flush();
   uint32_t MatchedReaders() const;
   dds_entity_t handle() const noexcept { return writer_.get(); }
 
@@ -119,6 +120,9 @@ class Writer {
   void Dispose(const T& key_sample) { core_.Dispose(&key_sample); }
   /// Stops writing the instance without disposing it: readers see NOT_ALIVE_NO_WRITERS.
   void Unregister(const T& key_sample) { core_.Unregister(&key_sample); }
+  /// Sends what the writer holds back under write batching (WithBatchedWrites); without it a
+  /// write has gone out already and this sends nothing.
+  void Flush() { core_.Flush(); }
   /// Number of readers currently matched.
   uint32_t MatchedReaders() const { return core_.MatchedReaders(); }
   /// Waits until at least `count` readers are matched; false on timeout.

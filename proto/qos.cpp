@@ -77,6 +77,12 @@ Qos VehicleStateRecordQos(int depth) {
   return qos;
 }
 
+Qos NeighbourStateQos(int depth) {
+  Qos qos = VehicleStateRecordQos(depth);
+  dds_qset_ignorelocal(qos.get(), DDS_IGNORELOCAL_PARTICIPANT);
+  return qos;
+}
+
 Qos VehicleCoverageQos() {
   Qos qos;
   // Reliable although each sample supersedes the previous (running sums with seq): a coverage

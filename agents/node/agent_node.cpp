@@ -47,7 +47,11 @@ int RunAgentNode(const maps::Scenario& scenario, const AgentNodeOptions& options
     mission.AddVehicle(static_cast<VehicleId>(options.ids[i]), options.vehicles[i], resume);
   }
   proto::Participant participant(
-      options.domain_id, proto::CycloneConfigXml(NetworkOf(scenario.network), proto::kMaxLocalParticipants, options.security));
+      options.domain_id,
+      // Batched: a cycle's states (one per vehicle) go out many to a datagram, each writer flushed
+      // once the cycle's writes are done.
+      proto::WithBatchedWrites(
+          proto::CycloneConfigXml(NetworkOf(scenario.network), proto::kMaxLocalParticipants, options.security)));
   const auto lease = std::chrono::milliseconds(std::lround(scenario.fleet.liveliness_lease_s * 1000.0));
   proto::Writer<proto::VehicleState> states(participant, proto::VehicleStateWriterQos(lease));
   proto::Writer<proto::VehicleCoverage> coverage(participant, proto::VehicleCoverageQos());
@@ -62,7 +66,7 @@ int RunAgentNode(const maps::Scenario& scenario, const AgentNodeOptions& options
   // The other hosts' vehicles, so this host's keep apart from them too.
   // Three deep: a host that runs ahead sends its next state before this one takes the last, and
   // the vehicles keep apart on the last cycle's.
-  proto::Reader<proto::VehicleState> neighbours(participant, proto::VehicleStateRecordQos(3));
+  proto::Reader<proto::VehicleState> neighbours(participant, proto::NeighbourStateQos(3));
   std::uint64_t reported_rejections = 0;  // refused at the door (logged)
   long cycles_not_in_step = 0, cycles_run = 0;  // cycles that went on without the server's last word
   double first_not_in_step_s = -1.0;
@@ -113,6 +117,7 @@ int RunAgentNode(const maps::Scenario& scenario, const AgentNodeOptions& options
     const std::string name = mission.Name(id);
     key.name = proto::BorrowString(name);
     states.Dispose(key);
+    states.Flush();  // a leave goes out now, not with the next cycle's states
   };
   const double rate = scenario.control_rate_hz;
   const std::map<int, std::int64_t> scenario_ends = scenario.VehicleEndCycles();
@@ -281,6 +286,9 @@ int RunAgentNode(const maps::Scenario& scenario, const AgentNodeOptions& options
       for (const ScanReport& scan : out.scans) detections->Write(wire::ToWire(scan, clock.instance, stamp, detections_scratch));
     }
     for (const StateReport& s : out.states) states.Write(wire::ToWire(s, clock.instance, stamp));
+    coverage.Flush();
+    if (detections) detections->Flush();
+    states.Flush();
   }
   for (const VehicleId id : mission.ids()) leave(id);
   if (cycles_not_in_step > 0) {

@@ -10,7 +10,9 @@
 #include <chrono>
 #include <cstdio>
 #include <map>
+#include <stdexcept>
 #include <string>
+#include <thread>
 #include <type_traits>
 #include <vector>
 
@@ -99,6 +101,98 @@ TEST(DdsEntities, KeyedVehicleStateRoundTripsFiftyInstances) {
 
 // A 400-element sequence<double> reaches readers created after the write (transient-local),
 // through both the owning Take() and the loaned TakeEach().
+// An agent host's neighbour reader (NeighbourStateQos) hears the other hosts' vehicles and not
+// its own: of states written by both participants it takes only the other's, while a plain reader
+// of the same participant takes both.
+TEST(DdsEntities, NeighbourReaderHearsOtherHostsOnly) {
+  const DomainReservation domain = ReserveTestDomain();
+  Participant host(domain.domain_id(), TestConfig()), other(domain.domain_id(), TestConfig());
+  Reader<VehicleState> neighbours(host, NeighbourStateQos(3));
+  Reader<VehicleState> everything(host, VehicleStateReaderQos());
+  Writer<VehicleState> own(host, VehicleStateWriterQos()), theirs(other, VehicleStateWriterQos());
+  ASSERT_TRUE(own.WaitForReaders(1, 2s));  // the plain reader (the neighbour reader never matches it)
+  ASSERT_TRUE(theirs.WaitForReaders(2, 2s));
+  for (uint32_t id = 0; id < 5; ++id) {
+    own.Write(VehicleState{id, 1, 0, 0, const_cast<char*>("own"), 1.0, 0, 0, 0, 0, 0, 0, 0});
+    theirs.Write(VehicleState{100 + id, 1, 0, 0, const_cast<char*>("theirs"), 2.0, 0, 0, 0, 0, 0, 0, 0});
+  }
+  const auto ids_of = [](Reader<VehicleState>& reader, std::size_t want) {
+    std::vector<uint32_t> ids;
+    TakeUntil(
+        reader,
+        [&](const std::vector<Sample<VehicleState>>& samples) {
+          ids.clear();
+          for (const auto& sample : samples)
+            if (sample.valid_data()) ids.push_back(sample.data().vehicle_id);
+          return ids.size() >= want;
+        },
+        1000ms);
+    std::sort(ids.begin(), ids.end());
+    return ids;
+  };
+  EXPECT_EQ(ids_of(everything, 10).size(), 10u);
+  EXPECT_EQ(ids_of(neighbours, 6), (std::vector<uint32_t>{100, 101, 102, 103, 104}));  // waited 1 s for a sixth
+}
+
+// Write batching (an agent host's states): what a batched writer writes waits until it is
+// flushed, then all of it arrives. The writer is another process (a batched domain and a plain one
+// cannot share a process), which tells through a pipe when it has written and when it flushed.
+// A configuration not made by CycloneConfigXml is refused rather than silently left unbatched.
+TEST(DdsEntities, BatchedWritesGoOutOnFlush) {
+  EXPECT_THROW(WithBatchedWrites("<CycloneDDS/>"), std::invalid_argument);
+  ASSERT_EQ(CountThreads(), 1) << "fork needs a single-threaded parent";
+  const DomainReservation domain = ReserveTestDomain();
+  int told[2];
+  ASSERT_EQ(pipe(told), 0);
+  const pid_t child = fork();
+  ASSERT_GE(child, 0);
+  if (child == 0) {
+    close(told[0]);
+    int status = 0;
+    try {
+      Participant host(domain.domain_id(), WithBatchedWrites(TestConfig()));
+      Writer<VehicleState> writer(host, VehicleStateWriterQos());
+      if (!writer.WaitForReaders(1, 5s)) throw std::runtime_error("no reader");
+      dds_sleepfor(DDS_MSECS(300));  // the reader's side of the match too
+      for (uint32_t id = 0; id < 20; ++id) writer.Write(VehicleState{id, 1, 0, 0, const_cast<char*>("rov"), 1.0 * id, 0, 0, 0, 0, 0, 0, 0});
+      if (write(told[1], "w", 1) != 1) throw std::runtime_error("pipe");
+      dds_sleepfor(DDS_MSECS(600));
+      writer.Flush();
+      if (write(told[1], "f", 1) != 1) throw std::runtime_error("pipe");
+      dds_sleepfor(DDS_MSECS(1500));
+    } catch (const std::exception& e) {
+      std::fprintf(stderr, "child: %s\n", e.what());
+      status = 1;
+    }
+    _exit(status);
+  }
+  close(told[1]);
+  Participant server(domain.domain_id(), TestConfig());
+  Reader<VehicleState> reader(server, VehicleStateReaderQos());
+  const auto count = [&](std::size_t want, std::chrono::milliseconds wait) {
+    std::size_t n = 0;
+    TakeUntil(
+        reader,
+        [&](const std::vector<Sample<VehicleState>>& samples) {
+          n = static_cast<std::size_t>(std::count_if(samples.begin(), samples.end(), [](const auto& x) { return x.valid_data(); }));
+          return n >= want;
+        },
+        wait);
+    return n;
+  };
+  char said = 0;
+  ASSERT_EQ(read(told[0], &said, 1), 1);
+  EXPECT_EQ(said, 'w');
+  EXPECT_EQ(count(1, 400ms), 0u);  // written but held back: 20 states are one datagram's worth
+  ASSERT_EQ(read(told[0], &said, 1), 1);
+  EXPECT_EQ(said, 'f');
+  EXPECT_EQ(count(20, 2000ms), 20u);
+  close(told[0]);
+  int status = -1;
+  ASSERT_EQ(waitpid(child, &status, 0), child);
+  EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0);
+}
+
 TEST(DdsEntities, ErgodicTargetReachesLateJoiner) {
   const DomainReservation domain = ReserveTestDomain();
   Participant server(domain.domain_id(), TestConfig());
