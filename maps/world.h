@@ -31,9 +31,9 @@ enum class WorldUse {
 class World {
  public:
   /// Builds everything from a validated scenario (kVehicles: the OctoMap is dropped once the maps
-  /// are made from it, and no risk field is made). The
-  /// seabed is voxelised at the A* grid resolution. With a seabed model the map is read and
-  /// checked, and a valve or a start on blocked seabed is refused (ScenarioError, one line).
+  /// are made from it, and no risk field is made). The seabed is voxelised at the A* grid
+  /// resolution. With a seabed model the map is read and checked, and a valve or a start on
+  /// blocked seabed is refused (ScenarioError, one line).
   explicit World(const Scenario& scenario, WorldUse use = WorldUse::kMission);
   World(const World&) = delete;
   World& operator=(const World&) = delete;

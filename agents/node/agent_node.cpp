@@ -36,7 +36,7 @@ int RunAgentNode(const maps::Scenario& scenario, const AgentNodeOptions& options
   const maps::World world(scenario, maps::WorldUse::kVehicles);  // the OctoMap and the risk field are the server's
   // Hand back what reading the scenario and voxelising the seabed freed: glibc keeps it in the heap
   // otherwise. A host of a 10,000-vehicle field stayed at 1.16 GB before its first vehicle moved;
-  // its world is 0.19 GB, and eight hosts share the machine.
+  // its world is 0.19 GB, and the machine may run other hosts and the server.
   malloc_trim(0);
   AgentMission mission(world, scenario, options.guidance);
   // The guidance of a cycle on the machine's cores (a thread per 256 vehicles at most; the
