@@ -30,6 +30,7 @@
 #include "proto/qos.h"
 #include "proto/wire_size.h"
 #include "server/live/live_view.h"
+#include "server/lockstep.h"
 #include "server/live/mission_frames.h"
 #include "server/operator_requests.h"
 #include "server/report/checkpoint.h"
@@ -320,13 +321,14 @@ int RunServerNode(const maps::Scenario& scenario, const ServerNodeOptions& optio
   std::int64_t cycle = first_cycle;
   std::vector<std::uint32_t> ids_scratch;
   std::vector<std::uint64_t> seqs_scratch;
-  std::map<int, std::int64_t> heard_cycle;  // each vehicle's newest state's cycle (lockstep)
   std::vector<std::pair<std::int64_t, int>> scenario_joins;  // (cycle, vehicle id) of each fleet_events join
   for (const maps::FleetEvent& e : scenario.fleet_events) {
     if (e.kind != maps::FleetEvent::Kind::kJoin) continue;
     scenario_joins.emplace_back(scenario.CycleAt(e.time_s), JoinVehicleId(scenario, e.vehicle.name));
   }
-  const std::map<int, std::int64_t> scenario_ends = scenario.VehicleEndCycles();
+  // Each vehicle's newest state's cycle, for the lockstep wait. The scenario's joins are waited
+  // for from their cycle on, for a second at most.
+  LockstepWait lockstep(scenario.VehicleEndCycles(), std::move(scenario_joins), static_cast<std::int64_t>(rate));
   long cycles_not_in_step = 0;
   double first_not_in_step_s = -1.0;
   SteadyClock::time_point compute_start;
@@ -339,7 +341,7 @@ int RunServerNode(const maps::Scenario& scenario, const ServerNodeOptions& optio
         // A state on another server's clock (sent before its host heard of this one) is not a
         // sample of this mission's time line; the host follows this server within a cycle.
         if (m.server_instance != instance) return;
-        heard_cycle[id] = m.cycle;
+        lockstep.Heard(id, m.cycle);
         door.TakeState(m, info.publication_handle);
         // A dispose or a lapsed lease that arrives while the vehicle's last state is still
         // unread comes as that (valid) sample with a not-alive instance state.
@@ -386,24 +388,7 @@ int RunServerNode(const maps::Scenario& scenario, const ServerNodeOptions& optio
                               : 0.45 / rate / options.time_scale;
     const auto lockstep_deadline = std::max(due, now_wall) + std::chrono::duration_cast<std::chrono::system_clock::duration>(
                                                                  std::chrono::duration<double>(wait_s));
-    const auto all_in = [&] {
-      for (const int id : core.roster().alive()) {
-        // A vehicle the scenario loses or takes out ends at its event's cycle: not waited for
-        // from there on (the lease that tells the server takes a few cycles more).
-        if (const auto end = scenario_ends.find(id); end != scenario_ends.end() && cycle >= end->second) continue;
-        const auto heard = heard_cycle.find(id);
-        if (heard == heard_cycle.end() || heard->second < cycle) return false;
-      }
-      // The scenario's joins are waited for from their cycle on (for a second at most: a host
-      // that does not come is not waited for all mission).
-      for (const auto& [join_cycle, id] : scenario_joins) {
-        if (cycle < join_cycle || cycle > join_cycle + static_cast<std::int64_t>(rate)) continue;
-        const auto heard = heard_cycle.find(id);
-        if (heard == heard_cycle.end() || heard->second < cycle) return false;
-      }
-      return true;
-    };
-    while (!all_in()) {
+    while (!lockstep.AllIn(core.roster().alive(), cycle)) {
       if (std::chrono::system_clock::now() >= lockstep_deadline) {
         if (cycles_not_in_step++ == 0) first_not_in_step_s = t;
         break;
