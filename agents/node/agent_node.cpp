@@ -261,7 +261,7 @@ int RunAgentNode(const maps::Scenario& scenario, const AgentNodeOptions& options
           if (cycles_not_in_step++ == 0) first_not_in_step_s = static_cast<double>(k) / rate;
           break;
         }
-        neighbours.WaitForData(std::chrono::milliseconds(1));
+        std::this_thread::sleep_for(proto::kStreamPoll);
         take_neighbours();
       }
     }

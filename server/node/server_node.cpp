@@ -393,7 +393,7 @@ int RunServerNode(const maps::Scenario& scenario, const ServerNodeOptions& optio
         if (cycles_not_in_step++ == 0) first_not_in_step_s = t;
         break;
       }
-      states.WaitForData(std::chrono::milliseconds(1));
+      std::this_thread::sleep_for(proto::kStreamPoll);
       take_all(states, on_state);
     }
     const auto cycle_start = SteadyClock::now();  // the cycle's own work starts here
