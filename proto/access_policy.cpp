@@ -85,6 +85,16 @@ std::vector<std::string_view> TopicsSubscribedBy(SecurityRole role) {
   return topics;
 }
 
+bool ReadByEveryRole(std::string_view topic) {
+  for (const TopicAccess& rule : MissionTopicAccess()) {
+    if (rule.topic != topic) continue;
+    for (const SecurityRole role : kSecurityRoles)
+      if (!Has(rule.subscribers, role)) return false;
+    return true;
+  }
+  return false;
+}
+
 std::string GovernanceXml() {
   std::string xml =
       "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n"
@@ -100,14 +110,15 @@ std::string GovernanceXml() {
       "      <rtps_protection_kind>ENCRYPT</rtps_protection_kind>\n"
       "      <topic_access_rules>\n";
   for (const char* topic : kMissionTopics) {
+    const char* kind = ReadByEveryRole(topic) ? "NONE" : "ENCRYPT";
     xml += "        <topic_rule>\n"
            "          <topic_expression>" + std::string(topic) + "</topic_expression>\n"
            "          <enable_discovery_protection>true</enable_discovery_protection>\n"
            "          <enable_liveliness_protection>true</enable_liveliness_protection>\n"
            "          <enable_read_access_control>true</enable_read_access_control>\n"
            "          <enable_write_access_control>true</enable_write_access_control>\n"
-           "          <metadata_protection_kind>ENCRYPT</metadata_protection_kind>\n"
-           "          <data_protection_kind>ENCRYPT</data_protection_kind>\n"
+           "          <metadata_protection_kind>" + kind + "</metadata_protection_kind>\n"
+           "          <data_protection_kind>" + kind + "</data_protection_kind>\n"
            "        </topic_rule>\n";
   }
   xml += "      </topic_access_rules>\n"

@@ -144,7 +144,9 @@ TEST(AccessPolicy, RolesPublishAndReadWhatTheMissionNeeds) {
 }
 
 // The governance: nobody unauthenticated, everything encrypted, one rule per mission topic with
-// read and write access control, and the domains Cyclone's parser accepts (0..230).
+// read and write access control, and the domains Cyclone's parser accepts (0..230). Samples and
+// submessages are encrypted with their writers' keys on every topic some role may not read; only
+// the states and the status, which every role reads, rely on the RTPS message's encryption alone.
 TEST(AccessPolicy, GovernanceEncryptsAndControlsEveryTopic) {
   const std::string xml = GovernanceXml();
   EXPECT_NE(xml.find("<allow_unauthenticated_participants>false<"), std::string::npos);
@@ -163,9 +165,23 @@ TEST(AccessPolicy, GovernanceEncryptsAndControlsEveryTopic) {
                            "enable_liveliness_protection"}) {
       EXPECT_NE(rule.find(std::string("<").append(on).append(">true<")), std::string::npos) << on << " in " << rule;
     }
-    EXPECT_NE(rule.find("<data_protection_kind>ENCRYPT<"), std::string::npos) << rule;
-    EXPECT_NE(rule.find("<metadata_protection_kind>ENCRYPT<"), std::string::npos) << rule;
+    const std::string kind = ReadByEveryRole(kMissionTopics[i]) ? "NONE" : "ENCRYPT";
+    EXPECT_NE(rule.find("<data_protection_kind>" + kind + "<"), std::string::npos) << rule;
+    EXPECT_NE(rule.find("<metadata_protection_kind>" + kind + "<"), std::string::npos) << rule;
   }
+  // Which topics every role reads, from the roles' grants: the states and the status only.
+  std::set<std::string> read_by_all;
+  for (const char* topic : kMissionTopics) {
+    bool all = true;
+    for (const SecurityRole role : kSecurityRoles) {
+      const std::vector<std::string_view> reads = TopicsSubscribedBy(role);
+      all = all && std::find(reads.begin(), reads.end(), std::string_view(topic)) != reads.end();
+    }
+    EXPECT_EQ(ReadByEveryRole(topic), all) << topic;
+    if (all) read_by_all.insert(topic);
+  }
+  EXPECT_EQ(read_by_all, (std::set<std::string>{kVehicleStateTopic, kMissionStatusTopic}));
+  EXPECT_FALSE(ReadByEveryRole("rt/sage/no_such_topic"));
 }
 
 // The permissions: one grant per role with exactly its topics, DENY otherwise, the validity given.

@@ -4,17 +4,27 @@
 // theirs on any mission topic, so it reads nothing they write and they read nothing it writes;
 // and a participant holding only the viewer identity cannot write a risk update at all. Each
 // role runs in a process of its own (forked before any DDS entity exists), as in a mission.
+#include <arpa/inet.h>
 #include <gtest/gtest.h>
+#include <linux/if_ether.h>
+#include <linux/if_packet.h>
+#include <net/if.h>
+#include <sys/socket.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <array>
+#include <cerrno>
 #include <chrono>
 #include <cstdio>
+#include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <functional>
 #include <memory>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <thread>
 #include <tuple>
 
@@ -308,6 +318,84 @@ TEST(SecureDds, ViewerIdentityCannotWriteRiskUpdates) {
   EXPECT_EQ(result.rfind("dds_create_writer(rt/sage/risk_update)", 0), 0u) << result;
   EXPECT_EQ(received, 0);
   EXPECT_EQ(updates.MatchedWriters(), 0u);
+}
+
+
+// What an eavesdropper on the loopback interface sees of the vehicles' states: the one topic
+// whose samples carry no encryption of their own writers' keys (every role reads them; see
+// GovernanceXml), so it is the RTPS message's encryption that must cover them. An agent host
+// sends states named with a marker to a server while a raw socket on lo captures every frame;
+// on a secured domain the marker is in no frame. The same run on a plain domain is the control:
+// there the capture finds the marker in the frames, and the server reads the states both times.
+TEST(SecureDds, StatesAreNotReadableOnTheWire) {
+  ASSERT_EQ(CountThreads(), 1) << "fork needs a single-threaded parent";
+  const int raw = socket(AF_PACKET, SOCK_RAW, htons(ETH_P_ALL));
+  if (raw < 0) GTEST_SKIP() << "capturing on lo needs CAP_NET_RAW: " << std::strerror(errno);
+  sockaddr_ll lo{};
+  lo.sll_family = AF_PACKET;
+  lo.sll_protocol = htons(ETH_P_ALL);
+  lo.sll_ifindex = static_cast<int>(if_nametoindex("lo"));
+  ASSERT_EQ(bind(raw, reinterpret_cast<const sockaddr*>(&lo), sizeof lo), 0) << std::strerror(errno);
+  const timeval poll{0, 100'000};
+  ASSERT_EQ(setsockopt(raw, SOL_SOCKET, SO_RCVTIMEO, &poll, sizeof poll), 0);
+  const SecuredDomain secure;
+  const std::string marker = "sage-wire-marker-" + std::to_string(getpid());
+
+  // Frames captured while a host writes states to a server on `config`'s domain: (frames,
+  // frames holding the marker, states the server read).
+  auto run = [&](const std::function<std::string(SecurityRole)>& config) {
+    Child server = Fork([&] {
+      Participant participant(secure.id, config(SecurityRole::kServer));
+      Reader<VehicleState> states(participant, VehicleStateReaderQos());
+      int read = 0;
+      const auto end = Clock::now() + kRunFor;
+      while (Clock::now() < end) {
+        states.WaitForData(50ms);
+        states.TakeEach([&](const VehicleState& s, const dds_sample_info_t& info) {
+          read += info.valid_data && std::string(s.name) == marker ? 1 : 0;
+        });
+      }
+      return std::to_string(read);
+    });
+    Child host = Fork([&] {
+      Participant participant(secure.id, config(SecurityRole::kAgentHost));
+      Writer<VehicleState> states(participant, VehicleStateWriterQos());
+      const auto end = Clock::now() + kRunFor;
+      for (int64_t cycle = 0; Clock::now() < end; ++cycle) {
+        VehicleState s{};
+        s.vehicle_id = 7;
+        s.cycle = cycle;
+        s.name = const_cast<char*>(marker.c_str());
+        s.x_m = 12.5;
+        states.Write(s);
+        std::this_thread::sleep_for(20ms);
+      }
+      return std::string("ok");
+    });
+    std::array<int, 3> seen{0, 0, 0};
+    std::vector<char> frame(1 << 16);
+    const auto end = Clock::now() + kRunFor + 1s;
+    while (Clock::now() < end) {
+      const ssize_t n = recv(raw, frame.data(), frame.size(), 0);
+      if (n <= 0) continue;
+      ++seen[0];
+      if (std::string_view(frame.data(), static_cast<std::size_t>(n)).find(marker) != std::string_view::npos) ++seen[1];
+    }
+    const std::string read = server.Result();
+    EXPECT_EQ(host.Result(), "ok");
+    seen[2] = std::atoi(read.c_str());
+    return seen;
+  };
+  const auto plain = run([](SecurityRole) { return LocalhostConfigXml(8, LoopbackDiscovery::kUnicastPeers); });
+  const auto secured = run([&](SecurityRole role) { return secure.Config(role); });
+  close(raw);
+  // The control: plain states cross lo in the clear, and the capture sees them.
+  EXPECT_GT(plain[2], 10) << "the plain server read the states";
+  EXPECT_GT(plain[1], 10) << "frames with the marker in a plain run, of " << plain[0];
+  // Secured: the server reads as many, and no frame shows a state's text.
+  EXPECT_GT(secured[2], 10) << "the secured server read the states";
+  EXPECT_GT(secured[0], 100) << "frames captured";
+  EXPECT_EQ(secured[1], 0) << "frames with the marker in a secured run, of " << secured[0];
 }
 
 }  // namespace
