@@ -257,6 +257,8 @@ FoxgloveBridge::~FoxgloveBridge() = default;
 
 int FoxgloveBridge::port() const { return socket_->port(); }
 
+std::size_t FoxgloveBridge::clients() const { return socket_->clients(); }
+
 std::string FoxgloveBridge::Url() const { return fmt::format("ws://127.0.0.1:{}/?token={}", port(), token_); }
 
 void FoxgloveBridge::Publish(const LiveFrame& frame, const HeatGrid* heat, std::uint64_t heat_seq) {

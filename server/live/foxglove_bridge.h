@@ -13,6 +13,7 @@
 //
 // Messages for a channel are made only while someone subscribes to it.
 #include <chrono>
+#include <cstddef>
 #include <cstdint>
 #include <memory>
 #include <string>
@@ -33,6 +34,8 @@ class FoxgloveBridge {
   FoxgloveBridge& operator=(const FoxgloveBridge&) = delete;
 
   int port() const;
+  /// Clients connected now.
+  std::size_t clients() const;
   /// ws://127.0.0.1:PORT/?token=...
   std::string Url() const;
   /// A frame of the mission (with trails), and the heat map as it stands (may be null) with its

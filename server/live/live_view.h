@@ -91,6 +91,9 @@ class LiveView final : public ViewSource {
   bool live() const override { return true; }
   bool closed() const override;
 
+  /// Whether someone watches: a page asked for a frame or the heat map in the last 5 s, or a
+  /// Foxglove client is connected. An unwatched view's thread keeps the trails and the log only.
+  bool watched() const;
   /// Frames published so far.
   std::uint64_t frames_published() const;
   /// The publisher thread's time a frame (trails, log, JSON, heat map; the Foxglove messages
@@ -100,6 +103,7 @@ class LiveView final : public ViewSource {
  private:
   void PublisherLoop();
   void Digest(LiveFrame& frame, std::vector<EventView>& events);
+  void Asked();  // a reader asked: the view is watched
 
   LiveScene scene_;
   LiveViewOptions options_;
@@ -143,6 +147,7 @@ class LiveView final : public ViewSource {
   std::uint64_t skipped_ = 0;  // frames replaced before the view's thread took them (the loop's)
   bool closed_streams_ = false;  // the last frame is out: streams end
   std::atomic<std::uint64_t> digest_ns_{0}, digested_{0};
+  std::atomic<std::int64_t> last_asked_ns_{INT64_MIN / 2};
 
   std::thread publisher_;
   std::unique_ptr<ViewServer> http_;

@@ -1,8 +1,9 @@
 // The live view's web server at its door: without the mission's token, or with another, no
 // request reaches the mission (the loop's queue stays empty) and no data leaves; a request that
 // names another host is refused; malformed requests are refused with the rule; with the token a
-// request reaches the loop and its answer comes back; frames stream as Server-Sent Events; once
-// the mission has ended every request is answered so.
+// request reaches the loop and its answer comes back; frames stream as Server-Sent Events; a
+// view nobody watches leaves its frames' JSON to the first reader; once the mission has ended
+// every request is answered so.
 #include "server/live/live_view.h"
 
 #include <atomic>
@@ -187,6 +188,40 @@ TEST(ViewServer, FramesStreamAsServerSentEvents) {
   stop = true;
   publisher.join();
   EXPECT_EQ(events, 3);
+}
+
+// A view nobody watches keeps its frames but makes their JSON only when first asked, and no heat
+// map: the first reader gets the newest frame's JSON, made then; the next frame, watched now,
+// comes with its heat map.
+TEST(ViewServer, AnUnwatchedViewMakesItsFramesJsonWhenFirstAsked) {
+  LiveView live(Scene(), Options());
+  EXPECT_FALSE(live.watched());
+  const auto publish = [&](double t) {
+    const std::uint64_t before = live.frames_published();
+    live.Publish(Frame(t));
+    for (int i = 0; i < 500 && live.frames_published() == before; ++i) std::this_thread::sleep_for(2ms);
+    ASSERT_EQ(live.frames_published(), before + 1);
+  };
+  for (int k = 1; k <= 3; ++k) publish(0.1 * k);
+  EXPECT_FALSE(live.watched());
+  std::uint64_t seq = 0;
+  const std::shared_ptr<const std::string> first = live.NextFrame(0, /*with_trails=*/false, 0ms, &seq);
+  ASSERT_NE(first, nullptr);
+  EXPECT_TRUE(live.watched());
+  const Json j = Json::parse(*first);
+  EXPECT_EQ(seq, 3u);
+  EXPECT_EQ(j["seq"], 3);
+  EXPECT_NEAR(j["t"].get<double>(), 0.3, 1e-9);
+  EXPECT_EQ(j["v"].size(), 1u);
+  EXPECT_EQ(j["heat_seq"], 0) << "no heat map while nobody watched";
+  EXPECT_EQ(Json::parse(live.HeatJson(std::nullopt))["nx"], 0);
+  // Asked again, the same JSON (made once).
+  EXPECT_EQ(live.NextFrame(0, false, 0ms, &seq), first);
+  publish(0.4);
+  const Json next = Json::parse(*live.NextFrame(3, false, 0ms, &seq));
+  EXPECT_EQ(next["seq"], 4);
+  EXPECT_EQ(next["heat_seq"], 1);
+  EXPECT_GT(Json::parse(live.HeatJson(std::nullopt))["nx"].get<int>(), 0);
 }
 
 TEST(ViewServer, AfterTheMissionEveryRequestIsAnsweredSo) {
