@@ -155,6 +155,11 @@ double LiveView::publisher_ms_per_frame() const {
   return frames == 0 ? 0.0 : static_cast<double>(digest_ns_.load()) * 1e-6 / static_cast<double>(frames);
 }
 
+std::vector<LoggedEvent> LiveView::RecentEventsLocked() const {
+  const std::size_t from = log_.size() > kLogPerFrame ? log_.size() - kLogPerFrame : 0;
+  return {log_.begin() + static_cast<long>(from), log_.end()};
+}
+
 void LiveView::Asked() { last_asked_ns_.store(SteadyNs(), std::memory_order_relaxed); }
 
 bool LiveView::watched() const {
@@ -172,10 +177,8 @@ std::shared_ptr<const std::string> LiveView::NextFrame(std::uint64_t after_seq, 
   if (!with_trails) {
     // A frame published while nobody watched has no JSON yet: the first to ask makes it.
     if (!frame_json_) {
-      const std::size_t from = log_.size() > kLogPerFrame ? log_.size() - kLogPerFrame : 0;
-      const std::vector<LoggedEvent> recent(log_.begin() + static_cast<long>(from), log_.end());
       frame_json_ = std::make_shared<const std::string>(
-          live::FrameJson(*frame_, seq_, recent, events_total_, heat_seq_, /*with_trails=*/false));
+          live::FrameJson(*frame_, seq_, RecentEventsLocked(), events_total_, heat_seq_, /*with_trails=*/false));
     }
     return frame_json_;
   }
@@ -245,8 +248,7 @@ void LiveView::Digest(LiveFrame& frame, std::vector<EventView>& events) {
       log_.push_back({++events_total_, std::move(e)});
       if (log_.size() > kLogKept) log_.pop_front();
     }
-    const std::size_t from = log_.size() > kLogPerFrame ? log_.size() - kLogPerFrame : 0;
-    recent.assign(log_.begin() + static_cast<long>(from), log_.end());
+    if (watching) recent = RecentEventsLocked();
     seq = seq_ + 1;
     events_total = events_total_;
     heat_seq = heat_seq_ + (heat ? 1 : 0);

@@ -104,6 +104,7 @@ class LiveView final : public ViewSource {
   void PublisherLoop();
   void Digest(LiveFrame& frame, std::vector<EventView>& events);
   void Asked();  // a reader asked: the view is watched
+  std::vector<LoggedEvent> RecentEventsLocked() const;  // what a frame carries of the log; published_mutex_ held
 
   LiveScene scene_;
   LiveViewOptions options_;
