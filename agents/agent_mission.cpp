@@ -20,7 +20,11 @@ constexpr std::size_t kReportsKept = 8;
 }  // namespace
 
 AgentMission::AgentMission(const maps::World& world, const maps::Scenario& scenario, Guidance guidance)
-    : scenario_(scenario), host_(world, scenario, guidance), sensors_(world, scenario) {}
+    : scenario_(scenario),
+      blocked_(world.blocked()),
+      valves_(scenario.AllValves()),
+      host_(world, scenario, guidance),
+      sensors_(world, scenario) {}
 
 void AgentMission::AddVehicle(VehicleId id, const maps::VehicleSpec& spec, const VehicleResume* resume) {
   maps::VehicleSpec placed = spec;
@@ -122,6 +126,20 @@ std::string AgentMission::Refusal(const Assignment& a) const {
       return who + fmt::format(": phi has {} coefficients, its region's basis {}", a.phi.size(),
                                a.region_order * a.region_order);
     }
+    if (!a.region_valves.empty()) {
+      const int valves = scenario_.ValveCount();
+      if (a.region_valves.size() > static_cast<std::size_t>(valves) ||
+          std::any_of(a.region_valves.begin(), a.region_valves.end(), [&](int i) { return i < 0 || i >= valves; })) {
+        return who + fmt::format(": its region names {} valves, or one outside 0..{}", a.region_valves.size(), valves - 1);
+      }
+      if (a.region_weights.size() != static_cast<Eigen::Index>(a.region_valves.size()) || !a.region_weights.allFinite() ||
+          (a.region_weights.array() < 0.0).any() || (a.region_weights.array() > kMaxTourWeight).any() ||
+          !(a.region_weights.sum() > 0.0)) {
+        return who + ": its region's weights must be one per valve, in [0, 1e12] and not all zero";
+      }
+    }
+  } else if (!a.region_valves.empty()) {
+    return who + ": it names a region's valves but no region";
   } else if (a.phi.size() != 0 && a.phi.size() != host_.basis().size()) {
     return who + fmt::format(": phi has {} coefficients, the field's basis {}", a.phi.size(), host_.basis().size());
   }
@@ -171,9 +189,18 @@ bool AgentMission::OnAssignment(const Assignment& assignment) {
   if (std::string why = Refusal(assignment); !why.empty()) return Refuse(std::move(why));
   Member& m = *found;
   if (m.has_assignment && assignment.cycle < m.own_cycle && !new_server_) return false;
+  Eigen::VectorXd phi;
+  if (assignment.region_order > 0 && assignment.phi.size() == 0 && !assignment.region_valves.empty()) {
+    std::string why;
+    phi = RegionPhi(m, assignment, why);
+    if (!why.empty()) return Refuse(std::move(why));
+  } else {
+    phi = assignment.phi;
+  }
+  if (assignment.region_order == 0) m.region_valves.clear(), m.region_field.reset();
   m.has_assignment = true;
   m.shared = assignment.shared;
-  m.own_phi = assignment.phi;
+  m.own_phi = std::move(phi);
   m.own_cycle = assignment.cycle;
   m.own_applied = false;
   m.in_region = assignment.region_order > 0;
@@ -183,6 +210,24 @@ bool AgentMission::OnAssignment(const Assignment& assignment) {
   }
   if (!assignment.tour.empty()) host_.SetTour(assignment.id, assignment.tour, assignment.tour_weights);
   return true;
+}
+
+Eigen::VectorXd AgentMission::RegionPhi(Member& m, const Assignment& a, std::string& why) const {
+  if (!m.region_field || m.region_valves != a.region_valves) {
+    m.region_valves = a.region_valves;
+    m.region_field = maps::ShareRegion(m.region_valves, valves_, scenario_, blocked_);
+  }
+  const maps::RegionBox& box = m.region_field->box();
+  if (box.origin_m != a.region_origin_m || box.size_m != a.region_size_m || box.order != a.region_order) {
+    why = fmt::format(
+        "assignment for vehicle {} (cycle {}): its region ({}, {}) {} x {} m, K = {} is not its {} valves' ({}, {}) "
+        "{} x {} m, K = {}: the server's scenario or version differs from this host's",
+        a.id, a.cycle, a.region_origin_m.x(), a.region_origin_m.y(), a.region_size_m.x(), a.region_size_m.y(),
+        a.region_order, a.region_valves.size(), box.origin_m.x(), box.origin_m.y(), box.size_m.x(), box.size_m.y(),
+        box.order);
+    return {};
+  }
+  return m.region_field->Coefficients(a.region_weights);
 }
 
 bool AgentMission::OnFleetSnapshot(const FleetSnapshot& snapshot) {

@@ -10,6 +10,7 @@
 #include <cstdint>
 #include <deque>
 #include <map>
+#include <memory>
 #include <optional>
 #include <string>
 #include <utility>
@@ -20,6 +21,7 @@
 #include "agents/agent_host.h"
 #include "agents/fleet_messages.h"
 #include "agents/perception/leak_sensors.h"
+#include "maps/region.h"
 #include "maps/scenario/scenario.h"
 #include "maps/world.h"
 
@@ -49,8 +51,10 @@ class AgentMission {
 
   /// The server's assignment for one of this host's vehicles (others' are ignored: false). One
   /// that does not fit the mission (phi not finite or not of its basis' size, a region off the
-  /// workspace or of an order outside 1..64, a tour through valves the scenario has not, weights
-  /// not finite, negative or all zero) is refused at the door: false, counted in rejected().
+  /// workspace or of an order outside 1..64, a tour or a region through valves the scenario has
+  /// not, weights not finite, negative or all zero, a region's box not its valves') is refused at
+  /// the door: false, counted in rejected(). A region target without phi names its valves and
+  /// weights: phi is made here from them, as the server made it (maps::ShareRegion).
   bool OnAssignment(const Assignment& assignment);
   /// The server's snapshot of the field and the fleet's coverage. An older one than held is
   /// ignored (false), unless a new server has taken over since (OnNewServer); one whose phi,
@@ -93,6 +97,10 @@ class AgentMission {
     std::uint64_t steered_cycle = 0;
     std::uint64_t seq = 0;
     bool in_region = false;  // steers on a region's own basis
+    // Its region as made here from the valves a target named (maps::ShareRegion), kept while
+    // they stay so that a target that re-weights them costs a product, not a quadrature.
+    std::vector<int> region_valves;
+    std::unique_ptr<maps::RegionField> region_field;
     std::deque<maps::CoverageReport> reports;  // the latest few, newest last
   };
 
@@ -102,7 +110,13 @@ class AgentMission {
   std::string Refusal(const FleetSnapshot& snapshot) const;
   bool Refuse(std::string why);  // counts it; false
 
+  // phi of a region target given as its valves and weights, made as the server made it; empty
+  // and `why` set if the target's box is not those valves' box.
+  Eigen::VectorXd RegionPhi(Member& member, const Assignment& assignment, std::string& why) const;
+
   const maps::Scenario& scenario_;
+  const maps::OccupancyGrid& blocked_;  // the World's: where the server's regions take out the water no hull is in
+  std::vector<maps::Valve> valves_;     // the scenario's, AllValves() order
   AgentHost host_;
   LeakSensors sensors_;
   // By id, ascending, in one block: walked three times a cycle, where a std::map's 10,000 nodes

@@ -78,6 +78,14 @@ struct Assignment {
   /// Regions: the time constant (s) of the coverage forgetting the vehicle steers with in its
   /// region; 0 = the scenario's ergodic.forgetting_time_s.
   double region_forgetting_s = 0.0;
+  /// Regions: the share's valves (indices into the scenario's valves, in the server's order) and
+  /// their weights, of which phi is the mixture on the region's basis (maps::ShareRegion). Given
+  /// so that a target crosses the wire as these few numbers rather than K^2 coefficients (2.6 kB
+  /// at K = 18, re-sent ~800 times a cycle at 10,000 vehicles): a host without phi makes it from
+  /// them as the server did, to the bit. Empty when phi holds more than the mixture (the risk
+  /// layer's excess in the box).
+  std::vector<int> region_valves;
+  Eigen::VectorXd region_weights;
 };
 
 }  // namespace sage::agents

@@ -53,4 +53,23 @@ RegionField::RegionField(const RegionBox& box, const std::vector<GaussianCompone
   risk_.ExcludeBlocked(basis_, blocked, box.origin_m);
 }
 
+std::unique_ptr<RegionField> ShareRegion(std::span<const int> valve_indices, const std::vector<Valve>& valves,
+                                         const Scenario& scenario, const OccupancyGrid& blocked) {
+  constexpr double kMargin_m = 1.0, kMinSide_m = 3.0, kResolution_m = 0.3;
+  constexpr int kMinOrder = 8, kMaxOrder = 20;
+  if (valve_indices.empty()) throw std::invalid_argument("ShareRegion: a share needs at least one valve");
+  const double target_sigma_m = kRegionTargetSigmaOfVisitRadius * scenario.visit_radius_m;
+  std::vector<Eigen::Vector2d> points;
+  std::vector<GaussianComponent> components;
+  points.reserve(valve_indices.size());
+  components.reserve(valve_indices.size());
+  for (int i : valve_indices) {
+    const Valve& valve = valves.at(static_cast<std::size_t>(i));
+    points.push_back(valve.position_m);
+    components.push_back(NarrowedTo({valve.position_m, valve.covariance_m2}, target_sigma_m));
+  }
+  const RegionBox box = RegionAround(points, scenario.workspace, kMargin_m, kMinSide_m, kResolution_m, kMinOrder, kMaxOrder);
+  return std::make_unique<RegionField>(box, components, blocked);
+}
+
 }  // namespace sage::maps

@@ -66,6 +66,7 @@ std::size_t WireBytes(const ErgodicTarget& m) {
   c.Sequence<double>(m.phi._length).Sequence<std::int32_t>(m.tour._length).Sequence<double>(m.tour_weights._length);
   for (int i = 0; i < 4; ++i) c.Primitive<double>();  // the region's box
   c.Primitive<std::uint32_t>().Primitive<double>();  // its order, its forgetting
+  c.Sequence<std::int32_t>(m.region_valves._length).Sequence<double>(m.region_weights._length);
   return c.Total();
 }
 

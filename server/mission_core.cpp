@@ -660,6 +660,9 @@ void MissionCore::AssignRegions(const std::vector<int>& alive, CycleOutput& out)
     if (excess_mass > 0.0) {
       const double w = share_weight > 0.0 ? share_weight : 1.0;
       a.phi = (w * a.phi + excess) / (w + excess_mass);
+    } else {
+      a.region_valves = share.valves;  // phi is their mixture alone: the wire sends these instead
+      a.region_weights = own;
     }
     a.region_origin_m = share.field->box().origin_m;
     a.region_size_m = share.field->box().size_m;

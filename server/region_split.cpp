@@ -14,10 +14,6 @@
 namespace sage::server {
 namespace {
 
-// A share's box: its valves + 1 m, at least 3 m a side, clipped to the workspace, with a basis
-// of a half-wave per 0.3 m (K = 8-20).
-constexpr double kMargin_m = 1.0, kMinSide_m = 3.0, kResolution_m = 0.3;
-constexpr int kMinOrder = 8, kMaxOrder = 20;
 // Mission time a split takes to plan, per valve (s): measured 10 s for 35,000 valves (the
 // generated 10,000-vehicle field) and 0.9 s for 3,500, on one core of this 2-core machine.
 constexpr double kPlanSecondsPerValve = 0.3e-3;
@@ -25,19 +21,10 @@ constexpr double kPlanSecondsPerValve = 0.3e-3;
 // A share's region: the box around its valves and their narrowed targets on the box's basis.
 PlannedRegion MakeRegion(std::vector<int> valve_indices, double lap_time_s, const std::vector<maps::Valve>& valves,
                          const maps::Scenario& scenario, const maps::OccupancyGrid& blocked) {
-  const double target_sigma_m = kRegionTargetSigmaOfVisitRadius * scenario.visit_radius_m;
   PlannedRegion region;
   region.valves = std::move(valve_indices);
   region.lap_time_s = lap_time_s;
-  std::vector<Eigen::Vector2d> points;
-  std::vector<maps::GaussianComponent> components;
-  for (int i : region.valves) {
-    points.push_back(valves[i].position_m);
-    components.push_back(maps::NarrowedTo({valves[i].position_m, valves[i].covariance_m2}, target_sigma_m));
-  }
-  const maps::RegionBox box =
-      maps::RegionAround(points, scenario.workspace, kMargin_m, kMinSide_m, kResolution_m, kMinOrder, kMaxOrder);
-  region.field = std::make_unique<maps::RegionField>(box, components, blocked);
+  region.field = maps::ShareRegion(region.valves, valves, scenario, blocked);
   return region;
 }
 

@@ -45,14 +45,6 @@ struct RegionSplit {
   bool provisional = false;  ///< QuickRegionSplit's, flown until the planned split is due
 };
 
-/// Each valve's target in a region: its Gaussian narrowed to this share of the visit radius
-/// (maps::NarrowedTo), so that the target's mass lies where a pass counts as a look. The valves'
-/// own Gaussians (sigma 0.25-0.35 m) had put much of a region's target outside the 0.3 m visit
-/// radius: measured with the regions' forgetting of two laps (mission_core.cpp), over ten graded
-/// fields, three seeds each, the risk-weighted revisit interval went from 0.91-1.04x the tours'
-/// to 0.88-0.98x, and on fleet_large with 100 vehicles the longest gap from 1.69x to 0.70x.
-constexpr double kRegionTargetSigmaOfVisitRadius = 0.5;
-
 /// Plans a split (see the file comment). astar_grid: the tours' inflated grid; blocked: where no
 /// hull can be (World::blocked()); both, and scenario, outlive the call and are not written
 /// while it runs.

@@ -58,6 +58,9 @@ Assignment FromWire(const proto::ErgodicTarget& m) {
   a.region_size_m = {m.region_width_m, m.region_height_m};
   a.region_order = static_cast<int>(m.region_order);
   a.region_forgetting_s = m.region_forgetting_s;
+  const auto region_valves = proto::AsSpan(m.region_valves);
+  a.region_valves.assign(region_valves.begin(), region_valves.end());
+  a.region_weights = Copy(proto::AsSpan(m.region_weights));
   return a;
 }
 
@@ -153,7 +156,9 @@ proto::ErgodicTarget ToWire(const Assignment& a, std::uint64_t server_instance, 
   m.cycle = a.cycle;
   m.basis_order = basis_order;
   m.shared = a.shared;
-  m.phi = proto::BorrowSequence(View(a.phi));
+  // A region's phi that is its valves' mixture goes as the valves and weights (the host makes it).
+  const bool by_valves = !a.region_valves.empty();
+  m.phi = proto::BorrowSequence(by_valves ? std::span<const double>() : View(a.phi));
   m.tour = proto::BorrowSequence(std::span<const std::int32_t>(a.tour.data(), a.tour.size()));
   m.tour_weights = proto::BorrowSequence(View(a.tour_weights));
   m.region_x_m = a.region_origin_m.x();
@@ -162,6 +167,8 @@ proto::ErgodicTarget ToWire(const Assignment& a, std::uint64_t server_instance, 
   m.region_height_m = a.region_size_m.y();
   m.region_order = static_cast<std::uint32_t>(a.region_order);
   m.region_forgetting_s = a.region_forgetting_s;
+  m.region_valves = proto::BorrowSequence(std::span<const std::int32_t>(a.region_valves.data(), a.region_valves.size()));
+  m.region_weights = proto::BorrowSequence(View(a.region_weights));
   return m;
 }
 

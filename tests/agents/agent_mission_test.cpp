@@ -8,6 +8,7 @@
 #include <limits>
 #include <string>
 
+#include "maps/region.h"
 #include "maps/world.h"
 
 namespace sage::agents {
@@ -99,6 +100,33 @@ TEST_F(AgentMissionDoor, RefusesMalformedAssignments) {
          a.tour = {0, 1}, a.tour_weights = Eigen::VectorXd::Zero(2);
        },
        "weights"},
+      {"region valve",
+       [](Assignment& a) {
+         a.region_order = 8, a.region_size_m = {2.0, 2.0}, a.phi.resize(0);
+         a.region_valves = {0, 9}, a.region_weights = Eigen::VectorXd::Ones(2);
+       },
+       "names 2 valves, or one outside 0..4"},
+      {"region weights",
+       [](Assignment& a) {
+         a.region_order = 8, a.region_size_m = {2.0, 2.0}, a.phi.resize(0);
+         a.region_valves = {0, 1}, a.region_weights = Eigen::VectorXd::Ones(3);
+       },
+       "region's weights must be one per valve"},
+      {"region weights zero",
+       [](Assignment& a) {
+         a.region_order = 8, a.region_size_m = {2.0, 2.0}, a.phi.resize(0);
+         a.region_valves = {0, 1}, a.region_weights = Eigen::VectorXd::Zero(2);
+       },
+       "not all zero"},
+      {"region valves without a region",
+       [](Assignment& a) { a.region_valves = {0}, a.region_weights = Eigen::VectorXd::Ones(1); },
+       "names a region's valves but no region"},
+      {"region box not its valves'",
+       [](Assignment& a) {
+         a.region_order = 8, a.region_origin_m = {1.0, 1.0}, a.region_size_m = {2.0, 2.0}, a.phi.resize(0);
+         a.region_valves = {0, 1}, a.region_weights = Eigen::VectorXd::Ones(2);
+       },
+       "is not its 2 valves'"},
   };
   std::uint64_t refused = 0;
   for (const Case& c : cases) {
@@ -185,6 +213,64 @@ TEST(AgentMissionMembers, OutOfOrderIdsAreReportedAscendingAndRemovedById) {
     EXPECT_EQ(out.states[k].name, "rov" + std::to_string(expected[k]));
     EXPECT_EQ(out.states[k].state.position_m, mission.host().State(expected[k]).position_m);
   }
+}
+
+}  // namespace
+}  // namespace sage::agents
+
+namespace sage::agents {
+namespace {
+
+// A region target that names its share's valves and weights (how the wire sends it: ~100 bytes
+// instead of K^2 coefficients) steers its vehicle exactly as the target that carries the phi the
+// server made of them: the host makes its region with the server's function and finds the same
+// box, and a later target that only re-weights the same valves does so too.
+TEST(AgentMissionRegions, ATargetByItsValvesSteersAsTheOneWithTheServersPhi) {
+  const maps::Scenario scenario = maps::LoadScenario(kTwoXt);
+  const maps::World world(scenario);
+  const std::vector<int> valves = {3, 0, 2};
+  // The server's side: the share's region and its phi for two weightings (region_split.cpp, mission_core.cpp).
+  const std::unique_ptr<maps::RegionField> region = maps::ShareRegion(valves, scenario.AllValves(), scenario, world.blocked());
+  const Eigen::Vector3d first(0.5, 0.3, 0.2), second(0.2, 0.2, 0.6);
+  const auto target = [&](const Eigen::VectorXd& w, std::uint64_t cycle, bool by_valves) {
+    Assignment a;
+    a.id = 0;
+    a.cycle = cycle;
+    a.shared = false;
+    a.region_origin_m = region->box().origin_m;
+    a.region_size_m = region->box().size_m;
+    a.region_order = region->box().order;
+    if (by_valves) {
+      a.region_valves = valves, a.region_weights = w;
+    } else {
+      a.phi = region->Coefficients(w);
+    }
+    return a;
+  };
+  AgentMission with_phi(world, scenario, Guidance::kErgodic), by_valves(world, scenario, Guidance::kErgodic);
+  FleetSnapshot snapshot;
+  snapshot.cycle = 1;
+  for (AgentMission* m : {&with_phi, &by_valves}) {
+    m->AddVehicle(0, scenario.vehicles.front());
+    ASSERT_TRUE(m->OnFleetSnapshot(snapshot));
+  }
+  ASSERT_TRUE(with_phi.OnAssignment(target(first, 1, false)));
+  ASSERT_TRUE(by_valves.OnAssignment(target(first, 1, true))) << by_valves.last_rejection();
+  int moved = 0;
+  for (std::int64_t cycle = 0; cycle < 60; ++cycle) {
+    if (cycle == 30) {
+      ASSERT_TRUE(with_phi.OnAssignment(target(second, 31, false)));
+      ASSERT_TRUE(by_valves.OnAssignment(target(second, 31, true))) << by_valves.last_rejection();
+    }
+    const AgentMission::CycleOutput a = with_phi.Step(cycle), b = by_valves.Step(cycle);
+    ASSERT_EQ(a.states.size(), 1u);
+    ASSERT_EQ(b.states.size(), 1u);
+    EXPECT_EQ(a.states[0].command_mps, b.states[0].command_mps) << "cycle " << cycle;
+    EXPECT_EQ(a.states[0].state.position_m, b.states[0].state.position_m) << "cycle " << cycle;
+    moved += a.states[0].command_mps.norm() > 0.0 ? 1 : 0;
+  }
+  EXPECT_GT(moved, 50);  // the vehicle steered on them, not held still
+  EXPECT_EQ(by_valves.rejected(), 0u);
 }
 
 }  // namespace

@@ -199,7 +199,7 @@ TEST(DdsEntities, ErgodicTargetReachesLateJoiner) {
   Writer<ErgodicTarget> writer(server, ErgodicTargetQos());
   std::vector<double> error(400);
   for (std::size_t k = 0; k < error.size(); ++k) error[k] = 0.25 * k - 3.0;
-  writer.Write(ErgodicTarget{7, 123, 0, 9, 20, false, BorrowSequence(error), {}, {}, 0, 0, 0, 0, 0, 0});
+  writer.Write(ErgodicTarget{7, 123, 0, 9, 20, false, BorrowSequence(error), {}, {}, 0, 0, 0, 0, 0, 0, {}, {}});
 
   Participant vehicle(domain.domain_id(), TestConfig());
   Reader<ErgodicTarget> late_reader(vehicle, ErgodicTargetQos());

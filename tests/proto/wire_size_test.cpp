@@ -89,10 +89,14 @@ TEST(WireBytes, ErgodicTargetMatchesCyclone) {
   const std::vector<double> phi(400, 0.1), none;
   const std::vector<int32_t> tour_odd = {3, 1, 4}, tour_even = {2, 7};
   const std::vector<double> waits_odd = {0.2, 0.3, 0.5}, waits_even = {0.5, 0.5};
+  // A region target by its valves and weights (no phi), with odd and even counts.
+  const std::vector<int32_t> valves_odd = {5, 9, 11}, valves_even = {0, 3};
   std::vector<ErgodicTarget> samples = {
-      {0, 1, 2, 3, 20, true, BorrowSequence(phi), {}, {}, 1, 2, 3, 4, 0, 0},
-      {1, 1, 2, 3, 20, false, BorrowSequence(none), BorrowSequence(tour_odd), BorrowSequence(waits_odd), 1, 2, 3, 4, 12, 40.5},
-      {2, 1, 2, 3, 20, false, BorrowSequence(phi), BorrowSequence(tour_even), BorrowSequence(waits_even), 1, 2, 3, 4, 12, 0},
+      {0, 1, 2, 3, 20, true, BorrowSequence(phi), {}, {}, 1, 2, 3, 4, 0, 0, {}, {}},
+      {1, 1, 2, 3, 20, false, BorrowSequence(none), BorrowSequence(tour_odd), BorrowSequence(waits_odd), 1, 2, 3, 4, 12, 40.5, {}, {}},
+      {2, 1, 2, 3, 20, false, BorrowSequence(phi), BorrowSequence(tour_even), BorrowSequence(waits_even), 1, 2, 3, 4, 12, 0, {}, {}},
+      {3, 1, 2, 3, 20, false, BorrowSequence(none), {}, {}, 1, 2, 3, 4, 12, 0, BorrowSequence(valves_odd), BorrowSequence(waits_odd)},
+      {4, 1, 2, 3, 20, false, BorrowSequence(none), {}, {}, 1, 2, 3, 4, 12, 7.5, BorrowSequence(valves_even), BorrowSequence(waits_even)},
   };
   ExpectSizesMatch(samples, &ErgodicTargetQos);
 }
