@@ -127,7 +127,7 @@ std::string AgentMission::Refusal(const Assignment& a) const {
                                a.region_order * a.region_order);
     }
     if (!a.region_valves.empty()) {
-      const int valves = scenario_.ValveCount();
+      const int valves = static_cast<int>(valves_.size());
       if (a.region_valves.size() > static_cast<std::size_t>(valves) ||
           std::any_of(a.region_valves.begin(), a.region_valves.end(), [&](int i) { return i < 0 || i >= valves; })) {
         return who + fmt::format(": its region names {} valves, or one outside 0..{}", a.region_valves.size(), valves - 1);
@@ -144,7 +144,7 @@ std::string AgentMission::Refusal(const Assignment& a) const {
     return who + fmt::format(": phi has {} coefficients, the field's basis {}", a.phi.size(), host_.basis().size());
   }
   if (!a.tour.empty()) {
-    const int valves = scenario_.ValveCount();
+    const int valves = static_cast<int>(valves_.size());
     if (std::any_of(a.tour.begin(), a.tour.end(), [&](int i) { return i < 0 || i >= valves; })) {
       return who + fmt::format(": the tour names a valve outside 0..{}", valves - 1);
     }
@@ -174,7 +174,7 @@ std::string AgentMission::Refusal(const FleetSnapshot& s) const {
       s.coverage.kernel_time_s < 0.0) {
     return what + ": its times must be finite and >= 0";
   }
-  const Eigen::Index valves = static_cast<Eigen::Index>(scenario_.ValveCount());
+  const Eigen::Index valves = static_cast<Eigen::Index>(valves_.size());
   if (s.valve_weights.size() != 0 &&
       (s.valve_weights.size() != valves || !s.valve_weights.allFinite() || (s.valve_weights.array() < 0.0).any() ||
        (s.valve_weights.array() > kMaxWeight).any())) {
