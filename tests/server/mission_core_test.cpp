@@ -6,11 +6,13 @@
 #include <cmath>
 #include <limits>
 #include <map>
+#include <memory>
 #include <set>
 #include <string>
 
 #include <gtest/gtest.h>
 
+#include "maps/region.h"
 #include "maps/world.h"
 #include "server/mission.h"
 #include "server/report/checkpoint.h"
@@ -157,12 +159,22 @@ struct ParkedRegions {
     s.fleet_events.clear();
     return s;
   }
+  // Also checks, each cycle, what a host relies on: a region target's valves and weights give its
+  // phi to the bit through the function a host makes it with (how the wire sends it).
   std::vector<int> Cycle() {
     for (int id = 0; id < 4; ++id) core.OnState(State(id, s.vehicles[id].name, k, at[id]));
     std::vector<int> sent;
-    for (const agents::Assignment& a : core.Cycle(k).assignments) {
+    const CycleOutput out = core.Cycle(k);
+    for (const agents::Assignment& a : out.assignments) {
       sent.push_back(a.id);
       last[a.id] = a;
+      if (a.region_valves.empty()) continue;
+      const std::unique_ptr<maps::RegionField> region = maps::ShareRegion(a.region_valves, s.AllValves(), s, world.blocked());
+      EXPECT_EQ(region->box().origin_m, a.region_origin_m);
+      EXPECT_EQ(region->box().size_m, a.region_size_m);
+      EXPECT_EQ(region->box().order, a.region_order);
+      EXPECT_EQ(region->Coefficients(a.region_weights), a.phi) << "vehicle " << a.id << " at cycle " << k;
+      ++by_valves;
     }
     ++k;
     return sent;
@@ -173,6 +185,7 @@ struct ParkedRegions {
   std::map<int, Eigen::Vector2d> at;
   std::map<int, agents::Assignment> last;
   std::int64_t k = 0;
+  int by_valves = 0;  // region targets checked against their valves and weights
 };
 
 // Regions at fleet scale: a risk change re-sends only the target of the region holding the valve
@@ -193,6 +206,7 @@ TEST(MissionCore, RegionTargetsAreSentAgainOnlyForTheirOwnValves) {
   EXPECT_TRUE(m.Cycle().empty());
   ASSERT_TRUE(m.core.OnRiskUpdate("P3", 5.1, "test").accepted);  // P3's proportion moves ~1 %
   EXPECT_TRUE(m.Cycle().empty()) << "a 2 % change of P3 re-sent vehicle " << sent[0] << "'s target";
+  EXPECT_EQ(m.by_valves, 5) << "every target sent (four, then P3's) names its valves and weights";
 }
 
 // Split by risk (fleet.risk_share): a leak that moves its region's share of the field's risk by
