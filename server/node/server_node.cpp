@@ -141,9 +141,13 @@ int RunServerNode(const maps::Scenario& scenario, const ServerNodeOptions& optio
                                      checkpoint.time_s, core.time_s(), tail.samples.size()));
   }
 
+  // Batched like the hosts' writes: a cycle's region targets (~800 a cycle at 10,000 vehicles, ~100
+  // bytes each since they name their valves) go out many to a datagram, one RTPS-level cipher
+  // operation and one sendmsg for each datagram, not for each target. Every writer is flushed
+  // where it writes, so nothing waits for the next cycle.
   proto::Participant participant(options.domain_id,
-                                 proto::CycloneConfigXml(agents::NetworkOf(scenario.network), proto::kMaxLocalParticipants,
-                                                         options.security));
+                                 proto::WithBatchedWrites(proto::CycloneConfigXml(
+                                     agents::NetworkOf(scenario.network), proto::kMaxLocalParticipants, options.security)));
   {
     // Two servers on one domain would both adopt the same vehicles and clocks: refuse to be the
     // second. Asked before this server's own status writer exists; discovery on loopback takes
@@ -245,6 +249,7 @@ int RunServerNode(const maps::Scenario& scenario, const ServerNodeOptions& optio
     s.finished = finished;
     s.vehicle_fingerprint = fingerprint;
     status.Write(s);
+    status.Flush();
     ++messages_out;
     bytes_out += proto::WireBytes(s);
   };
@@ -259,6 +264,7 @@ int RunServerNode(const maps::Scenario& scenario, const ServerNodeOptions& optio
     r.vehicle_id = c.vehicle_id;
     r.mission_time_s = core.time_s();
     command_results.Write(r);
+    command_results.Flush();
     ++messages_out;
     bytes_out += proto::WireBytes(r);
   };
@@ -272,6 +278,7 @@ int RunServerNode(const maps::Scenario& scenario, const ServerNodeOptions& optio
     order.verb = BorrowString(retire_verb);
     order.vehicle_id = vehicle_id;
     retire.Write(order);
+    retire.Flush();
     ++messages_out;
     bytes_out += proto::WireBytes(order);
   };
@@ -436,6 +443,7 @@ int RunServerNode(const maps::Scenario& scenario, const ServerNodeOptions& optio
       result.new_share = a.new_share;
       result.reason = BorrowString(a.reason);
       risk_results.Write(result);
+      risk_results.Flush();
       ++messages_out;
       bytes_out += proto::WireBytes(result);
     });
@@ -512,9 +520,11 @@ int RunServerNode(const maps::Scenario& scenario, const ServerNodeOptions& optio
       ++messages_out;
       bytes_out += proto::WireBytes(target);
     }
+    targets.Flush();
     const proto::FleetCoverage snapshot =
         agents::wire::ToWire(out.snapshot, instance, order, stamp, ids_scratch, seqs_scratch);
     fleet_coverage.Write(snapshot);
+    fleet_coverage.Flush();
     ++messages_out;
     bytes_out += proto::WireBytes(snapshot);
     if (out.fleet_empty && !empty_warned && cycle > first_cycle + 2 * static_cast<std::int64_t>(rate)) {
