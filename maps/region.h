@@ -64,7 +64,7 @@ constexpr double kRegionTargetSigmaOfVisitRadius = 0.5;
 /// box around them + 1 m, at least 3 m a side, clipped to the workspace, with a half-wave per
 /// 0.3 m (K = 8-20), and their narrowed targets on it. The server's split makes a share's region
 /// with it, and an agent host the region of a target that names its valves and weights instead of
-/// its K^2 coefficients (agents/region_targets.h): one function, so the two agree to the bit.
+/// its K^2 coefficients (agents/agent_mission.h): one function, so the two agree to the bit.
 /// valve_indices: not empty, each in range.
 std::unique_ptr<RegionField> ShareRegion(std::span<const int> valve_indices, const std::vector<Valve>& valves,
                                          const Scenario& scenario, const OccupancyGrid& blocked);
