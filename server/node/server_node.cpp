@@ -2,6 +2,7 @@
 
 #include <malloc.h>
 #include <sys/resource.h>
+#include <time.h>
 
 #include <algorithm>
 #include <chrono>
@@ -41,6 +42,13 @@
 
 namespace sage::server {
 namespace {
+
+// Milliseconds of CPU the calling thread has used.
+double ThreadCpuMs() {
+  timespec t{};
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
+  return 1e3 * static_cast<double>(t.tv_sec) + 1e-6 * static_cast<double>(t.tv_nsec);
+}
 
 using proto::BorrowString;
 using proto::NowRealtimeNs;
@@ -225,6 +233,10 @@ int RunServerNode(const maps::Scenario& scenario, const ServerNodeOptions& optio
       maps::VehicleFingerprint(scenario) ^ (options.controller == ControllerKind::kAstar ? 0x5A5Aull : 0ull);
 
   double last_cycle_ms = 0.0, total_cycle_ms = 0.0, max_cycle_ms = 0.0;
+  // The cycles' time on a core (the rest of their wall time the thread was preempted or blocked),
+  // and how often it was switched out while runnable (preempted) or while waiting (a lock, a send).
+  double total_cycle_cpu_ms = 0.0;
+  long cycle_preempted = 0, cycle_blocked = 0;
   long cycles_run = 0;
   std::uint64_t messages_in = 0, messages_out = 0;
   // Payload bytes of the valid samples taken and of the samples written (proto/wire_size.h);
@@ -404,6 +416,9 @@ int RunServerNode(const maps::Scenario& scenario, const ServerNodeOptions& optio
       take_all(states, on_state);
     }
     const auto cycle_start = SteadyClock::now();  // the cycle's own work starts here
+    const double cycle_cpu_start_ms = ThreadCpuMs();
+    rusage ru0{};
+    getrusage(RUSAGE_THREAD, &ru0);
     for (auto it = suspect.begin(); it != suspect.end();) {
       if (compute_start < it->second) {
         ++it;
@@ -542,6 +557,13 @@ int RunServerNode(const maps::Scenario& scenario, const ServerNodeOptions& optio
     }
     last_cycle_ms = std::chrono::duration<double, std::milli>(SteadyClock::now() - cycle_start).count();
     total_cycle_ms += last_cycle_ms;
+    total_cycle_cpu_ms += ThreadCpuMs() - cycle_cpu_start_ms;
+    {
+      rusage ru1{};
+      getrusage(RUSAGE_THREAD, &ru1);
+      cycle_preempted += ru1.ru_nivcsw - ru0.ru_nivcsw;
+      cycle_blocked += ru1.ru_nvcsw - ru0.ru_nvcsw;
+    }
     max_cycle_ms = std::max(max_cycle_ms, last_cycle_ms);
     cycle_ms.push_back(last_cycle_ms);
     ++cycles_run;
@@ -584,6 +606,11 @@ int RunServerNode(const maps::Scenario& scenario, const ServerNodeOptions& optio
                (messages_in + messages_out) / std::max(1e-9, wall_s), bytes_in / 1e6, bytes_out / 1e6,
                (bytes_in + bytes_out) / 1e6 / std::max(1e-9, wall_s), total_cycle_ms / std::max(1L, cycles_run), p99_ms,
                max_cycle_ms, peak_rss_mb, options.out_dir, finish_s);
+  // A cycle's wall time against its thread's CPU time: what the other threads and processes on the
+  // cores took from it (a page on the mission's own machine shows here).
+  spdlog::info("server: cycle on the CPU {:.2f} ms mean of its {:.2f} ms; switched out {} times preempted, {} waiting",
+               total_cycle_cpu_ms / std::max(1L, cycles_run), total_cycle_ms / std::max(1L, cycles_run), cycle_preempted,
+               cycle_blocked);
   if (live) {
     // What the live view cost: the loop's copy (inside the cycle times above) and its own thread.
     spdlog::info("server: live view: {} frames, {:.3f} ms a frame in the server's loop, {:.3f} ms in the view's thread",
