@@ -8,11 +8,14 @@
 //
 //   build/bin/sage field generate --xts 300 --valves 1000 --vehicles 1000 --seed 1 -o /tmp/f1000.yaml
 //   node tests/live/live_view_bench.mjs --sage build/bin/sage --source-dir . --out /tmp/live_bench \
-//        --field /tmp/f1000.yaml --duration 60 --runs 2 [--configs off,idle,stream,viewer,viewer-niced,viewer-user,viewer-user-niced,replay] [--secured]
+//        --field /tmp/f1000.yaml --duration 60 --runs 2 [--configs off,idle,stream,viewer,viewer-niced,viewer-user,viewer-user-niced,viewer-user-idle,replay] [--secured]
 //        [--page-fps N]
 // (replay: the page alone, `sage view` of the run "off" just recorded, played at 1x, no mission running;
 // viewer-niced: the page in a chromium run under `nice -n 19`, the browser taking only the CPU the
-// mission leaves, as a browser on the operator's own machine would take none of the mission's;
+// mission leaves, as a browser on the operator's own machine would take none of the mission's
+// (its session niced too: Playwright starts chromium in a session of its own, and where the
+// kernel schedules sessions as groups, as here, a nice orders a process only within its session);
+// viewer-user-idle: as viewer-user-niced, under SCHED_IDLE (`chrt --idle 0`) instead of nice 19;
 // viewer-user / viewer-user-niced: the same as viewer / viewer-niced with chromium run as the
 // unprivileged user nobody, as an operator's browser runs. Run as root, chromium raises its own
 // display and compositor threads to nice -8 (its thread priorities; root may lower a nice value),
@@ -35,7 +38,7 @@ const field = path.resolve(args.field || path.join(args["source-dir"], "scenario
 const duration = Number(args.duration || 60);
 const runs = Number(args.runs || 1);
 const configs = (args.configs || "off,idle,viewer").split(",");
-const KNOWN_CONFIGS = ["off", "idle", "stream", "viewer", "viewer-niced", "viewer-user", "viewer-user-niced", "replay"];
+const KNOWN_CONFIGS = ["off", "idle", "stream", "viewer", "viewer-niced", "viewer-user", "viewer-user-niced", "viewer-user-idle", "replay"];
 for (const config of configs) {
   if (!KNOWN_CONFIGS.includes(config)) {
     console.error(`--configs: ${config}: not one of ${KNOWN_CONFIGS.join(", ")}`);
@@ -66,7 +69,11 @@ const chromiumLowestNice = () => {
 // root. Unprivileged, chromium gets the profile directory playwright made for it and a home there.
 function chromiumFor(config) {
   if (config === "viewer") return "/usr/bin/chromium";
-  const niced = config.endsWith("-niced") ? "nice -n 19 " : "";
+  const niced = config.endsWith("-niced") ? "nice -n 19 " : config.endsWith("-idle") ? "chrt --idle 0 " : "";
+  // Playwright starts the browser in a session of its own and, where the kernel groups the
+  // scheduling of sessions (autogroups, /proc/sys/kernel/sched_autogroup_enabled), a process's
+  // nice orders it only within its session: the session's own nice is what yields to the mission.
+  const autogroup = config.endsWith("-niced") || config.endsWith("-idle") ? "echo 19 > /proc/self/autogroup 2>/dev/null; " : "";
   const user = config.startsWith("viewer-user");
   const wrapper = path.join(out, `chromium-${config}`);
   const body = user
@@ -74,9 +81,9 @@ function chromiumFor(config) {
         "#!/bin/sh",
         'profile=$(printf "%s\\n" "$@" | sed -n "s/^--user-data-dir=//p" | head -1)',
         '[ -n "$profile" ] && chown -R nobody:nogroup "$profile"',
-        `HOME="\${profile:-/tmp}" exec ${niced}setpriv --reuid=nobody --regid=nogroup --clear-groups --inh-caps=-all --bounding-set=-all /usr/bin/chromium "$@"`,
+        `${autogroup}HOME="\${profile:-/tmp}" exec ${niced}setpriv --reuid=nobody --regid=nogroup --clear-groups --inh-caps=-all --bounding-set=-all /usr/bin/chromium "$@"`,
       ]
-    : ["#!/bin/sh", `exec ${niced}/usr/bin/chromium "$@"`];
+    : ["#!/bin/sh", `${autogroup}exec ${niced}/usr/bin/chromium "$@"`];
   fs.writeFileSync(wrapper, body.join("\n") + "\n", { mode: 0o755 });
   return wrapper;
 }
@@ -85,6 +92,7 @@ function serverFigures(output) {
   const cycle = output.match(/server cycle ([0-9.]+) ms mean, ([0-9.]+) ms p99/);
   const factor = output.match(/\(([0-9.]+)x real time\)/);
   const lockstep = output.match(/(\d+) of (\d+) cycles in lockstep/);
+  const onCpu = output.match(/cycle on the CPU ([0-9.]+) ms mean of its [0-9.]+ ms; switched out (\d+) times preempted/);
   const live = output.match(/live view: (\d+) frames, ([0-9.]+) ms a frame in the server's loop, ([0-9.]+) ms in the view's thread/);
   return {
     live_frames: live ? Number(live[1]) : 0,
@@ -92,6 +100,8 @@ function serverFigures(output) {
     view_thread_ms: live ? Number(live[3]) : NaN,
     cycle_mean_ms: cycle ? Number(cycle[1]) : NaN,
     cycle_p99_ms: cycle ? Number(cycle[2]) : NaN,
+    cycle_cpu_ms: onCpu ? Number(onCpu[1]) : NaN,
+    cycle_preemptions: onCpu ? Number(onCpu[2]) : NaN,
     real_time_factor: factor ? Number(factor[1]) : NaN,
     lockstep: lockstep ? `${lockstep[1]} of ${lockstep[2]}` : "?",
   };
@@ -129,7 +139,7 @@ async function once(config, k) {
     const live = await liveEndpoints(dir);
     browser = await chromium.launch({ executablePath: chromiumFor(config), args: CHROMIUM_FLAGS });
     const page = await browser.newPage({ viewport: { width: 1400, height: 820 } });
-    // --page-fps N: the page's own cap on redraws (#fps=N; the page's default is 30, 12 over 300 vehicles).
+    // --page-fps N: the page's own cap on redraws (#fps=N; by default 30, and over 300 vehicles two a server frame).
     const fps = args["page-fps"] ? `&fps=${args["page-fps"]}` : "";
     await page.goto(`http://127.0.0.1:${live.http_port}/#token=${live.token}${fps}`);
     await page.waitForFunction(() => window.sageView && window.sageView.ready, null, { timeout: 120000 });
@@ -213,7 +223,7 @@ for (let k = 0; k < runs; k++) {
 }
 fs.writeFileSync(path.join(out, "live_view_bench.json"), JSON.stringify({ field, duration, results }, null, 2));
 const rows = results.map((r) =>
-  `| ${r.config} | ${r.run} | ${r.cycle_mean_ms} / ${r.cycle_p99_ms} | ${r.real_time_factor}x | ${r.lockstep} | ` +
+  `| ${r.config} | ${r.run} | ${r.cycle_mean_ms} / ${r.cycle_p99_ms} | ${r.cycle_cpu_ms ?? "-"} / ${r.cycle_preemptions ?? "-"} | ${r.real_time_factor}x | ${r.lockstep} | ` +
   `${r.fps_median === undefined ? "-" : `${r.fps_min.toFixed(1)} / ${r.fps_p10.toFixed(1)} / ${r.fps_median.toFixed(1)}`} | ` +
   `${r.stream_frames !== undefined ? `${(r.stream_frames / duration).toFixed(1)} a second read (${r.stream_mb.toFixed(1)} MB)`
     : r.updates_median === undefined ? "-" : `${r.updates_min.toFixed(1)} / ${r.updates_median.toFixed(1)}`} | ` +
@@ -223,8 +233,8 @@ const rows = results.map((r) =>
 const table = [
   `${field}, ${duration} s per run`,
   "",
-  "| live view | run | server cycle mean / p99 (ms) | real time | cycles in lockstep | page frames/s min / p10 / median | updates/s min / median | chromium (cores) | chromium's lowest nice | view's ms a frame: loop / own thread | load average before -> after |",
-  "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|",
+  "| live view | run | server cycle mean / p99 (ms) | on its CPU (ms) / preempted | real time | cycles in lockstep | page frames/s min / p10 / median | updates/s min / median | chromium (cores) | chromium's lowest nice | view's ms a frame: loop / own thread | load average before -> after |",
+  "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|",
   ...rows,
 ].join("\n");
 fs.writeFileSync(path.join(out, "live_view_bench.md"), table + "\n");
