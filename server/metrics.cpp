@@ -9,8 +9,6 @@
 
 #include <fmt/format.h>
 
-#include "server/background_thread.h"
-
 namespace sage::server {
 namespace {
 
@@ -283,8 +281,7 @@ void MetricsAccumulator::SettleCoverage() const {
 
 void MetricsAccumulator::CoverageBacklog::Launch(const maps::SpectralBasis& basis, Eigen::VectorXd& sums) {
   Wait();
-  if (!thread_) thread_ = std::make_shared<BackgroundThread>();
-  job_ = thread_->Run([batch = std::move(queued_), &basis, &sums] {
+  job_ = std::async(std::launch::async, [batch = std::move(queued_), &basis, &sums] {
            for (const auto& [x, dt] : batch) basis.AddScaled(x, dt, sums);
          }).share();
   queued_.clear();  // moved from: empty it for certain

@@ -8,7 +8,6 @@
 #include <limits>
 #include <iterator>
 #include <map>
-#include <memory>
 #include <string>
 #include <unordered_map>
 #include <vector>
@@ -22,8 +21,6 @@
 #include "server/trajectory.h"
 
 namespace sage::server {
-
-class BackgroundThread;  // server/background_thread.h
 
 /// Counts visits online: a visit is an entry within visit_radius of a valve; the valve is
 /// re-armed for that vehicle only after it leaves rearm_radius, so jitter is not counted twice.
@@ -376,7 +373,6 @@ class MetricsAccumulator {
     }
     mutable std::vector<std::pair<Eigen::Vector2d, double>> queued_;
     std::shared_future<void> job_;
-    std::shared_ptr<BackgroundThread> thread_;  // made at the first batch; a copy makes its own
   };
 
   const maps::Scenario& scenario_;

@@ -159,7 +159,7 @@ void RunDirectory::OnSamples(const std::vector<TrajectorySample>& samples, const
     pending_until_s_ = std::max(pending_until_s_, s.time_s);
     plot_.OnSample(s, row_names.back());
   }
-  rows_ = rows_thread_.Run([samples, row_names = std::move(row_names)] {
+  rows_ = std::async(std::launch::async, [samples, row_names = std::move(row_names)] {
     std::string rows;
     for (std::size_t i = 0; i < samples.size(); ++i) AppendTrajectoryRow(rows, samples[i], row_names[i]);
     return rows;

@@ -15,7 +15,6 @@
 
 #include "maps/scenario/scenario.h"
 #include "maps/world.h"
-#include "server/background_thread.h"
 #include "server/mission_core.h"
 #include "server/report/plots/plot_record.h"
 #include "server/report/report.h"
@@ -109,7 +108,6 @@ class RunDirectory final : public MissionRecorder {
   double pending_until_s_ = -1.0, flushed_until_s_ = -1.0, checkpoint_time_s_ = -1.0;
   double checkpoint_cost_s_ = 0.0;        // CPU seconds the last checkpoint took, copies and writing
   std::future<double> checkpoint_write_;  // the checkpoint is encoded and written off the cycle (its CPU seconds)
-  BackgroundThread rows_thread_;         // formats a large cycle's trajectory rows
   std::future<std::string> rows_;       // the last large cycle's trajectory rows, being formatted
   plots::PlotRecord plot_;               // a thinned copy of the trajectory and the events, for the plots
 };
