@@ -2,7 +2,6 @@
 
 #include <malloc.h>
 #include <sys/resource.h>
-#include <time.h>
 
 #include <algorithm>
 #include <chrono>
@@ -43,11 +42,10 @@
 namespace sage::server {
 namespace {
 
-// Milliseconds of CPU the calling thread has used.
-double ThreadCpuMs() {
-  timespec t{};
-  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
-  return 1e3 * static_cast<double>(t.tv_sec) + 1e-6 * static_cast<double>(t.tv_nsec);
+// Milliseconds of CPU a thread's usage counts (user and system).
+double CpuMs(const rusage& usage) {
+  return 1e3 * static_cast<double>(usage.ru_utime.tv_sec + usage.ru_stime.tv_sec) +
+         1e-3 * static_cast<double>(usage.ru_utime.tv_usec + usage.ru_stime.tv_usec);
 }
 
 using proto::BorrowString;
@@ -416,9 +414,8 @@ int RunServerNode(const maps::Scenario& scenario, const ServerNodeOptions& optio
       take_all(states, on_state);
     }
     const auto cycle_start = SteadyClock::now();  // the cycle's own work starts here
-    const double cycle_cpu_start_ms = ThreadCpuMs();
-    rusage ru0{};
-    getrusage(RUSAGE_THREAD, &ru0);
+    rusage cycle_usage{};
+    getrusage(RUSAGE_THREAD, &cycle_usage);
     for (auto it = suspect.begin(); it != suspect.end();) {
       if (compute_start < it->second) {
         ++it;
@@ -557,12 +554,12 @@ int RunServerNode(const maps::Scenario& scenario, const ServerNodeOptions& optio
     }
     last_cycle_ms = std::chrono::duration<double, std::milli>(SteadyClock::now() - cycle_start).count();
     total_cycle_ms += last_cycle_ms;
-    total_cycle_cpu_ms += ThreadCpuMs() - cycle_cpu_start_ms;
     {
-      rusage ru1{};
-      getrusage(RUSAGE_THREAD, &ru1);
-      cycle_preempted += ru1.ru_nivcsw - ru0.ru_nivcsw;
-      cycle_blocked += ru1.ru_nvcsw - ru0.ru_nvcsw;
+      rusage end{};
+      getrusage(RUSAGE_THREAD, &end);
+      total_cycle_cpu_ms += CpuMs(end) - CpuMs(cycle_usage);
+      cycle_preempted += end.ru_nivcsw - cycle_usage.ru_nivcsw;
+      cycle_blocked += end.ru_nvcsw - cycle_usage.ru_nvcsw;
     }
     max_cycle_ms = std::max(max_cycle_ms, last_cycle_ms);
     cycle_ms.push_back(last_cycle_ms);
