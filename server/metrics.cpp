@@ -13,6 +13,7 @@ namespace sage::server {
 namespace {
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+constexpr double kInfinity = std::numeric_limits<double>::infinity();
 
 // True if the values are equal up to rounding: time-averaged equal weights (0.2 each) can differ
 // in the last bit, and a correlation of rounding noise would be a made-up number.
@@ -227,23 +228,57 @@ MetricsAccumulator::MetricsAccumulator(const maps::Scenario& scenario, const map
 }
 
 void MetricsAccumulator::OnWeights(double time_s, const Eigen::VectorXd& weights) {
+  holds_.Wait();
   WeightChange change{time_s, Normalised({time_s, weights}, static_cast<int>(valves_.size()))};
   phi_.push_back(risk_.CoefficientsFor(change.weights));
   state_.schedule.push_back(std::move(change));
 }
 
 std::vector<int> MetricsAccumulator::Add(const TrajectorySample& sample) {
-  if (!(sample.time_s >= 0.0) || !sample.position_m.allFinite()) {
-    ++state_.refused;
-    return {};
+  holds_.Wait();
+  if (!Accept(sample)) return {};
+  HoldNext(sample);
+  return visits_.Update(sample.vehicle, sample.position_m, sample.time_s);
+}
+
+void MetricsAccumulator::AddCycle(const std::vector<TrajectorySample>& samples) {
+  holds_.Wait();
+  if (state_.schedule.empty()) throw std::logic_error("MetricsAccumulator: OnWeights before the first sample");
+  std::vector<TrajectorySample> accepted;
+  accepted.reserve(samples.size());
+  for (const TrajectorySample& sample : samples) {
+    if (!Accept(sample)) continue;
+    visits_.Update(sample.vehicle, sample.position_m, sample.time_s);
+    accepted.push_back(sample);
   }
+  const auto hold = [this, batch = std::move(accepted)] {
+    for (const TrajectorySample& sample : batch) HoldNext(sample);
+    LaunchCoverage();
+  };
+  if (samples.size() >= kHoldBatch) {
+    holds_.Launch(hold);
+  } else {
+    hold();  // a small fleet's cycle: a thread would cost more than it saves
+  }
+}
+
+bool MetricsAccumulator::Accept(const TrajectorySample& sample) {
+  if (sample.vehicle < 0) throw std::invalid_argument("MetricsAccumulator: vehicle id must be >= 0");
+  const auto vehicle = static_cast<std::size_t>(sample.vehicle);
+  if (vehicle >= accepted_until_s_.size()) accepted_until_s_.resize(vehicle + 1, -kInfinity);
+  // Refused (counted, no effect): before 0, not finite, or not after its vehicle's previous one.
+  if (!(sample.time_s >= 0.0) || !sample.position_m.allFinite() || !(sample.time_s > accepted_until_s_[vehicle])) {
+    ++state_.refused;
+    return false;
+  }
+  accepted_until_s_[vehicle] = sample.time_s;
+  return true;
+}
+
+void MetricsAccumulator::HoldNext(const TrajectorySample& sample) {
   const auto pending = pending_at_.Find(state_.pending, sample.vehicle);
   if (pending != state_.pending.end()) {
-    const double dt = sample.time_s - pending->second.time_s;
-    if (!(dt > 0.0)) {
-      ++state_.refused;  // not after its vehicle's previous sample
-      return {};
-    }
+    const double dt = sample.time_s - pending->second.time_s;  // > 0: Accept saw to it
     ++state_.spacings[dt];
     TakeCheckpointsBefore(pending->second.time_s);
     Hold(pending->second, dt);
@@ -251,10 +286,10 @@ std::vector<int> MetricsAccumulator::Add(const TrajectorySample& sample) {
   } else {
     state_.pending[sample.vehicle] = sample;
   }
-  return visits_.Update(sample.vehicle, sample.position_m, sample.time_s);
 }
 
 void MetricsAccumulator::Retire(int vehicle) {
+  holds_.Wait();
   // Its last sample holds for the median spacing, as checkpoints since have counted it; should
   // the vehicle come back (a host that stalled), its next sample starts afresh.
   auto it = state_.pending.find(vehicle);
@@ -264,10 +299,16 @@ void MetricsAccumulator::Retire(int vehicle) {
     pending_at_.Forget();
     state_.pending.erase(it);
   }
+  if (vehicle >= 0 && static_cast<std::size_t>(vehicle) < accepted_until_s_.size()) {
+    accepted_until_s_[static_cast<std::size_t>(vehicle)] = -kInfinity;
+  }
   visits_.Forget(vehicle);
 }
 
-void MetricsAccumulator::Advance(double time_s) { TakeCheckpointsBefore(time_s); }
+void MetricsAccumulator::Advance(double time_s) {
+  holds_.Wait();
+  TakeCheckpointsBefore(time_s);
+}
 
 void MetricsAccumulator::LaunchCoverage() {
   if (coverage_.queued() >= kCoverageBatch) coverage_.Launch(basis_, state_.sum_f);
@@ -294,9 +335,18 @@ void MetricsAccumulator::CoverageBacklog::Settle(const maps::SpectralBasis& basi
 }
 
 void MetricsAccumulator::Restore(State state, VisitTracker visits) {
+  holds_.Wait();
   if (state.time_near_s.size() != valves_.size() || state.sum_f.size() != basis_.size() || state.schedule.empty()) {
     throw std::invalid_argument("MetricsAccumulator::Restore: state of another mission");
   }
+  std::vector<double> accepted_until;  // the pending samples' times: what Accept screens against
+  for (const auto& [vehicle, sample] : state.pending) {
+    if (vehicle < 0) throw std::invalid_argument("MetricsAccumulator::Restore: a pending sample of vehicle < 0");
+    const auto v = static_cast<std::size_t>(vehicle);
+    if (v >= accepted_until.size()) accepted_until.resize(v + 1, -kInfinity);
+    accepted_until[v] = sample.time_s;
+  }
+  accepted_until_s_ = std::move(accepted_until);
   phi_.clear();
   for (const WeightChange& change : state.schedule) phi_.push_back(risk_.CoefficientsFor(change.weights));
   pending_at_.Forget();
@@ -411,6 +461,7 @@ MissionMetrics MetricsAccumulator::Result(double end_s) const {
   if (!(end_s > 0.0) || !std::isfinite(end_s)) {
     throw maps::ScenarioError(fmt::format("metrics: mission length = {}: must be finite and > 0", end_s));
   }
+  holds_.Wait();
   if (state_.schedule.empty()) throw std::logic_error("MetricsAccumulator: no weights");
   SettleCoverage();
   // Finish a copy: each vehicle's last sample holds for the median spacing, clipped to the end.

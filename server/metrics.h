@@ -5,6 +5,7 @@
 // or pinned to the workspace boundary (the paper's corner excursions).
 #include <cstdint>
 #include <future>
+#include <functional>
 #include <limits>
 #include <iterator>
 #include <map>
@@ -235,14 +236,24 @@ class MetricsAccumulator {
                      const MetricsOptions& options = {});
   MetricsAccumulator(const MetricsAccumulator&) = default;
   MetricsAccumulator& operator=(const MetricsAccumulator&) = delete;  // it refers to its scenario, basis and field
-  /// Waits for the coverage helper, which writes into this accumulator's sums.
-  ~MetricsAccumulator() { coverage_.Drop(); }
+  /// Waits for the helpers, which write into this accumulator.
+  ~MetricsAccumulator() {
+    holds_.Drain();
+    coverage_.Drop();
+  }
 
   /// The normalised weights in force from time_s on (the first call sets t = 0's).
   void OnWeights(double time_s, const Eigen::VectorXd& weights);
   /// One sample; returns the valves it visited. A sample before 0, not finite, or not after
   /// its vehicle's previous one is refused (counted, no effect).
   std::vector<int> Add(const TrajectorySample& sample);
+  /// A cycle's samples in (time, vehicle) order, as Add takes each: their visits counted at once
+  /// (the fleet's guard and the regions' targets read them this cycle), the rest (hold times,
+  /// checkpoints, coverage) on a helper thread while the mission's cycle goes on, when there are
+  /// at least kHoldBatch of them; whatever reads or changes those waits for it. Bit for bit what
+  /// Add gives. Throws std::logic_error before the first OnWeights.
+  void AddCycle(const std::vector<TrajectorySample>& samples);
+  static constexpr std::size_t kHoldBatch = 256;
   /// Vehicle `vehicle` sends no more samples (it left or was lost).
   void Retire(int vehicle);
   /// Every sample before time_s has been added: the metric checkpoints up to time_s are taken.
@@ -256,7 +267,10 @@ class MetricsAccumulator {
   /// The metrics of [0, end_s] as they stand (a copy is finished; this one goes on).
   MissionMetrics Result(double end_s) const;
   /// The latest checkpoint's ergodic metric (NaN before the first): what a progress line shows.
-  double latest_metric() const { return state_.latest_metric; }
+  double latest_metric() const {
+    holds_.Wait();
+    return state_.latest_metric;
+  }
   /// Samples of the metric over time kept at most: beyond, every other one is dropped and the
   /// spacing doubles, as the run directory's plot copy is thinned (memory and metrics.json stay
   /// the same size however long the mission).
@@ -290,6 +304,7 @@ class MetricsAccumulator {
     std::size_t refused = 0;
   };
   const State& state() const {
+    holds_.Wait();
     SettleCoverage();
     return state_;
   }
@@ -297,6 +312,12 @@ class MetricsAccumulator {
   void Restore(State state, VisitTracker visits);
 
  private:
+  // A sample's screening, on the caller's thread: refused (counted) unless at t >= 0, finite and
+  // after its vehicle's last accepted sample (throws std::invalid_argument for a vehicle < 0).
+  bool Accept(const TrajectorySample& sample);
+  // What Add does with an accepted sample besides its visits: the vehicle's previous sample is
+  // held until it (checkpoints before it taken first), and it waits for its own hold time.
+  void HoldNext(const TrajectorySample& sample);
   void Hold(const TrajectorySample& sample, double dt_s);
   // Brings state_.sum_f up to date with every held sample (waits for the helper thread).
   void SettleCoverage() const;
@@ -381,6 +402,36 @@ class MetricsAccumulator {
   MetricsOptions options_;
   std::vector<Eigen::Vector2d> valves_;
   VisitTracker visits_;
+  // [vehicle] the time of its last accepted sample (-inf: none): state_.pending's times, kept
+  // apart so that AddCycle screens samples while a helper holds the previous cycle's.
+  std::vector<double> accepted_until_s_;
+
+  // AddCycle's helper thread: it writes what follows (not visits_, accepted_until_s_ or
+  // state_.refused); declared before them, so that a copy waits for the source's helper before
+  // it copies them. Wait rethrows what the helper threw.
+  class HoldJob {
+   public:
+    HoldJob() = default;
+    HoldJob(const HoldJob& other) { other.Wait(); }
+    HoldJob& operator=(const HoldJob&) = delete;
+    ~HoldJob() { Drain(); }
+    void Launch(std::function<void()> work) {
+      Wait();
+      job_ = std::async(std::launch::async, std::move(work));
+    }
+    void Wait() const {
+      if (!job_.valid()) return;
+      std::future<void> done = std::move(job_);
+      done.get();
+    }
+    void Drain() noexcept {
+      if (job_.valid()) job_.wait();
+    }
+
+   private:
+    mutable std::future<void> job_;
+  };
+  HoldJob holds_;
   std::vector<int> near_scratch_;
   // Before state_: a copy waits for the source's helper before it copies the sums.
   CoverageBacklog coverage_;

@@ -279,8 +279,9 @@ void MissionCore::RecordSamples() {
   std::stable_sort(samples_.begin(), samples_.end(), [](const TrajectorySample& a, const TrajectorySample& b) {
     return a.time_s != b.time_s ? a.time_s < b.time_s : a.vehicle < b.vehicle;
   });
-  for (const TrajectorySample& s : samples_) metrics_.Add(s);
-  metrics_.LaunchCoverage();  // the fleet's coverage figure, on a helper thread while vehicles move
+  // Visits now (the guard and the targets below read them); the metric's share on a helper thread
+  // while this cycle goes on, settled at its end (AccountMetrics).
+  metrics_.AddCycle(samples_);
   if (recorder_ != nullptr && !samples_.empty()) {
     recorder_->OnSamples(samples_, roster_.names_by_index());
   }
@@ -310,11 +311,6 @@ CycleOutput MissionCore::Cycle(std::int64_t cycle) {
                               "scenario"});
     }
   }
-  for (; schedule_seen_ < fleet_.schedule().size(); ++schedule_seen_) {
-    const WeightChange& change = fleet_.schedule()[schedule_seen_];
-    metrics_.OnWeights(change.time_s, change.weights);
-  }
-  metrics_.Advance(time_s_);
   // Every risk change since the last cycle (operators' and the profile's) is measured on the
   // first live vehicle: unknown (NaN, null in metrics.json) until its answer arrives.
   const std::uint64_t snapshot_cycle = static_cast<std::uint64_t>(cycle) + 1;
@@ -356,7 +352,18 @@ CycleOutput MissionCore::Cycle(std::int64_t cycle) {
     Note("empty", "no vehicle is alive in the mission");
   }
   empty_noted_ = out.fleet_empty;
+  AccountMetrics();
   return out;
+}
+
+// The cycle's weights and checkpoints into the metrics, after the samples' holds (AddCycle's
+// helper, waited for here): last in the cycle, so that the helper ran beside the rest of it.
+void MissionCore::AccountMetrics() {
+  for (; schedule_seen_ < fleet_.schedule().size(); ++schedule_seen_) {
+    const WeightChange& change = fleet_.schedule()[schedule_seen_];
+    metrics_.OnWeights(change.time_s, change.weights);
+  }
+  metrics_.Advance(time_s_);
 }
 
 // A partition target is the vehicle's share weighted by the current risk: sent again when the

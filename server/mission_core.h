@@ -212,6 +212,7 @@ class MissionCore {
   void AssignTargets(const std::vector<int>& alive, bool risk_changed, CycleOutput& out);
   void AssignTours(const std::vector<int>& alive, bool risk_changed, CycleOutput& out);
   void AssignRegions(const std::vector<int>& alive, CycleOutput& out);
+  void AccountMetrics();
   // The live vehicles as the planners see them: where each last reported (or its start), its speed.
   std::vector<agents::FleetVehicle> FleetVehicles(const std::vector<int>& alive) const;
   // The valves split among the live vehicles, balanced on travel (the fleet's tours).

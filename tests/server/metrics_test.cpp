@@ -326,6 +326,67 @@ TEST(MetricsAccumulator, CoverageOnTheHelperThreadIsBitForBitTheSame) {
   EXPECT_GT(a.ergodic_metric, 0.0);
 }
 
+// A fleet's cycles through AddCycle (visits at once, holds and checkpoints on the helper thread
+// over kHoldBatch samples, a small cycle inline) give bit for bit what Add gives sample by sample:
+// with samples refused (out of order, not finite, before 0), a vehicle retired and back, a weight
+// change, the visits read while the helper runs and the state read mid-way.
+TEST(MetricsAccumulator, CycleOfSamplesOnTheHelperIsBitForBitAdd) {
+  const maps::Scenario scenario = MakeScenario({{3, 5}, {9, 5}, {6, 2}});
+  const maps::SpectralBasis basis(12, 10, 16);
+  const maps::RiskField field = maps::RiskField::ForScenario(scenario, basis);
+  MetricsAccumulator cycles(scenario, basis, field), single(scenario, basis, field);
+  for (MetricsAccumulator* m : {&cycles, &single}) m->OnWeights(0.0, Eigen::Vector3d(0.5, 0.3, 0.2));
+  std::mt19937_64 rng(11);
+  std::uniform_real_distribution<double> x(0.0, 12.0), y(0.0, 10.0);
+  const int fleet = static_cast<int>(MetricsAccumulator::kHoldBatch) + 60;
+  for (int cycle = 0; cycle < 50; ++cycle) {
+    const double t = 0.1 * cycle;
+    // Cycles 20-29 small (a fleet of 40: inline), the others over kHoldBatch (the helper).
+    const int vehicles = cycle >= 20 && cycle < 30 ? 40 : fleet;
+    std::vector<TrajectorySample> samples;
+    for (int v = 0; v < vehicles; ++v) samples.push_back({t, v, Eigen::Vector2d(x(rng), y(rng))});
+    samples.push_back({t, 7, Eigen::Vector2d(1, 1)});                     // again at the same time: refused
+    samples.push_back({t, 8, Eigen::Vector2d(std::nan(""), 1)});          // not finite: refused
+    if (cycle == 3) samples.push_back({-1.0, 9, Eigen::Vector2d(1, 1)});  // before 0: refused
+    for (const TrajectorySample& s : samples) single.Add(s);
+    cycles.AddCycle(samples);
+    EXPECT_EQ(cycles.refused_samples(), single.refused_samples()) << "cycle " << cycle;
+    for (int valve = 0; valve < 3; ++valve)  // the visits, while the helper may still run
+      ASSERT_EQ(cycles.visits().LastVisit(valve), single.visits().LastVisit(valve)) << "cycle " << cycle;
+    if (cycle == 12) {
+      for (MetricsAccumulator* m : {&cycles, &single}) m->Retire(5);
+    }
+    if (cycle == 33) {
+      for (MetricsAccumulator* m : {&cycles, &single}) m->OnWeights(t, Eigen::Vector3d(0.2, 0.2, 0.6));
+    }
+    for (MetricsAccumulator* m : {&cycles, &single}) m->Advance(t);
+    if (cycle == 17) {
+      const MetricsAccumulator::State& a = cycles.state();
+      const MetricsAccumulator::State& b = single.state();
+      ASSERT_EQ(a.pending.size(), b.pending.size());
+      for (Eigen::Index k = 0; k < a.sum_f.size(); ++k) ASSERT_EQ(a.sum_f[k], b.sum_f[k]) << "k " << k;
+      EXPECT_EQ(a.time_near_s, b.time_near_s);
+      EXPECT_EQ(cycles.Result(1.7).ergodic_metric, single.Result(1.7).ergodic_metric);
+    }
+  }
+  EXPECT_EQ(cycles.refused_samples(), 50u * 2u + 1u);
+  const MissionMetrics a = cycles.Result(5.0), b = single.Result(5.0);
+  ASSERT_EQ(a.metric_over_time.size(), b.metric_over_time.size());
+  ASSERT_GE(a.metric_over_time.size(), 4u);
+  for (std::size_t i = 0; i < a.metric_over_time.size(); ++i)
+    EXPECT_EQ(a.metric_over_time[i].ergodic_metric, b.metric_over_time[i].ergodic_metric) << "checkpoint " << i;
+  EXPECT_EQ(a.ergodic_metric, b.ergodic_metric);
+  EXPECT_EQ(a.time_outside_s, b.time_outside_s);
+  ASSERT_EQ(a.valves.size(), b.valves.size());
+  for (std::size_t v = 0; v < a.valves.size(); ++v) {
+    EXPECT_EQ(a.valves[v].visits, b.valves[v].visits);
+    EXPECT_EQ(a.valves[v].time_near_s, b.valves[v].time_near_s);
+  }
+  EXPECT_GT(a.ergodic_metric, 0.0);
+  // A sample of a vehicle < 0 is refused at the door with an error, changing nothing.
+  EXPECT_THROW(cycles.AddCycle({{6.0, -1, Eigen::Vector2d(1, 1)}}), std::invalid_argument);
+}
+
 // 1 s in the middle, 2 s beyond the left edge, 3 s 0.1 m from the right edge, 0.5 s above the
 // top: 2.5 s outside and 3 s pinned (margin 0.2 m); a sample after the end does not count.
 // Tolerance 1e-9 s.
