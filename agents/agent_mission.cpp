@@ -95,14 +95,15 @@ bool AgentMission::Refuse(std::string why) {
 }
 
 std::string AgentMission::Refusal(const Assignment& a) const {
-  const std::string who = fmt::format("assignment for vehicle {} (cycle {})", a.id, a.cycle);
+  // Named only when refused: at 10,000 vehicles a host checks thousands of assignments a cycle.
+  const auto who = [&a] { return fmt::format("assignment for vehicle {} (cycle {})", a.id, a.cycle); };
   // Bounds well beyond any real target, so that no product of them overflows to inf or NaN in
   // the control law (the agent door's fuzzer steered a vehicle on a NaN command): a density's
   // coefficients on a basis of unit norm stay below 2 / sqrt(area) (1e6 for a 4 um^2 box).
   constexpr double kMaxPhi = 1e6, kMinRegion_m = 1e-3, kMinForgetting_s = 1e-3, kMaxTourWeight = 1e12;
-  if (!a.phi.allFinite()) return who + ": phi is not finite";
+  if (!a.phi.allFinite()) return who() + ": phi is not finite";
   if (a.phi.size() > 0 && a.phi.cwiseAbs().maxCoeff() > kMaxPhi) {
-    return who + fmt::format(": a phi coefficient is beyond +-{:g}", kMaxPhi);
+    return who() + fmt::format(": a phi coefficient is beyond +-{:g}", kMaxPhi);
   }
   if (a.region_order != 0) {
     const maps::Workspace& w = scenario_.workspace;
@@ -110,48 +111,48 @@ std::string AgentMission::Refusal(const Assignment& a) const {
     constexpr double kSlack_m = 1e-6;
     if (!a.region_origin_m.allFinite() || !a.region_size_m.allFinite() || (a.region_size_m.array() < kMinRegion_m).any() ||
         (a.region_origin_m.array() < -kSlack_m).any() || hi.x() > w.width_m + kSlack_m || hi.y() > w.height_m + kSlack_m) {
-      return who + fmt::format(": region at ({}, {}) of {} x {} m is not inside the {} x {} m workspace",
+      return who() + fmt::format(": region at ({}, {}) of {} x {} m is not inside the {} x {} m workspace",
                                a.region_origin_m.x(), a.region_origin_m.y(), a.region_size_m.x(), a.region_size_m.y(),
                                w.width_m, w.height_m);
     }
     if (a.region_order < 1 || a.region_order > maps::SpectralBasis::kMaxOrder) {
-      return who + fmt::format(": region basis order {} is outside 1..{}", a.region_order, maps::SpectralBasis::kMaxOrder);
+      return who() + fmt::format(": region basis order {} is outside 1..{}", a.region_order, maps::SpectralBasis::kMaxOrder);
     }
     if (std::isnan(a.region_forgetting_s) || a.region_forgetting_s < 0.0 ||
         (a.region_forgetting_s > 0.0 && a.region_forgetting_s < kMinForgetting_s)) {
-      return who + fmt::format(": region forgetting time {} s is not 0 (the scenario's) or >= {:g} s",
+      return who() + fmt::format(": region forgetting time {} s is not 0 (the scenario's) or >= {:g} s",
                                a.region_forgetting_s, kMinForgetting_s);
     }
     if (a.phi.size() != 0 && a.phi.size() != a.region_order * a.region_order) {
-      return who + fmt::format(": phi has {} coefficients, its region's basis {}", a.phi.size(),
+      return who() + fmt::format(": phi has {} coefficients, its region's basis {}", a.phi.size(),
                                a.region_order * a.region_order);
     }
     if (!a.region_valves.empty()) {
       const int valves = static_cast<int>(valves_.size());
       if (a.region_valves.size() > static_cast<std::size_t>(valves) ||
           std::any_of(a.region_valves.begin(), a.region_valves.end(), [&](int i) { return i < 0 || i >= valves; })) {
-        return who + fmt::format(": its region names {} valves, or one outside 0..{}", a.region_valves.size(), valves - 1);
+        return who() + fmt::format(": its region names {} valves, or one outside 0..{}", a.region_valves.size(), valves - 1);
       }
       if (a.region_weights.size() != static_cast<Eigen::Index>(a.region_valves.size()) || !a.region_weights.allFinite() ||
           (a.region_weights.array() < 0.0).any() || (a.region_weights.array() > kMaxTourWeight).any() ||
           !(a.region_weights.sum() > 0.0)) {
-        return who + ": its region's weights must be one per valve, in [0, 1e12] and not all zero";
+        return who() + ": its region's weights must be one per valve, in [0, 1e12] and not all zero";
       }
     }
   } else if (!a.region_valves.empty()) {
-    return who + ": it names a region's valves but no region";
+    return who() + ": it names a region's valves but no region";
   } else if (a.phi.size() != 0 && a.phi.size() != host_.basis().size()) {
-    return who + fmt::format(": phi has {} coefficients, the field's basis {}", a.phi.size(), host_.basis().size());
+    return who() + fmt::format(": phi has {} coefficients, the field's basis {}", a.phi.size(), host_.basis().size());
   }
   if (!a.tour.empty()) {
     const int valves = static_cast<int>(valves_.size());
     if (std::any_of(a.tour.begin(), a.tour.end(), [&](int i) { return i < 0 || i >= valves; })) {
-      return who + fmt::format(": the tour names a valve outside 0..{}", valves - 1);
+      return who() + fmt::format(": the tour names a valve outside 0..{}", valves - 1);
     }
     if (a.tour_weights.size() != static_cast<Eigen::Index>(a.tour.size()) || !a.tour_weights.allFinite() ||
         (a.tour_weights.array() < 0.0).any() || (a.tour_weights.array() > kMaxTourWeight).any() ||
         !(a.tour_weights.sum() > 0.0)) {
-      return who + ": the tour's weights must be one per valve, in [0, 1e12] and not all zero";
+      return who() + ": the tour's weights must be one per valve, in [0, 1e12] and not all zero";
     }
   }
   return {};
