@@ -253,7 +253,10 @@ class MetricsAccumulator {
   /// at least kHoldBatch of them; whatever reads or changes those waits for it. Bit for bit what
   /// Add gives. Throws std::logic_error before the first OnWeights.
   void AddCycle(const std::vector<TrajectorySample>& samples);
-  static constexpr std::size_t kHoldBatch = 256;
+  /// From this many samples a cycle the helper pays: at 10,000 vehicles in one process the
+  /// server's cycle went from 20.3 / 18.6 to 16.5 / 14.5 ms; over DDS at 1,000 a thread a cycle
+  /// lengthened it (2.09 / 2.19 -> 2.34 / 2.32 ms).
+  static constexpr std::size_t kHoldBatch = 2048;
   /// Vehicle `vehicle` sends no more samples (it left or was lost).
   void Retire(int vehicle);
   /// Every sample before time_s has been added: the metric checkpoints up to time_s are taken.
