@@ -160,6 +160,7 @@
     if (lastFrameAt > 0) frameInterval = Math.min(1000, Math.max(20, 0.7 * frameInterval + 0.3 * (now - lastFrameAt)));
     lastFrameAt = now;
     drawsOfFrame = 0;
+    wake();
     const moved = new Map();
     const jump = scene.mode !== "live";  // a replay jumps where the slider goes
     for (let i = 0; i < next.v.length; i++) {
@@ -630,6 +631,35 @@
       renderTables(now);
       view.tableMs = average(view.tableMs, performance.now() - now);
     }
+    next(now);
+  }
+
+  // On the server's clock nothing is drawn between the planned redraws, so the page sleeps until
+  // the next one (or the next frame, which wakes it) instead of running at every display frame:
+  // sixty wake-ups a second of the renderer and compositor beside the mission. Otherwise, and
+  // whenever the next redraw is near, the display's own frames.
+  let sleeping = null;
+  function next(now) {
+    if (!drawsOnFrames() || now - lastFrameAt >= 2 * frameInterval) {
+      requestAnimationFrame(loop);
+      return;
+    }
+    const due = drawsOfFrame < DRAWS_PER_FRAME ? lastFrameAt + drawsOfFrame * frameInterval / DRAWS_PER_FRAME - 2
+                                               : lastFrameAt + 2 * frameInterval;  // the frame wakes it before
+    const wait = due - performance.now() - 8;  // woken a little early, drawn on the display frame after
+    if (wait <= 0) {
+      requestAnimationFrame(loop);
+      return;
+    }
+    sleeping = setTimeout(() => {
+      sleeping = null;
+      requestAnimationFrame(loop);
+    }, Math.min(wait, 250));
+  }
+  function wake() {
+    if (sleeping === null) return;
+    clearTimeout(sleeping);
+    sleeping = null;
     requestAnimationFrame(loop);
   }
 
