@@ -253,7 +253,7 @@ void MetricsAccumulator::AddCycle(const std::vector<TrajectorySample>& samples) 
   }
   const auto hold = [this, batch = std::move(accepted)] {
     for (const TrajectorySample& sample : batch) HoldNext(sample);
-    LaunchCoverage();
+    LaunchQueuedCoverage();
   };
   if (samples.size() >= kHoldBatch) {
     holds_.Launch(hold);
@@ -311,6 +311,11 @@ void MetricsAccumulator::Advance(double time_s) {
 }
 
 void MetricsAccumulator::LaunchCoverage() {
+  holds_.Wait();
+  LaunchQueuedCoverage();
+}
+
+void MetricsAccumulator::LaunchQueuedCoverage() {
   if (coverage_.queued() >= kCoverageBatch) coverage_.Launch(basis_, state_.sum_f);
 }
 

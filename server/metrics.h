@@ -322,6 +322,8 @@ class MetricsAccumulator {
   // held until it (checkpoints before it taken first), and it waits for its own hold time.
   void HoldNext(const TrajectorySample& sample);
   void Hold(const TrajectorySample& sample, double dt_s);
+  // LaunchCoverage's work, on whichever thread holds the samples (AddCycle's helper included).
+  void LaunchQueuedCoverage();
   // Brings state_.sum_f up to date with every held sample (waits for the helper thread).
   void SettleCoverage() const;
   void TakeCheckpointsBefore(double time_s);
