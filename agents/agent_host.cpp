@@ -1,6 +1,7 @@
 #include "agents/agent_host.h"
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <condition_variable>
 #include <exception>
@@ -25,11 +26,14 @@ namespace sage::agents {
 namespace host_detail {  // named: AgentHost::Impl holds one
 
 // Box2D worlds of a host: one up to kShardedFleet vehicles (every vehicle can touch every other,
-// and missions below 2,000 vehicles move exactly as before), two from there, stepped on two threads.
-// A host of 10,000 BlueROV2s spent ~40 ms a cycle in one world on one core. Decided by the
-// scenario's fleet, not by the threads, so a seed gives the same mission on any machine.
+// and missions below 2,000 vehicles move exactly as before), four from there, taken in turn by
+// the threads. A host of 10,000 BlueROV2s spent ~40 ms a cycle in one world on one core; four
+// rather than two so that a thread busy with something else (the server's cycle, in one
+// process) leaves its share to the others. Decided by the scenario's fleet, not by the threads,
+// so a seed gives the same mission on any machine.
 constexpr std::size_t kShardedFleet = 2000;
-int PhysicsShards(const maps::Scenario& s) { return s.vehicles.size() >= kShardedFleet ? 2 : 1; }
+constexpr int kPhysicsShards = 4;
+int PhysicsShards(const maps::Scenario& s) { return s.vehicles.size() >= kShardedFleet ? kPhysicsShards : 1; }
 
 // Threads kept for the host's life, so that what they keep per thread (the A* search's per-cell
 // state, sized to the grid: 256 MB on a 10,000-vehicle field) is built once, not every cycle.
@@ -154,6 +158,7 @@ struct AgentHost::Impl {
   std::vector<Eigen::Vector2d> others;  // vehicles of other hosts
   std::optional<std::vector<std::pair<VehicleId, Eigen::Vector2d>>> own_reported;  // this host's, as last reported
   int physics_substeps = 1;
+  bool move_pending = false;  // Steer has set commands that Move has not stepped yet
   double control_dt = 0.1;
   int threads = 1, vehicles_per_thread = 256;
   std::unique_ptr<host_detail::WorkerPool> pool;  // threads - 1 workers, made on the first cycle that uses them
@@ -452,6 +457,12 @@ void AgentHost::SetThreads(int threads, int min_vehicles_per_thread) {
 }
 
 void AgentHost::Step(double time_s) {
+  Steer(time_s);
+  Move();
+}
+
+void AgentHost::Steer(double time_s) {
+  Move();  // a cycle steered but not moved moves first, as Step would have
   // Everyone's position at the start of the cycle, so the order of vehicles does not matter.
   std::vector<Eigen::Vector2d> positions;
   for (const Impl::Vehicle& v : impl_->vehicles) positions.push_back(impl_->world.State(v.body).position_m);
@@ -504,16 +515,28 @@ void AgentHost::Step(double time_s) {
     impl_->world.SetVelocityCommand(v.body, v.command);
     if (impl_->gaze.active()) impl_->world.SetHeadingCommand(v.body, v.heading);
   }
+  impl_->move_pending = true;
+}
+
+void AgentHost::Move(const std::function<void()>& beside) {
+  if (!std::exchange(impl_->move_pending, false)) {
+    if (beside) beside();
+    return;
+  }
   const double dt = impl_->control_dt / impl_->physics_substeps;
   const int shards = impl_->world.shard_count();
-  const std::function<void(int)> step = [&](int k) { impl_->world.StepShard(k, dt, impl_->physics_substeps); };
+  const auto step = [&](int k) { impl_->world.StepShard(k, dt, impl_->physics_substeps); };
   if (shards > 1 && impl_->threads > 1) {
-    // Every worker and the caller take shards in turn (parts never exceed the threads).
+    // Each thread takes the next shard not yet taken (a shard's motion does not depend on the
+    // thread); the caller runs `beside` first, the workers start on the shards at once.
+    std::atomic<int> next{0};
     const int parts = std::min(shards, impl_->threads);
     impl_->Pool().Run([&](int part) {
-      for (int k = part; k < shards; k += parts) step(k);
+      if (part == 0 && beside) beside();
+      for (int k = next++; k < shards; k = next++) step(k);
     }, parts);
   } else {
+    if (beside) beside();
     for (int k = 0; k < shards; ++k) step(k);
   }
 }

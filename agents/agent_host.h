@@ -5,6 +5,7 @@
 // server goes silent. No DDS here: the in-process mission and the DDS agent node drive the same
 // object.
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <utility>
 #include <vector>
@@ -77,8 +78,18 @@ class AgentHost {
   /// world and writes only its own vehicle). Throws std::invalid_argument below 1.
   void SetThreads(int threads, int min_vehicles_per_thread = 256);
   /// One control cycle at mission time t: every vehicle's guidance turns its state into a
-  /// command; then physics advances one control period in physics_rate substeps.
+  /// command; then physics advances one control period in physics_rate substeps. The same as
+  /// Steer(t) then Move().
   void Step(double time_s);
+  /// The cycle's first half: every vehicle's guidance turns its state into a command (its
+  /// coverage and LastCommand are the cycle's from here). The states are still the cycle's, so
+  /// they can be reported while Move runs. A Steer whose Move has not been called moves first.
+  void Steer(double time_s);
+  /// The second half: physics advances one control period on the commands of the last Steer
+  /// (nothing if none is pending). Touches only this host's Box2D worlds. `beside`, if given,
+  /// runs on the calling thread while the host's other threads start on the physics (then the
+  /// caller joins them): work that reads and writes nothing the physics does.
+  void Move(const std::function<void()>& beside = {});
 
   VehicleState State(VehicleId id) const;
   Eigen::Vector2d LastCommand(VehicleId id) const;  ///< commanded velocity of the last Step (m/s)

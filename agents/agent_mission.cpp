@@ -276,6 +276,13 @@ std::optional<VehicleTarget> AgentMission::TargetOf(VehicleId id, Member& member
 }
 
 AgentMission::CycleOutput AgentMission::Step(std::int64_t cycle) {
+  CycleOutput out = Steer(cycle);
+  Move();
+  return out;
+}
+
+AgentMission::CycleOutput AgentMission::Steer(std::int64_t cycle) {
+  host_.Move();  // the last cycle's physics, if its caller left it (AgentHost::Steer would too)
   const double t = static_cast<double>(cycle) / scenario_.control_rate_hz;
   // The vehicles keep apart on where each reported being last cycle, this host's as the others'.
   host_.SetOwnReported(std::move(reported_));
@@ -301,7 +308,7 @@ AgentMission::CycleOutput AgentMission::Step(std::int64_t cycle) {
   for (auto& [id, member] : members_) {
     if (const std::optional<VehicleTarget> target = TargetOf(id, member, t)) host_.SetTarget(id, *target);
   }
-  host_.Step(t);
+  host_.Steer(t);
   auto member = members_.cbegin();  // the states are in the members' order
   for (StateReport& s : out.states) {
     s.command_mps = host_.LastCommand(s.id);

@@ -79,7 +79,15 @@ class AgentMission {
     std::vector<ScanReport> scans;          ///< the leak sensors' scans of this cycle (vehicle, then sensor order)
   };
   /// One control cycle at mission time cycle / control rate: steer, step the physics, report.
+  /// The same as Steer(cycle) then Move().
   CycleOutput Step(std::int64_t cycle);
+  /// The cycle but its physics: the reports (states before the physics, the cycle's commands,
+  /// coverage and scans) are all known once the vehicles have steered, so a server can take them
+  /// while Move runs (AgentHost::Steer).
+  CycleOutput Steer(std::int64_t cycle);
+  /// The cycle's physics, on the commands of the last Steer, with `beside` on the calling
+  /// thread meanwhile (AgentHost::Move).
+  void Move(const std::function<void()>& beside = {}) { host_.Move(beside); }
 
   const AgentHost& host() const { return host_; }
   /// Threads the host's guidance may use each cycle (AgentHost::SetThreads).

@@ -61,6 +61,7 @@ struct Mission::Impl {
   std::size_t next_fleet_event = 0;
   std::int64_t cycle = 0;
   std::int64_t cycles_total = 0;
+  bool beside = false;  // the server's cycle runs beside the vehicles' physics (large fleets)
 
   Impl(maps::Scenario s, const MissionOptions& o)
       : scenario(std::move(s)),
@@ -71,7 +72,12 @@ struct Mission::Impl {
         agents(world, scenario,
                o.controller == ControllerKind::kErgodic ? agents::Guidance::kErgodic : agents::Guidance::kAstar) {
     cycles_total = std::llround(scenario.duration_s * scenario.control_rate_hz);
-    agents.SetThreads(o.threads > 0 ? o.threads : static_cast<int>(std::max(1u, std::thread::hardware_concurrency())));
+    const int threads = o.threads > 0 ? o.threads : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+    agents.SetThreads(threads);
+    // From the fleet whose physics is sharded (AgentHost): the host's threads take the shards
+    // while the caller serves, then joins them.
+    constexpr std::size_t kServerBesideFleet = 2000;
+    beside = threads > 1 && scenario.vehicles.size() >= kServerBesideFleet;
     for (std::size_t i = 0; i < scenario.vehicles.size(); ++i) agents.AddVehicle(static_cast<int>(i), scenario.vehicles[i]);
   }
 
@@ -96,15 +102,28 @@ struct Mission::Impl {
   bool Step() {
     if (cycle > cycles_total) return false;
     ApplyFleetEvents(static_cast<double>(cycle) / scenario.control_rate_hz);
-    const agents::AgentMission::CycleOutput reports = agents.Step(cycle);
-    for (const agents::StateReport& s : reports.states) core.OnState(s);
-    for (const agents::CoverageMessage& c : reports.coverage) core.OnCoverage(c);
-    for (const agents::ScanReport& s : reports.scans) core.OnScan(s);
-    using Clock = std::chrono::steady_clock;
-    const Clock::time_point cycle_start = options.server_cycle_s ? Clock::now() : Clock::time_point();
-    const CycleOutput answer = core.Cycle(cycle);
-    if (options.server_cycle_s) {
-      options.server_cycle_s->push_back(std::chrono::duration<double>(Clock::now() - cycle_start).count());
+    // The reports are all known once the vehicles have steered (states before the physics), so
+    // the server takes them and runs its cycle while the vehicles' physics steps, as the server
+    // of a DDS mission does beside its hosts: the server reads nothing the physics writes and the
+    // other way round, so the mission is the same as one after the other, to the bit.
+    const agents::AgentMission::CycleOutput reports = agents.Steer(cycle);
+    CycleOutput answer;
+    const auto serve = [&] {
+      for (const agents::StateReport& s : reports.states) core.OnState(s);
+      for (const agents::CoverageMessage& c : reports.coverage) core.OnCoverage(c);
+      for (const agents::ScanReport& s : reports.scans) core.OnScan(s);
+      using Clock = std::chrono::steady_clock;
+      const Clock::time_point cycle_start = options.server_cycle_s ? Clock::now() : Clock::time_point();
+      answer = core.Cycle(cycle);
+      if (options.server_cycle_s) {
+        options.server_cycle_s->push_back(std::chrono::duration<double>(Clock::now() - cycle_start).count());
+      }
+    };
+    if (beside) {
+      agents.Move(serve);
+    } else {
+      agents.Move();
+      serve();
     }
     agents.OnFleetSnapshot(answer.snapshot);
     for (const agents::Assignment& a : answer.assignments) agents.OnAssignment(a);

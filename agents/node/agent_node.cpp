@@ -276,7 +276,9 @@ int RunAgentNode(const maps::Scenario& scenario, const AgentNodeOptions& options
     // last cycle's is a vehicle that stopped reporting (lost, or late), not a place.
     mission.SetOtherVehicles(door.OthersAt(k - 1));
 
-    const AgentMission::CycleOutput out = mission.Step(k);
+    // Steered, reported, then moved: the server's cycle runs on these reports while this host's
+    // physics steps (the states are the cycle's, before its physics, either way).
+    const AgentMission::CycleOutput out = mission.Steer(k);
     ++cycles_run;
     const long long stamp = proto::NowRealtimeNs();
     // Coverage and scans first: the server waits for the states of the cycle, and by then a
@@ -289,6 +291,7 @@ int RunAgentNode(const maps::Scenario& scenario, const AgentNodeOptions& options
     coverage.Flush();
     if (detections) detections->Flush();
     states.Flush();
+    mission.Move();
   }
   for (const VehicleId id : mission.ids()) leave(id);
   if (cycles_not_in_step > 0) {
