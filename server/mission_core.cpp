@@ -604,7 +604,20 @@ void MissionCore::AssignRegions(const std::vector<int>& alive, CycleOutput& out)
   // 22 MB/s a 1,000-vehicle mission sent.
   const Eigen::VectorXd& weights = fleet_.effective_weights();
   auto found = plan.shares.begin();  // both ascending by id: walked together, not looked up
-  for (int id : alive) {
+  // Each share's valves and sent weights, and each vehicle's roster entry, lie apart on the heap:
+  // at 10,000 vehicles the walk was a cache miss on each (3 % of the mission's main thread).
+  // Asked for a few shares ahead, they are in by the time the walk gets there.
+  constexpr std::size_t kAhead = 4;
+  const auto PrefetchShare = [](const RegionShare& share) {
+    __builtin_prefetch(share.valves.data());
+    __builtin_prefetch(share.sent_weights.data());
+  };
+  for (std::size_t k = 0; k < std::min(kAhead, plan.shares.size()); ++k) PrefetchShare(plan.shares[k].second);
+  for (std::size_t i = 0; i < alive.size(); ++i) {
+    const int id = alive[i];
+    if (i + kAhead < alive.size()) __builtin_prefetch(roster_.Find(alive[i + kAhead]));
+    const std::size_t at = static_cast<std::size_t>(found - plan.shares.begin());
+    if (at + kAhead < plan.shares.size()) PrefetchShare(plan.shares[at + kAhead].second);
     Roster::Member& m = *roster_.Find(id);
     while (found != plan.shares.end() && found->first < id) ++found;
     if (found == plan.shares.end() || found->first != id) {
