@@ -526,11 +526,13 @@ void AgentHost::Move(const std::function<void()>& beside) {
   const double dt = impl_->control_dt / impl_->physics_substeps;
   const int shards = impl_->world.shard_count();
   const auto step = [&](int k) { impl_->world.StepShard(k, dt, impl_->physics_substeps); };
-  if (shards > 1 && impl_->threads > 1) {
+  // On the pool when the guidance is (enough vehicles a thread) and there is more than one thing
+  // to do: several worlds, or one world and `beside`.
+  const int parts = std::min(impl_->threads, shards + (beside ? 1 : 0));
+  if (parts > 1 && impl_->vehicles.size() >= 2 * static_cast<std::size_t>(impl_->vehicles_per_thread)) {
     // Each thread takes the next shard not yet taken (a shard's motion does not depend on the
     // thread); the caller runs `beside` first, the workers start on the shards at once.
     std::atomic<int> next{0};
-    const int parts = std::min(shards, impl_->threads);
     impl_->Pool().Run([&](int part) {
       if (part == 0 && beside) beside();
       for (int k = next++; k < shards; k = next++) step(k);

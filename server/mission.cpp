@@ -61,7 +61,6 @@ struct Mission::Impl {
   std::size_t next_fleet_event = 0;
   std::int64_t cycle = 0;
   std::int64_t cycles_total = 0;
-  bool beside = false;  // the server's cycle runs beside the vehicles' physics (large fleets)
 
   Impl(maps::Scenario s, const MissionOptions& o)
       : scenario(std::move(s)),
@@ -72,12 +71,7 @@ struct Mission::Impl {
         agents(world, scenario,
                o.controller == ControllerKind::kErgodic ? agents::Guidance::kErgodic : agents::Guidance::kAstar) {
     cycles_total = std::llround(scenario.duration_s * scenario.control_rate_hz);
-    const int threads = o.threads > 0 ? o.threads : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
-    agents.SetThreads(threads);
-    // From the fleet whose physics is sharded (AgentHost): the host's threads take the shards
-    // while the caller serves, then joins them.
-    constexpr std::size_t kServerBesideFleet = 2000;
-    beside = threads > 1 && scenario.vehicles.size() >= kServerBesideFleet;
+    agents.SetThreads(o.threads > 0 ? o.threads : static_cast<int>(std::max(1u, std::thread::hardware_concurrency())));
     for (std::size_t i = 0; i < scenario.vehicles.size(); ++i) agents.AddVehicle(static_cast<int>(i), scenario.vehicles[i]);
   }
 
@@ -103,9 +97,10 @@ struct Mission::Impl {
     if (cycle > cycles_total) return false;
     ApplyFleetEvents(static_cast<double>(cycle) / scenario.control_rate_hz);
     // The reports are all known once the vehicles have steered (states before the physics), so
-    // the server takes them and runs its cycle while the vehicles' physics steps, as the server
-    // of a DDS mission does beside its hosts: the server reads nothing the physics writes and the
-    // other way round, so the mission is the same as one after the other, to the bit.
+    // the server takes them and runs its cycle while the vehicles' physics steps (on the host's
+    // other threads, when its guidance is on several: from 512 vehicles on two), as the
+    // server of a DDS mission does beside its hosts. The server reads nothing the physics writes
+    // and the other way round, so the mission is the same as one after the other, to the bit.
     const agents::AgentMission::CycleOutput reports = agents.Steer(cycle);
     CycleOutput answer;
     const auto serve = [&] {
@@ -119,12 +114,7 @@ struct Mission::Impl {
         options.server_cycle_s->push_back(std::chrono::duration<double>(Clock::now() - cycle_start).count());
       }
     };
-    if (beside) {
-      agents.Move(serve);
-    } else {
-      agents.Move();
-      serve();
-    }
+    agents.Move(serve);
     agents.OnFleetSnapshot(answer.snapshot);
     for (const agents::Assignment& a : answer.assignments) agents.OnAssignment(a);
     ++cycle;

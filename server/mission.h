@@ -37,7 +37,7 @@ struct MissionOptions {
   /// `sage bench scale` reports as the in-process server cycle. Off by default (no clock reads).
   std::vector<double>* server_cycle_s = nullptr;
   /// Threads for the vehicles' guidance each cycle; 0 (default): the machine's cores. The mission
-  /// is the same for any count. With more than one and 2,000 vehicles or more, the server's cycle
+  /// is the same for any count. With more than one and 512 vehicles or more, the server's cycle
   /// also runs beside the vehicles' physics (the same mission again).
   int threads = 0;
 };
