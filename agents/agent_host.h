@@ -92,6 +92,9 @@ class AgentHost {
   void Move(const std::function<void()>& beside = {});
 
   VehicleState State(VehicleId id) const;
+  /// Asks for what State(id) reads to be brought into cache (maps/prefetch.h), for a caller that
+  /// asks every vehicle's state in turn; changes nothing. An unknown id is ignored.
+  void PrefetchState(VehicleId id) const;
   Eigen::Vector2d LastCommand(VehicleId id) const;  ///< commanded velocity of the last Step (m/s)
   /// The vehicle's own coverage (nullptr under A*).
   const CoverageAccumulator* Coverage(VehicleId id) const;

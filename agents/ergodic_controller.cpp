@@ -5,6 +5,8 @@
 #include <cmath>
 #include <stdexcept>
 
+#include "maps/prefetch.h"
+
 namespace sage::agents {
 
 Eigen::Vector2d TurnToward(const Eigen::Vector2d& from, const Eigen::Vector2d& to, double max_angle_rad) {
@@ -48,6 +50,15 @@ Eigen::VectorXd ErgodicController::CoverageError() const {
   const double total_time = coverage_.time_s() + fleet_time_s_;
   if (total_time <= 0.0) return -target_;
   return (coverage_.sums() + fleet_sums_) / total_time - target_;
+}
+
+void ErgodicController::Prefetch() const {
+  const std::size_t bytes = sizeof(double) * static_cast<std::size_t>(basis_.size());
+  maps::PrefetchBytes(coverage_.sums().data(), bytes);
+  maps::PrefetchBytes(target_.data(), bytes);
+  maps::PrefetchBytes(lambda_over_h_.data(), bytes);
+  if (!fleet_zero_) maps::PrefetchBytes(fleet_sums_.data(), bytes);
+  basis_.Prefetch();
 }
 
 double ErgodicController::Metric() const { return basis_.Metric(CoverageError()); }

@@ -56,6 +56,10 @@ class ErgodicController final : public VehicleController {
   /// Ergodic metric of CoverageError().
   double Metric() const;
   const CoverageAccumulator& coverage() const { return coverage_; }
+  /// Asks for the arrays the next Command() reads (its coverage sums, target, Lambda_k / h_k, the
+  /// fleet's sums if any, the basis' tables) to be brought into cache; changes nothing. For a host
+  /// that steers thousands of vehicles in turn: called a few vehicles ahead of Command().
+  void Prefetch() const;
   /// Starts from given coverage (a resumed vehicle's last accounted sums and kernel time).
   void RestoreCoverage(const Eigen::VectorXd& sums, double time_s) { coverage_.Restore(sums, time_s); }
 

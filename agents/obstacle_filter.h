@@ -37,6 +37,8 @@ class ObstacleFilter {
   /// to the full speed at the clearance, and a command heading into it slides past it.
   Eigen::Vector2d Apply(const Eigen::Vector2d& x_m, const Eigen::Vector2d& velocity_mps,
                         const std::vector<Eigen::Vector2d>& neighbours = {});
+  /// Asks for what Apply at x reads of the distance field to be brought into cache; changes nothing.
+  void Prefetch(const Eigen::Vector2d& x_m) const { field_.Prefetch(x_m, settings_.influence_m); }
   /// The box the vehicle is kept in (workspace frame, m): the workspace, or a region of it.
   void SetBounds(const Eigen::Vector2d& lo_m, const Eigen::Vector2d& hi_m);
 

@@ -17,6 +17,8 @@
 
 #include <box2d/box2d.h>
 
+#include "maps/prefetch.h"
+
 namespace sage::agents {
 namespace {
 
@@ -291,6 +293,11 @@ VehicleState PhysicsWorld::State(VehicleId id) const {
   state.heading_rad = WrapAngle(body->GetAngle());  // Box2D's angle is unwrapped
   state.yaw_rate_radps = body->GetAngularVelocity();
   return state;
+}
+
+void PhysicsWorld::Prefetch(VehicleId id) const {
+  if (id < 0 || static_cast<std::size_t>(id) >= vehicles_.size() || vehicles_[static_cast<std::size_t>(id)].id != id) return;
+  maps::PrefetchObject(vehicles_[static_cast<std::size_t>(id)].body);
 }
 
 Eigen::Vector3d PhysicsWorld::Thrust(VehicleId id) const { return Find(id).thrust; }

@@ -76,6 +76,10 @@ class PhysicsWorld {
   /// on different threads at once, and the result is the same as stepping them one by one.
   void StepShard(int shard, double dt_s, int steps);
   VehicleState State(VehicleId id) const;
+  /// Asks for what State(id) reads (the vehicle's Box2D body) to be brought into cache
+  /// (maps/prefetch.h); changes nothing. Only a vehicle held at its id's place (none removed
+  /// before it, as in one process) is asked for; any other id is ignored.
+  void Prefetch(VehicleId id) const;
   /// Thrust the BlueROV2 velocity controller applied in the last Step, body frame:
   /// (surge N, sway N, yaw N m), within the thrust limits; zero for a single integrator.
   Eigen::Vector3d Thrust(VehicleId id) const;

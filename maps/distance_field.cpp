@@ -4,6 +4,8 @@
 #include <cmath>
 #include <limits>
 
+#include "maps/prefetch.h"
+
 namespace sage::maps {
 namespace {
 
@@ -97,6 +99,18 @@ bool DistanceField::FartherThan(const Eigen::Vector2d& x_m, double d) const {
   const double least = block_least_m_[static_cast<std::size_t>(i / kBlockCells) * block_rows_ + j / kBlockCells];
   // A bilinear mean of values >= least is >= least up to a few ulps of rounding.
   return least * (1.0 - 1e-9) >= d;
+}
+
+void DistanceField::Prefetch(const Eigen::Vector2d& x_m, double d) const {
+  if (!x_m.allFinite() || FartherThan(x_m, d)) return;
+  // Distance's stencil is cells i..i+1 by j..j+1; AwayFromObstacle's central differences, one
+  // cell either way of x, widen it to i-1..i+2 by j-1..j+2 (a column's four cells are adjacent).
+  const int i = static_cast<int>(std::floor(std::clamp(x_m.x() / resolution_m_ - 0.5, -2.0, double(cols_))));
+  const int j = static_cast<int>(std::floor(std::clamp(x_m.y() / resolution_m_ - 0.5, -2.0, double(rows_))));
+  const int j0 = std::clamp(j - 1, 0, rows_ - 1), j1 = std::clamp(j + 2, 0, rows_ - 1);
+  for (int c = std::max(i - 1, 0); c <= std::min(i + 2, cols_ - 1); ++c) {
+    PrefetchBytes(&distance_m_[static_cast<std::size_t>(c) * rows_ + j0], sizeof(double) * (j1 - j0 + 1));
+  }
 }
 
 double DistanceField::At(int i, int j) const {

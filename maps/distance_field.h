@@ -30,6 +30,10 @@ class DistanceField {
   /// nothing: look Distance up.
   bool FartherThan(const Eigen::Vector2d& x_m, double d) const;
 
+  /// Asks for the cells that Distance and AwayFromObstacle read about x to be brought into cache
+  /// (maps/prefetch.h), unless FartherThan(x, d) says they will not be read; changes nothing.
+  void Prefetch(const Eigen::Vector2d& x_m, double d) const;
+
   static constexpr int kBlockCells = 8;
 
   double resolution_m() const { return resolution_m_; }

@@ -6,6 +6,8 @@
 #include <stdexcept>
 #include <string>
 
+#include "maps/prefetch.h"
+
 namespace sage::maps {
 namespace {
 
@@ -146,6 +148,14 @@ Eigen::Vector2d SpectralBasis::GradientOfSum(const Eigen::Vector2d& x, const Eig
 
 double SpectralBasis::Metric(const Eigen::VectorXd& coverage_error) const {
   return (lambda_.array() * coverage_error.array().square()).sum();
+}
+
+void SpectralBasis::Prefetch() const {
+  const std::size_t row = sizeof(double) * static_cast<std::size_t>(order_);
+  PrefetchBytes(kappa_x_.data(), row);
+  PrefetchBytes(kappa_y_.data(), row);
+  PrefetchBytes(inv_h_x_.data(), row);
+  PrefetchBytes(inv_h_y_.data(), row);
 }
 
 }  // namespace sage::maps

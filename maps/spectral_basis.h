@@ -44,6 +44,9 @@ class SpectralBasis {
   /// Wave numbers kappa_j = k_j pi / L_j (rad/m) for dimension 0 (x) and 1 (y).
   const Eigen::VectorXd& kappa_x() const { return kappa_x_; }
   const Eigen::VectorXd& kappa_y() const { return kappa_y_; }
+  /// Asks for what one SMC step reads of the basis (the per-dimension tables) to be brought into
+  /// cache (maps/prefetch.h); changes nothing.
+  void Prefetch() const;
 
   /// The cosine and sine tables at x (metres, workspace frame), by Chebyshev recurrences: one
   /// sin/cos pair per dimension whatever K. For callers that fuse F_k or its gradient into their
