@@ -164,6 +164,35 @@ TEST(FleetTourPlanner, WithoutLegsTheSamePlanPricedOnGridDistances) {
   }
 }
 
+// Without legs a lap is priced on the planner's own valve-to-valve grid distances (its A*, with
+// its open list on doubles): each must be the grid distance GridDistance finds (itself tested
+// against Dijkstra, tour_planner_test.cpp), so a lap is their sum over the tour at the vehicle's
+// speed plus the waits, to rounding. On the five-block field a pair whose rectangle holds a block
+// is searched.
+TEST(FleetTourPlanner, WithoutLegsALapIsItsGridDistancesSummed) {
+  const OccupancyGrid grid = FieldGrid();
+  for (const unsigned seed : {11u, 12u, 13u}) {
+    const Points valves = RandomFreePoints(grid, 30, seed);
+    const Eigen::VectorXd weights = RandomWeights(30, seed + 100);
+    const std::vector<FleetVehicle> vehicles = Vehicles(5, 0.5);
+    FleetTourOptions options;
+    options.legs = false;
+    const FleetTourPlan plan = PlanFleetTours(grid, valves, weights, vehicles, 3.0, options);
+    ASSERT_TRUE(plan.ok);
+    for (std::size_t k = 0; k < plan.vehicles.size(); ++k) {
+      const VehicleTour& v = plan.vehicles[k];
+      const std::vector<int>& order = v.tour.order;
+      double travel_m = 0.0;
+      for (std::size_t i = 0; order.size() > 1 && i < order.size(); ++i) {
+        const int from = v.valves[order[i]], to = v.valves[order[(i + 1) % order.size()]];
+        travel_m += GridDistance(grid, valves[from], valves[to]);
+      }
+      EXPECT_NEAR(v.lap_time_s, travel_m / vehicles[k].speed_mps + 3.0 * v.weights.sum(), 1e-9)
+          << "seed " << seed << ", vehicle " << k;
+    }
+  }
+}
+
 // Shortest closed tour length through the points `subset` of d (brute force over orders).
 double BruteForceTour(const std::vector<std::vector<double>>& d, std::vector<int> subset) {
   if (subset.size() <= 1) return 0.0;
