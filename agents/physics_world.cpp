@@ -170,16 +170,19 @@ PhysicsWorld::Vehicle& PhysicsWorld::Find(VehicleId id) {
 }
 
 const PhysicsWorld::Vehicle& PhysicsWorld::Find(VehicleId id) const {
+  const Vehicle* vehicle = Lookup(id);
+  if (vehicle == nullptr) throw std::out_of_range("PhysicsWorld: no vehicle with id " + std::to_string(id));
+  return *vehicle;
+}
+
+const PhysicsWorld::Vehicle* PhysicsWorld::Lookup(VehicleId id) const {
   // Ids count up from 0, so a vehicle is at its id until one before it is removed.
   if (id >= 0 && static_cast<std::size_t>(id) < vehicles_.size() && vehicles_[static_cast<std::size_t>(id)].id == id) {
-    return vehicles_[static_cast<std::size_t>(id)];
+    return &vehicles_[static_cast<std::size_t>(id)];
   }
   auto it = std::lower_bound(vehicles_.begin(), vehicles_.end(), id,
                              [](const Vehicle& v, VehicleId value) { return v.id < value; });
-  if (it == vehicles_.end() || it->id != id) {
-    throw std::out_of_range("PhysicsWorld: no vehicle with id " + std::to_string(id));
-  }
-  return *it;
+  return it == vehicles_.end() || it->id != id ? nullptr : &*it;
 }
 
 void PhysicsWorld::SetVelocityCommand(VehicleId id, const Eigen::Vector2d& velocity_mps) {
@@ -296,8 +299,7 @@ VehicleState PhysicsWorld::State(VehicleId id) const {
 }
 
 void PhysicsWorld::Prefetch(VehicleId id) const {
-  if (id < 0 || static_cast<std::size_t>(id) >= vehicles_.size() || vehicles_[static_cast<std::size_t>(id)].id != id) return;
-  maps::PrefetchObject(vehicles_[static_cast<std::size_t>(id)].body);
+  if (const Vehicle* vehicle = Lookup(id)) maps::PrefetchObject(vehicle->body);
 }
 
 Eigen::Vector3d PhysicsWorld::Thrust(VehicleId id) const { return Find(id).thrust; }

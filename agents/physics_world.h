@@ -77,8 +77,7 @@ class PhysicsWorld {
   void StepShard(int shard, double dt_s, int steps);
   VehicleState State(VehicleId id) const;
   /// Asks for what State(id) reads (the vehicle's Box2D body) to be brought into cache
-  /// (maps/prefetch.h); changes nothing. Only a vehicle held at its id's place (none removed
-  /// before it, as in one process) is asked for; any other id is ignored.
+  /// (maps/prefetch.h); changes nothing. An unknown id is ignored.
   void Prefetch(VehicleId id) const;
   /// Thrust the BlueROV2 velocity controller applied in the last Step, body frame:
   /// (surge N, sway N, yaw N m), within the thrust limits; zero for a single integrator.
@@ -90,6 +89,7 @@ class PhysicsWorld {
   struct Vehicle;
   Vehicle& Find(VehicleId id);
   const Vehicle& Find(VehicleId id) const;
+  const Vehicle* Lookup(VehicleId id) const;  // nullptr if there is no such vehicle
   void ApplyBlueRov2Forces(Vehicle& vehicle);
 
   BlueRov2Params rov_params_;

@@ -9,6 +9,7 @@
 
 #include <fmt/format.h>
 
+#include "maps/prefetch.h"
 #include "maps/scenario/printable_text.h"
 
 namespace sage::server {
@@ -609,13 +610,13 @@ void MissionCore::AssignRegions(const std::vector<int>& alive, CycleOutput& out)
   // Asked for a few shares ahead, they are in by the time the walk gets there.
   constexpr std::size_t kAhead = 4;
   const auto PrefetchShare = [](const RegionShare& share) {
-    __builtin_prefetch(share.valves.data());
-    __builtin_prefetch(share.sent_weights.data());
+    maps::PrefetchBytes(share.valves.data(), sizeof(int) * share.valves.size());
+    maps::PrefetchBytes(share.sent_weights.data(), sizeof(double) * static_cast<std::size_t>(share.sent_weights.size()));
   };
   for (std::size_t k = 0; k < std::min(kAhead, plan.shares.size()); ++k) PrefetchShare(plan.shares[k].second);
   for (std::size_t i = 0; i < alive.size(); ++i) {
     const int id = alive[i];
-    if (i + kAhead < alive.size()) __builtin_prefetch(roster_.Find(alive[i + kAhead]));
+    if (i + kAhead < alive.size()) maps::PrefetchObject(roster_.Find(alive[i + kAhead]));
     const std::size_t at = static_cast<std::size_t>(found - plan.shares.begin());
     if (at + kAhead < plan.shares.size()) PrefetchShare(plan.shares[at + kAhead].second);
     Roster::Member& m = *roster_.Find(id);
