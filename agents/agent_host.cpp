@@ -453,7 +453,7 @@ void AgentHost::SetTarget(VehicleId id, const VehicleTarget& target) {
   if (target.fleet_sums.size() == size) {
     v.ergodic->SetFleetCoverage(target.fleet_sums, target.fleet_time_s);
   } else {
-    v.ergodic->SetFleetCoverage(Eigen::VectorXd::Zero(size), 0.0);
+    v.ergodic->ClearFleetCoverage();
   }
 }
 

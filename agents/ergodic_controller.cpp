@@ -27,7 +27,11 @@ ErgodicController::ErgodicController(const maps::SpectralBasis& basis, double sp
       coverage_(basis.size(), forgetting_time_s),
       target_(Eigen::VectorXd::Zero(basis.size())),
       fleet_sums_(Eigen::VectorXd::Zero(basis.size())),
-      lambda_over_h_(basis.weights().cwiseProduct(basis.inverse_normalizers())) {
+      lambda_(basis.weights().data()) {
+  const int order = basis.order();
+  const Eigen::VectorXd& inv_h = basis.inverse_normalizers();
+  inv_h_first_ = {inv_h[0], order > 1 ? inv_h[order] : 0.0};
+  inv_h_rest_ = {order > 1 ? inv_h[1] : 0.0, order > 1 ? inv_h[order + 1] : 0.0};
   if (!(speed_mps > 0.0)) throw std::invalid_argument("ErgodicController: speed must be > 0");
   if (!(min_turn_radius_m >= 0.0) || !std::isfinite(min_turn_radius_m)) {
     throw std::invalid_argument("ErgodicController: minimum turning radius must be finite and >= 0");
@@ -46,6 +50,12 @@ void ErgodicController::SetFleetCoverage(const Eigen::VectorXd& sums, double tim
   fleet_zero_ = (sums.array() == 0.0).all();
 }
 
+void ErgodicController::ClearFleetCoverage() {
+  if (!fleet_zero_) fleet_sums_.setZero();
+  fleet_time_s_ = 0.0;
+  fleet_zero_ = true;
+}
+
 Eigen::VectorXd ErgodicController::CoverageError() const {
   const double total_time = coverage_.time_s() + fleet_time_s_;
   if (total_time <= 0.0) return -target_;
@@ -56,7 +66,6 @@ void ErgodicController::Prefetch() const {
   const std::size_t bytes = sizeof(double) * static_cast<std::size_t>(basis_.size());
   maps::PrefetchBytes(coverage_.sums().data(), bytes);
   maps::PrefetchBytes(target_.data(), bytes);
-  maps::PrefetchBytes(lambda_over_h_.data(), bytes);
   if (!fleet_zero_) maps::PrefetchBytes(fleet_sums_.data(), bytes);
   basis_.Prefetch();
 }
@@ -83,15 +92,21 @@ Eigen::Vector2d ErgodicController::DeficitGradient(const maps::SpectralBasis::Tr
   std::fill_n(col_x.begin(), order, 0.0);
   std::fill_n(col_y.begin(), order, 0.0);
   const double* kappa_x = basis_.kappa_x().data();
-  const double* g = lambda_over_h_.data();
+  const double* lambda = lambda_;
   const double* phi = target_.data();
   auto accumulate = [&](auto deficit) {  // deficit(k) = c_k - phi_k
     for (int k1 = 0; k1 < order; ++k1) {
       const int row = k1 * order;
       const double dsin_x = kappa_x[k1] * t.sin_x[k1];
       const double cos_x = t.cos_x[k1];
-      for (int k2 = 0; k2 < order; ++k2) {
-        const double b = g[row + k2] * deficit(row + k2);
+      // Lambda_k / h_k as the product the basis' tables would hold: the same bits.
+      const std::size_t nonzero_k1 = k1 == 0 ? 0 : 1;
+      const double b0 = (lambda[row] * inv_h_first_[nonzero_k1]) * deficit(row);
+      col_x[0] += dsin_x * b0;
+      col_y[0] += cos_x * b0;
+      const double inv_h = inv_h_rest_[nonzero_k1];
+      for (int k2 = 1; k2 < order; ++k2) {
+        const double b = (lambda[row + k2] * inv_h) * deficit(row + k2);
         col_x[k2] += dsin_x * b;
         col_y[k2] += cos_x * b;
       }

@@ -13,6 +13,7 @@
 // One step is one set of cos/sin tables (shared by F_k and grad F_k), one pass over the K^2
 // coefficients for the coverage (an outer product: F_k is separable) and one for B, with no
 // allocation (0.3 us at K = 20; tests/bench/spectral_bench.cpp).
+#include <array>
 #include <limits>
 
 #include <Eigen/Core>
@@ -43,6 +44,10 @@ class ErgodicController final : public VehicleController {
   void SetTarget(const Eigen::VectorXd& phi_k);
   /// Coverage of the rest of the fleet (sums and kernel time), added to this vehicle's own.
   void SetFleetCoverage(const Eigen::VectorXd& sums, double time_s);
+  /// No coverage of the rest of the fleet (a vehicle alone: a region's or a partition's): the
+  /// same as SetFleetCoverage of zeros and 0 s, with no array to make (a region vehicle's every
+  /// new target came with one).
+  void ClearFleetCoverage();
 
   /// Integrates F_k at the state's position over the time since the last call, then returns
   /// the SMC velocity (|u| = speed). Before any coverage exists it heads along +B of the target.
@@ -56,7 +61,7 @@ class ErgodicController final : public VehicleController {
   /// Ergodic metric of CoverageError().
   double Metric() const;
   const CoverageAccumulator& coverage() const { return coverage_; }
-  /// Asks for the arrays the next Command() reads (its coverage sums, target, Lambda_k / h_k, the
+  /// Asks for the arrays the next Command() reads (its coverage sums, target, the
   /// fleet's sums if any, the basis' tables) to be brought into cache; changes nothing. For a host
   /// that steers thousands of vehicles in turn: called a few vehicles ahead of Command().
   void Prefetch() const;
@@ -78,7 +83,13 @@ class ErgodicController final : public VehicleController {
   // The fleet's sums are all zero (a vehicle alone: a region's or partition's): the law reads
   // its own sums only, one K^2 array less a step (c_k is the same: S_k + 0 = S_k).
   bool fleet_zero_ = true;
-  Eigen::VectorXd lambda_over_h_;  // Lambda_k / h_k (1/m), fixed by the basis
+  // Lambda_k / h_k (1/m), fixed by the basis, formed where it is used from the order's one Lambda
+  // table (SpectralBasis::SobolevWeights) and 1 / h_k, which takes four values: k1 = 0 or not
+  // times k2 = 0 or not. Per vehicle it was a third K^2 array to stream every step (a third of
+  // what a 10,000-vehicle host's guidance read from memory).
+  const double* lambda_;
+  std::array<double, 2> inv_h_first_{};  // 1 / h_k at k2 = 0, for k1 = 0 and k1 > 0
+  std::array<double, 2> inv_h_rest_{};   // 1 / h_k at k2 > 0, for k1 = 0 and k1 > 0
   Eigen::Vector2d last_direction_ = Eigen::Vector2d::UnitX();
   bool has_direction_ = false;  // false until the first command: a vehicle at rest may head anywhere
   double last_time_s_ = std::numeric_limits<double>::quiet_NaN();

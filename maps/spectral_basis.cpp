@@ -2,6 +2,7 @@
 
 #include <array>
 #include <cmath>
+#include <mutex>
 #include <numbers>
 #include <stdexcept>
 #include <string>
@@ -41,6 +42,26 @@ void CosSinTables(double a_x, double a_y, int order, SpectralBasis::Trigonometry
 
 }  // namespace
 
+const Eigen::VectorXd& SpectralBasis::SobolevWeights(int order) {
+  if (order < 1 || order > kMaxOrder) {
+    throw std::invalid_argument("SpectralBasis::SobolevWeights: order = " + std::to_string(order) + ": must be in 1..64");
+  }
+  // Never destroyed: a basis with static storage may outlive any other static here.
+  static auto* const tables = new std::array<Eigen::VectorXd, kMaxOrder + 1>;
+  static auto* const built = new std::array<std::once_flag, kMaxOrder + 1>;
+  Eigen::VectorXd& lambda = (*tables)[static_cast<std::size_t>(order)];
+  std::call_once((*built)[static_cast<std::size_t>(order)], [&] {
+    lambda.resize(order * order);
+    for (int k1 = 0; k1 < order; ++k1) {
+      for (int k2 = 0; k2 < order; ++k2) {
+        // Lambda_k = (1 + |k|^2)^(-(n+1)/2) with n = 2 dimensions.
+        lambda[Index(k1, k2, order)] = std::pow(1.0 + k1 * k1 + k2 * k2, -1.5);
+      }
+    }
+  });
+  return lambda;
+}
+
 SpectralBasis::SpectralBasis(double width_m, double height_m, int order)
     : width_m_(width_m), height_m_(height_m), order_(order) {
   if (!(width_m > 0.0) || !(height_m > 0.0)) {
@@ -50,9 +71,9 @@ SpectralBasis::SpectralBasis(double width_m, double height_m, int order)
     throw std::invalid_argument("SpectralBasis: order = " + std::to_string(order) + ": must be in 1..64");
   }
   const int n = size();
+  lambda_ = &SobolevWeights(order);
   h_.resize(n);
   inv_h_.resize(n);
-  lambda_.resize(n);
   kappa_x_.resize(order);
   kappa_y_.resize(order);
   inv_h_x_.resize(order);
@@ -74,8 +95,6 @@ SpectralBasis::SpectralBasis(double width_m, double height_m, int order)
       if (k2 != 0) h2 *= 0.5;
       h_[i] = std::sqrt(h2);
       inv_h_[i] = 1.0 / h_[i];
-      // Lambda_k = (1 + |k|^2)^(-(n+1)/2) with n = 2 dimensions.
-      lambda_[i] = std::pow(1.0 + k1 * k1 + k2 * k2, -1.5);
     }
   }
 }
@@ -147,7 +166,7 @@ Eigen::Vector2d SpectralBasis::GradientOfSum(const Eigen::Vector2d& x, const Eig
 }
 
 double SpectralBasis::Metric(const Eigen::VectorXd& coverage_error) const {
-  return (lambda_.array() * coverage_error.array().square()).sum();
+  return (lambda_->array() * coverage_error.array().square()).sum();
 }
 
 void SpectralBasis::Prefetch() const {

@@ -31,9 +31,14 @@ class SpectralBasis {
   double height_m() const { return height_m_; }
   static int Index(int k1, int k2, int order) { return k1 * order + k2; }
 
-  /// Normalisers h_k (metres) and metric weights Lambda_k, flat-indexed.
+  /// Normalisers h_k (metres) and metric weights Lambda_k, flat-indexed. Lambda_k depends on k
+  /// alone, so every basis of an order reads one table (SobolevWeights): a fleet of region
+  /// vehicles, each on a basis of its own, steers on one copy of it instead of one each.
   const Eigen::VectorXd& normalizers() const { return h_; }
-  const Eigen::VectorXd& weights() const { return lambda_; }
+  const Eigen::VectorXd& weights() const { return *lambda_; }
+  /// Lambda_k = (1 + |k|^2)^(-3/2) for order K (1..kMaxOrder), flat-indexed; built once per order
+  /// (thread-safe) and kept for the process's life.
+  static const Eigen::VectorXd& SobolevWeights(int order);
   /// 1 / h_k (1/m), flat-indexed: F_k(x) = cos_x[k1] cos_y[k2] / h_k.
   const Eigen::VectorXd& inverse_normalizers() const { return inv_h_; }
   /// The per-dimension factors of 1 / h_k (1/sqrt(m)), indexed by k1 and k2:
@@ -73,7 +78,7 @@ class SpectralBasis {
   int order_;
   Eigen::VectorXd h_;
   Eigen::VectorXd inv_h_;
-  Eigen::VectorXd lambda_;
+  const Eigen::VectorXd* lambda_;  // SobolevWeights(order_): shared by every basis of the order
   Eigen::VectorXd kappa_x_;
   Eigen::VectorXd kappa_y_;
   Eigen::VectorXd inv_h_x_;

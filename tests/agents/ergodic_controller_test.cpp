@@ -161,6 +161,31 @@ TEST(ErgodicController, FleetCoverageAddsToOwn) {
   EXPECT_LT((controller.CoverageError() - expected).cwiseAbs().maxCoeff(), 1e-12);
 }
 
+// Clearing the fleet's coverage leaves the vehicle's own alone: the error is its own c_k - phi_k,
+// as for a vehicle that was never told of others, whatever it was told before.
+TEST(ErgodicController, ClearedFleetCoverageIsAVehicleAlone) {
+  const maps::SpectralBasis basis(7.0, 5.0, 4);
+  Eigen::VectorXd phi, f_other;
+  basis.Evaluate({2.0, 3.0}, phi);
+  basis.Evaluate({1.0, 1.0}, f_other);
+  ErgodicController cleared(basis, 0.5), alone(basis, 0.5), told(basis, 0.5);
+  for (ErgodicController* c : {&cleared, &alone, &told}) c->SetTarget(phi);
+  cleared.SetFleetCoverage(3.0 * f_other, 3.0);
+  cleared.ClearFleetCoverage();
+  told.SetFleetCoverage(3.0 * f_other, 3.0);
+  VehicleState state, told_state;
+  state.position_m = told_state.position_m = {5.0, 4.0};
+  for (double t = 0.0; t < 2.0; t += 0.1) {
+    const Eigen::Vector2d a = cleared.Command(state, t), b = alone.Command(state, t);
+    EXPECT_EQ(a, b) << "at t = " << t;
+    state.position_m += 0.1 * a;
+    told_state.position_m += 0.1 * told.Command(told_state, t);
+  }
+  EXPECT_LT((cleared.CoverageError() - alone.CoverageError()).cwiseAbs().maxCoeff(), 1e-15);
+  // Still told of the others, the same vehicle covers otherwise: the clearing made them agree.
+  EXPECT_GT((told.CoverageError() - alone.CoverageError()).cwiseAbs().maxCoeff(), 1e-3);
+}
+
 // The SMC law written out plainly, as a yardstick for the controller's fused step: F_k and
 // grad F_k from direct libm cosines (no recurrences, no outer product), the coverage through
 // CoverageAccumulator::Add, c_k = (own S_k + fleet S_k) / (own W + fleet W),
