@@ -6,6 +6,7 @@
 #include <stdexcept>
 
 #include "maps/prefetch.h"
+#include "maps/simd_clones.h"
 
 namespace sage::agents {
 
@@ -80,13 +81,14 @@ double ErgodicController::TargetDensity(const Eigen::Vector2d& x_m) const {
   return target_.dot(f);
 }
 
-Eigen::Vector2d ErgodicController::DeficitGradient(const maps::SpectralBasis::Trigonometry& t) const {
+SAGE_AVX2_CLONES Eigen::Vector2d ErgodicController::DeficitGradient(const maps::SpectralBasis::Trigonometry& t) const {
   // With b_k = Lambda_k / h_k (c_k - phi_k) and grad F_k = -(1/h_k) (kx_k1 sin_x[k1] cos_y[k2],
   // ky_k2 cos_x[k1] sin_y[k2]) (kx, ky: the wave numbers kappa),
   //   B_x = -sum_k2 cos_y[k2] col_x[k2],            col_x[k2] = sum_k1 kx_k1 sin_x[k1] b_k,
   //   B_y = -sum_k2 ky_k2 sin_y[k2] col_y[k2],      col_y[k2] = sum_k1 cos_x[k1] b_k.
   // The column sums run along k1, so the inner loop over k2 carries no reduction and the compiler
-  // vectorises it without reassociating (no -ffast-math); b_k is formed where it is used.
+  // vectorises it without reassociating (no -ffast-math), four lanes in the AVX2 clone with the
+  // same bits (maps/simd_clones.h); b_k is formed where it is used.
   const int order = basis_.order();
   std::array<double, maps::SpectralBasis::kMaxOrder> col_x, col_y;
   std::fill_n(col_x.begin(), order, 0.0);

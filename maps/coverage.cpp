@@ -4,6 +4,8 @@
 #include <cmath>
 #include <stdexcept>
 
+#include "maps/simd_clones.h"
+
 namespace sage::maps {
 
 double ForgettingDecay(double age_s, double forgetting_time_s) {
@@ -28,12 +30,13 @@ void CoverageAccumulator::Add(const Eigen::VectorXd& f, double dt_s) {
   time_s_ += dt_s;
 }
 
-void CoverageAccumulator::AddOuterProduct(std::span<const double> x, std::span<const double> y, double dt_s) {
+SAGE_AVX2_CLONES void CoverageAccumulator::AddOuterProduct(std::span<const double> x, std::span<const double> y, double dt_s) {
   const auto rows = static_cast<Eigen::Index>(x.size()), cols = static_cast<Eigen::Index>(y.size());
   if (rows * cols != sums_.size()) throw std::invalid_argument("CoverageAccumulator::AddOuterProduct: wrong size");
   if (dt_s <= 0.0) return;
   // S_{ij} <- decay S_{ij} + (dt x_i) y_j; the decay multiply is skipped without forgetting, as
-  // in Add. Plain loops over contiguous rows: the compiler vectorises them.
+  // in Add. Plain loops over contiguous rows: the compiler vectorises them (each element its own:
+  // the AVX2 clone gives the same bits, maps/simd_clones.h).
   const bool forgets = std::isfinite(forgetting_time_s_);
   const double decay = forgets ? std::exp(-dt_s / forgetting_time_s_) : 1.0;
   double* s = sums_.data();

@@ -8,6 +8,7 @@
 #include <string>
 
 #include "maps/prefetch.h"
+#include "maps/simd_clones.h"
 
 namespace sage::maps {
 namespace {
@@ -117,15 +118,7 @@ void SpectralBasis::Evaluate(const Eigen::Vector2d& x, Eigen::VectorXd& f) const
 
 // F_k(x) = (cos(kappa1 x1) / h_x[k1]) (cos(kappa2 x2) / h_y[k2]): the normalised y cosines once,
 // then one multiply-add a term. Every term is its own element (no reduction), so the AVX2 clone
-// (chosen at load time where the CPU has it; no FMA, so no contraction) gives the same bits as
-// the SSE2 one, 4,096 terms a sample at K = 64.
-// Clang before 16 (Debian's clang-14 builds the fuzz harnesses) emits no resolver that a call
-// from another file links to: one version there.
-#if defined(__clang__) && __clang_major__ < 16
-#define SAGE_AVX2_CLONES
-#else
-#define SAGE_AVX2_CLONES __attribute__((target_clones("avx2", "default")))
-#endif
+// (maps/simd_clones.h) gives the same bits as the SSE2 one, 4,096 terms a sample at K = 64.
 SAGE_AVX2_CLONES void SpectralBasis::AddScaled(const Eigen::Vector2d& x, double scale, Eigen::VectorXd& sum) const {
   Trigonometry t;
   EvaluateTrigonometry(x, t);
