@@ -212,11 +212,12 @@ struct AgentHost::Impl {
     around.index.emplace(around.points, ObstacleFilterSettings{}.neighbour_influence_m);
   }
 
-  // found: the caller's scratch (one per thread).
-  std::vector<Eigen::Vector2d> Neighbours(std::size_t i, const std::vector<Eigen::Vector2d>& positions,
-                                          const Surroundings& around, std::vector<int>& found) const {
+  // Into near (cleared first); found and near are the caller's scratch (one per thread), not a
+  // vector allocated per vehicle per cycle.
+  void Neighbours(std::size_t i, const std::vector<Eigen::Vector2d>& positions, const Surroundings& around,
+                  std::vector<int>& found, std::vector<Eigen::Vector2d>& near) const {
     const double reach = ObstacleFilterSettings{}.neighbour_influence_m, reach2 = reach * reach;
-    std::vector<Eigen::Vector2d> near;
+    near.clear();
     // Candidates within a hair more than the reach; the rule itself is the strict squared one.
     around.index->Within(positions[i], reach * (1.0 + 1e-9), found);
     for (const int k : found) {
@@ -228,7 +229,6 @@ struct AgentHost::Impl {
     std::sort(near.begin(), near.end(), [](const Eigen::Vector2d& a, const Eigen::Vector2d& b) {
       return a.x() < b.x() || (a.x() == b.x() && a.y() < b.y());
     });
-    return near;
   }
 
   // What steering vehicle i + k will read, asked for while vehicle i is steered (maps/prefetch.h),
@@ -507,11 +507,12 @@ void AgentHost::Steer(double time_s) {
   // threads in fixed contiguous blocks give the very commands one thread gives.
   const auto guide = [&](std::size_t begin, std::size_t end) {
     std::vector<int> found, in_reach;
+    std::vector<Eigen::Vector2d> nearby;
     for (std::size_t i = begin; i < end; ++i) {
       impl_->PrefetchAhead(i, end, positions);
       Impl::Vehicle& v = impl_->vehicles[i];
       const VehicleState state = impl_->world.State(v.body);
-      std::vector<Eigen::Vector2d> nearby = impl_->Neighbours(i, positions, around, found);
+      impl_->Neighbours(i, positions, around, found, nearby);
       if (v.tour) v.tour->SetNearby(nearby);
       if (v.transit) v.transit->SetNearby(nearby);
       // An A* vehicle holds station until it has a tour.

@@ -40,7 +40,10 @@ double Drag(double linear, double quadratic, double x) { return (linear + quadra
 
 }  // namespace
 
-struct PhysicsWorld::Vehicle {
+// A cache line or more each: the vehicles are dealt over the shards in turn (id mod shards), so
+// neighbouring records belong to shards stepped on different threads at once, and a record
+// sharing a line with another shard's was written by two cores every substep (the thrust).
+struct alignas(64) PhysicsWorld::Vehicle {
   VehicleId id = -1;
   maps::MotionModel model = maps::MotionModel::kBlueRov2;
   b2Body* body = nullptr;  // owned by worlds_[shard]
@@ -100,6 +103,14 @@ PhysicsWorld::PhysicsWorld(const maps::Workspace& /*workspace*/,
     }
     worlds_.push_back(std::move(world));
   }
+  shard_members_.resize(worlds_.size());
+}
+
+void PhysicsWorld::IndexShards() {
+  for (std::vector<std::size_t>& members : shard_members_) members.clear();
+  for (std::size_t i = 0; i < vehicles_.size(); ++i) {
+    shard_members_[static_cast<std::size_t>(vehicles_[i].shard)].push_back(i);
+  }
 }
 
 PhysicsWorld::~PhysicsWorld() = default;
@@ -148,6 +159,7 @@ VehicleId PhysicsWorld::AddVehicle(const maps::VehicleSpec& spec) {
     vehicle.body->SetMassData(&mass_data);
   }
   vehicles_.push_back(vehicle);  // ids increase, so vehicles_ stays sorted by id
+  shard_members_[static_cast<std::size_t>(vehicle.shard)].push_back(vehicles_.size() - 1);
   return vehicle.id;
 }
 
@@ -155,6 +167,7 @@ void PhysicsWorld::RemoveVehicle(VehicleId id) {
   Vehicle& vehicle = Find(id);
   worlds_[static_cast<std::size_t>(vehicle.shard)]->DestroyBody(vehicle.body);
   vehicles_.erase(vehicles_.begin() + (&vehicle - vehicles_.data()));
+  IndexShards();  // the records after it moved down one
 }
 
 bool PhysicsWorld::Contains(VehicleId id) const {
@@ -252,9 +265,10 @@ int PhysicsWorld::shard_count() const { return static_cast<int>(worlds_.size());
 
 void PhysicsWorld::StepShard(int shard, double dt_s, int steps) {
   b2World& world = *worlds_.at(static_cast<std::size_t>(shard));
+  const std::vector<std::size_t>& members = shard_members_[static_cast<std::size_t>(shard)];
   for (int step = 0; step < steps; ++step) {
-    for (Vehicle& vehicle : vehicles_) {
-      if (vehicle.shard != shard) continue;
+    for (const std::size_t i : members) {
+      Vehicle& vehicle = vehicles_[i];
       if (vehicle.model == maps::MotionModel::kBlueRov2) {
         ApplyBlueRov2Forces(vehicle);
       } else {
@@ -263,8 +277,9 @@ void PhysicsWorld::StepShard(int shard, double dt_s, int steps) {
       }
     }
     world.Step(static_cast<float>(dt_s), kVelocityIterations, kPositionIterations);
-    for (Vehicle& vehicle : vehicles_) {
-      if (vehicle.shard != shard || vehicle.model != maps::MotionModel::kSingleIntegrator) continue;
+    for (const std::size_t i : members) {
+      Vehicle& vehicle = vehicles_[i];
+      if (vehicle.model != maps::MotionModel::kSingleIntegrator) continue;
       const Eigen::Vector2d& u = vehicle.command_mps;
       vehicle.position_m += u * dt_s;  // x' = u, explicit Euler is exact for a held command
       vehicle.velocity_mps = u;

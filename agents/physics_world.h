@@ -6,6 +6,7 @@
 //  - bluerov2: a dynamic body with the BlueROV2 Heavy rigid-body + added mass, body-frame linear
 //    and quadratic drag and thrust limits (von Benzon et al. 2022), and a velocity controller
 //    that tracks the commanded velocity; collides with structures and other vehicles.
+#include <cstddef>
 #include <memory>
 #include <vector>
 
@@ -95,7 +96,12 @@ class PhysicsWorld {
   BlueRov2Params rov_params_;
   std::vector<std::unique_ptr<b2World>> worlds_;  // the shards
   std::vector<Vehicle> vehicles_;  // sorted by id
+  // Each shard's vehicles, as indices into vehicles_ in id order: a shard's step walks its own,
+  // not every vehicle of the host (rebuilt when a vehicle is added or removed).
+  std::vector<std::vector<std::size_t>> shard_members_;
   VehicleId next_id_ = 0;
+
+  void IndexShards();
 };
 
 }  // namespace sage::agents

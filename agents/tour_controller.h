@@ -42,7 +42,7 @@ class GridFlight {
   bool active() const { return active_; }
   void Stop() { active_ = false; }
   /// The other vehicles near this one now (m), for a re-plan round them.
-  void SetNearby(std::vector<Eigen::Vector2d> nearby_m) { nearby_ = std::move(nearby_m); }
+  void SetNearby(const std::vector<Eigen::Vector2d>& nearby_m) { nearby_.assign(nearby_m.begin(), nearby_m.end()); }
 
  private:
   const maps::OccupancyGrid* grid_;
@@ -68,7 +68,7 @@ class TourController final : public VehicleController {
   /// New weights, used from the next lap on.
   void SetWeights(const Eigen::VectorXd& weights);
   /// The other vehicles near this one now (m): a pinned vehicle re-plans round them.
-  void SetNearby(std::vector<Eigen::Vector2d> nearby_m) { nearby_ = std::move(nearby_m); }
+  void SetNearby(const std::vector<Eigen::Vector2d>& nearby_m) { nearby_.assign(nearby_m.begin(), nearby_m.end()); }
   int laps_completed() const { return laps_completed_; }
 
  private:

@@ -96,6 +96,10 @@ double FleetServer::LastVisit(int valve) const {
   return visits_ != nullptr ? visits_->LastVisit(valve) : -std::numeric_limits<double>::infinity();
 }
 
+void FleetServer::PrefetchLastVisit(int valve) const {
+  if (visits_ != nullptr) visits_->PrefetchLastVisit(valve);
+}
+
 // The no-starving-valve guard: a floor under every weight, and a valve no vehicle has visited
 // for longer than the revisit bound weighs, for the controllers, as much as the heaviest valve.
 void FleetServer::UpdateEffectiveWeights(double time_s) {

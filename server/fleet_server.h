@@ -125,6 +125,8 @@ class FleetServer {
 
   /// When the valve was last visited (s; -inf if never or no visit tracker).
   double LastVisit(int valve) const;
+  /// Asks for what LastVisit(valve) reads to be brought into cache; changes nothing.
+  void PrefetchLastVisit(int valve) const;
 
  private:
   using VehicleRecord = Vehicle;

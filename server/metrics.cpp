@@ -9,6 +9,8 @@
 
 #include <fmt/format.h>
 
+#include "maps/prefetch.h"
+
 namespace sage::server {
 namespace {
 
@@ -178,6 +180,12 @@ void VisitTracker::Forget(int vehicle) {
 }
 
 double VisitTracker::LastVisit(int valve) const { return last_visit_s_.at(static_cast<std::size_t>(valve)); }
+
+void VisitTracker::PrefetchLastVisit(int valve) const {
+  if (valve >= 0 && static_cast<std::size_t>(valve) < last_visit_s_.size()) {
+    maps::PrefetchObject(&last_visit_s_[static_cast<std::size_t>(valve)]);
+  }
+}
 
 void FillEventResponses(const VisitTracker& visits, MissionMetrics& metrics) {
   const std::size_t n = std::min(metrics.events.size(), visits.watches().size());

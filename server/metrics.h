@@ -72,6 +72,8 @@ class VisitTracker {
   const std::vector<ValveVisits>& visits() const { return visits_; }
   /// Time of the last visit of valve i, or -infinity before the first.
   double LastVisit(int valve) const;
+  /// Asks for LastVisit(valve)'s line to be brought into cache (maps/prefetch.h); changes nothing.
+  void PrefetchLastVisit(int valve) const;
   /// Follows the visits of `valve` around `time_s` from now on (a risk event's), the ones already
   /// counted taken as their times say (those no longer kept as before it). watches()[i] is the
   /// i-th call's.

@@ -609,14 +609,19 @@ void MissionCore::AssignRegions(const std::vector<int>& alive, CycleOutput& out)
   // at 10,000 vehicles the walk was a cache miss on each (3 % of the mission's main thread).
   // Asked for a few shares ahead, they are in by the time the walk gets there; and once a share's
   // valve indices are in, their weights (the field's, 35,000 of them: scattered reads that were
-  // half of the walk's time at 10,000 vehicles) are asked for too.
+  // half of the walk's time at 10,000 vehicles) are asked for too, with their last visits (the
+  // age weighting's clock, as scattered).
   constexpr std::size_t kAhead = 8, kWeightsAhead = 3;
   const auto PrefetchShare = [](const RegionShare& share) {
     maps::PrefetchBytes(share.valves.data(), sizeof(int) * share.valves.size());
     maps::PrefetchBytes(share.sent_weights.data(), sizeof(double) * static_cast<std::size_t>(share.sent_weights.size()));
   };
-  const auto PrefetchShareWeights = [&weights](const RegionShare& share) {
-    for (int v : share.valves) maps::PrefetchObject(&weights[v]);
+  const bool aged = scenario_.fleet.age_weighting_laps > 0.0;
+  const auto PrefetchShareWeights = [&](const RegionShare& share) {
+    for (int v : share.valves) {
+      maps::PrefetchObject(&weights[v]);
+      if (aged) fleet_.PrefetchLastVisit(v);  // read by the age weighting, as scattered
+    }
   };
   for (std::size_t k = 0; k < std::min(kAhead, plan.shares.size()); ++k) PrefetchShare(plan.shares[k].second);
   for (std::size_t i = 0; i < alive.size(); ++i) {
