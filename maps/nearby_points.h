@@ -23,6 +23,8 @@ class NearbyPoints {
   void Within(const Eigen::Vector2d& x, double radius_m, std::vector<int>& out) const;
 
  private:
+  // The points in cell order (points_[k] is the input's order_[k]): a query reads the cells'
+  // points as one run, not each through its index (a cache miss apiece at 35,000 valves).
   std::vector<Eigen::Vector2d> points_;
   double cell_m_;
   Eigen::Vector2d origin_m_ = Eigen::Vector2d::Zero();  // lower corner of cell (0, 0)

@@ -7,6 +7,8 @@
 
 #include <fmt/format.h>
 
+#include "maps/prefetch.h"
+
 namespace sage::server {
 FleetServer::FleetServer(maps::World& world, const maps::Scenario& scenario, const std::string& profile)
     : world_(world), scenario_(scenario), valve_positions_(scenario.ValvePositions()) {
@@ -51,6 +53,8 @@ void FleetServer::SetPosition(int id, const Eigen::Vector2d& position_m) {
   VehicleRecord* v = by_id_.Find(vehicles_, id);
   if (v != nullptr && v->alive) v->position_m = position_m;
 }
+
+void FleetServer::PrefetchVehicle(int id) const { maps::PrefetchObject(by_id_.Find(vehicles_, id)); }
 
 bool FleetServer::OnCoverage(int id, std::uint64_t seq, double stamp_s, double kernel_time_s,
                              const Eigen::VectorXd& sums) {

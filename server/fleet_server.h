@@ -60,6 +60,8 @@ class FleetServer {
 
   /// A vehicle's latest position (m): partition shares start from where vehicles are.
   void SetPosition(int id, const Eigen::Vector2d& position_m);
+  /// Asks for vehicle id's record (what SetPosition writes) to be brought into cache; changes nothing.
+  void PrefetchVehicle(int id) const;
   /// A vehicle's running coverage (sums of F_k dt with its forgetting, and its kernel time) as of
   /// mission time stamp_s. Reports with seq <= the last one seen and no newer stamp are stale
   /// (late or duplicated) and ignored: returns false. A lost report costs nothing, the next one

@@ -181,6 +181,13 @@ void VisitTracker::Forget(int vehicle) {
 
 double VisitTracker::LastVisit(int valve) const { return last_visit_s_.at(static_cast<std::size_t>(valve)); }
 
+void VisitTracker::PrefetchArming(int vehicle) const {
+  if (vehicle >= 0 && static_cast<std::size_t>(vehicle) < disarmed_.size()) {
+    const std::vector<int>& disarmed = disarmed_[static_cast<std::size_t>(vehicle)];
+    maps::PrefetchBytes(disarmed.data(), sizeof(int) * disarmed.size());
+  }
+}
+
 void VisitTracker::PrefetchLastVisit(int valve) const {
   if (valve >= 0 && static_cast<std::size_t>(valve) < last_visit_s_.size()) {
     maps::PrefetchObject(&last_visit_s_[static_cast<std::size_t>(valve)]);
@@ -254,7 +261,12 @@ void MetricsAccumulator::AddCycle(const std::vector<TrajectorySample>& samples) 
   if (state_.schedule.empty()) throw std::logic_error("MetricsAccumulator: OnWeights before the first sample");
   std::vector<TrajectorySample> accepted;
   accepted.reserve(samples.size());
-  for (const TrajectorySample& sample : samples) {
+  // Each vehicle's list of disarmed valves is a heap block of its own: asked for a few samples
+  // ahead (at 10,000 vehicles each was a cache miss).
+  constexpr std::size_t kArmingAhead = 4;
+  for (std::size_t i = 0; i < samples.size(); ++i) {
+    if (i + kArmingAhead < samples.size()) visits_.PrefetchArming(samples[i + kArmingAhead].vehicle);
+    const TrajectorySample& sample = samples[i];
     if (!Accept(sample)) continue;
     visits_.Update(sample.vehicle, sample.position_m, sample.time_s);
     accepted.push_back(sample);

@@ -74,6 +74,9 @@ class VisitTracker {
   double LastVisit(int valve) const;
   /// Asks for LastVisit(valve)'s line to be brought into cache (maps/prefetch.h); changes nothing.
   void PrefetchLastVisit(int valve) const;
+  /// Asks for what Update(vehicle, ...) reads of the vehicle's own (the valves it has disarmed)
+  /// to be brought into cache; changes nothing.
+  void PrefetchArming(int vehicle) const;
   /// Follows the visits of `valve` around `time_s` from now on (a risk event's), the ones already
   /// counted taken as their times say (those no longer kept as before it). watches()[i] is the
   /// i-th call's.

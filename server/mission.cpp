@@ -104,7 +104,12 @@ struct Mission::Impl {
     const agents::AgentMission::CycleOutput reports = agents.Steer(cycle);
     CycleOutput answer;
     const auto serve = [&] {
-      for (const agents::StateReport& s : reports.states) core.OnState(s);
+      // Each vehicle's records at the server are heap blocks of their own: asked for ahead.
+      constexpr std::size_t kAhead = 8;
+      for (std::size_t i = 0; i < reports.states.size(); ++i) {
+        if (i + kAhead < reports.states.size()) core.PrefetchVehicle(reports.states[i + kAhead].id);
+        core.OnState(reports.states[i]);
+      }
       for (const agents::CoverageMessage& c : reports.coverage) core.OnCoverage(c);
       for (const agents::ScanReport& s : reports.scans) core.OnScan(s);
       using Clock = std::chrono::steady_clock;

@@ -146,6 +146,11 @@ bool MissionCore::OnState(const agents::StateReport& s, std::uint64_t writer) {
   return true;
 }
 
+void MissionCore::PrefetchVehicle(int id) const {
+  maps::PrefetchObject(roster_.Find(id));
+  fleet_.PrefetchVehicle(id);
+}
+
 void MissionCore::OnVehicleGone(int id, bool lost) {
   const FleetEventRecord* event = roster_.Leave(id, lost, next_time_s());
   if (event == nullptr) return;

@@ -126,6 +126,10 @@ class MissionCore {
   /// `writer`: the transport's handle of whoever sent it (the DDS writer; 0 = none), which a
   /// refusal is counted under beside the vehicle the state names.
   bool OnState(const agents::StateReport& state, std::uint64_t writer = 0);
+  /// Asks for what OnState reads and writes of vehicle `id` (its roster entry and fleet record,
+  /// heap blocks of their own) to be brought into cache (maps/prefetch.h); changes nothing. A
+  /// caller with a cycle's states in hand asks a few ahead.
+  void PrefetchVehicle(int id) const;
   /// The vehicle was lost (lost = true: its liveliness lapsed) or left cleanly.
   void OnVehicleGone(int id, bool lost);
   /// A vehicle's running coverage; false if stale, of an unknown vehicle, or malformed (counted

@@ -285,6 +285,47 @@ TEST(PhysicsWorld, ShardsSteppedApartMatchStepTogether) {
   EXPECT_THROW(PhysicsWorld({}, trees, {}, 0), std::invalid_argument);
 }
 
+// A vehicle removed from a sharded world takes nothing of the others with it: each shard steps
+// its own vehicles from a list of its own, rebuilt on removal. Nine BlueROV2s over 3 shards, 8 m
+// apart (no two touch), the single integrator among them; with vehicle 4 removed after 1 s, the
+// other eight end where they end in a world that keeps it, bit for bit (a stale list would step
+// a vehicle twice, or not, or another world's body).
+TEST(PhysicsWorld, RemovalFromAShardLeavesTheOthersAsTheyWere) {
+  const std::vector<maps::ChristmasTree> trees{Tree({50.0, 50.0}, {1.0, 1.0})};
+  PhysicsWorld kept({}, trees, {}, 3), removed({}, trees, {}, 3);
+  std::vector<VehicleId> ids;
+  for (int k = 0; k < 9; ++k) {
+    const maps::MotionModel model = k == 7 ? maps::MotionModel::kSingleIntegrator : maps::MotionModel::kBlueRov2;
+    const Eigen::Vector2d start(8.0 * k, 3.0);
+    ids.push_back(kept.AddVehicle(Spec(model, start, 0.2 * k)));
+    removed.AddVehicle(Spec(model, start, 0.2 * k));
+  }
+  const auto command = [](int k, int cycle) {
+    return Eigen::Vector2d(0.5 * std::cos(0.05 * cycle + k), 0.5 * std::sin(0.05 * cycle + k));  // a slow turn
+  };
+  for (int cycle = 0; cycle < 30; ++cycle) {
+    if (cycle == 10) removed.RemoveVehicle(ids[4]);
+    for (int k = 0; k < 9; ++k) {
+      kept.SetVelocityCommand(ids[k], command(k, cycle));
+      if (removed.Contains(ids[k])) removed.SetVelocityCommand(ids[k], command(k, cycle));
+    }
+    for (int shard = 0; shard < 3; ++shard) {
+      kept.StepShard(shard, kDt, 5);
+      removed.StepShard(shard, kDt, 5);
+    }
+  }
+  ASSERT_FALSE(removed.Contains(ids[4]));
+  EXPECT_EQ(removed.vehicle_count(), 8);
+  for (int k = 0; k < 9; ++k) {
+    if (k == 4) continue;
+    const VehicleState x = kept.State(ids[k]), y = removed.State(ids[k]);
+    ASSERT_EQ(x.position_m, y.position_m) << "vehicle " << ids[k];
+    ASSERT_EQ(x.velocity_mps, y.velocity_mps) << "vehicle " << ids[k];
+    ASSERT_EQ(x.heading_rad, y.heading_rad) << "vehicle " << ids[k];
+    EXPECT_GT((x.position_m - Eigen::Vector2d(8.0 * k, 3.0)).norm(), 0.3) << "vehicle " << ids[k] << " moved";
+  }
+}
+
 // Commanded along +y from heading 0, the vehicle faces +y within 3 s (0.05 rad).
 TEST(PhysicsWorld, BlueRov2TurnsToFaceCommand) {
   PhysicsWorld world({}, {});
