@@ -54,12 +54,15 @@ struct SensorSpec {
 
 /// A leak the mission hides from its server: the vehicles' sensors see it from start_s on.
 struct LeakSpec {
-  /// Where: a valve (its position) or, when `valve` is empty, a seabed point. (A point along a
-  /// flowline will be `at: {flowline: NAME, s_m: X}` once scenarios have flowlines.)
+  /// Where, one of three: a valve (`at: {valve: P3}`, its position); a point along a flowline's
+  /// axis (`at: {flowline: FL-A, s_m: 12.5}`, s_m metres from its first vertex: a flange, a weld or
+  /// a corroded stretch); or, when both names are empty, a seabed point (`at: {point_m: [x, y]}`).
   std::string valve;
   Eigen::Vector2d point_m = Eigen::Vector2d::Zero();
   double start_s = 0.0;   ///< onset, mission time, in [0, duration_s]
   double strength = 1.0;  ///< > 0: 1 = the leak the sensors' parameters describe; s scales half_range_m by sqrt(s)
+  std::string flowline;   ///< the flowline's name (then s_m), or empty
+  double s_m = 0.0;       ///< metres along the flowline's axis from its first point, in [0, its length]
 };
 
 /// How the server turns scans into risk. Each leaf of the risk layer holds the log-odds that a
@@ -95,10 +98,11 @@ struct FusionSettings {
   bool operator==(const FusionSettings&) const = default;
 };
 
-/// Where a leak is (m): its valve's position or its point. Throws std::out_of_range for an
-/// unknown valve.
+/// Where a leak is (m): its valve's position, its flowline's point or its seabed point. Throws
+/// std::out_of_range for an unknown valve, ScenarioError for an unknown flowline or an s_m off it.
 Eigen::Vector2d LeakPosition(const Scenario& scenario, const LeakSpec& leak);
-/// How a leak is named in tables and metrics.json: its valve ("P3") or "seabed (x, y)".
+/// How a leak is named in tables and metrics.json: its valve ("P3"), "FL-A at 12.5 m" or
+/// "seabed (x, y)".
 std::string LeakWhere(const LeakSpec& leak);
 
 /// Where random leaks are drawn.
@@ -109,13 +113,17 @@ enum class LeakSites {
   kValves,
   kValvesEven,  ///< at a valve, every valve alike
   kSeabed,      ///< at a seabed point in open water, at least 1 m from every valve and clear of the structures
+  /// Along the flowlines, uniform over their total length, where the point is as a seabed
+  /// leak's would be: at least 1 m from every valve and clear of the structures and edges.
+  kFlowlines,
 };
 
 /// A copy whose leaks are `count` random ones (replacing the file's), drawn from the scenario's
 /// seed alone: onsets uniform in [0.1, 0.9] of the mission, strength 1, sites as asked. Throws
-/// ScenarioError if count is out of 0..1000 or no seabed point qualifies.
+/// ScenarioError if count is out of 0..1000 or no seabed point (flowline point) qualifies.
 Scenario WithRandomLeaks(const Scenario& scenario, int count, LeakSites sites);
-/// Throws ScenarioError (`where` starts the message) unless text is "valves", "valves-even" or "seabed".
+/// Throws ScenarioError (`where` starts the message) unless text is "valves", "valves-even",
+/// "seabed" or "flowlines".
 LeakSites ParseLeakSites(const std::string& text, const std::string& where);
 const char* ToString(LeakSites sites);
 

@@ -195,6 +195,9 @@ std::string EmitScenario(const Scenario& s) {
       key("at") << YAML::Flow << YAML::BeginMap;
       if (!leak.valve.empty()) {
         key("valve") << leak.valve;
+      } else if (!leak.flowline.empty()) {
+        key("flowline") << leak.flowline;
+        number("s_m", leak.s_m);
       } else {
         key("point_m");
         vector(leak.point_m);

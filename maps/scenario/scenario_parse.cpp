@@ -331,18 +331,21 @@ SensorSpec ReadSensor(const Reader& r, const YAML::Node& node, const std::string
   return sensor;
 }
 
-// {at: {valve: P1} | {point_m: [x, y]}, start_s: T, strength: S}
+// {at: {valve: P1} | {flowline: FL-A, s_m: X} | {point_m: [x, y]}, start_s: T, strength: S}
 LeakSpec ReadLeak(const Reader& r, const YAML::Node& node, const std::string& path) {
   r.ExpectMap(node, path, {"at", "start_s", "strength"});
   LeakSpec leak;
   const YAML::Node at = r.Require(node, "at", path);
   const std::string at_path = path + ".at";
   r.ExpectMap(at, at_path, {"valve", "point_m", "flowline", "s_m"});
-  if (at["flowline"].IsDefined() || at["s_m"].IsDefined()) {
-    r.Fail(at_path, at, "leaks along a flowline need the scenario's flowlines (not in this version): give point_m");
+  const int given = (at["valve"].IsDefined() ? 1 : 0) + (at["point_m"].IsDefined() ? 1 : 0) + (at["flowline"].IsDefined() ? 1 : 0);
+  if (given != 1) r.Fail(at_path, at, "must give exactly one of valve, point_m, flowline (with s_m)");
+  if (at["flowline"].IsDefined() != at["s_m"].IsDefined()) {
+    r.Fail(at_path, at, "a flowline leak gives both flowline (its name) and s_m (metres along it), and nothing else does");
   }
-  if (at["valve"].IsDefined() == at["point_m"].IsDefined()) r.Fail(at_path, at, "must give exactly one of valve, point_m");
   r.Optional(at, "valve", at_path, [&](const YAML::Node& n, const std::string& p) { leak.valve = r.Text(n, p); });
+  r.Optional(at, "flowline", at_path, [&](const YAML::Node& n, const std::string& p) { leak.flowline = r.Text(n, p); });
+  r.OptionalNumber(at, "s_m", at_path, leak.s_m);
   r.Optional(at, "point_m", at_path, [&](const YAML::Node& n, const std::string& p) { leak.point_m = r.Vector(n, p); });
   leak.start_s = r.Number(r.Require(node, "start_s", path), path + ".start_s");
   r.OptionalNumber(node, "strength", path, leak.strength);

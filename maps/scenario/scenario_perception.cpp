@@ -31,7 +31,8 @@ LeakSites ParseLeakSites(const std::string& text, const std::string& where) {
   if (text == "valves") return LeakSites::kValves;
   if (text == "valves-even") return LeakSites::kValvesEven;
   if (text == "seabed") return LeakSites::kSeabed;
-  throw ScenarioError(OneLine(where + " = " + text + ": must be valves (by risk), valves-even or seabed"));
+  if (text == "flowlines") return LeakSites::kFlowlines;
+  throw ScenarioError(OneLine(where + " = " + text + ": must be valves (by risk), valves-even, seabed or flowlines"));
 }
 
 const char* ToString(LeakSites sites) {
@@ -39,11 +40,13 @@ const char* ToString(LeakSites sites) {
     case LeakSites::kValves: return "valves";
     case LeakSites::kValvesEven: return "valves-even";
     case LeakSites::kSeabed: return "seabed";
+    case LeakSites::kFlowlines: return "flowlines";
   }
   return "?";
 }
 
 Eigen::Vector2d LeakPosition(const Scenario& scenario, const LeakSpec& leak) {
+  if (!leak.flowline.empty()) return scenario.FlowlinePoint(leak.flowline, leak.s_m);
   if (leak.valve.empty()) return leak.point_m;
   for (const ChristmasTree& tree : scenario.structures)
     for (const Valve& valve : tree.valves)
@@ -53,6 +56,7 @@ Eigen::Vector2d LeakPosition(const Scenario& scenario, const LeakSpec& leak) {
 
 std::string LeakWhere(const LeakSpec& leak) {
   if (!leak.valve.empty()) return leak.valve;
+  if (!leak.flowline.empty()) return leak.flowline + " at " + FormatNumber(std::round(leak.s_m * 100.0) / 100.0) + " m";
   return "seabed (" + FormatNumber(std::round(leak.point_m.x() * 100.0) / 100.0) + ", " +
          FormatNumber(std::round(leak.point_m.y() * 100.0) / 100.0) + ")";
 }
@@ -117,6 +121,25 @@ void ValidatePerception(const Scenario& s, const std::string& file) {
     const std::string path = "leaks[" + std::to_string(i) + "]";
     if (!leak.valve.empty()) {
       if (s.ValveIndex(leak.valve) < 0) fail(path + ".at.valve", leak.valve, "no such valve");
+    } else if (!leak.flowline.empty()) {
+      const auto line = std::find_if(s.flowlines.begin(), s.flowlines.end(),
+                                     [&](const Flowline& f) { return f.name == leak.flowline; });
+      if (line == s.flowlines.end()) {
+        std::string names;
+        for (const Flowline& f : s.flowlines) names += (names.empty() ? "" : ", ") + f.name;
+        fail(path + ".at.flowline", leak.flowline, "no such flowline (flowlines: " + (names.empty() ? "none" : names) + ")");
+      }
+      const double length = line->Length_m();
+      in_range(path + ".at.s_m", leak.s_m, 0.0, length, false, false,
+               "must be in [0, " + FormatNumber(length) + "] m (" + leak.flowline + "'s length)");
+      // A flowline ends at its structures: the stretch under a footprint is not in any view.
+      const Eigen::Vector2d p = line->PointAt(leak.s_m);
+      for (const ChristmasTree& tree : s.structures) {
+        if (((p - tree.center_m).array().abs() < (tree.size_m / 2).array()).all()) {
+          fail(path + ".at.s_m", FormatNumber(leak.s_m),
+               leak.flowline + " is inside the footprint of " + tree.name + " there (no sensor could see it)");
+        }
+      }
     } else {
       const Eigen::Vector2d& p = leak.point_m;
       const std::string shown = "[" + FormatNumber(p.x()) + ", " + FormatNumber(p.y()) + "]";
@@ -180,10 +203,35 @@ Scenario WithRandomLeaks(const Scenario& scenario, int count, LeakSites sites) {
       if ((p - valve.position_m).norm() < kRandomSeabedFromValves_m) return false;
     return true;
   };
+  // Flowline sites: a point uniform over the flowlines' total length, then its flowline and s.
+  double flowline_length = 0.0;
+  for (const Flowline& f : scenario.flowlines) flowline_length += f.Length_m();
+  if (sites == LeakSites::kFlowlines && !(flowline_length > 0.0)) {
+    throw ScenarioError("--random-leaks: " + scenario.name + " has no flowlines to draw leaks along (flowlines: in the "
+                        "scenario, as scenarios/fleet_field_leaks.yaml has; or --leak-sites seabed)");
+  }
+  const auto flowline_site = [&](LeakSpec& leak) {
+    double s = uniform() * flowline_length;
+    std::size_t k = 0;
+    while (k + 1 < scenario.flowlines.size() && s > scenario.flowlines[k].Length_m()) s -= scenario.flowlines[k++].Length_m();
+    const Flowline& line = scenario.flowlines[k];
+    leak.flowline = line.name;
+    // Rounded to the centimetre, as a seabed point is, and kept on the line.
+    leak.s_m = std::min(std::round(s * 100.0) / 100.0, line.Length_m());
+    return open_seabed(line.PointAt(leak.s_m));
+  };
   for (int n = 0; n < count; ++n) {
     LeakSpec leak;
     leak.start_s = scenario.duration_s * (0.1 + 0.8 * uniform());
-    if (sites != LeakSites::kSeabed) {
+    if (sites == LeakSites::kFlowlines) {
+      bool found = false;
+      for (int attempt = 0; attempt < 100000 && !found; ++attempt) found = flowline_site(leak);
+      if (!found) {
+        throw ScenarioError("--random-leaks: " + scenario.name + " has no flowline point " +
+                            FormatNumber(kRandomSeabedFromValves_m) + " m from every valve and " +
+                            FormatNumber(kSeabedLeakClearance_m) + " m from the structures and edges");
+      }
+    } else if (sites != LeakSites::kSeabed) {
       double pick = uniform() * total;
       std::size_t i = 0;
       while (i + 1 < valves.size() && pick >= weights[static_cast<Eigen::Index>(i)]) pick -= weights[static_cast<Eigen::Index>(i++)];

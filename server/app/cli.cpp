@@ -94,9 +94,10 @@ void AddScenarioOverrides(CLI::App& cmd, ScenarioOverrides& o, OverrideSet set, 
                  "mission), replacing the scenario's leaks: the vehicles' sensors can see them, the server is not told")
       ->check(CLI::Range(0, 1000));
   cmd.add_option("--leak-sites", o.leak_sites,
-                 "Where random leaks are: valves (by the default profile's risk), valves-even or seabed (open water "
-                 "1 m from every valve); default valves")
-      ->check(CLI::IsMember({"valves", "valves-even", "seabed"}));
+                 "Where random leaks are: valves (by the default profile's risk), valves-even, seabed (open water "
+                 "1 m from every valve) or flowlines (along the scenario's flowlines, 1 m from every valve); default "
+                 "valves")
+      ->check(CLI::IsMember({"valves", "valves-even", "seabed", "flowlines"}));
   if (mission) {
     cmd.add_option("--steer", o.steer,
                    "posterior: vehicles steer on the risk layer the sensors' scans update (the Bayesian loop, the "
@@ -451,9 +452,9 @@ int RunCli(int argc, char** argv) {
       ->capture_default_str();
   bench_leaks
       ->add_option("--sites", leaks_cmd.sites,
-                   "Where the leaks are: valves (by the default profile's risk), valves-even or seabed (open water 1 m "
-                   "from every valve)")
-      ->check(CLI::IsMember({"valves", "valves-even", "seabed"}))
+                   "Where the leaks are: valves (by the default profile's risk), valves-even, seabed (open water 1 m "
+                   "from every valve) or flowlines (along the scenario's flowlines, 1 m from every valve)")
+      ->check(CLI::IsMember({"valves", "valves-even", "seabed", "flowlines"}))
       ->capture_default_str();
   bench_leaks->add_option("--seed", leaks_cmd.first_seed, "Seed of the first run")->check(MustBeWholeNumber)->capture_default_str();
   bench_leaks

@@ -1,7 +1,9 @@
 // Leaks, sensors and fusion in a scenario: read, written back exactly, checked with one line
 // naming the field, and random leaks drawn by seed (the same seed the same leaks; valves as often
 // as their risk; seabed points in open water).
+#include <algorithm>
 #include <cmath>
+#include <limits>
 #include <map>
 #include <string>
 
@@ -83,7 +85,16 @@ TEST(ScenarioPerception, BadInputsNameFieldAndRule) {
       {"leaks: [{at: {point_m: [3, 2.5]}, start_s: 1}]", "lies inside the footprint of XT"},
       {"leaks: [{at: {point_m: [9, 1]}, start_s: 1}]", "x.yaml: leaks[0].at.point_m = [9, 1]: must be inside the workspace"},
       {"leaks: [{at: {valve: P1, point_m: [1, 1]}, start_s: 1}]", "must give exactly one of valve, point_m"},
-      {"leaks: [{at: {flowline: F1, s_m: 3}, start_s: 1}]", "need the scenario's flowlines"},
+      {"leaks: [{at: {flowline: F1, s_m: 3}, start_s: 1}]", "x.yaml: leaks[0].at.flowline = F1: no such flowline (flowlines: none)"},
+      {"leaks: [{at: {flowline: F1}, start_s: 1}]", "gives both flowline (its name) and s_m"},
+      {"leaks: [{at: {point_m: [1, 1], s_m: 2}, start_s: 1}]", "gives both flowline (its name) and s_m"},
+      {"leaks: [{at: {valve: P1, flowline: F1, s_m: 2}, start_s: 1}]", "must give exactly one of valve, point_m, flowline"},
+      {"flowlines: [{name: F1, points_m: [[0.5, 4], [4.5, 4]]}]\nleaks: [{at: {flowline: F1, s_m: 4.5}, start_s: 1}]",
+       "x.yaml: leaks[0].at.s_m = 4.5: must be in [0, 4] m (F1's length)"},
+      {"flowlines: [{name: F1, points_m: [[0.5, 4], [4.5, 4]]}]\nleaks: [{at: {flowline: F2, s_m: 1}, start_s: 1}]",
+       "x.yaml: leaks[0].at.flowline = F2: no such flowline (flowlines: F1)"},
+      {"flowlines: [{name: F1, points_m: [[3, 2.5], [3, 0.2]]}]\nleaks: [{at: {flowline: F1, s_m: 0.1}, start_s: 1}]",
+       "x.yaml: leaks[0].at.s_m = 0.1: F1 is inside the footprint of XT there"},
       {"leaks: [{at: {valve: P1}, start_s: 900}]", "x.yaml: leaks[0].start_s = 900: must be in [0, duration_s = 300]"},
       {"leaks: [{at: {valve: P1}, start_s: 1, strength: 0}]", "x.yaml: leaks[0].strength = 0: must be in (0, 1e6]"},
       {"leaks: [{at: {valve: P1}}]", "x.yaml: leaks[0].start_s: missing (required)"},
@@ -181,6 +192,84 @@ TEST(ScenarioPerception, GazeRoundTrips) {
   const Scenario ahead = ParseScenario(WithSection("sensors: [{name: c}]\n"), "x.yaml");
   EXPECT_EQ(ahead.gaze, Gaze::kTravel);
   EXPECT_EQ(EmitScenario(ahead).find("gaze"), std::string::npos);
+}
+
+// A leak along a flowline: at the point s_m along its axis (checked against the polyline walked by
+// hand), named by the line and the distance, written back as it was read; in the fingerprint.
+TEST(ScenarioPerception, LeakAlongAFlowline) {
+  const Scenario s = ParseScenario(WithSection(R"(
+flowlines: [{name: F1, points_m: [[0.5, 4.5], [2.5, 4.5], [2.5, 3.0]]}]
+leaks: [{at: {flowline: F1, s_m: 2.75}, start_s: 20}]
+)"),
+                                   "x.yaml");
+  ASSERT_EQ(s.leaks.size(), 1u);
+  EXPECT_EQ(s.leaks[0].flowline, "F1");
+  EXPECT_EQ(s.leaks[0].s_m, 2.75);
+  EXPECT_TRUE(s.leaks[0].valve.empty());
+  // 2 m east along the first leg, then 0.75 m south along the second.
+  EXPECT_NEAR((LeakPosition(s, s.leaks[0]) - Eigen::Vector2d(2.5, 3.75)).norm(), 0.0, 1e-12);
+  EXPECT_EQ(LeakWhere(s.leaks[0]), "F1 at 2.75 m");
+  const std::string text = EmitScenario(s);
+  EXPECT_NE(text.find("flowline: F1"), std::string::npos) << text;
+  const Scenario again = ParseScenario(text, "x.yaml");
+  EXPECT_EQ(EmitScenario(again), text);
+  EXPECT_EQ(again.leaks[0].s_m, 2.75);
+  Scenario further = s;
+  further.leaks[0].s_m = 3.0;
+  EXPECT_NE(VehicleFingerprint(further), VehicleFingerprint(s)) << "a host told of another leak flies another world";
+}
+
+// Random flowline leaks: on a flowline (the distance to its polyline, by projection on each
+// segment, is zero), 1 m from every valve and clear of the structures and edges, the same for
+// the same seed, and uniform over the eligible length: F1 runs 0.9 m north of P1, so the 0.87 m of
+// it within 1 m of P1 is never drawn, and the draws split 3.93 : 3 between F1 and F2.
+TEST(ScenarioPerception, RandomLeaksAlongTheFlowlines) {
+  Scenario s = ParseScenario(WithSection(R"(
+flowlines:
+  - {name: F1, points_m: [[0.6, 4.4], [5.4, 4.4]]}
+  - {name: F2, points_m: [[0.8, 0.8], [0.8, 3.8]]}
+)"),
+                             "x.yaml");
+  const auto distance_to_polyline = [](const Flowline& f, const Eigen::Vector2d& p) {
+    double best = std::numeric_limits<double>::infinity();
+    for (std::size_t k = 1; k < f.points_m.size(); ++k) {
+      const Eigen::Vector2d a = f.points_m[k - 1], d = f.points_m[k] - a;
+      const double t = std::clamp((p - a).dot(d) / d.squaredNorm(), 0.0, 1.0);
+      best = std::min(best, (a + t * d - p).norm());
+    }
+    return best;
+  };
+  const Scenario a = WithRandomLeaks(s, 200, LeakSites::kFlowlines);
+  EXPECT_EQ(EmitScenario(a), EmitScenario(WithRandomLeaks(s, 200, LeakSites::kFlowlines)));
+  EXPECT_NO_THROW(a.Validate());
+  int on_f1 = 0, total = 0;
+  for (std::uint64_t seed = 1; seed <= 10; ++seed) {
+    s.seed = seed;
+    for (const LeakSpec& leak : WithRandomLeaks(s, 200, LeakSites::kFlowlines).leaks) {
+      ASSERT_FALSE(leak.flowline.empty());
+      EXPECT_TRUE(leak.valve.empty());
+      const Flowline& line = s.flowlines[leak.flowline == "F1" ? 0 : 1];
+      const Eigen::Vector2d p = LeakPosition(s, leak);
+      EXPECT_LT(distance_to_polyline(line, p), 1e-9);
+      for (const Eigen::Vector2d& v : s.ValvePositions()) EXPECT_GE((p - v).norm(), 1.0);
+      EXPECT_GE(leak.start_s, 30.0);
+      EXPECT_LE(leak.start_s, 270.0);
+      on_f1 += leak.flowline == "F1" ? 1 : 0;
+      ++total;
+    }
+  }
+  const double f1_eligible = 4.8 - 2.0 * std::sqrt(1.0 - 0.9 * 0.9);
+  const double share = f1_eligible / (f1_eligible + 3.0);
+  EXPECT_NEAR(static_cast<double>(on_f1) / total, share, 4.0 * std::sqrt(share * (1 - share) / total));
+  EXPECT_EQ(ParseLeakSites("flowlines", "--leak-sites"), LeakSites::kFlowlines);
+  // A field without flowlines has nowhere to put them: one line that says so.
+  Scenario bare = ParseScenario(WithSection(""), "x.yaml");
+  try {
+    WithRandomLeaks(bare, 1, LeakSites::kFlowlines);
+    ADD_FAILURE() << "drew flowline leaks without flowlines";
+  } catch (const ScenarioError& e) {
+    EXPECT_NE(std::string(e.what()).find("has no flowlines"), std::string::npos) << e.what();
+  }
 }
 
 }  // namespace

@@ -21,6 +21,7 @@ namespace {
 
 const std::string kTwoXt = std::string(SAGE_SOURCE_DIR) + "/scenarios/two_xt.yaml";
 const std::string kTwoXtLeaks = std::string(SAGE_SOURCE_DIR) + "/scenarios/two_xt_leaks.yaml";
+const std::string kFleetFieldLeaks = std::string(SAGE_SOURCE_DIR) + "/scenarios/fleet_field_leaks.yaml";
 
 agents::StateReport State(int id, std::int64_t cycle, Eigen::Vector2d position, double heading = 0.0) {
   agents::StateReport s;
@@ -252,6 +253,29 @@ TEST(RiskLoop, SameSeedSameFindingsAndCheckpointRoundTrip) {
   EXPECT_TRUE(j["leaks"][0].contains("confirmed_s"));
   EXPECT_TRUE(j.contains("false_alarms"));
   EXPECT_EQ(j["scans"], ma.scans);
+}
+
+// A leak along a flowline, 1.5 m from the nearest valve: the vehicles' sensors see it where the
+// line is, the record names it by the line and the distance, and the same seed finds it again.
+TEST(RiskLoop, AFlowlineLeakIsFoundWhereTheLineIs) {
+  maps::Scenario s = maps::WithDuration(maps::LoadScenario(kFleetFieldLeaks), 200.0);
+  ASSERT_FALSE(s.flowlines.empty());
+  maps::LeakSpec leak;
+  leak.flowline = "FL-1";
+  leak.s_m = 4.4;  // (5.0, 4.85), the header between XT-A and XT-B
+  leak.start_s = 60.0;
+  s.leaks = {leak};
+  s.Validate();
+  const MissionMetrics m = Mission(s, MissionOptions{}).Run().metrics;
+  ASSERT_EQ(m.leaks.size(), 1u);
+  EXPECT_EQ(m.leaks[0].where, "FL-1 at 4.4 m");
+  EXPECT_LT((m.leaks[0].position_m - Eigen::Vector2d(5.0, 4.85)).norm(), 1e-12);
+  EXPECT_EQ(m.leaks[0].valve, -1);
+  ASSERT_FALSE(std::isnan(m.leaks[0].detected_s)) << "five vehicles with a sonar pass the header within 140 s";
+  EXPECT_GE(m.leaks[0].detected_s, 60.0);
+  EXPECT_EQ(Mission(s, MissionOptions{}).Run().metrics.leaks[0].detected_s, m.leaks[0].detected_s);
+  const nlohmann::json j = nlohmann::json::parse(MetricsJson(m));
+  EXPECT_EQ(j["leaks"][0]["where"], "FL-1 at 4.4 m");
 }
 
 }  // namespace
