@@ -207,8 +207,8 @@ Scenario WithRandomLeaks(const Scenario& scenario, int count, LeakSites sites) {
   double flowline_length = 0.0;
   for (const Flowline& f : scenario.flowlines) flowline_length += f.Length_m();
   if (sites == LeakSites::kFlowlines && !(flowline_length > 0.0)) {
-    throw ScenarioError("--random-leaks: " + scenario.name + " has no flowlines to draw leaks along (flowlines: in the "
-                        "scenario, as scenarios/fleet_field_leaks.yaml has; or --leak-sites seabed)");
+    throw ScenarioError("--random-leaks: " + scenario.name + " has no flowlines to draw leaks along (give it a "
+                        "flowlines: section, as scenarios/fleet_field_leaks.yaml has, or draw at valves or seabed)");
   }
   const auto flowline_site = [&](LeakSpec& leak) {
     double s = uniform() * flowline_length;

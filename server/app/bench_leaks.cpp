@@ -78,6 +78,7 @@ int CmdBenchLeaks(const BenchLeaksCommand& c) {
                               "sensors: section, as scenarios/two_xt_leaks.yaml does)");
   }
   const maps::LeakSites sites = maps::ParseLeakSites(c.sites, "--sites");
+  maps::WithRandomLeaks(scenario, c.leaks, sites);  // a field with no such sites is refused before anything is written
   const std::string profile = c.scenario.profile.empty() ? scenario.default_profile : c.scenario.profile;
   const std::vector<Config> configs = ParseConfigs(c.configs, scenario, profile);
   const fs::path dir = c.out_dir.empty() ? fs::path("runs") / ("bench_leaks_" + scenario.name) : fs::path(c.out_dir);

@@ -100,7 +100,7 @@ struct BenchLeaksCommand {
   ScenarioOverrides scenario;              ///< the path, and --profile, --duration, --vehicles, --assignment
   int runs = 100;                          ///< Monte Carlo runs (seeds first_seed, first_seed + 1, ...)
   int leaks = 1;                           ///< hidden leaks per run
-  std::string sites = "valves";            ///< valves | valves-even | seabed
+  std::string sites = "valves";            ///< valves | valves-even | seabed | flowlines
   std::uint64_t first_seed = 1;
   std::string configs = "bayes,astar,fixed";  ///< what flies each run (see CmdBenchLeaks)
   std::string out_dir;                     ///< default runs/bench_leaks_<scenario>

@@ -81,6 +81,17 @@ TEST(BenchLeaks, EveryConfigurationMeetsTheSameLeaks) {
     EXPECT_NE(std::string(e.what()).find("sensors: none"), std::string::npos) << e.what();
   }
   EXPECT_FALSE(fs::exists(dir)) << "refused before anything was written";
+  // Flowline sites on a field without flowlines: refused before anything is written, too.
+  c.scenario.scenario_path = kTwoXtLeaks;
+  c.sites = "flowlines";
+  try {
+    CmdBenchLeaks(c);
+    ADD_FAILURE() << "flowline leaks benched on a field without flowlines";
+  } catch (const maps::ScenarioError& e) {
+    EXPECT_NE(std::string(e.what()).find("has no flowlines"), std::string::npos) << e.what();
+  }
+  EXPECT_FALSE(fs::exists(dir));
+  c.sites = "valves";
   c.scenario.scenario_path = kTwoXtLeaks;
   c.configs = "bayes,tours";
   EXPECT_THROW(CmdBenchLeaks(c), maps::ScenarioError);
