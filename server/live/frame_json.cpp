@@ -114,6 +114,25 @@ std::string SceneJson(const LiveScene& scene) {
     fmt::format_to(std::back_inserter(out), ",{:.3f},{:.3f},{:.3f},{:.3f}]", s.center_m.x(), s.center_m.y(), s.size_m.x(),
                    s.size_m.y());
   }
+  // Flowlines as [name, diameter, [x0, y0, x1, y1, ...]], boulders as [x, y, diameter].
+  out += "],\"flowlines\":[";
+  for (std::size_t i = 0; i < scene.flowlines.size(); ++i) {
+    const FlowlineView& f = scene.flowlines[i];
+    if (i > 0) out += ',';
+    out += '[';
+    AppendString(out, f.name);
+    fmt::format_to(std::back_inserter(out), ",{:.3f},[", f.diameter_m);
+    for (std::size_t k = 0; k < f.points_m.size(); ++k) {
+      fmt::format_to(std::back_inserter(out), "{}{:.3f},{:.3f}", k > 0 ? "," : "", f.points_m[k].x(), f.points_m[k].y());
+    }
+    out += "]]";
+  }
+  out += "],\"boulders\":[";
+  for (std::size_t i = 0; i < scene.boulders.size(); ++i) {
+    const BoulderView& b = scene.boulders[i];
+    fmt::format_to(std::back_inserter(out), "{}[{:.3f},{:.3f},{:.3f}]", i > 0 ? "," : "", b.center_m.x(), b.center_m.y(),
+                   b.diameter_m);
+  }
   out += "],\"valves\":[";
   for (std::size_t i = 0; i < scene.valves.size(); ++i) {
     const ValveSite& v = scene.valves[i];

@@ -24,6 +24,8 @@ LiveScene SceneOf(const maps::Scenario& scenario) {
     scene.structures.push_back({xt.name, xt.center_m, xt.size_m});
     for (const maps::Valve& v : xt.valves) scene.valves.push_back({v.name, xt.name, v.position_m, v.covariance_m2});
   }
+  for (const maps::Flowline& f : scenario.flowlines) scene.flowlines.push_back({f.name, f.diameter_m, f.points_m});
+  for (const maps::Boulder& b : scenario.boulders) scene.boulders.push_back({b.center_m, b.diameter_m});
   return scene;
 }
 

@@ -65,6 +65,19 @@ struct StructureView {
   Eigen::Vector2d size_m = Eigen::Vector2d::Zero();
 };
 
+/// A pipe on the seabed (a flowline, jumper or umbilical): the page draws its axis at its width.
+struct FlowlineView {
+  std::string name;
+  double diameter_m = 0.0;
+  std::vector<Eigen::Vector2d> points_m;
+};
+
+/// A boulder on the seabed: its footprint as a circle.
+struct BoulderView {
+  Eigen::Vector2d center_m = Eigen::Vector2d::Zero();
+  double diameter_m = 0.0;
+};
+
 struct ValveSite {
   std::string name;
   std::string xt;  ///< the XT it is on
@@ -81,6 +94,8 @@ struct LiveScene {
   double visit_radius_m = 0.0;
   std::string controller, assignment, profile;
   std::vector<StructureView> structures;
+  std::vector<FlowlineView> flowlines;  ///< the seabed's pipes, in the scenario's order
+  std::vector<BoulderView> boulders;
   std::vector<ValveSite> valves;  ///< maps::Scenario::AllValves() order
   double replay_end_s = 0.0;      ///< replay: the record's last time
   bool actions = false;           ///< operators may act (a running mission)

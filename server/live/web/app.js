@@ -408,6 +408,26 @@
     g.strokeStyle = "#2c4a66";
     g.lineWidth = 1;
     g.strokeRect(sx(0), sy(scene.height_m), scene.width_m * s, scene.height_m * s);
+    // The seabed's pipes at their width (a pixel and a half at least) and its boulders, in the
+    // ochre of the plots, under the structures.
+    g.strokeStyle = "#9c7a32";
+    g.lineCap = "round";
+    g.lineJoin = "round";
+    for (const [, diameter, xy] of scene.flowlines || []) {
+      g.lineWidth = Math.max(1.5, diameter * s);
+      g.beginPath();
+      for (let k = 0; k + 1 < xy.length; k += 2) (k ? g.lineTo : g.moveTo).call(g, sx(xy[k]), sy(xy[k + 1]));
+      g.stroke();
+    }
+    g.lineWidth = 1;
+    g.fillStyle = "#6b5a3a";
+    g.beginPath();
+    for (const [bx, by, diameter] of scene.boulders || []) {
+      const r = Math.max(1.5, (diameter / 2) * s);
+      g.moveTo(sx(bx) + r, sy(by));
+      g.arc(sx(bx), sy(by), r, 0, 2 * Math.PI);
+    }
+    g.fill();
     g.fillStyle = "#4e5a68";
     g.beginPath();
     for (const [, cx, cy, w, h] of scene.structures) g.rect(sx(cx - w / 2), sy(cy + h / 2), w * s, h * s);

@@ -9,6 +9,8 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include "maps/scenario/scenario.h"
+
 namespace sage::live {
 namespace {
 
@@ -56,6 +58,34 @@ TEST(FrameJson, FrameReadsBackWithNullsForNonFinite) {
   EXPECT_EQ(j["events"][0][3], "rov2 (id 1) lost");
   EXPECT_EQ(j["trails"][0].size(), 4u);
   EXPECT_FALSE(Json::parse(FrameJson(frame, 9, events, 4, 2, /*with_trails=*/false)).contains("trails"));
+}
+
+// The page draws the seabed's pipes and boulders: the scene of fleet_field_leaks carries each
+// flowline's name, diameter and every vertex, and a boulder its centre and diameter, to the mm.
+TEST(FrameJson, SceneCarriesFlowlinesAndBoulders) {
+  maps::Scenario scenario = maps::LoadScenario(std::string(SAGE_SOURCE_DIR) + "/scenarios/fleet_field_leaks.yaml");
+  scenario.boulders.push_back({Eigen::Vector2d(1.25, 8.5), 0.6, 0.4});
+  const Json j = Json::parse(SceneJson(SceneOf(scenario)));
+  ASSERT_EQ(j["flowlines"].size(), scenario.flowlines.size());
+  for (std::size_t i = 0; i < scenario.flowlines.size(); ++i) {
+    const maps::Flowline& f = scenario.flowlines[i];
+    const Json& line = j["flowlines"][i];
+    EXPECT_EQ(line[0], f.name);
+    EXPECT_NEAR(line[1].get<double>(), f.diameter_m, 5e-4);
+    ASSERT_EQ(line[2].size(), 2 * f.points_m.size());
+    for (std::size_t k = 0; k < f.points_m.size(); ++k) {
+      EXPECT_NEAR(line[2][2 * k].get<double>(), f.points_m[k].x(), 5e-4);
+      EXPECT_NEAR(line[2][2 * k + 1].get<double>(), f.points_m[k].y(), 5e-4);
+    }
+  }
+  ASSERT_EQ(j["boulders"].size(), 1u);
+  EXPECT_NEAR(j["boulders"][0][0].get<double>(), 1.25, 5e-4);
+  EXPECT_NEAR(j["boulders"][0][2].get<double>(), 0.6, 5e-4);
+  EXPECT_EQ(j["structures"].size(), scenario.structures.size());
+  // A field without a seabed model sends empty lists, which the page draws as nothing.
+  const Json plain = Json::parse(SceneJson(SceneOf(maps::LoadScenario(std::string(SAGE_SOURCE_DIR) + "/scenarios/two_xt.yaml"))));
+  EXPECT_TRUE(plain["flowlines"].empty());
+  EXPECT_TRUE(plain["boulders"].empty());
 }
 
 TEST(FrameJson, Base64AsRfc4648) {
