@@ -47,9 +47,12 @@ std::string SceneSchema() {
   const std::string text = fmt::format(
       R"({{"type":"object","properties":{{"pose":{},"billboard":{{"type":"boolean"}},"font_size":{{"type":"number"}},"scale_invariant":{{"type":"boolean"}},"color":{},"text":{{"type":"string"}}}}}})",
       pose, kColorSchema);
+  const std::string line = fmt::format(
+      R"({{"type":"object","properties":{{"type":{{"type":"integer"}},"pose":{},"thickness":{{"type":"number"}},"scale_invariant":{{"type":"boolean"}},"points":{{"type":"array","items":{}}},"color":{},"colors":{{"type":"array","items":{}}},"indices":{{"type":"array","items":{{"type":"integer","minimum":0}}}}}}}})",
+      pose, kVector3Schema, kColorSchema, kColorSchema);
   const std::string entity = fmt::format(
-      R"({{"type":"object","properties":{{"timestamp":{},"frame_id":{{"type":"string"}},"id":{{"type":"string"}},"lifetime":{},"frame_locked":{{"type":"boolean"}},"metadata":{{"type":"array","items":{{"type":"object","properties":{{"key":{{"type":"string"}},"value":{{"type":"string"}}}}}}}},"arrows":{{"type":"array","items":{}}},"cubes":{{"type":"array","items":{}}},"spheres":{{"type":"array","items":{}}},"texts":{{"type":"array","items":{}}}}}}})",
-      kTimeSchema, kTimeSchema, arrow, sized, sized, text);
+      R"({{"type":"object","properties":{{"timestamp":{},"frame_id":{{"type":"string"}},"id":{{"type":"string"}},"lifetime":{},"frame_locked":{{"type":"boolean"}},"metadata":{{"type":"array","items":{{"type":"object","properties":{{"key":{{"type":"string"}},"value":{{"type":"string"}}}}}}}},"arrows":{{"type":"array","items":{}}},"cubes":{{"type":"array","items":{}}},"spheres":{{"type":"array","items":{}}},"texts":{{"type":"array","items":{}}},"lines":{{"type":"array","items":{}}}}}}})",
+      kTimeSchema, kTimeSchema, arrow, sized, sized, text, line);
   return fmt::format(
       R"({{"title":"foxglove.SceneUpdate","type":"object","properties":{{"deletions":{{"type":"array","items":{{"type":"object","properties":{{"timestamp":{},"type":{{"type":"integer"}},"id":{{"type":"string"}}}}}}}},"entities":{{"type":"array","items":{}}}}}}})",
       kTimeSchema, entity);
@@ -198,6 +201,35 @@ std::string SceneUpdateJson(const LiveScene& scene, const LiveFrame& frame) {
     out += R"(,"text":)";
     out += JsonString(v.status == VehicleStatus::kAlive ? v.name : v.name + " (" + ToString(v.status) + ")");
     out += '}';
+  }
+  out += "]},";
+  // The seabed's pipes (a line strip each, at its diameter, on the seabed) and its boulders
+  // (half-buried spheres of their diameter), in the page's ochre.
+  EntityStart(out, "seabed", frame.time_s);
+  out += R"(,"arrows":[],"cubes":[],"spheres":[)";
+  for (std::size_t i = 0; i < scene.boulders.size(); ++i) {
+    const BoulderView& b = scene.boulders[i];
+    if (i > 0) out += ',';
+    out += R"({"pose":)";
+    Pose(out, b.center_m.x(), b.center_m.y(), 0.0, 0.0);
+    fmt::format_to(std::back_inserter(out), R"(,"size":{{"x":{0:.3f},"y":{0:.3f},"z":{0:.3f}}},"color":)", b.diameter_m);
+    Color(out, 0.42, 0.35, 0.23, 1.0);
+    out += '}';
+  }
+  out += R"(],"texts":[],"lines":[)";
+  for (std::size_t i = 0; i < scene.flowlines.size(); ++i) {
+    const FlowlineView& f = scene.flowlines[i];
+    if (i > 0) out += ',';
+    out += R"({"type":0,"pose":)";  // LINE_STRIP
+    Pose(out, 0.0, 0.0, 0.0, 0.0);
+    fmt::format_to(std::back_inserter(out), R"(,"thickness":{:.3f},"scale_invariant":false,"points":[)", f.diameter_m);
+    for (std::size_t k = 0; k < f.points_m.size(); ++k) {
+      fmt::format_to(std::back_inserter(out), R"({}{{"x":{:.3f},"y":{:.3f},"z":{:.3f}}})", k > 0 ? "," : "",
+                     f.points_m[k].x(), f.points_m[k].y(), 0.5 * f.diameter_m);
+    }
+    out += R"(],"color":)";
+    Color(out, 0.61, 0.48, 0.2, 1.0);
+    out += R"(,"colors":[],"indices":[]})";
   }
   out += "]}]}";
   return out;

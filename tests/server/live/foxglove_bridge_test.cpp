@@ -47,8 +47,10 @@ TEST(FoxgloveBridge, SceneHasEveryXtValveAndVehicle) {
   scene.visit_radius_m = 0.3;
   scene.structures = {{"XT-\"A\"", {2.0, 3.0}, {0.5, 0.6}}};
   scene.valves = {{"P1", "XT-A", {1.0, 1.0}, Eigen::Matrix2d::Identity()}, {"P2", "XT-A", {2.0, 1.0}, Eigen::Matrix2d::Identity()}};
+  scene.flowlines = {{"FL-1", 0.3, {{0.5, 4.0}, {3.0, 4.0}, {3.0, 2.0}}}};
+  scene.boulders = {{{4.0, 1.0}, 0.8}};
   const Json j = Json::parse(SceneUpdateJson(scene, Frame()));
-  ASSERT_EQ(j["entities"].size(), 3u);
+  ASSERT_EQ(j["entities"].size(), 4u);
   const Json& xts = j["entities"][0];
   EXPECT_EQ(xts["cubes"].size(), 1u);
   EXPECT_EQ(xts["texts"][0]["text"], "XT-\"A\"");
@@ -63,6 +65,16 @@ TEST(FoxgloveBridge, SceneHasEveryXtValveAndVehicle) {
   EXPECT_EQ(vehicles["arrows"].size(), 3u);  // greyed ones stay in the scene
   EXPECT_EQ(vehicles["texts"][2]["text"], "rov3 (lost)");
   EXPECT_LT(vehicles["arrows"][1]["color"]["g"].get<double>(), 0.6);
+  // The seabed: each flowline a line strip through its vertices at its diameter; each boulder a sphere.
+  const Json& seabed = j["entities"][3];
+  EXPECT_EQ(seabed["id"], "seabed");
+  ASSERT_EQ(seabed["lines"].size(), 1u);
+  EXPECT_EQ(seabed["lines"][0]["type"], 0);
+  EXPECT_DOUBLE_EQ(seabed["lines"][0]["thickness"].get<double>(), 0.3);
+  ASSERT_EQ(seabed["lines"][0]["points"].size(), 3u);
+  EXPECT_DOUBLE_EQ(seabed["lines"][0]["points"][2]["y"].get<double>(), 2.0);
+  ASSERT_EQ(seabed["spheres"].size(), 1u);
+  EXPECT_DOUBLE_EQ(seabed["spheres"][0]["size"]["x"].get<double>(), 0.8);
 }
 
 TEST(FoxgloveBridge, GridCarriesTheHeatMapsFloats) {
