@@ -95,6 +95,14 @@ void RiskColor(std::string& out, double u) {
   Color(out, r, g, b, 0.9);
 }
 
+// A cube or a sphere: its centre at (x, y, z), unturned, of size (sx, sy, sz), in one colour.
+void SizedPrimitive(std::string& out, double x, double y, double z, const Eigen::Vector3d& size) {
+  out += R"({"pose":)";
+  Pose(out, x, y, z, 0.0);
+  fmt::format_to(std::back_inserter(out), R"(,"size":{{"x":{:.3f},"y":{:.3f},"z":{:.3f}}},"color":)", size.x(), size.y(),
+                 size.z());
+}
+
 void EntityStart(std::string& out, const std::string& id, double time_s) {
   out += R"({"timestamp":)";
   Time(out, time_s);
@@ -127,9 +135,7 @@ std::string SceneUpdateJson(const LiveScene& scene, const LiveFrame& frame) {
   for (std::size_t i = 0; i < scene.structures.size(); ++i) {
     const StructureView& s = scene.structures[i];
     if (i > 0) out += ',';
-    out += R"({"pose":)";
-    Pose(out, s.center_m.x(), s.center_m.y(), 0.5, 0.0);
-    fmt::format_to(std::back_inserter(out), R"(,"size":{{"x":{:.3f},"y":{:.3f},"z":1.0}},"color":)", s.size_m.x(), s.size_m.y());
+    SizedPrimitive(out, s.center_m.x(), s.center_m.y(), 0.5, Eigen::Vector3d(s.size_m.x(), s.size_m.y(), 1.0));
     Color(out, 0.45, 0.45, 0.5, 1.0);
     out += '}';
   }
@@ -156,9 +162,8 @@ std::string SceneUpdateJson(const LiveScene& scene, const LiveFrame& frame) {
   const double diameter = std::max(0.1, 2.0 * scene.visit_radius_m);
   for (std::size_t i = 0; i < valves; ++i) {
     if (i > 0) out += ',';
-    out += R"({"pose":)";
-    Pose(out, scene.valves[i].position_m.x(), scene.valves[i].position_m.y(), 0.2, 0.0);
-    fmt::format_to(std::back_inserter(out), R"(,"size":{{"x":{0:.3f},"y":{0:.3f},"z":{0:.3f}}},"color":)", diameter);
+    SizedPrimitive(out, scene.valves[i].position_m.x(), scene.valves[i].position_m.y(), 0.2,
+                   Eigen::Vector3d::Constant(diameter));
     RiskColor(out, largest > 0.0 ? frame.valves[i].share / largest : 0.0);
     out += '}';
   }
@@ -210,9 +215,7 @@ std::string SceneUpdateJson(const LiveScene& scene, const LiveFrame& frame) {
   for (std::size_t i = 0; i < scene.boulders.size(); ++i) {
     const BoulderView& b = scene.boulders[i];
     if (i > 0) out += ',';
-    out += R"({"pose":)";
-    Pose(out, b.center_m.x(), b.center_m.y(), 0.0, 0.0);
-    fmt::format_to(std::back_inserter(out), R"(,"size":{{"x":{0:.3f},"y":{0:.3f},"z":{0:.3f}}},"color":)", b.diameter_m);
+    SizedPrimitive(out, b.center_m.x(), b.center_m.y(), 0.0, Eigen::Vector3d::Constant(b.diameter_m));
     Color(out, 0.42, 0.35, 0.23, 1.0);
     out += '}';
   }
