@@ -347,9 +347,9 @@ class FleetDds : public ::testing::Test {
   }
 
   // Waits for a server or launch of `duration_s` mission seconds to end; its exit code.
-  static std::optional<int> WaitMissionEnd(ChildProcess& child, double duration_s) {
+  static std::optional<int> WaitMissionEnd(ChildProcess& child, double duration_s, double time_scale = kTimeScale) {
     return child.WaitExit(std::chrono::duration_cast<SteadyClock::duration>(
-                              std::chrono::duration<double>(duration_s / kTimeScale)) +
+                              std::chrono::duration<double>(duration_s / time_scale)) +
                           kStartupTimeout + 10s);
   }
 
@@ -1264,14 +1264,34 @@ TEST_F(FleetDds, LaunchedMissionIsSecuredByDefault) {
 }
 
 // A trajectory.csv's rows after t = 0 (the in-process record has a row at t = 0 a launch does
-// not), sorted: two records of one mission compare row for row.
-std::vector<std::string> TrajectoryRowsAfterStart(const fs::path& csv) {
+// not) and before `until_s`, sorted: two records of one mission compare row for row.
+std::vector<std::string> TrajectoryRowsAfterStart(const fs::path& csv,
+                                                  double until_s = std::numeric_limits<double>::infinity()) {
   std::istringstream in(ReadFile(csv));
   std::vector<std::string> rows;
   for (std::string line; std::getline(in, line);)
-    if (line.rfind("t,", 0) != 0 && line.rfind("0,", 0) != 0) rows.push_back(line);
+    if (line.rfind("t,", 0) != 0 && line.rfind("0,", 0) != 0 && std::stod(line) < until_s) rows.push_back(line);
   std::sort(rows.begin(), rows.end());
   return rows;
+}
+
+// What the launched server logged of its lockstep with the vehicles: the mission over DDS is the
+// in-process one only while every cycle had every vehicle's state. On a loaded machine a host can
+// miss its word by more than the server waits (0.45 of a period); the server then goes on and the
+// missions part from that cycle on. `first_out_s` is infinity when every cycle was in lockstep.
+struct Lockstep {
+  long in_step = 0, cycles = 0;
+  double first_out_s = std::numeric_limits<double>::infinity();
+};
+Lockstep LockstepOf(const std::string& launch_log) {
+  std::smatch m;
+  const std::regex counts(R"((\d+) of (\d+) cycles in lockstep)"), first(R"(the first at t = ([0-9.]+) s)");
+  Lockstep out;
+  if (!std::regex_search(launch_log, m, counts)) return out;
+  out.in_step = std::stol(m[1]);
+  out.cycles = std::stol(m[2]);
+  if (out.in_step < out.cycles && std::regex_search(launch_log, m, first)) out.first_out_s = std::stod(m[1]);
+  return out;
 }
 
 // 12. The same scenario and seed fly the same mission in-process and over DDS: fleet_field with
@@ -1358,7 +1378,11 @@ namespace {
 // 13. Leak detections over DDS (rt/sage/detection) are the ones the in-process mission hands over:
 // two_xt with its camera and a leak at P3 from 5 s, two vehicles, 40 s; the same trajectory, the
 // same scans fused, the leak detected and confirmed at the same times, the same false alarms.
+// At half the other tests' time scale: the camera's scans make a host's cycle the longest of any
+// two-vehicle mission, and the server waits 0.45 of a period for it. Should the server still go on
+// without a state (a loaded machine), the missions are compared up to that cycle.
 TEST_F(FleetDds, DetectionsOverDdsAreTheInProcessOnes) {
+  constexpr double kScale = kTimeScale / 2;
   std::string text = ReadFile(Scenario("two_xt_leaks.yaml"));
   const std::string from = "start_s: 120";
   const auto at = text.find(from);
@@ -1372,27 +1396,31 @@ TEST_F(FleetDds, DetectionsOverDdsAreTheInProcessOnes) {
   run_args.insert(run_args.end(), common.begin(), common.end());
   ChildProcess& run = Start("run", run_args);
   ASSERT_EQ(run.WaitExit(60s), std::optional<int>(0));
-  std::vector<std::string> launch_args = {scenario.string(), "--time-scale", Num(kTimeScale), "--no-latest"};
+  std::vector<std::string> launch_args = {scenario.string(), "--time-scale", Num(kScale), "--no-latest"};
   launch_args.insert(launch_args.end(), common.begin(), common.end());
   ChildProcess& launch = StartLaunch("launch", launch_args, over_dds, FreeDomainForLaunch(), run_dir_);
-  ASSERT_EQ(WaitMissionEnd(launch, 40.0), std::optional<int>(0));
+  ASSERT_EQ(WaitMissionEnd(launch, 40.0, kScale), std::optional<int>(0));
+  const Lockstep lockstep = LockstepOf(launch.LogText());
+  ASSERT_GT(lockstep.cycles, 390) << "the launch did not log its lockstep:\n" << launch.LogText();
+  // A break in the first half leaves too little to compare: that is a failure, not a pass.
+  ASSERT_GT(lockstep.first_out_s, 20.0) << lockstep.in_step << " of " << lockstep.cycles << " cycles in lockstep";
   const Json ma = ReadJson(in_process / "metrics.json"), mb = ReadJson(over_dds / "metrics.json");
   ASSERT_EQ(ma.at("leaks").size(), 1u);
-  EXPECT_TRUE(ma["leaks"][0].at("detected_s").is_number()) << "P3's leak is found in 35 s by two vehicles";
+  ASSERT_TRUE(ma["leaks"][0].at("detected_s").is_number()) << "P3's leak is found in 35 s by two vehicles";
   EXPECT_GT(ma.at("scans").get<int>(), 300);
-  EXPECT_EQ(ma.at("scans"), mb.at("scans"));
-  EXPECT_EQ(ma.at("leaks"), mb.at("leaks"));
-  EXPECT_EQ(ma.at("false_alarms"), mb.at("false_alarms"));
   EXPECT_EQ(mb.at("rejected_samples"), 0);
-  const auto rows = [](const fs::path& csv) {
-    std::istringstream in(ReadFile(csv));
-    std::vector<std::string> out;
-    for (std::string line; std::getline(in, line);)
-      if (line.rfind("t,", 0) != 0 && line.rfind("0,", 0) != 0) out.push_back(line);  // t = 0: only in-process
-    std::sort(out.begin(), out.end());
-    return out;
-  };
-  EXPECT_EQ(rows(in_process / "trajectory.csv"), rows(over_dds / "trajectory.csv"));
+  EXPECT_EQ(TrajectoryRowsAfterStart(in_process / "trajectory.csv", lockstep.first_out_s),
+            TrajectoryRowsAfterStart(over_dds / "trajectory.csv", lockstep.first_out_s));
+  if (lockstep.in_step == lockstep.cycles) {
+    EXPECT_EQ(ma.at("scans"), mb.at("scans"));
+    EXPECT_EQ(ma.at("leaks"), mb.at("leaks"));
+    EXPECT_EQ(ma.at("false_alarms"), mb.at("false_alarms"));
+  } else {
+    std::cout << "lockstep broke at t = " << lockstep.first_out_s << " s (" << lockstep.in_step << " of "
+              << lockstep.cycles << " cycles): compared up to there\n";
+    const double detected = ma["leaks"][0]["detected_s"].get<double>();
+    if (detected < lockstep.first_out_s) EXPECT_EQ(ma["leaks"][0]["detected_s"], mb["leaks"][0]["detected_s"]);
+  }
 }
 
 }  // namespace
