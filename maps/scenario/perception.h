@@ -94,6 +94,13 @@ struct FusionSettings {
   /// linearly, P(t) = min(P0, P_after + P0 t / relax_time_s): a valve not looked at for a while
   /// weighs in proportion to how long, as an inspection schedule's "longest waiting" rule.
   bool onset_regrowth = false;
+  /// Of a leak in the leaf of a flowline joint (a tie-in at either end of a flowline, a flange at
+  /// each bend: its vertices), before anyone looked. Joints leak more often than straight pipe or
+  /// open seabed; their prior draws the vehicles as a valve's does, leak_mass * (P - P0) each, and
+  /// looking at a joint and seeing nothing makes it lighter until its prior comes back. 0: a joint
+  /// is any leaf (prior_probability); else in [prior_probability, alarm_probability / 2) (a joint
+  /// alone never raises an alarm).
+  double joint_prior_probability = 0.0;
 
   bool operator==(const FusionSettings&) const = default;
 };
@@ -101,6 +108,9 @@ struct FusionSettings {
 /// Where a leak is (m): its valve's position, its flowline's point or its seabed point. Throws
 /// std::out_of_range for an unknown valve, ScenarioError for an unknown flowline or an s_m off it.
 Eigen::Vector2d LeakPosition(const Scenario& scenario, const LeakSpec& leak);
+/// The flowlines' joints (m): every vertex of every flowline (tie-ins at the ends, flanges at the
+/// bends), in flowline then vertex order, a point shared by two flowlines once.
+std::vector<Eigen::Vector2d> FlowlineJoints(const Scenario& scenario);
 /// How a leak is named in tables and metrics.json: its valve ("P3"), "FL-A at 12.5 m" or
 /// "seabed (x, y)".
 std::string LeakWhere(const LeakSpec& leak);
@@ -116,6 +126,9 @@ enum class LeakSites {
   /// Along the flowlines, uniform over their total length, where the point is as a seabed
   /// leak's would be: at least 1 m from every valve and clear of the structures and edges.
   kFlowlines,
+  /// At a flowline joint (a vertex: tie-in, flange), every joint alike, among those where a
+  /// seabed leak could be (1 m from every valve, clear of the structures and edges).
+  kJoints,
 };
 
 /// A copy whose leaks are `count` random ones (replacing the file's), drawn from the scenario's
@@ -123,7 +136,7 @@ enum class LeakSites {
 /// ScenarioError if count is out of 0..1000 or no seabed point (flowline point) qualifies.
 Scenario WithRandomLeaks(const Scenario& scenario, int count, LeakSites sites);
 /// Throws ScenarioError (`where` starts the message) unless text is "valves", "valves-even",
-/// "seabed" or "flowlines".
+/// "seabed", "flowlines" or "joints".
 LeakSites ParseLeakSites(const std::string& text, const std::string& where);
 const char* ToString(LeakSites sites);
 

@@ -222,6 +222,7 @@ std::string EmitScenario(const Scenario& s) {
     number("max_log_odds", f.max_log_odds);
     number("min_evidence", f.min_evidence);
     key("regrowth") << (f.onset_regrowth ? "onset" : "relax");
+    if (f.joint_prior_probability > 0.0) number("joint_prior_probability", f.joint_prior_probability);
     out << YAML::EndMap;
   }
   out << YAML::EndMap;

@@ -354,7 +354,8 @@ LeakSpec ReadLeak(const Reader& r, const YAML::Node& node, const std::string& pa
 
 void ReadFusion(const Reader& r, const YAML::Node& node, const std::string& path, FusionSettings& f) {
   r.ExpectMap(node, path, {"steer", "prior_probability", "relax_time_s", "confirm_probability", "alarm_probability",
-                           "leak_mass", "spread_m", "max_log_odds", "min_evidence", "regrowth"});
+                           "leak_mass", "spread_m", "max_log_odds", "min_evidence", "regrowth",
+                           "joint_prior_probability"});
   r.Optional(node, "steer", path, [&](const YAML::Node& n, const std::string& p) {
     const std::string text = r.Text(n, p);
     if (text == "posterior") f.steer = true;
@@ -369,6 +370,7 @@ void ReadFusion(const Reader& r, const YAML::Node& node, const std::string& path
   r.OptionalNumber(node, "spread_m", path, f.spread_m);
   r.OptionalNumber(node, "max_log_odds", path, f.max_log_odds);
   r.OptionalNumber(node, "min_evidence", path, f.min_evidence);
+  r.OptionalNumber(node, "joint_prior_probability", path, f.joint_prior_probability);
   r.Optional(node, "regrowth", path, [&](const YAML::Node& n, const std::string& p) {
     const std::string text = r.Text(n, p);
     if (text == "relax") f.onset_regrowth = false;

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <map>
 #include <random>
+#include <set>
 #include <stdexcept>
 
 #include "maps/scenario/scenario.h"
@@ -32,7 +33,9 @@ LeakSites ParseLeakSites(const std::string& text, const std::string& where) {
   if (text == "valves-even") return LeakSites::kValvesEven;
   if (text == "seabed") return LeakSites::kSeabed;
   if (text == "flowlines") return LeakSites::kFlowlines;
-  throw ScenarioError(OneLine(where + " = " + text + ": must be valves (by risk), valves-even, seabed or flowlines"));
+  if (text == "joints") return LeakSites::kJoints;
+  throw ScenarioError(
+      OneLine(where + " = " + text + ": must be valves (by risk), valves-even, seabed, flowlines or joints"));
 }
 
 const char* ToString(LeakSites sites) {
@@ -41,6 +44,7 @@ const char* ToString(LeakSites sites) {
     case LeakSites::kValvesEven: return "valves-even";
     case LeakSites::kSeabed: return "seabed";
     case LeakSites::kFlowlines: return "flowlines";
+    case LeakSites::kJoints: return "joints";
   }
   return "?";
 }
@@ -52,6 +56,17 @@ Eigen::Vector2d LeakPosition(const Scenario& scenario, const LeakSpec& leak) {
     for (const Valve& valve : tree.valves)
       if (valve.name == leak.valve) return valve.position_m;
   throw std::out_of_range("leak at valve " + leak.valve + ": no such valve");
+}
+
+std::vector<Eigen::Vector2d> FlowlineJoints(const Scenario& scenario) {
+  std::vector<Eigen::Vector2d> joints;
+  std::set<std::pair<double, double>> seen;
+  for (const Flowline& line : scenario.flowlines) {
+    for (const Eigen::Vector2d& p : line.points_m) {
+      if (seen.insert({p.x(), p.y()}).second) joints.push_back(p);
+    }
+  }
+  return joints;
 }
 
 std::string LeakWhere(const LeakSpec& leak) {
@@ -170,6 +185,15 @@ void ValidatePerception(const Scenario& s, const std::string& file) {
   in_range("fusion.max_log_odds", f.max_log_odds, LeakLogit(f.confirm_probability), 30.0, true, false,
            "must be in (logit(confirm_probability) = " + FormatNumber(LeakLogit(f.confirm_probability)) + ", 30]");
   in_range("fusion.min_evidence", f.min_evidence, -30.0, 0.0, false, true, "must be in [-30, 0)");
+  if (f.joint_prior_probability != 0.0) {
+    in_range("fusion.joint_prior_probability", f.joint_prior_probability, f.prior_probability,
+             0.5 * f.alarm_probability, false, true,
+             "must be 0 (a joint is any leaf) or in [prior_probability, alarm_probability / 2)");
+    if (s.flowlines.empty()) {
+      fail("fusion.joint_prior_probability", FormatNumber(f.joint_prior_probability),
+           "weights the flowlines' joints, and the scenario has no flowlines");
+    }
+  }
 }
 
 }  // namespace detail
@@ -220,10 +244,37 @@ Scenario WithRandomLeaks(const Scenario& scenario, int count, LeakSites sites) {
     leak.s_m = std::min(std::round(s * 100.0) / 100.0, line.Length_m());
     return open_seabed(line.PointAt(leak.s_m));
   };
+  // Joint sites: the flowlines' vertices where a seabed leak could be, each once (by the first
+  // flowline through it), as (flowline, metres along it).
+  std::vector<std::pair<const Flowline*, double>> joints;
+  if (sites == LeakSites::kJoints) {
+    if (scenario.flowlines.empty()) {
+      throw ScenarioError("--random-leaks: " + scenario.name + " has no flowlines, so no joints to draw leaks at (give it a "
+                          "flowlines: section, as scenarios/fleet_field_leaks.yaml has, or draw at valves or seabed)");
+    }
+    std::set<std::pair<double, double>> seen;
+    for (const Flowline& line : scenario.flowlines) {
+      double s = 0.0;
+      for (std::size_t v = 0; v < line.points_m.size(); ++v) {
+        if (v > 0) s += (line.points_m[v] - line.points_m[v - 1]).norm();
+        const Eigen::Vector2d& p = line.points_m[v];
+        if (seen.insert({p.x(), p.y()}).second && open_seabed(p)) joints.emplace_back(&line, std::min(s, line.Length_m()));
+      }
+    }
+    if (joints.empty()) {
+      throw ScenarioError("--random-leaks: " + scenario.name + " has no flowline joint " +
+                          FormatNumber(kRandomSeabedFromValves_m) + " m from every valve and " +
+                          FormatNumber(kSeabedLeakClearance_m) + " m from the structures and edges");
+    }
+  }
   for (int n = 0; n < count; ++n) {
     LeakSpec leak;
     leak.start_s = scenario.duration_s * (0.1 + 0.8 * uniform());
-    if (sites == LeakSites::kFlowlines) {
+    if (sites == LeakSites::kJoints) {
+      const auto& [line, s] = joints[std::min(joints.size() - 1, static_cast<std::size_t>(uniform() * joints.size()))];
+      leak.flowline = line->name;
+      leak.s_m = s;
+    } else if (sites == LeakSites::kFlowlines) {
       bool found = false;
       for (int attempt = 0; attempt < 100000 && !found; ++attempt) found = flowline_site(leak);
       if (!found) {

@@ -95,9 +95,9 @@ void AddScenarioOverrides(CLI::App& cmd, ScenarioOverrides& o, OverrideSet set, 
       ->check(CLI::Range(0, 1000));
   cmd.add_option("--leak-sites", o.leak_sites,
                  "Where random leaks are: valves (by the default profile's risk), valves-even, seabed (open water "
-                 "1 m from every valve) or flowlines (along the scenario's flowlines, 1 m from every valve); default "
-                 "valves")
-      ->check(CLI::IsMember({"valves", "valves-even", "seabed", "flowlines"}));
+                 "1 m from every valve), flowlines (along the scenario's flowlines, 1 m from every valve) or joints "
+                 "(at the flowlines' vertices: tie-ins, flanges; the same clearances); default valves")
+      ->check(CLI::IsMember({"valves", "valves-even", "seabed", "flowlines", "joints"}));
   if (mission) {
     cmd.add_option("--steer", o.steer,
                    "posterior: vehicles steer on the risk layer the sensors' scans update (the Bayesian loop, the "
@@ -453,8 +453,9 @@ int RunCli(int argc, char** argv) {
   bench_leaks
       ->add_option("--sites", leaks_cmd.sites,
                    "Where the leaks are: valves (by the default profile's risk), valves-even, seabed (open water 1 m "
-                   "from every valve) or flowlines (along the scenario's flowlines, 1 m from every valve)")
-      ->check(CLI::IsMember({"valves", "valves-even", "seabed", "flowlines"}))
+                   "from every valve), flowlines (along the scenario's flowlines, 1 m from every valve) or joints (at "
+                   "the flowlines' vertices, the same clearances)")
+      ->check(CLI::IsMember({"valves", "valves-even", "seabed", "flowlines", "joints"}))
       ->capture_default_str();
   bench_leaks->add_option("--seed", leaks_cmd.first_seed, "Seed of the first run")->check(MustBeWholeNumber)->capture_default_str();
   bench_leaks

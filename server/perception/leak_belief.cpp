@@ -31,6 +31,26 @@ LeakBelief::LeakBelief(const maps::Scenario& scenario, const maps::World& world,
   floor_ = f.min_evidence;
   ceiling_ = f.max_log_odds - prior_;
   for (const Eigen::Vector2d& p : scenario.ValvePositions()) valve_cells_.push_back(CellOf(p));
+  if (f.joint_prior_probability > f.prior_probability) {
+    joint_prior_probability_ = f.joint_prior_probability;
+    joint_prior_ = std::log(joint_prior_probability_ / (1.0 - joint_prior_probability_));
+    const maps::OccupancyGrid& obstacles = world.obstacles();
+    for (const Eigen::Vector2d& p : maps::FlowlineJoints(scenario)) {
+      const Cell c = CellOf(p);
+      const Eigen::Vector2i in_grid = obstacles.CellOf(CentreOf(c));
+      if (obstacles.Occupied(in_grid.x(), in_grid.y())) continue;  // under a structure: no sensor sees it
+      if (is_joint_.emplace(Key(c), true).second) joints_.push_back(c);
+    }
+    std::sort(joints_.begin(), joints_.end());
+  }
+}
+
+double LeakBelief::PriorLogOdds(Cell c) const {
+  return !is_joint_.empty() && is_joint_.count(Key(c)) != 0 ? joint_prior_ : prior_;
+}
+
+double LeakBelief::PriorProbability(Cell c) const {
+  return !is_joint_.empty() && is_joint_.count(Key(c)) != 0 ? joint_prior_probability_ : prior_probability_;
 }
 
 LeakBelief::Cell LeakBelief::CellOf(const Eigen::Vector2d& x) const {
@@ -44,21 +64,23 @@ Eigen::Vector2d LeakBelief::CentreOf(Cell c) const {
           0.5 * (y0 + std::min(y0 + resolution_m_, scenario_.workspace.height_m))};
 }
 
-double LeakBelief::Relaxed(const Value& v, double time_s) const {
+double LeakBelief::Relaxed(std::uint64_t key, const Value& v, double time_s) const {
   const double tau = scenario_.fusion.relax_time_s;
   if (!std::isfinite(tau) || time_s <= v.time_s) return v.evidence;
   if (v.evidence < 0.0 && scenario_.fusion.onset_regrowth) {
     // Leaks that began since the look, at the hazard P0 / tau: P grows linearly back to P0.
-    const double p = LeakLogistic(prior_ + v.evidence) + prior_probability_ * (time_s - v.time_s) / tau;
-    if (p >= prior_probability_) return 0.0;
-    return std::log(p / (1.0 - p)) - prior_;
+    const bool joint = !is_joint_.empty() && is_joint_.count(key) != 0;
+    const double l0 = joint ? joint_prior_ : prior_, p0 = joint ? joint_prior_probability_ : prior_probability_;
+    const double p = LeakLogistic(l0 + v.evidence) + p0 * (time_s - v.time_s) / tau;
+    if (p >= p0) return 0.0;
+    return std::log(p / (1.0 - p)) - l0;
   }
   return v.evidence * std::exp(-(time_s - v.time_s) / tau);
 }
 
 double LeakBelief::Evidence(Cell c, double time_s) const {
   const auto it = cells_.find(Key(c));
-  return it == cells_.end() ? 0.0 : Relaxed(it->second, time_s);
+  return it == cells_.end() ? 0.0 : Relaxed(it->first, it->second, time_s);
 }
 
 double LeakBelief::Probability(Cell c, double time_s) const { return LeakLogistic(LogOdds(c, time_s)); }
@@ -85,9 +107,12 @@ int LeakBelief::Fuse(int sensor, const Eigen::Vector2d& position_m, double headi
       double near = 0.0;
       for (const Eigen::Vector2d& z : detections_m) near += model.PositionDensity(z, centre);
       const double ratio = (1.0 - p) + p * near / kappa;
-      Value& v = cells_[Key(c)];
-      const double before = Relaxed(v, time_s);
-      const double after = std::clamp(before + std::log(std::max(ratio, 1e-300)), floor_, ceiling_);
+      const std::uint64_t key = Key(c);
+      Value& v = cells_[key];
+      const double before = Relaxed(key, v, time_s);
+      // The ceiling is on l itself: a joint's evidence has that much less room above its prior.
+      const double ceiling = is_joint_.empty() || is_joint_.count(key) == 0 ? ceiling_ : ceiling_ + prior_ - joint_prior_;
+      const double after = std::clamp(before + std::log(std::max(ratio, 1e-300)), floor_, ceiling);
       v.evidence = after;
       v.time_s = time_s;
       if (after > 0.0) positive_.insert(c);
@@ -113,7 +138,7 @@ void LeakBelief::DropRelaxed(double time_s) {
 void LeakBelief::Prune(double time_s) {
   next_prune_s_ = time_s + kBeliefPrunePeriod_s;
   for (auto it = cells_.begin(); it != cells_.end();) {
-    if (std::abs(Relaxed(it->second, time_s)) < kEvidenceForgotten) {
+    if (std::abs(Relaxed(it->first, it->second, time_s)) < kEvidenceForgotten) {
       const Cell c{static_cast<int>(static_cast<std::uint32_t>(it->first >> 32)),
                    static_cast<int>(static_cast<std::uint32_t>(it->first))};
       positive_.erase(c);
@@ -128,7 +153,10 @@ Eigen::VectorXd LeakBelief::ValveFactors(double time_s) const {
   Eigen::VectorXd factors = Eigen::VectorXd::Ones(static_cast<Eigen::Index>(valve_cells_.size()));
   for (std::size_t k = 0; k < valve_cells_.size(); ++k) {
     const double evidence = Evidence(valve_cells_[k], time_s);
-    if (evidence < 0.0) factors[static_cast<Eigen::Index>(k)] = LeakLogistic(prior_ + evidence) / prior_probability_;
+    if (evidence < 0.0) {
+      factors[static_cast<Eigen::Index>(k)] =
+          LeakLogistic(PriorLogOdds(valve_cells_[k]) + evidence) / PriorProbability(valve_cells_[k]);
+    }
   }
   return factors;
 }

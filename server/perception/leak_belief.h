@@ -12,7 +12,9 @@
 // detection elsewhere in view lowers it as a miss does. l is held in [l0 + min_evidence,
 // max_log_odds] (OctoMap's clamping: the belief can always be moved again), and between scans
 // relaxes to the prior, l - l0 decaying as exp(-t / relax_time_s): a leak may begin anywhere at
-// any time. No transport, no files.
+// any time. The prior is per leaf: the leaves of the flowlines' joints (tie-ins, flanges) start
+// at logit(fusion.joint_prior_probability) when it is set, every other leaf at l0; evidence is
+// always held as l minus the leaf's own prior. No transport, no files.
 #include <cstdint>
 #include <unordered_map>
 #include <set>
@@ -47,7 +49,15 @@ class LeakBelief {
 
   const std::vector<maps::SensorModel>& sensors() const { return sensors_; }
   double resolution_m() const { return resolution_m_; }
+  /// The open seabed's prior (every leaf but the joints').
   double prior_log_odds() const { return prior_; }
+  /// A leaf's own prior log-odds and probability.
+  double PriorLogOdds(Cell c) const;
+  double PriorProbability(Cell c) const;
+  /// The leaves of the flowlines' joints whose prior is above the open seabed's (none unless
+  /// fusion.joint_prior_probability is set), ascending; joints inside a structure's footprint,
+  /// where no sensor sees, are left out.
+  const std::vector<Cell>& joints() const { return joints_; }
 
   /// Fuses one scan (checked at the door) of sensor `sensor` at time_s (>= every earlier scan's).
   /// Returns how many leaves were updated.
@@ -59,7 +69,7 @@ class LeakBelief {
   Eigen::Vector2d CentreOf(Cell c) const;
   /// l - l0 of a leaf at time_s (0: the prior).
   double Evidence(Cell c, double time_s) const;
-  double LogOdds(Cell c, double time_s) const { return prior_ + Evidence(c, time_s); }
+  double LogOdds(Cell c, double time_s) const { return PriorLogOdds(c) + Evidence(c, time_s); }
   double Probability(Cell c, double time_s) const;
   /// The leaves above the prior (evidence > 0), ascending; those relaxed below 1e-4 are dropped.
   const std::set<Cell>& positive() const { return positive_; }
@@ -78,7 +88,7 @@ class LeakBelief {
     double time_s = 0.0;
   };
   static std::uint64_t Key(Cell c) { return (static_cast<std::uint64_t>(static_cast<std::uint32_t>(c.i)) << 32) | static_cast<std::uint32_t>(c.j); }
-  double Relaxed(const Value& v, double time_s) const;
+  double Relaxed(std::uint64_t key, const Value& v, double time_s) const;
   void Prune(double time_s);
 
   const maps::Scenario& scenario_;
@@ -87,6 +97,9 @@ class LeakBelief {
   int cells_x_ = 0, cells_y_ = 0;
   double prior_ = 0.0, prior_probability_ = 0.0, floor_ = 0.0, ceiling_ = 0.0;
   std::unordered_map<std::uint64_t, Value> cells_;
+  std::vector<Cell> joints_;
+  double joint_prior_ = 0.0, joint_prior_probability_ = 0.0;
+  std::unordered_map<std::uint64_t, bool> is_joint_;
   std::set<Cell> positive_;
   std::vector<Cell> valve_cells_;
   double next_prune_s_ = 0.0;

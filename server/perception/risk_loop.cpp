@@ -139,11 +139,16 @@ void RiskLoop::UpdateLayer(double time_s) {
     const Eigen::Vector2i in_grid = blocked.CellOf(belief_.CentreOf(c));
     return reachable_[key] = !blocked.Occupied(in_grid.x(), in_grid.y());
   };
-  // Each leaf's evidence of a leak as a mass, spread as a Gaussian over the reachable leaves
-  // around it (no risk where no hull can be: SMC would push into the structure).
+  // Each leaf's chance of a leak above the open seabed's as a mass, spread as a Gaussian over the
+  // reachable leaves around it (no risk where no hull can be: SMC would push into the structure):
+  // the leaves with evidence of a leak, and the flowlines' joints, whose prior is above P0.
   std::unordered_map<std::uint64_t, double> mass;
   std::vector<std::pair<LeakBelief::Cell, double>> spread;
-  for (const LeakBelief::Cell& c : belief_.positive()) {
+  std::vector<LeakBelief::Cell> raised(belief_.positive().begin(), belief_.positive().end());
+  for (const LeakBelief::Cell& c : belief_.joints()) {
+    if (belief_.positive().count(c) == 0) raised.push_back(c);
+  }
+  for (const LeakBelief::Cell& c : raised) {
     const double m = scenario_.fusion.leak_mass * (belief_.Probability(c, time_s) - p0);
     // A leaf a hundred thousandth of the prior's mass above it steers nobody (and a false alarm's
     // leaves take ten relaxation times to fall below the belief's own threshold).

@@ -4,7 +4,9 @@
 // them in, and the belief is turned into what the vehicles steer on:
 //  - evidence of a leak adds risk to its leaf of the risk layer,
 //      e_c = leak_mass (P_c - P0) / r^2   (1/m^2; a certain leak adds leak_mass, the prior holds 1),
-//    so a detection pulls vehicles there on the next cycle;
+//    so a detection pulls vehicles there on the next cycle; the flowlines' joints, whose prior
+//    is above P0 when fusion.joint_prior_probability is set, add theirs from the start, as a
+//    valve's prior does, and weigh less once looked at and found clean;
 //  - evidence of no leak at a valve (its leaf below the prior) scales the valve's weight by
 //    P / P0 <= 1 until relaxation brings it back: a valve just looked at weighs less, one nobody
 //    looked at for a while its full risk (FleetServer::SetWeightFactors).

@@ -107,6 +107,13 @@ TEST(ScenarioPerception, BadInputsNameFieldAndRule) {
       {"fusion: {min_evidence: 1}", "x.yaml: fusion.min_evidence = 1: must be in [-30, 0)"},
       {"fusion: {max_log_odds: 1}", "x.yaml: fusion.max_log_odds = 1: must be in (logit(confirm_probability)"},
       {"fusion: {regrowth: linear}", "x.yaml: fusion.regrowth = linear: must be relax"},
+      {"flowlines: [{name: F1, points_m: [[0.5, 4], [4.5, 4]]}]\nfusion: {joint_prior_probability: 0.25}",
+       "x.yaml: fusion.joint_prior_probability = 0.25: must be 0 (a joint is any leaf) or in [prior_probability, "
+       "alarm_probability / 2)"},
+      {"flowlines: [{name: F1, points_m: [[0.5, 4], [4.5, 4]]}]\nfusion: {joint_prior_probability: 0.0001}",
+       "x.yaml: fusion.joint_prior_probability = 1e-04: must be 0"},
+      {"fusion: {joint_prior_probability: 0.01}",
+       "x.yaml: fusion.joint_prior_probability = 0.01: weights the flowlines' joints, and the scenario has no flowlines"},
   };
   for (const auto& [section, expected] : cases) {
     SCOPED_TRACE(section);
@@ -219,6 +226,27 @@ leaks: [{at: {flowline: F1, s_m: 2.75}, start_s: 20}]
   EXPECT_NE(VehicleFingerprint(further), VehicleFingerprint(s)) << "a host told of another leak flies another world";
 }
 
+// A flowline's joints are its vertices, a point two flowlines share once; their prior is read,
+// written back and read again the same, and left out of the text while unset.
+TEST(ScenarioPerception, FlowlineJointsAndTheirPrior) {
+  const Scenario s = ParseScenario(WithSection(R"(
+flowlines: [{name: F1, points_m: [[0.5, 4.5], [2.5, 4.5], [2.5, 3.0]]}, {name: F2, points_m: [[2.5, 3.0], [4.5, 3.0]]}]
+fusion: {joint_prior_probability: 0.02}
+)"),
+                                   "x.yaml");
+  const std::vector<Eigen::Vector2d> joints = FlowlineJoints(s);
+  ASSERT_EQ(joints.size(), 4u);
+  EXPECT_EQ(joints[2], Eigen::Vector2d(2.5, 3.0));
+  EXPECT_EQ(joints[3], Eigen::Vector2d(4.5, 3.0));
+  EXPECT_EQ(s.fusion.joint_prior_probability, 0.02);
+  const std::string text = EmitScenario(s);
+  EXPECT_NE(text.find("joint_prior_probability: 0.02"), std::string::npos) << text;
+  EXPECT_EQ(EmitScenario(ParseScenario(text, "x.yaml")), text);
+  Scenario unset = s;
+  unset.fusion.joint_prior_probability = 0.0;
+  EXPECT_EQ(EmitScenario(unset).find("joint_prior_probability"), std::string::npos);
+}
+
 // Random flowline leaks: on a flowline (the distance to its polyline, by projection on each
 // segment, is zero), 1 m from every valve and clear of the structures and edges, the same for
 // the same seed, and uniform over the eligible length: F1 runs 0.9 m north of P1, so the 0.87 m of
@@ -267,6 +295,50 @@ flowlines:
   try {
     WithRandomLeaks(bare, 1, LeakSites::kFlowlines);
     ADD_FAILURE() << "drew flowline leaks without flowlines";
+  } catch (const ScenarioError& e) {
+    EXPECT_NE(std::string(e.what()).find("has no flowlines"), std::string::npos) << e.what();
+  }
+}
+
+
+// Random joint leaks: at a vertex of a flowline, each eligible vertex (1 m from every valve, 0.5 m
+// inside the edges and off the structures, by hand below) alike, a vertex two flowlines share
+// once, the same for the same seed; named by the flowline and the metres to the vertex.
+TEST(ScenarioPerception, RandomLeaksAtTheJoints) {
+  Scenario s = ParseScenario(WithSection(R"(
+flowlines:
+  - {name: F1, points_m: [[0.6, 4.4], [2.6, 4.4], [5.4, 4.4]]}
+  - {name: F2, points_m: [[0.8, 0.8], [0.8, 3.8], [0.6, 4.4]]}
+)"),
+                             "x.yaml");
+  std::vector<Eigen::Vector2d> eligible;
+  for (const Eigen::Vector2d& v : FlowlineJoints(s)) {
+    bool ok = v.x() >= 0.5 && v.y() >= 0.5 && v.x() <= s.workspace.width_m - 0.5 && v.y() <= s.workspace.height_m - 0.5;
+    for (const Eigen::Vector2d& valve : s.ValvePositions()) ok = ok && (v - valve).norm() >= 1.0;
+    for (const ChristmasTree& t : s.structures) ok = ok && !((v - t.center_m).array().abs() < t.size_m.array() / 2 + 0.5).all();
+    if (ok) eligible.push_back(v);
+  }
+  ASSERT_GE(eligible.size(), 3u);
+  ASSERT_LT(eligible.size(), 5u) << "a vertex near a valve or an edge is left out";
+  const Scenario a = WithRandomLeaks(s, 300, LeakSites::kJoints);
+  EXPECT_EQ(EmitScenario(a), EmitScenario(WithRandomLeaks(s, 300, LeakSites::kJoints)));
+  EXPECT_NO_THROW(a.Validate());
+  std::vector<int> hits(eligible.size(), 0);
+  for (const LeakSpec& leak : a.leaks) {
+    ASSERT_FALSE(leak.flowline.empty());
+    const Eigen::Vector2d p = LeakPosition(s, leak);
+    std::size_t k = 0;
+    while (k < eligible.size() && (eligible[k] - p).norm() > 1e-9) ++k;
+    ASSERT_LT(k, eligible.size()) << LeakWhere(leak) << " is no eligible joint";
+    ++hits[k];
+  }
+  const double share = 1.0 / static_cast<double>(eligible.size()), n = 300.0;
+  for (const int h : hits) EXPECT_NEAR(h / n, share, 4.0 * std::sqrt(share * (1 - share) / n));
+  EXPECT_EQ(ParseLeakSites("joints", "--leak-sites"), LeakSites::kJoints);
+  Scenario bare = ParseScenario(WithSection(""), "x.yaml");
+  try {
+    WithRandomLeaks(bare, 1, LeakSites::kJoints);
+    ADD_FAILURE() << "drew joint leaks without flowlines";
   } catch (const ScenarioError& e) {
     EXPECT_NE(std::string(e.what()).find("has no flowlines"), std::string::npos) << e.what();
   }

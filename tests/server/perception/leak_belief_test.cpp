@@ -132,5 +132,60 @@ TEST_F(LeakBeliefTest, CheckpointRoundTrip) {
   EXPECT_THROW(again.Restore(bad), std::invalid_argument);
 }
 
+
+// Flowline joints (fusion.joint_prior_probability) start at their own prior: a pipe of two_xt_leaks
+// from beside P1 to the east, bent once, its first vertex in the camera's view from below P1. The
+// joint's leaf is at Pj before any look; a scan that sees nothing lowers its log-odds by the same
+// ln(1 - p) as any leaf's (evidence is against the leaf's own prior); it relaxes back to Pj, under
+// onset linearly at the hazard Pj / tau; the ceiling max_log_odds holds for l itself; a vertex
+// under a structure is no joint; the checkpoint keeps the posterior. Hand computations, 1e-12.
+TEST_F(LeakBeliefTest, FlowlineJointsStartAtTheirOwnPrior) {
+  const double pj = 0.02, p0 = scenario_.fusion.prior_probability, tau = scenario_.fusion.relax_time_s;
+  maps::Scenario with_joints = scenario_;
+  with_joints.flowlines.push_back({"FL-T", {{2.3, 3.6}, {4.5, 3.6}, {4.5, 2.0}}, 0.15});
+  with_joints.flowlines.push_back({"J-B", {{3.7, 2.0}, {4.5, 2.0}}, 0.15});  // from inside XT-B to the bend
+  with_joints.fusion.joint_prior_probability = pj;
+  maps::World world(with_joints);
+  LeakBelief b(with_joints, world, 0.2);
+  const LeakBelief::Cell joint = b.CellOf({2.3, 3.6}), pipe = b.CellOf({3.4, 3.6});
+  ASSERT_EQ(b.joints().size(), 3u) << "(2.3, 3.6), (4.5, 3.6), (4.5, 2.0) once; (3.7, 2.0) is inside XT-B";
+  EXPECT_EQ(b.joints()[0], joint);
+  EXPECT_NEAR(b.Probability(joint, 0.0), pj, 1e-12);
+  EXPECT_NEAR(b.Probability(pipe, 0.0), p0, 1e-12) << "straight pipe is open seabed";
+  EXPECT_NEAR(b.Probability(b.CellOf({3.7, 2.0}), 0.0), p0, 1e-12);
+  EXPECT_EQ(b.prior_log_odds(), belief_.prior_log_odds());
+
+  const Eigen::Vector2d pose(2.0, 2.9);
+  const double d = (b.CentreOf(joint) - pose).norm();
+  ASSERT_LT(d, 1.2);
+  ASSERT_GT(b.Fuse(0, pose, M_PI / 2, {}, 1.0), 0);
+  ASSERT_NE(b.Evidence(joint, 1.0), 0.0) << "the joint is in view";
+  EXPECT_NEAR(b.Evidence(joint, 1.0), std::log(1 - P(d)), 1e-12);
+  EXPECT_NEAR(b.LogOdds(joint, 1.0), Logit(pj) + std::log(1 - P(d)), 1e-12);
+  EXPECT_NEAR(b.Evidence(joint, 1.0 + tau), std::log(1 - P(d)) / std::exp(1.0), 1e-12);
+
+  maps::Scenario onset_scenario = with_joints;
+  onset_scenario.fusion.onset_regrowth = true;
+  LeakBelief onset(onset_scenario, world, 0.2);
+  onset.Fuse(0, pose, M_PI / 2, {}, 1.0);
+  const double after = 1.0 / (1.0 + std::exp(-(Logit(pj) + std::log(1 - P(d)))));
+  for (const double t : {3.0, 0.5 * tau * (1 - after / pj)}) {
+    EXPECT_NEAR(onset.Probability(joint, 1.0 + t), after + pj * t / tau, 1e-12);
+  }
+  EXPECT_EQ(onset.Evidence(joint, 1.0 + tau * (1 - after / pj) + 1e-6), 0.0);
+
+  for (int k = 0; k < 20; ++k) b.Fuse(0, pose, M_PI / 2, {b.CentreOf(joint)}, 2.0);
+  EXPECT_NEAR(b.LogOdds(joint, 2.0), scenario_.fusion.max_log_odds, 1e-12);
+  LeakBelief again(with_joints, world, 0.2);
+  again.Restore(b.Checkpoint());
+  EXPECT_EQ(again.Probability(joint, 30.0), b.Probability(joint, 30.0));
+  EXPECT_NEAR(again.Probability(b.CellOf({4.5, 2.0}), 30.0), pj, 1e-12) << "a joint not looked at keeps its prior";
+
+  with_joints.fusion.joint_prior_probability = 0.0;
+  LeakBelief unweighted(with_joints, world, 0.2);
+  EXPECT_TRUE(unweighted.joints().empty());
+  EXPECT_NEAR(unweighted.Probability(joint, 0.0), p0, 1e-12);
+}
+
 }  // namespace
 }  // namespace sage::server

@@ -278,5 +278,67 @@ TEST(RiskLoop, AFlowlineLeakIsFoundWhereTheLineIs) {
   EXPECT_EQ(j["leaks"][0]["where"], "FL-1 at 4.4 m");
 }
 
+
+// Flowline joints weighted above the seabed (fusion.joint_prior_probability) draw the vehicles
+// before anyone saw anything: fleet_field_leaks' 20 joints (each jumper's tie-in, bend and tee, the
+// header's ends) each put leak_mass (Pj - P0) into the layer, spread over the leaves a hull can
+// reach, so the layer's mass is that times the joints a sensor can see (those off every
+// structure's footprint: at least the 14 that are 0.3 m or more clear of one). Looked at and found
+// clean, a joint weighs less until its prior comes back; unweighted, the layer stays empty.
+TEST(RiskLoop, FlowlineJointsDrawTheVehiclesUntilLookedAt) {
+  maps::Scenario s = maps::LoadScenario(kFleetFieldLeaks);
+  s.leaks.clear();
+  const double pj = 0.05, p0 = s.fusion.prior_probability;
+  s.fusion.joint_prior_probability = pj;
+  s.Validate();
+  maps::World world(s);
+  MissionCore core(world, s, "", ControllerKind::kErgodic);
+  core.Cycle(0);
+  const std::vector<Eigen::Vector2d> joints = maps::FlowlineJoints(s);
+  ASSERT_EQ(joints.size(), 20u);
+  std::size_t clear = 0;
+  for (const Eigen::Vector2d& j : joints) {
+    bool near_a_structure = false;
+    for (const maps::ChristmasTree& tree : s.structures) {
+      near_a_structure |= ((j - tree.center_m).array().abs() < (tree.size_m / 2).array() + 0.3).all();
+    }
+    clear += near_a_structure ? 0 : 1;
+  }
+  const std::size_t seen = core.risk_loop().belief().joints().size();
+  EXPECT_GE(seen, clear);
+  EXPECT_GE(clear, 14u);
+  const maps::RiskLayer& layer = core.risk_layer();
+  EXPECT_NEAR(layer.excess_mass(), static_cast<double>(seen) * (pj - p0), 1e-4 * seen * pj);
+  // The header's tee of J-A, clear of everything: its leaf holds the kernel's centre share, as the
+  // continuous 3-sigma Gaussian gives it, plus the share of J-D's tee one leaf (0.2 m) east.
+  const Eigen::Vector2d tee(3.2, 4.85);
+  const double sigma = s.fusion.spread_m;
+  const double continuous = (pj - p0) / (2 * M_PI * sigma * sigma * (1 - std::exp(-4.5))) *
+                            (1 + std::exp(-0.5 * 0.2 * 0.2 / (sigma * sigma)));
+  EXPECT_NEAR(layer.Excess(tee), continuous, 0.03 * continuous);
+  const CycleOutput start = core.Cycle(1);
+
+  // A vehicle over the header looks at the tee (the sonar, facing along the line) and sees nothing.
+  const Eigen::Vector2d from(2.6, 4.85);
+  const auto& sensor = s.sensors[0];
+  ASSERT_LT((tee - from).norm(), sensor.range_m);
+  std::int64_t k = 2;
+  for (; k < 2 + 10 * 20; ++k) {
+    ASSERT_TRUE(core.OnState(State(0, k, from, 0.0)));
+    if (core.risk_loop().belief().sensors()[0].ScansAt(k)) ASSERT_TRUE(core.OnScan(Scan(0, k, from, 0.0)));
+    core.Cycle(k);
+  }
+  const double looked = layer.Excess(tee);
+  EXPECT_LT(looked, 0.5 * continuous) << "looked at and found clean";
+  EXPECT_LT(layer.excess_mass(), static_cast<double>(seen) * (pj - p0));
+  EXPECT_GT(layer.excess_mass(), static_cast<double>(seen - 3) * (pj - p0)) << "the joints out of view keep theirs";
+  // Without the weight nothing is in the layer.
+  s.fusion.joint_prior_probability = 0.0;
+  MissionCore unweighted(world, s, "", ControllerKind::kErgodic);
+  const CycleOutput plain = unweighted.Cycle(1);
+  EXPECT_EQ(unweighted.risk_layer().excess_mass(), 0.0);
+  EXPECT_GT(DensityOf(world.basis(), start.snapshot.phi, tee), DensityOf(world.basis(), plain.snapshot.phi, tee));
+}
+
 }  // namespace
 }  // namespace sage::server
