@@ -39,18 +39,18 @@ LeakBelief::LeakBelief(const maps::Scenario& scenario, const maps::World& world,
       const Cell c = CellOf(p);
       const Eigen::Vector2i in_grid = obstacles.CellOf(CentreOf(c));
       if (obstacles.Occupied(in_grid.x(), in_grid.y())) continue;  // under a structure: no sensor sees it
-      if (is_joint_.emplace(Key(c), true).second) joints_.push_back(c);
+      if (joint_keys_.insert(Key(c)).second) joints_.push_back(c);
     }
     std::sort(joints_.begin(), joints_.end());
   }
 }
 
 double LeakBelief::PriorLogOdds(Cell c) const {
-  return !is_joint_.empty() && is_joint_.count(Key(c)) != 0 ? joint_prior_ : prior_;
+  return IsJoint(Key(c)) ? joint_prior_ : prior_;
 }
 
 double LeakBelief::PriorProbability(Cell c) const {
-  return !is_joint_.empty() && is_joint_.count(Key(c)) != 0 ? joint_prior_probability_ : prior_probability_;
+  return IsJoint(Key(c)) ? joint_prior_probability_ : prior_probability_;
 }
 
 LeakBelief::Cell LeakBelief::CellOf(const Eigen::Vector2d& x) const {
@@ -69,7 +69,7 @@ double LeakBelief::Relaxed(std::uint64_t key, const Value& v, double time_s) con
   if (!std::isfinite(tau) || time_s <= v.time_s) return v.evidence;
   if (v.evidence < 0.0 && scenario_.fusion.onset_regrowth) {
     // Leaks that began since the look, at the hazard P0 / tau: P grows linearly back to P0.
-    const bool joint = !is_joint_.empty() && is_joint_.count(key) != 0;
+    const bool joint = IsJoint(key);
     const double l0 = joint ? joint_prior_ : prior_, p0 = joint ? joint_prior_probability_ : prior_probability_;
     const double p = LeakLogistic(l0 + v.evidence) + p0 * (time_s - v.time_s) / tau;
     if (p >= p0) return 0.0;
@@ -111,7 +111,7 @@ int LeakBelief::Fuse(int sensor, const Eigen::Vector2d& position_m, double headi
       Value& v = cells_[key];
       const double before = Relaxed(key, v, time_s);
       // The ceiling is on l itself: a joint's evidence has that much less room above its prior.
-      const double ceiling = is_joint_.empty() || is_joint_.count(key) == 0 ? ceiling_ : ceiling_ + prior_ - joint_prior_;
+      const double ceiling = IsJoint(key) ? ceiling_ + prior_ - joint_prior_ : ceiling_;
       const double after = std::clamp(before + std::log(std::max(ratio, 1e-300)), floor_, ceiling);
       v.evidence = after;
       v.time_s = time_s;

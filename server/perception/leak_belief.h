@@ -17,6 +17,7 @@
 // always held as l minus the leaf's own prior. No transport, no files.
 #include <cstdint>
 #include <unordered_map>
+#include <unordered_set>
 #include <set>
 #include <utility>
 #include <vector>
@@ -99,7 +100,8 @@ class LeakBelief {
   std::unordered_map<std::uint64_t, Value> cells_;
   std::vector<Cell> joints_;
   double joint_prior_ = 0.0, joint_prior_probability_ = 0.0;
-  std::unordered_map<std::uint64_t, bool> is_joint_;
+  std::unordered_set<std::uint64_t> joint_keys_;
+  bool IsJoint(std::uint64_t key) const { return !joint_keys_.empty() && joint_keys_.count(key) != 0; }
   std::set<Cell> positive_;
   std::vector<Cell> valve_cells_;
   double next_prune_s_ = 0.0;
