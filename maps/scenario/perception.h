@@ -16,6 +16,7 @@
 namespace sage::maps {
 
 struct Scenario;
+struct Flowline;
 
 enum class SensorKind {
   kCamera,  ///< a forward camera: short range, narrow view, few false alarms
@@ -108,9 +109,15 @@ struct FusionSettings {
 /// Where a leak is (m): its valve's position, its flowline's point or its seabed point. Throws
 /// std::out_of_range for an unknown valve, ScenarioError for an unknown flowline or an s_m off it.
 Eigen::Vector2d LeakPosition(const Scenario& scenario, const LeakSpec& leak);
-/// The flowlines' joints (m): every vertex of every flowline (tie-ins at the ends, flanges at the
-/// bends), in flowline then vertex order, a point shared by two flowlines once.
-std::vector<Eigen::Vector2d> FlowlineJoints(const Scenario& scenario);
+/// A flowline joint: a vertex of a flowline (a tie-in at an end, a flange at a bend).
+struct FlowlineJoint {
+  Eigen::Vector2d point_m;
+  const Flowline* flowline;  ///< the first flowline through it (the scenario's own)
+  double s_m;                ///< metres along that flowline to it
+};
+/// Every vertex of every flowline, in flowline then vertex order, a point two flowlines share
+/// once (by the first); the joints point into `scenario`.
+std::vector<FlowlineJoint> FlowlineJoints(const Scenario& scenario);
 /// How a leak is named in tables and metrics.json: its valve ("P3"), "FL-A at 12.5 m" or
 /// "seabed (x, y)".
 std::string LeakWhere(const LeakSpec& leak);

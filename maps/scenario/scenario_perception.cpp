@@ -58,12 +58,15 @@ Eigen::Vector2d LeakPosition(const Scenario& scenario, const LeakSpec& leak) {
   throw std::out_of_range("leak at valve " + leak.valve + ": no such valve");
 }
 
-std::vector<Eigen::Vector2d> FlowlineJoints(const Scenario& scenario) {
-  std::vector<Eigen::Vector2d> joints;
+std::vector<FlowlineJoint> FlowlineJoints(const Scenario& scenario) {
+  std::vector<FlowlineJoint> joints;
   std::set<std::pair<double, double>> seen;
   for (const Flowline& line : scenario.flowlines) {
-    for (const Eigen::Vector2d& p : line.points_m) {
-      if (seen.insert({p.x(), p.y()}).second) joints.push_back(p);
+    double s = 0.0;
+    for (std::size_t v = 0; v < line.points_m.size(); ++v) {
+      if (v > 0) s += (line.points_m[v] - line.points_m[v - 1]).norm();
+      const Eigen::Vector2d& p = line.points_m[v];
+      if (seen.insert({p.x(), p.y()}).second) joints.push_back({p, &line, std::min(s, line.Length_m())});
     }
   }
   return joints;
@@ -244,22 +247,15 @@ Scenario WithRandomLeaks(const Scenario& scenario, int count, LeakSites sites) {
     leak.s_m = std::min(std::round(s * 100.0) / 100.0, line.Length_m());
     return open_seabed(line.PointAt(leak.s_m));
   };
-  // Joint sites: the flowlines' vertices where a seabed leak could be, each once (by the first
-  // flowline through it), as (flowline, metres along it).
-  std::vector<std::pair<const Flowline*, double>> joints;
+  // Joint sites: the flowlines' vertices where a seabed leak could be.
+  std::vector<FlowlineJoint> joints;
   if (sites == LeakSites::kJoints) {
     if (scenario.flowlines.empty()) {
       throw ScenarioError("--random-leaks: " + scenario.name + " has no flowlines, so no joints to draw leaks at (give it a "
                           "flowlines: section, as scenarios/fleet_field_leaks.yaml has, or draw at valves or seabed)");
     }
-    std::set<std::pair<double, double>> seen;
-    for (const Flowline& line : scenario.flowlines) {
-      double s = 0.0;
-      for (std::size_t v = 0; v < line.points_m.size(); ++v) {
-        if (v > 0) s += (line.points_m[v] - line.points_m[v - 1]).norm();
-        const Eigen::Vector2d& p = line.points_m[v];
-        if (seen.insert({p.x(), p.y()}).second && open_seabed(p)) joints.emplace_back(&line, std::min(s, line.Length_m()));
-      }
+    for (const FlowlineJoint& joint : FlowlineJoints(scenario)) {
+      if (open_seabed(joint.point_m)) joints.push_back(joint);
     }
     if (joints.empty()) {
       throw ScenarioError("--random-leaks: " + scenario.name + " has no flowline joint " +
@@ -271,9 +267,9 @@ Scenario WithRandomLeaks(const Scenario& scenario, int count, LeakSites sites) {
     LeakSpec leak;
     leak.start_s = scenario.duration_s * (0.1 + 0.8 * uniform());
     if (sites == LeakSites::kJoints) {
-      const auto& [line, s] = joints[std::min(joints.size() - 1, static_cast<std::size_t>(uniform() * joints.size()))];
-      leak.flowline = line->name;
-      leak.s_m = s;
+      const FlowlineJoint& joint = joints[std::min(joints.size() - 1, static_cast<std::size_t>(uniform() * joints.size()))];
+      leak.flowline = joint.flowline->name;
+      leak.s_m = joint.s_m;
     } else if (sites == LeakSites::kFlowlines) {
       bool found = false;
       for (int attempt = 0; attempt < 100000 && !found; ++attempt) found = flowline_site(leak);

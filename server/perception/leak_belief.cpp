@@ -35,8 +35,8 @@ LeakBelief::LeakBelief(const maps::Scenario& scenario, const maps::World& world,
     joint_prior_probability_ = f.joint_prior_probability;
     joint_prior_ = std::log(joint_prior_probability_ / (1.0 - joint_prior_probability_));
     const maps::OccupancyGrid& obstacles = world.obstacles();
-    for (const Eigen::Vector2d& p : maps::FlowlineJoints(scenario)) {
-      const Cell c = CellOf(p);
+    for (const maps::FlowlineJoint& joint : maps::FlowlineJoints(scenario)) {
+      const Cell c = CellOf(joint.point_m);
       const Eigen::Vector2i in_grid = obstacles.CellOf(CentreOf(c));
       if (obstacles.Occupied(in_grid.x(), in_grid.y())) continue;  // under a structure: no sensor sees it
       if (joint_keys_.insert(Key(c)).second) joints_.push_back(c);

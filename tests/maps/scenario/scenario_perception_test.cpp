@@ -234,10 +234,10 @@ flowlines: [{name: F1, points_m: [[0.5, 4.5], [2.5, 4.5], [2.5, 3.0]]}, {name: F
 fusion: {joint_prior_probability: 0.02}
 )"),
                                    "x.yaml");
-  const std::vector<Eigen::Vector2d> joints = FlowlineJoints(s);
+  const std::vector<FlowlineJoint> joints = FlowlineJoints(s);
   ASSERT_EQ(joints.size(), 4u);
-  EXPECT_EQ(joints[2], Eigen::Vector2d(2.5, 3.0));
-  EXPECT_EQ(joints[3], Eigen::Vector2d(4.5, 3.0));
+  EXPECT_EQ(joints[2].point_m, Eigen::Vector2d(2.5, 3.0));
+  EXPECT_EQ(joints[3].point_m, Eigen::Vector2d(4.5, 3.0));
   EXPECT_EQ(s.fusion.joint_prior_probability, 0.02);
   const std::string text = EmitScenario(s);
   EXPECT_NE(text.find("joint_prior_probability: 0.02"), std::string::npos) << text;
@@ -245,6 +245,17 @@ fusion: {joint_prior_probability: 0.02}
   Scenario unset = s;
   unset.fusion.joint_prior_probability = 0.0;
   EXPECT_EQ(EmitScenario(unset).find("joint_prior_probability"), std::string::npos);
+}
+
+// A field without flowlines has nowhere to put flowline or joint leaks: one line that says so.
+void ExpectRefusedWithoutFlowlines(LeakSites sites) {
+  const Scenario bare = ParseScenario(WithSection(""), "x.yaml");
+  try {
+    WithRandomLeaks(bare, 1, sites);
+    ADD_FAILURE() << "drew " << ToString(sites) << " leaks without flowlines";
+  } catch (const ScenarioError& e) {
+    EXPECT_NE(std::string(e.what()).find("has no flowlines"), std::string::npos) << e.what();
+  }
 }
 
 // Random flowline leaks: on a flowline (the distance to its polyline, by projection on each
@@ -290,14 +301,7 @@ flowlines:
   const double share = f1_eligible / (f1_eligible + 3.0);
   EXPECT_NEAR(static_cast<double>(on_f1) / total, share, 4.0 * std::sqrt(share * (1 - share) / total));
   EXPECT_EQ(ParseLeakSites("flowlines", "--leak-sites"), LeakSites::kFlowlines);
-  // A field without flowlines has nowhere to put them: one line that says so.
-  Scenario bare = ParseScenario(WithSection(""), "x.yaml");
-  try {
-    WithRandomLeaks(bare, 1, LeakSites::kFlowlines);
-    ADD_FAILURE() << "drew flowline leaks without flowlines";
-  } catch (const ScenarioError& e) {
-    EXPECT_NE(std::string(e.what()).find("has no flowlines"), std::string::npos) << e.what();
-  }
+  ExpectRefusedWithoutFlowlines(LeakSites::kFlowlines);
 }
 
 
@@ -312,7 +316,8 @@ flowlines:
 )"),
                              "x.yaml");
   std::vector<Eigen::Vector2d> eligible;
-  for (const Eigen::Vector2d& v : FlowlineJoints(s)) {
+  for (const FlowlineJoint& joint : FlowlineJoints(s)) {
+    const Eigen::Vector2d v = joint.point_m;
     bool ok = v.x() >= 0.5 && v.y() >= 0.5 && v.x() <= s.workspace.width_m - 0.5 && v.y() <= s.workspace.height_m - 0.5;
     for (const Eigen::Vector2d& valve : s.ValvePositions()) ok = ok && (v - valve).norm() >= 1.0;
     for (const ChristmasTree& t : s.structures) ok = ok && !((v - t.center_m).array().abs() < t.size_m.array() / 2 + 0.5).all();
@@ -335,13 +340,7 @@ flowlines:
   const double share = 1.0 / static_cast<double>(eligible.size()), n = 300.0;
   for (const int h : hits) EXPECT_NEAR(h / n, share, 4.0 * std::sqrt(share * (1 - share) / n));
   EXPECT_EQ(ParseLeakSites("joints", "--leak-sites"), LeakSites::kJoints);
-  Scenario bare = ParseScenario(WithSection(""), "x.yaml");
-  try {
-    WithRandomLeaks(bare, 1, LeakSites::kJoints);
-    ADD_FAILURE() << "drew joint leaks without flowlines";
-  } catch (const ScenarioError& e) {
-    EXPECT_NE(std::string(e.what()).find("has no flowlines"), std::string::npos) << e.what();
-  }
+  ExpectRefusedWithoutFlowlines(LeakSites::kJoints);
 }
 
 }  // namespace

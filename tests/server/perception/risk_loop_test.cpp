@@ -294,10 +294,11 @@ TEST(RiskLoop, FlowlineJointsDrawTheVehiclesUntilLookedAt) {
   maps::World world(s);
   MissionCore core(world, s, "", ControllerKind::kErgodic);
   core.Cycle(0);
-  const std::vector<Eigen::Vector2d> joints = maps::FlowlineJoints(s);
+  const std::vector<maps::FlowlineJoint> joints = maps::FlowlineJoints(s);
   ASSERT_EQ(joints.size(), 20u);
   std::size_t clear = 0;
-  for (const Eigen::Vector2d& j : joints) {
+  for (const maps::FlowlineJoint& joint : joints) {
+    const Eigen::Vector2d j = joint.point_m;
     bool near_a_structure = false;
     for (const maps::ChristmasTree& tree : s.structures) {
       near_a_structure |= ((j - tree.center_m).array().abs() < (tree.size_m / 2).array() + 0.3).all();
