@@ -57,6 +57,7 @@ const std::vector<TopicAccess>& MissionTopicAccess() {
       {kVehicleStateTopic, {kAgentHost}, {kServer, kAgentHost, kOperator, kViewer}},
       {kVehicleCoverageTopic, {kAgentHost}, {kServer, kViewer}},
       {kErgodicTargetTopic, {kServer}, {kAgentHost, kViewer}},
+      {kErgodicTargetsTopic, {kServer}, {kAgentHost, kViewer}},
       {kFleetCoverageTopic, {kServer}, {kAgentHost, kViewer}},
       {kRiskUpdateTopic, {kOperator}, {kServer, kViewer}},
       {kRiskUpdateResultTopic, {kServer}, {kOperator, kViewer}},

@@ -17,6 +17,8 @@ using VehicleState = sage_msgs_msg_dds__VehicleState_;
 using VehicleCoverage = sage_msgs_msg_dds__VehicleCoverage_;
 /// The server's assignment for one vehicle (key vehicle_id).
 using ErgodicTarget = sage_msgs_msg_dds__ErgodicTarget_;
+/// A server cycle's changed assignments of vehicles that already had one (unkeyed).
+using ErgodicTargets = sage_msgs_msg_dds__ErgodicTargets_;
 /// The field's phi_k and the fleet's coverage, once per server cycle (unkeyed).
 using FleetCoverage = sage_msgs_msg_dds__FleetCoverage_;
 /// One valve's new risk weight (key source: each sender's history apart).
@@ -43,6 +45,7 @@ SAGE_PROTO_MESSAGE_TRAITS(VehicleState, sage_msgs_msg_dds__VehicleState_, kVehic
 SAGE_PROTO_MESSAGE_TRAITS(VehicleCoverage, sage_msgs_msg_dds__VehicleCoverage_,
                           kVehicleCoverageTopic);
 SAGE_PROTO_MESSAGE_TRAITS(ErgodicTarget, sage_msgs_msg_dds__ErgodicTarget_, kErgodicTargetTopic);
+SAGE_PROTO_MESSAGE_TRAITS(ErgodicTargets, sage_msgs_msg_dds__ErgodicTargets_, kErgodicTargetsTopic);
 SAGE_PROTO_MESSAGE_TRAITS(FleetCoverage, sage_msgs_msg_dds__FleetCoverage_, kFleetCoverageTopic);
 SAGE_PROTO_MESSAGE_TRAITS(RiskUpdate, sage_msgs_msg_dds__RiskUpdate_, kRiskUpdateTopic);
 SAGE_PROTO_MESSAGE_TRAITS(RiskUpdateResult, sage_msgs_msg_dds__RiskUpdateResult_, kRiskUpdateResultTopic);
@@ -86,6 +89,17 @@ inline dds_sequence_uint64 BorrowSequence(std::span<const uint64_t> values) {
   sequence._buffer = const_cast<uint64_t*>(values.data());
   sequence._release = false;
   return sequence;
+}
+/// The same for an ErgodicTargets sample's targets (each element borrowing its own sequences).
+inline dds_sequence_sage_msgs_msg_dds__ErgodicTarget_ BorrowSequence(std::span<const ErgodicTarget> values) {
+  dds_sequence_sage_msgs_msg_dds__ErgodicTarget_ sequence{};
+  sequence._maximum = sequence._length = static_cast<uint32_t>(values.size());
+  sequence._buffer = const_cast<ErgodicTarget*>(values.data());
+  sequence._release = false;
+  return sequence;
+}
+inline std::span<const ErgodicTarget> AsSpan(const dds_sequence_sage_msgs_msg_dds__ErgodicTarget_& sequence) {
+  return {sequence._buffer, sequence._length};
 }
 inline std::span<const int32_t> AsSpan(const dds_sequence_int32& sequence) { return {sequence._buffer, sequence._length}; }
 inline std::span<const uint32_t> AsSpan(const dds_sequence_uint32& sequence) { return {sequence._buffer, sequence._length}; }

@@ -107,6 +107,14 @@ Qos ErgodicTargetQos() {
   return qos;
 }
 
+Qos ErgodicTargetsQos() {
+  Qos qos;
+  SetReliable(qos);
+  SetKeepLast(qos, kErgodicTargetsDepth);
+  dds_qset_durability(qos.get(), DDS_DURABILITY_VOLATILE);
+  return qos;
+}
+
 Qos FleetCoverageQos() {
   Qos qos;
   SetReliable(qos);

@@ -58,6 +58,12 @@ Qos VehicleCoverageQos();
 /// ErgodicTarget (server -> vehicles): reliable, transient-local, keep-last 1 per vehicle.
 Qos ErgodicTargetQos();
 
+/// ErgodicTargets (server -> vehicles, a cycle's changed assignments in one sample): reliable,
+/// volatile, keep-last kErgodicTargetsDepth. Each sample carries changes no later one repeats, so
+/// a reader keeps the unread ones of several seconds (a host that far behind has lost its lease).
+inline constexpr int32_t kErgodicTargetsDepth = 64;
+Qos ErgodicTargetsQos();
+
 /// FleetCoverage (server -> vehicles, once a cycle): reliable, volatile, keep-last 1 — only the
 /// newest accounting matters, and the next cycle brings one to a late joiner within 0.1 s.
 Qos FleetCoverageQos();

@@ -59,14 +59,30 @@ std::size_t WireBytes(const VehicleCoverage& m) {
   return c.Total();
 }
 
-std::size_t WireBytes(const ErgodicTarget& m) {
-  Cdr c;
+namespace {
+// An ErgodicTarget's members where they fall in the payload (alone, or as an element of a batch:
+// XCDR1 aligns a nested struct's members from the payload's start too).
+void TargetMembers(Cdr& c, const ErgodicTarget& m) {
   c.Primitive<std::uint32_t>().Primitive<std::int64_t>().Primitive<std::uint64_t>().Primitive<std::uint64_t>();
   c.Primitive<std::uint32_t>().Primitive<bool>();
   c.Sequence<double>(m.phi._length).Sequence<std::int32_t>(m.tour._length).Sequence<double>(m.tour_weights._length);
   for (int i = 0; i < 4; ++i) c.Primitive<double>();  // the region's box
   c.Primitive<std::uint32_t>().Primitive<double>();  // its order, its forgetting
   c.Sequence<std::int32_t>(m.region_valves._length).Sequence<double>(m.region_weights._length);
+}
+}  // namespace
+
+std::size_t WireBytes(const ErgodicTarget& m) {
+  Cdr c;
+  TargetMembers(c, m);
+  return c.Total();
+}
+
+std::size_t WireBytes(const ErgodicTargets& m) {
+  Cdr c;
+  c.Primitive<std::int64_t>().Primitive<std::uint64_t>().Primitive<std::uint64_t>();
+  c.Primitive<std::uint32_t>();  // the sequence's length
+  for (std::uint32_t i = 0; i < m.targets._length; ++i) TargetMembers(c, m.targets._buffer[i]);
   return c.Total();
 }
 

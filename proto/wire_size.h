@@ -18,6 +18,7 @@ namespace sage::proto {
 std::size_t WireBytes(const VehicleState& m);
 std::size_t WireBytes(const VehicleCoverage& m);
 std::size_t WireBytes(const ErgodicTarget& m);
+std::size_t WireBytes(const ErgodicTargets& m);
 std::size_t WireBytes(const FleetCoverage& m);
 std::size_t WireBytes(const RiskUpdate& m);
 std::size_t WireBytes(const RiskUpdateResult& m);

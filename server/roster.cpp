@@ -25,6 +25,7 @@ const FleetEventRecord* Roster::Join(int id, const std::string& name, double tim
   m.status = Status::kAlive;
   alive_stale_ = names_stale_ = glances_stale_ = true;
   m.joined_s = time_s;
+  ++m.joins;
   m.target_sent = false;
   ++alive_count_;
   event_ = {time_s, rejoined ? "rejoined" : "joined", id, name, ""};

@@ -34,6 +34,7 @@ class Roster {
     int index = 0;                    ///< the record's vehicle index, in order of first joining
     Status status = Status::kAlive;
     double joined_s = 0.0;            ///< latest (re)join
+    int joins = 0;                    ///< how many times it (re)joined this server (not checkpointed)
     double gone_s = 0.0;              ///< when it was lost or left (if it is)
     bool has_state = false;
     agents::StateReport last;         ///< its latest state (position, command, target cycle)

@@ -60,6 +60,7 @@ int RunAgentNode(const maps::Scenario& scenario, const AgentNodeOptions& options
   if (!scenario.sensors.empty()) detections.emplace(participant, proto::DetectionQos());
   std::vector<double> detections_scratch;
   proto::Reader<proto::ErgodicTarget> targets(participant, proto::ErgodicTargetQos());
+  proto::Reader<proto::ErgodicTargets> target_batches(participant, proto::ErgodicTargetsQos());
   proto::Reader<proto::FleetCoverage> fleet(participant, proto::FleetCoverageQos());
   proto::Reader<proto::MissionStatus> status(participant, proto::MissionStatusQos());
   proto::Reader<proto::FleetCommand> commands(participant, proto::FleetCommandQos());
@@ -174,6 +175,11 @@ int RunAgentNode(const maps::Scenario& scenario, const AgentNodeOptions& options
         if (info.valid_data) door.TakeTarget(m, k);
       }, 1024) == 1024) {
       }
+      // Then the later changes (a vehicle's first target goes alone; an older one is not taken
+      // over a newer, whichever comes first).
+      target_batches.TakeEach([&](const proto::ErgodicTargets& m, const dds_sample_info_t& info) {
+        if (info.valid_data) door.TakeTargets(m, k);
+      }, static_cast<std::size_t>(proto::kErgodicTargetsDepth));
     };
     const auto take_server_words = [&] {
       take_targets();

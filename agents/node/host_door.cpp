@@ -61,6 +61,13 @@ bool HostDoor::TakeTarget(const proto::ErgodicTarget& m, std::int64_t now_cycle)
   return mission_.OnAssignment(wire::FromWire(m));
 }
 
+std::size_t HostDoor::TakeTargets(const proto::ErgodicTargets& m, std::int64_t now_cycle) {
+  if (m.server_instance != clock_.instance || clock_.instance == 0) return 0;
+  std::size_t taken = 0;
+  for (const proto::ErgodicTarget& target : proto::AsSpan(m.targets)) taken += TakeTarget(target, now_cycle) ? 1 : 0;
+  return taken;
+}
+
 bool HostDoor::TakeSnapshot(const proto::FleetCoverage& m, std::int64_t now_cycle) {
   if (m.server_instance != clock_.instance || clock_.instance == 0) return false;
   if (Ahead(m.cycle, m.mission_time_s, now_cycle)) {

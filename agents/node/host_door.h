@@ -59,6 +59,9 @@ class HostDoor {
   /// past it is refused (counted in ahead_of_the_clock()): taken, it would have made every real
   /// one after it look old (the probe's snapshot of mission time 1e300).
   bool TakeTarget(const proto::ErgodicTarget& m, std::int64_t now_cycle);
+  /// A cycle's batch of changed assignments: each as TakeTarget, if the batch and the element are
+  /// of the current server; the number the mission took.
+  std::size_t TakeTargets(const proto::ErgodicTargets& m, std::int64_t now_cycle);
   /// The server's fleet snapshot; true if the mission took it (the newest of its server).
   bool TakeSnapshot(const proto::FleetCoverage& m, std::int64_t now_cycle);
   /// How far ahead of a host's clock the server's words may be: a host that fell behind catches

@@ -172,4 +172,14 @@ proto::ErgodicTarget ToWire(const Assignment& a, std::uint64_t server_instance, 
   return m;
 }
 
+proto::ErgodicTargets ToWire(std::span<const proto::ErgodicTarget> targets, std::uint64_t server_instance,
+                             std::uint64_t cycle, long long stamp_ns) {
+  proto::ErgodicTargets m{};
+  m.stamp_ns = stamp_ns;
+  m.server_instance = server_instance;
+  m.cycle = cycle;
+  m.targets = proto::BorrowSequence(targets);
+  return m;
+}
+
 }  // namespace sage::agents::wire

@@ -3,6 +3,7 @@
 // (proto/sage_msgs.idl), field by field, for both nodes. A message going out borrows the plain
 // value's memory (write it while the value lives); one coming in is copied out of the sample.
 #include <cstdint>
+#include <span>
 #include <vector>
 
 #include "agents/fleet_messages.h"
@@ -28,6 +29,9 @@ proto::FleetCoverage ToWire(const FleetSnapshot& s, std::uint64_t server_instanc
                             long long stamp_ns, std::vector<std::uint32_t>& ids, std::vector<std::uint64_t>& seqs);
 proto::ErgodicTarget ToWire(const Assignment& a, std::uint64_t server_instance, std::uint32_t basis_order,
                             long long stamp_ns);
+/// A cycle's changed assignments in one sample, borrowing `targets` (each made by the ToWire above).
+proto::ErgodicTargets ToWire(std::span<const proto::ErgodicTarget> targets, std::uint64_t server_instance,
+                             std::uint64_t cycle, long long stamp_ns);
 /// `xy` is scratch the message borrows (the detections' coordinates, flattened).
 proto::Detection ToWire(const ScanReport& s, std::uint64_t server_instance, long long stamp_ns, std::vector<double>& xy);
 

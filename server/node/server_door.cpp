@@ -73,4 +73,14 @@ CommandOutcome ServerDoor::TakeCommand(const proto::FleetCommand& c) {
   return out;
 }
 
+bool ServerDoor::Batched(int id) {
+  const Roster::Member* m = core_.roster().Find(id);
+  if (m == nullptr) return false;
+  const auto [at, first] = sent_for_join_.try_emplace(id, m->joins);
+  if (first) return false;
+  if (at->second == m->joins) return true;
+  at->second = m->joins;  // it rejoined: its first target since goes alone again
+  return false;
+}
+
 }  // namespace sage::server

@@ -8,6 +8,7 @@
 #include <deque>
 #include <optional>
 #include <string>
+#include <unordered_map>
 
 #include "proto/messages.h"
 #include "server/mission_core.h"
@@ -45,6 +46,13 @@ class ServerDoor {
   /// operator sends a command again until it is answered: a repeat gets the first answer.
   CommandOutcome TakeCommand(const proto::FleetCommand& c);
 
+  /// How a cycle's assignment for vehicle `id` goes out: alone (false: rt/sage/ergodic_target,
+  /// transient-local, so a host that reads late still gets it) if it is the vehicle's first since
+  /// it (re)joined, else in the cycle's batch (true: rt/sage/ergodic_targets). A host that can
+  /// miss a batch is one whose reader is not yet matched: one that has not had its vehicles'
+  /// first targets. Call once per assignment written.
+  bool Batched(int id);
+
   /// Text from outside as it may appear in a log line: at most 64 characters, control characters
   /// (newline, escape) as '?', so a sender cannot forge or break lines.
   static std::string LogSafe(std::string_view text);
@@ -64,6 +72,7 @@ class ServerDoor {
   std::uint64_t instance_;
   double rate_;
   std::deque<AnsweredCommand> answered_;
+  std::unordered_map<int, int> sent_for_join_;  // vehicle id -> the join (Roster::Member::joins) its first target went for
 };
 
 }  // namespace sage::server

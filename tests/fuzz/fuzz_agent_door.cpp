@@ -71,6 +71,16 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
         door.TakeTarget(m.get(), k);
         break;
       }
+      case kTargets: {
+        Decoded<proto::ErgodicTargets> m(r.payload);
+        if (!m.ok() || !r.valid_data()) break;
+        if (r.stamp_instance()) {
+          m.get().server_instance = door.clock().instance;
+          for (std::uint32_t i = 0; i < m.get().targets._length; ++i) m.get().targets._buffer[i].server_instance = door.clock().instance;
+        }
+        door.TakeTargets(m.get(), k);
+        break;
+      }
       case kSnapshot: {
         Decoded<proto::FleetCoverage> m(r.payload);
         if (!m.ok() || !r.valid_data()) break;

@@ -150,9 +150,18 @@ void AgentDoorSeeds(const fs::path& dir) {
       for (const agents::CoverageMessage& c : out.coverage) core.OnCoverage(c);
       core.SetClock(static_cast<double>(k) / v.scenario.control_rate_hz);
       const server::CycleOutput cycle = core.Cycle(k);
+      // The first cycle's targets alone, the later ones in a batch, as the server node sends them.
+      std::vector<proto::ErgodicTarget> batch;
       for (const agents::Assignment& a : cycle.assignments) {
         fleet.OnAssignment(a);
-        AppendRecord(input, kTarget, 0, Encode(agents::wire::ToWire(a, kInstance, 0, 0)));
+        if (k == 0) {
+          AppendRecord(input, kTarget, 0, Encode(agents::wire::ToWire(a, kInstance, 0, 0)));
+        } else {
+          batch.push_back(agents::wire::ToWire(a, kInstance, 0, 0));
+        }
+      }
+      if (!batch.empty()) {
+        AppendRecord(input, kTargets, 0, Encode(agents::wire::ToWire(batch, kInstance, static_cast<std::uint64_t>(k), 0)));
       }
       fleet.OnFleetSnapshot(cycle.snapshot);
       std::vector<std::uint32_t> ids;

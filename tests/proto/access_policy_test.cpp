@@ -124,8 +124,8 @@ TEST(AccessPolicy, EveryMissionTopicHasOneRule) {
 // publish states, coverage and their sensors' scans; the viewer reads every topic and publishes none.
 TEST(AccessPolicy, RolesPublishAndReadWhatTheMissionNeeds) {
   EXPECT_EQ(Set(TopicsPublishedBy(SecurityRole::kServer)),
-            (std::set<std::string>{kErgodicTargetTopic, kFleetCoverageTopic, kRiskUpdateResultTopic, kMissionStatusTopic,
-                                   kFleetCommandTopic, kFleetCommandResultTopic}));
+            (std::set<std::string>{kErgodicTargetTopic, kErgodicTargetsTopic, kFleetCoverageTopic, kRiskUpdateResultTopic,
+                                   kMissionStatusTopic, kFleetCommandTopic, kFleetCommandResultTopic}));
   EXPECT_EQ(Set(TopicsPublishedBy(SecurityRole::kOperator)), (std::set<std::string>{kRiskUpdateTopic, kFleetCommandTopic}));
   EXPECT_EQ(Set(TopicsPublishedBy(SecurityRole::kAgentHost)),
             (std::set<std::string>{kVehicleStateTopic, kVehicleCoverageTopic, kDetectionTopic}));
@@ -136,8 +136,8 @@ TEST(AccessPolicy, RolesPublishAndReadWhatTheMissionNeeds) {
             (std::set<std::string>{kVehicleStateTopic, kVehicleCoverageTopic, kRiskUpdateTopic, kMissionStatusTopic,
                                    kFleetCommandTopic, kDetectionTopic}));
   EXPECT_EQ(Set(TopicsSubscribedBy(SecurityRole::kAgentHost)),
-            (std::set<std::string>{kVehicleStateTopic, kErgodicTargetTopic, kFleetCoverageTopic, kMissionStatusTopic,
-                                   kFleetCommandTopic}));
+            (std::set<std::string>{kVehicleStateTopic, kErgodicTargetTopic, kErgodicTargetsTopic, kFleetCoverageTopic,
+                                   kMissionStatusTopic, kFleetCommandTopic}));
   EXPECT_EQ(Set(TopicsSubscribedBy(SecurityRole::kOperator)),
             (std::set<std::string>{kVehicleStateTopic, kRiskUpdateResultTopic, kMissionStatusTopic,
                                    kFleetCommandResultTopic}));

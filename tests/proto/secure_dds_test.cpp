@@ -81,8 +81,8 @@ struct SecuredDomain {
   }
 };
 
-using AllMessages = std::tuple<VehicleState, VehicleCoverage, ErgodicTarget, FleetCoverage, RiskUpdate, RiskUpdateResult,
-                               MissionStatus, FleetCommand, FleetCommandResult, Detection>;
+using AllMessages = std::tuple<VehicleState, VehicleCoverage, ErgodicTarget, ErgodicTargets, FleetCoverage, RiskUpdate,
+                               RiskUpdateResult, MissionStatus, FleetCommand, FleetCommandResult, Detection>;
 static_assert(std::tuple_size_v<AllMessages> == kMissionTopics.size(), "a message type for every mission topic");
 
 // Readers and writers on many topics, held type-erased, with their matched counts.

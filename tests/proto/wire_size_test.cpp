@@ -101,6 +101,23 @@ TEST(WireBytes, ErgodicTargetMatchesCyclone) {
   ExpectSizesMatch(samples, &ErgodicTargetQos);
 }
 
+// A batch of targets: the elements' members aligned from the payload's start, not the element's.
+TEST(WireBytes, ErgodicTargetsMatchCyclone) {
+  const std::vector<double> phi(3, 0.1), none, waits_odd = {0.2, 0.3, 0.5};
+  const std::vector<int32_t> valves_odd = {5, 9, 11}, valves_even = {0, 3}, tour_odd = {3, 1, 4};
+  const std::vector<double> weights_even = {0.5, 0.5};
+  const std::vector<ErgodicTarget> elements = {
+      {3, 1, 2, 3, 20, false, BorrowSequence(none), {}, {}, 1, 2, 3, 4, 12, 0, BorrowSequence(valves_odd), BorrowSequence(waits_odd)},
+      {4, 1, 2, 3, 20, true, BorrowSequence(phi), BorrowSequence(tour_odd), BorrowSequence(waits_odd), 1, 2, 3, 4, 0, 7.5, {}, {}},
+      {5, 1, 2, 3, 20, false, BorrowSequence(none), {}, {}, 1, 2, 3, 4, 12, 0, BorrowSequence(valves_even), BorrowSequence(weights_even)},
+  };
+  std::vector<ErgodicTargets> samples;
+  for (std::size_t n = 0; n <= elements.size(); ++n) {
+    samples.push_back({1, 2, 3, BorrowSequence(std::span<const ErgodicTarget>(elements.data(), n))});
+  }
+  ExpectSizesMatch(samples, &ErgodicTargetsQos);
+}
+
 TEST(WireBytes, DetectionMatchesCyclone) {
   const std::vector<std::vector<double>> xy = {{}, {1.0, 2.0}, {1.0, 2.0, 3.0, 4.0, 5.0, 6.0}};
   std::vector<Detection> samples;

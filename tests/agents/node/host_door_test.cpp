@@ -9,6 +9,7 @@
 
 #include <limits>
 #include <string>
+#include <vector>
 
 #include "maps/world.h"
 
@@ -124,6 +125,35 @@ TEST_F(HostDoorTest, TakesTheServersWordsOnlyFromItsServer) {
   target.server_instance = kServer + 1;
   target.cycle = 10;
   EXPECT_FALSE(door_.TakeTarget(target, 10));
+}
+
+// A cycle's batch of changed targets: taken only from the followed server, each element as a
+// target alone (this host's vehicles, the server's instance, not older than the vehicle's own).
+TEST_F(HostDoorTest, TakesABatchOfTargetsElementByElement) {
+  proto::ErgodicTarget own{}, other_host{}, other_server{};
+  own.server_instance = other_host.server_instance = kServer;
+  other_server.server_instance = kServer + 1;
+  own.vehicle_id = 0;
+  other_host.vehicle_id = 9;
+  other_server.vehicle_id = 1;
+  own.shared = other_host.shared = other_server.shared = true;
+  own.cycle = other_host.cycle = other_server.cycle = 4;
+  const std::vector<proto::ErgodicTarget> elements = {own, other_host, other_server};
+  proto::ErgodicTargets batch{};
+  batch.server_instance = kServer;
+  batch.cycle = 4;
+  batch.targets = proto::BorrowSequence(elements);
+  EXPECT_EQ(door_.TakeTargets(batch, 4), 0u) << "taken before any server was followed";
+  ASSERT_TRUE(door_.TakeStatus(Status(kServer)));
+  EXPECT_EQ(door_.TakeTargets(batch, 4), 1u) << "only vehicle 0's, of this server";
+  batch.server_instance = kServer + 1;
+  EXPECT_EQ(door_.TakeTargets(batch, 4), 0u) << "a batch of another server";
+  // A newer target alone first, then a batch of an older one: the vehicle keeps the newer.
+  proto::ErgodicTarget newer = own;
+  newer.cycle = 6;
+  ASSERT_TRUE(door_.TakeTarget(newer, 6));
+  batch.server_instance = kServer;
+  EXPECT_EQ(door_.TakeTargets(batch, 6), 0u);
 }
 
 // Other hosts' vehicles: the last few states each, none with no finite position (counted), not

@@ -158,6 +158,25 @@ TEST_F(ServerDoorTest, ACoverageReportOfTheLargestSeqFreezesNothing) {
   EXPECT_EQ(core_.Cycle(6).snapshot.coverage.accounted_seq.at(0), 2u);
 }
 
+// A vehicle's first target since it joined goes alone (its transient-local topic, for a host
+// that reads late), every later one in the cycle's batch; one lost and back is a new join.
+TEST_F(ServerDoorTest, AVehiclesFirstTargetSinceItJoinedGoesAlone) {
+  EXPECT_FALSE(door_.Batched(5)) << "not in the mission";
+  ASSERT_TRUE(door_.TakeState(State(5, 0), 1));
+  ASSERT_TRUE(door_.TakeState(State(6, 0), 1));
+  EXPECT_FALSE(door_.Batched(5));
+  EXPECT_TRUE(door_.Batched(5));
+  EXPECT_TRUE(door_.Batched(5));
+  EXPECT_FALSE(door_.Batched(6)) << "each vehicle's own first";
+  EXPECT_TRUE(door_.Batched(6));
+  core_.OnVehicleGone(5, /*lost=*/true);
+  ASSERT_TRUE(door_.TakeState(State(5, 1), 1));  // back, even within the same cycle: rejoined
+  EXPECT_EQ(core_.roster().Find(5)->joins, 2);
+  EXPECT_FALSE(door_.Batched(5));
+  EXPECT_TRUE(door_.Batched(5));
+  EXPECT_TRUE(door_.Batched(6)) << "the other vehicle's join is unchanged";
+}
+
 TEST(ServerDoor, LogSafeKeepsOneShortLine) {
   EXPECT_EQ(ServerDoor::LogSafe("a\nb\x1b"), "a?b?");
   EXPECT_EQ(ServerDoor::LogSafe(std::string(100, 'x')), std::string(64, 'x') + "...");
