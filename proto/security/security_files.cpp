@@ -21,9 +21,11 @@
 #include <fstream>
 #include <iterator>
 #include <memory>
+#include <utility>
 #include <vector>
 
 #include "proto/access_policy.h"
+#include "proto/topics.h"
 
 namespace sage::proto {
 namespace {
@@ -295,6 +297,20 @@ void CheckSecurityDirectory(const std::string& dir, std::time_t now) {
   const std::string permissions = (fs::path(dir) / "permissions.xml").string();
   std::ifstream in(permissions);
   const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  // A directory made by an older sage lacks the rules of a topic added since: Cyclone then refuses
+  // to create that topic (an error at start-up that names no file). Say which.
+  const std::string governance = (fs::path(dir) / "governance.xml").string();
+  std::ifstream governance_in(governance);
+  const std::string rules((std::istreambuf_iterator<char>(governance_in)), std::istreambuf_iterator<char>());
+  for (const char* topic : kMissionTopics) {
+    const std::string tag = ">" + std::string(topic) + "<";
+    for (const auto& [path, document] : {std::pair{&governance, &rules}, std::pair{&permissions, &text}}) {
+      if (document->find(tag) == std::string::npos) {
+        throw SecurityError(*path + ": has no rule for the topic " + topic +
+                            " (made by an older sage, before the topic)" + renew);
+      }
+    }
+  }
   const auto field = [&](const std::string& name) {
     const std::size_t at = text.find("<" + name + ">");
     const std::size_t end = text.find("</" + name + ">");

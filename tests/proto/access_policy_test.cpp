@@ -15,6 +15,8 @@
 #include <algorithm>
 #include <ctime>
 #include <cstdio>
+#include <cstring>
+#include <iterator>
 #include <filesystem>
 #include <fstream>
 #include <set>
@@ -338,6 +340,38 @@ TEST(SecurityFiles, ExpiredOrNotYetValidIdentitiesAreNamedWithTheirDates) {
   } catch (const SecurityError& e) {
     EXPECT_NE(std::string(e.what()).find("is valid only from"), std::string::npos) << e.what();
   }
+}
+
+// A directory made before a topic was added (rt/sage/ergodic_targets came after missions were
+// secured) has no rule for it, and Cyclone would refuse to create the topic naming no file: the
+// check names the document and the topic.
+TEST(SecurityFiles, ADirectoryWithoutAMissionTopicsRuleIsNamed) {
+  const TempDir temp;
+  const fs::path dir = temp.path / "sec";
+  InitSecurityDirectory(dir.string(), {.validity_days = 1, .keep_ca_key = false});
+  CheckSecurityDirectory(dir.string());
+  for (const char* document : {"governance.xml", "permissions.xml"}) {
+    const fs::path path = dir / document;
+    std::ifstream in(path);
+    const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    in.close();
+    std::string older = text;
+    for (std::size_t at; (at = older.find(">rt/sage/ergodic_targets<")) != std::string::npos;) {
+      older.replace(at, std::strlen(">rt/sage/ergodic_targets<"), ">rt/sage/other<");
+    }
+    ASSERT_NE(older, text) << document;
+    std::ofstream(path, std::ios::trunc) << older;
+    try {
+      CheckSecurityDirectory(dir.string());
+      FAIL() << "a " << document << " without the targets' batch topic passed";
+    } catch (const SecurityError& e) {
+      const std::string message = e.what();
+      EXPECT_EQ(message.rfind(path.string() + ": has no rule for the topic rt/sage/ergodic_targets", 0), 0u) << message;
+      EXPECT_NE(message.find("sage security init"), std::string::npos) << message;
+    }
+    std::ofstream(path, std::ios::trunc) << text;
+  }
+  CheckSecurityDirectory(dir.string());
 }
 
 }  // namespace
