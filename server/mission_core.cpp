@@ -693,11 +693,11 @@ void MissionCore::AssignRegions(const std::vector<int>& alive, CycleOutput& out)
     a.id = id;
     a.cycle = out.snapshot.cycle;
     a.shared = false;
-    a.phi = share.field->Coefficients(own);
     if (excess_mass > 0.0) {
       const double w = share_weight > 0.0 ? share_weight : 1.0;
-      a.phi = (w * a.phi + excess) / (w + excess_mass);
+      a.phi = (w * share.field->Coefficients(own) + excess) / (w + excess_mass);
     } else {
+      if (!region_phi_by_hosts_) a.phi = share.field->Coefficients(own);
       a.region_valves = share.valves;  // phi is their mixture alone: the wire sends these instead
       a.region_weights = own;
     }

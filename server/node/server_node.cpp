@@ -127,6 +127,7 @@ int RunServerNode(const maps::Scenario& scenario, const ServerNodeOptions& optio
   RunDirectory run(options.out_dir, scenario, record_options);
   LoggedRecord record(run);
   MissionCore core(world, scenario, options.profile, options.controller, &record);
+  core.SetRegionPhiMadeByHosts(true);  // a region's target goes as its valves and weights (agents/node/wire.h)
   std::int64_t first_cycle = 0;
   if (options.resume) {
     core.Restore(checkpoint);

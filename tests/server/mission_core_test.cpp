@@ -162,9 +162,9 @@ struct ParkedRegions {
   // Also checks, each cycle, what a host relies on: a region target's valves and weights give its
   // phi to the bit through the function a host makes it with (how the wire sends it).
   std::vector<int> Cycle() {
-    for (int id = 0; id < 4; ++id) core.OnState(State(id, s.vehicles[id].name, k, at[id]));
     std::vector<int> sent;
-    const CycleOutput out = core.Cycle(k);
+    const CycleOutput out = Step();
+    --k;
     for (const agents::Assignment& a : out.assignments) {
       sent.push_back(a.id);
       last[a.id] = a;
@@ -179,6 +179,11 @@ struct ParkedRegions {
     ++k;
     return sent;
   }
+  // One cycle with the parked states, its output as it is.
+  CycleOutput Step() {
+    for (int id = 0; id < 4; ++id) core.OnState(State(id, s.vehicles[id].name, k, at[id]));
+    return core.Cycle(k++);
+  }
   maps::Scenario s;
   maps::World world;
   MissionCore core;
@@ -187,6 +192,39 @@ struct ParkedRegions {
   std::int64_t k = 0;
   int by_valves = 0;  // region targets checked against their valves and weights
 };
+
+// Over DDS a region's target goes as its valves and weights and the host makes phi_k from them
+// (checked to the bit in ParkedRegions::Cycle): a core told so leaves phi empty in those targets
+// and sends the same targets otherwise, in the same cycles.
+TEST(MissionCore, RegionTargetsLeavePhiToHostsThatMakeIt) {
+  ParkedRegions in_process(1.0, 0.5), hosts(1.0, 0.5);
+  hosts.core.SetRegionPhiMadeByHosts(true);
+  int by_valves = 0;
+  for (int i = 0; i < 60; ++i) {
+    const CycleOutput a = in_process.Step(), b = hosts.Step();
+    ASSERT_EQ(a.assignments.size(), b.assignments.size()) << "cycle " << i;
+    for (std::size_t j = 0; j < a.assignments.size(); ++j) {
+      const agents::Assignment &x = a.assignments[j], &y = b.assignments[j];
+      EXPECT_EQ(x.id, y.id);
+      EXPECT_EQ(x.cycle, y.cycle);
+      EXPECT_EQ(x.shared, y.shared);
+      EXPECT_EQ(x.region_valves, y.region_valves);
+      EXPECT_EQ(x.region_weights, y.region_weights);
+      EXPECT_EQ(x.region_origin_m, y.region_origin_m);
+      EXPECT_EQ(x.region_size_m, y.region_size_m);
+      EXPECT_EQ(x.region_order, y.region_order);
+      EXPECT_EQ(x.region_forgetting_s, y.region_forgetting_s);
+      if (x.region_valves.empty()) {
+        EXPECT_EQ(x.phi, y.phi) << "a target not by its valves keeps its phi";
+      } else {
+        EXPECT_GT(x.phi.size(), 0);
+        EXPECT_EQ(y.phi.size(), 0) << "vehicle " << y.id << " at cycle " << i;
+        ++by_valves;
+      }
+    }
+  }
+  EXPECT_GE(by_valves, 4) << "every region's first target at least";
+}
 
 // Regions at fleet scale: a risk change re-sends only the target of the region holding the valve
 // (at 1,000 vehicles every region had been re-sent on any change anywhere, 21 MB/s), and not
