@@ -189,7 +189,9 @@ bool AgentMission::OnAssignment(const Assignment& assignment) {
   if (found == nullptr) return false;
   if (std::string why = Refusal(assignment); !why.empty()) return Refuse(std::move(why));
   Member& m = *found;
-  if (m.has_assignment && assignment.cycle < m.own_cycle && !new_server_) return false;
+  // Never an older target over a newer (targets come on two topics: a first alone, later ones in
+  // batches). A new server's start from own_cycle 0 (OnNewServer).
+  if (m.has_assignment && assignment.cycle < m.own_cycle) return false;
   Eigen::VectorXd phi;
   if (assignment.region_order > 0 && assignment.phi.size() == 0 && !assignment.region_valves.empty()) {
     std::string why;

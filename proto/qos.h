@@ -60,7 +60,9 @@ Qos ErgodicTargetQos();
 
 /// ErgodicTargets (server -> vehicles, a cycle's changed assignments in one sample): reliable,
 /// volatile, keep-last kErgodicTargetsDepth. Each sample carries changes no later one repeats, so
-/// a reader keeps the unread ones of several seconds (a host that far behind has lost its lease).
+/// a reader keeps the unread ones of 64 cycles; one missed all the same (a reader matched late, a
+/// host further behind) is found from the vehicle's states and sent again alone
+/// (server/node/server_door.h).
 inline constexpr int32_t kErgodicTargetsDepth = 64;
 Qos ErgodicTargetsQos();
 

@@ -119,6 +119,12 @@ class MissionCore {
   /// leaves phi empty in such assignments instead of making a phi_k no one reads (8 % of the
   /// server's thread at 10,000 regions). In-process (false, the default) the vehicles take it.
   void SetRegionPhiMadeByHosts(bool made) { region_phi_by_hosts_ = made; }
+  /// The transport found that vehicle `id`'s host lacks its current target (a restarted host, a
+  /// change it missed): the next cycle sends its target again, as at its join. Nothing for a
+  /// vehicle that is not alive.
+  void ResendTarget(int id) {
+    if (Roster::Member* m = roster_.Find(id); m != nullptr && m->status == Roster::Status::kAlive) m->target_sent = false;
+  }
 
   /// The mission clock as the transport reads it now (wall clock, time scale): states and
   /// reports up to a few seconds past it are taken. Without it, the last cycle's time.

@@ -14,7 +14,19 @@ std::string ServerDoor::LogSafe(std::string_view text) { return maps::PrintableU
 
 bool ServerDoor::TakeState(const proto::VehicleState& m, std::uint64_t writer) {
   if (m.server_instance != instance_) return false;
-  return core_.OnState(agents::wire::FromWire(m, rate_), writer);
+  if (!core_.OnState(agents::wire::FromWire(m, rate_), writer)) return false;
+  Route& route = routes_[static_cast<int>(m.vehicle_id)];  // its first state: join 0, no target sent yet
+  const bool new_writer = route.join != 0 && route.writer != 0 && writer != route.writer;  // and a target sent
+  route.writer = writer;
+  const bool missing = route.batched_cycle >= 0 && m.target_cycle < static_cast<std::uint64_t>(route.batched_cycle) &&
+                       m.cycle >= route.batched_cycle + kTargetDueCycles;
+  if (new_writer || missing) {
+    core_.ResendTarget(static_cast<int>(m.vehicle_id));
+    route.join = -1;
+    route.batched_cycle = -1;
+    ++resent_;
+  }
+  return true;
 }
 
 bool ServerDoor::TakeCoverage(const proto::VehicleCoverage& m, std::uint64_t writer) {
@@ -73,13 +85,17 @@ CommandOutcome ServerDoor::TakeCommand(const proto::FleetCommand& c) {
   return out;
 }
 
-bool ServerDoor::Batched(int id) {
+bool ServerDoor::Batched(int id, std::uint64_t cycle) {
   const Roster::Member* m = core_.roster().Find(id);
   if (m == nullptr) return false;
-  const auto [at, first] = sent_for_join_.try_emplace(id, m->joins);
-  if (first) return false;
-  if (at->second == m->joins) return true;
-  at->second = m->joins;  // it rejoined: its first target since goes alone again
+  const auto [at, first] = routes_.try_emplace(id);
+  Route& route = at->second;
+  if (!first && route.join == m->joins) {
+    route.batched_cycle = static_cast<std::int64_t>(cycle);
+    return true;
+  }
+  route.join = m->joins;  // its first since it (re)joined, or since its target went missing: alone
+  route.batched_cycle = -1;
   return false;
 }
 

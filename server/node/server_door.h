@@ -33,7 +33,11 @@ class ServerDoor {
 
   /// A vehicle's state (a valid sample) from DDS writer `writer`: false if it is on another
   /// server's clock (sent before its host heard of this one) or the core refused it (counted
-  /// under the vehicle it names and its writer).
+  /// under the vehicle it names and its writer). A taken state also says whether the vehicle's
+  /// host has its target: one from a new writer (its host restarted: it has only what the keyed
+  /// topic kept), or one still steering on an older target kTargetDueCycles after a batched one
+  /// (its own target's cycle; shared and tour vehicles report the snapshot's, never older), has
+  /// its target sent again, alone (MissionCore::ResendTarget).
   bool TakeState(const proto::VehicleState& m, std::uint64_t writer);
   /// A vehicle's coverage report from `writer`; false if the core refused or ignored it.
   bool TakeCoverage(const proto::VehicleCoverage& m, std::uint64_t writer);
@@ -46,12 +50,18 @@ class ServerDoor {
   /// operator sends a command again until it is answered: a repeat gets the first answer.
   CommandOutcome TakeCommand(const proto::FleetCommand& c);
 
-  /// How a cycle's assignment for vehicle `id` goes out: alone (false: rt/sage/ergodic_target,
-  /// transient-local, so a host that reads late still gets it) if it is the vehicle's first since
-  /// it (re)joined, else in the cycle's batch (true: rt/sage/ergodic_targets). A host that can
-  /// miss a batch is one whose reader is not yet matched: one that has not had its vehicles'
-  /// first targets. Call once per assignment written.
-  bool Batched(int id);
+  /// How vehicle `id`'s assignment of server cycle `cycle` goes out: alone (false:
+  /// rt/sage/ergodic_target, keyed, transient-local, so a host that reads late still gets it) if it
+  /// is the vehicle's first since it (re)joined or since its target was found missing, else in the
+  /// cycle's batch (true: rt/sage/ergodic_targets). A batch is missed by a host whose reader is
+  /// not matched yet, or that fell more than its depth behind; TakeState finds that from the
+  /// vehicle's own word (below). Call once per assignment written.
+  bool Batched(int id, std::uint64_t cycle);
+  /// Targets sent again alone because a vehicle's host lacked one (TakeState).
+  std::uint64_t targets_resent() const { return resent_; }
+  /// Cycles after a batched target by which its vehicle must say it steers on it (its state's
+  /// target_cycle), else it goes again alone. Lockstep has it there the next cycle.
+  static constexpr std::int64_t kTargetDueCycles = 10;
 
   /// Text from outside as it may appear in a log line: at most 64 characters, control characters
   /// (newline, escape) as '?', so a sender cannot forge or break lines.
@@ -72,7 +82,13 @@ class ServerDoor {
   std::uint64_t instance_;
   double rate_;
   std::deque<AnsweredCommand> answered_;
-  std::unordered_map<int, int> sent_for_join_;  // vehicle id -> the join (Roster::Member::joins) its first target went for
+  struct Route {
+    int join = 0;                     // the join (Roster::Member::joins) its first target went alone for; -1: send alone
+    std::uint64_t writer = 0;         // the DDS writer of its states (0: none yet)
+    std::int64_t batched_cycle = -1;  // the cycle of its last target, if that went in a batch
+  };
+  std::unordered_map<int, Route> routes_;  // by vehicle id
+  std::uint64_t resent_ = 0;
 };
 
 }  // namespace sage::server

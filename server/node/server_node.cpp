@@ -533,7 +533,7 @@ int RunServerNode(const maps::Scenario& scenario, const ServerNodeOptions& optio
     batch_scratch.clear();
     for (const agents::Assignment& a : out.assignments) {
       const proto::ErgodicTarget target = agents::wire::ToWire(a, instance, order, stamp);
-      if (door.Batched(a.id)) {
+      if (door.Batched(a.id, a.cycle)) {
         batch_scratch.push_back(target);  // borrows a's memory, alive until the write below
         continue;
       }
@@ -636,6 +636,10 @@ int RunServerNode(const maps::Scenario& scenario, const ServerNodeOptions& optio
                    : fmt::format(" (the others went on without a state, the first at t = {:.1f} s: a late one, or a "
                                  "vehicle that died, until its lease ran out)",
                                  first_not_in_step_s));
+  if (door.targets_resent() > 0) {
+    spdlog::info("server: {} targets sent again alone: a host lacked them (restarted, or a batch it missed)",
+                 door.targets_resent());
+  }
   return 0;
 }
 

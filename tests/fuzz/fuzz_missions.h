@@ -22,6 +22,8 @@ inline constexpr std::uint64_t kInstance = 0x5a6e5a6e00c0ffeeull;
 /// The server door harness's ops (a record's op modulo kServerOps).
 enum ServerOp : std::uint8_t { kState, kCoverage, kRiskUpdate, kCommand, kCycle, kGone, kServerOps };
 /// The host door harness's ops (a record's op modulo kHostOps).
+// New ops go last; the kept regressions' ops are stored below the count of their day (op % count
+// rewritten), so that an op added later does not change what they replay.
 enum HostOp : std::uint8_t { kStatus, kTarget, kSnapshot, kRetire, kNeighbour, kStep, kTargets, kHostOps };
 
 /// Vehicles of the host harness: the first three (ids 0..2); the fourth flies "elsewhere" in the

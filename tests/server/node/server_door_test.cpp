@@ -161,20 +161,60 @@ TEST_F(ServerDoorTest, ACoverageReportOfTheLargestSeqFreezesNothing) {
 // A vehicle's first target since it joined goes alone (its transient-local topic, for a host
 // that reads late), every later one in the cycle's batch; one lost and back is a new join.
 TEST_F(ServerDoorTest, AVehiclesFirstTargetSinceItJoinedGoesAlone) {
-  EXPECT_FALSE(door_.Batched(5)) << "not in the mission";
+  EXPECT_FALSE(door_.Batched(5, 0)) << "not in the mission";
   ASSERT_TRUE(door_.TakeState(State(5, 0), 1));
   ASSERT_TRUE(door_.TakeState(State(6, 0), 1));
-  EXPECT_FALSE(door_.Batched(5));
-  EXPECT_TRUE(door_.Batched(5));
-  EXPECT_TRUE(door_.Batched(5));
-  EXPECT_FALSE(door_.Batched(6)) << "each vehicle's own first";
-  EXPECT_TRUE(door_.Batched(6));
+  EXPECT_FALSE(door_.Batched(5, 0));
+  EXPECT_TRUE(door_.Batched(5, 1));
+  EXPECT_TRUE(door_.Batched(5, 2));
+  EXPECT_FALSE(door_.Batched(6, 2)) << "each vehicle's own first";
+  EXPECT_TRUE(door_.Batched(6, 3));
   core_.OnVehicleGone(5, /*lost=*/true);
   ASSERT_TRUE(door_.TakeState(State(5, 1), 1));  // back, even within the same cycle: rejoined
   EXPECT_EQ(core_.roster().Find(5)->joins, 2);
-  EXPECT_FALSE(door_.Batched(5));
-  EXPECT_TRUE(door_.Batched(5));
-  EXPECT_TRUE(door_.Batched(6)) << "the other vehicle's join is unchanged";
+  EXPECT_FALSE(door_.Batched(5, 3));
+  EXPECT_TRUE(door_.Batched(5, 4));
+  EXPECT_TRUE(door_.Batched(6, 4)) << "the other vehicle's join is unchanged";
+  EXPECT_EQ(door_.targets_resent(), 0u);
+}
+
+// A host that lacks its vehicle's current target gets it again, alone: one restarted (its states
+// from a new writer: it has only what the keyed topic kept) and one that missed a batch (its
+// vehicle still steers on an older target kTargetDueCycles after it; a late word is not missing).
+TEST_F(ServerDoorTest, AHostThatLacksItsTargetGetsItAgainAlone) {
+  for (std::uint32_t id = 0; id < 2; ++id) ASSERT_TRUE(door_.TakeState(State(id, 0), 0x10));
+  core_.Cycle(0);
+  ASSERT_TRUE(core_.roster().Find(0)->target_sent && core_.roster().Find(1)->target_sent);
+  for (int id = 0; id < 2; ++id) {
+    ASSERT_FALSE(door_.Batched(id, 0));
+    ASSERT_TRUE(door_.Batched(id, 1));  // a change of cycle 1 in that cycle's batch
+  }
+  // Vehicle 0's host restarted: the same vehicle's state from another writer.
+  proto::VehicleState s = State(0, 2);
+  s.target_cycle = 1;
+  ASSERT_TRUE(door_.TakeState(s, 0x20));
+  EXPECT_FALSE(core_.roster().Find(0)->target_sent) << "sent again next cycle";
+  EXPECT_FALSE(door_.Batched(0, 2)) << "and alone";
+  EXPECT_TRUE(door_.Batched(0, 3));
+  EXPECT_EQ(door_.targets_resent(), 1u);
+  // Vehicle 1 still steers on its first target (cycle 0): late, not yet missing ...
+  s = State(1, 1 + ServerDoor::kTargetDueCycles - 1);
+  s.target_cycle = 0;
+  ASSERT_TRUE(door_.TakeState(s, 0x10));
+  EXPECT_TRUE(core_.roster().Find(1)->target_sent);
+  // ... a target of a later cycle in hand says nothing missing either ...
+  s = State(1, 1 + ServerDoor::kTargetDueCycles);
+  s.target_cycle = 1;
+  ASSERT_TRUE(door_.TakeState(s, 0x10));
+  EXPECT_TRUE(core_.roster().Find(1)->target_sent);
+  // ... but the batch of cycle 3 missed, kTargetDueCycles on, is.
+  ASSERT_TRUE(door_.Batched(1, 3));
+  s = State(1, 3 + ServerDoor::kTargetDueCycles);
+  s.target_cycle = 1;
+  ASSERT_TRUE(door_.TakeState(s, 0x10));
+  EXPECT_FALSE(core_.roster().Find(1)->target_sent);
+  EXPECT_FALSE(door_.Batched(1, 14));
+  EXPECT_EQ(door_.targets_resent(), 2u);
 }
 
 TEST(ServerDoor, LogSafeKeepsOneShortLine) {
