@@ -1,6 +1,8 @@
 #pragma once
 // C++ names for the generated IDL structs of proto/sage_msgs.idl, their topics (MessageTraits),
 // and helpers to view IDL sequences and strings without copying.
+#include <algorithm>
+#include <iterator>
 #include <span>
 #include <string>
 #include <string_view>
@@ -115,5 +117,30 @@ inline char* BorrowString(const std::string& text) { return const_cast<char*>(te
 
 /// A received string field as a view ("" for a null pointer, e.g. in an invalid sample).
 inline std::string_view AsStringView(const char* text) { return text ? text : ""; }
+
+/// The longest text a bounded string field (IDL string<N>: char[N + 1] in the sample) holds.
+template <std::size_t Size>
+constexpr std::size_t BoundOf(const char (&)[Size]) {
+  return Size - 1;
+}
+
+/// Fills a bounded string field with `text`; false, and the field empty, if it is longer than the
+/// bound (the caller names the field and the limit: a name never goes out cut short).
+template <std::size_t Size>
+bool CopyBounded(char (&field)[Size], std::string_view text) {
+  std::fill(std::begin(field), std::end(field), '\0');
+  if (text.size() > Size - 1) return false;
+  std::copy(text.begin(), text.end(), field);
+  return true;
+}
+
+/// A received bounded string field as a view, up to its first NUL or its bound (Cyclone checks a
+/// bounded string's length when it deserialises; a field filled in memory need not be terminated).
+template <std::size_t Size>
+std::string_view AsBoundedView(const char (&field)[Size]) {
+  std::size_t n = 0;
+  while (n < Size && field[n] != '\0') ++n;
+  return {field, n};
+}
 
 }  // namespace sage::proto

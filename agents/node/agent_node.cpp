@@ -115,8 +115,7 @@ int RunAgentNode(const maps::Scenario& scenario, const AgentNodeOptions& options
   const auto leave = [&](VehicleId id) {
     proto::VehicleState key{};
     key.vehicle_id = static_cast<std::uint32_t>(id);
-    const std::string name = mission.Name(id);
-    key.name = proto::BorrowString(name);
+    (void)proto::CopyBounded(key.name, mission.Name(id));  // a key sample: the id is what counts
     states.Dispose(key);
     states.Flush();  // a leave goes out now, not with the next cycle's states
   };

@@ -2,9 +2,17 @@
 
 #include <algorithm>
 #include <limits>
+#include <stdexcept>
+
+#include <fmt/format.h>
+
+#include "maps/scenario/scenario.h"
 
 namespace sage::agents::wire {
 namespace {
+
+// Every name a scenario allows fits a state's bounded name (proto/sage_msgs.idl).
+static_assert(sizeof(proto::VehicleState::name) == maps::kMaxNameLength + 1);
 
 Eigen::VectorXd Copy(std::span<const double> values) {
   return Eigen::Map<const Eigen::VectorXd>(values.data(), static_cast<Eigen::Index>(values.size()));
@@ -16,7 +24,7 @@ std::span<const double> View(const Eigen::VectorXd& v) { return {v.data(), stati
 StateReport FromWire(const proto::VehicleState& m, double control_rate_hz) {
   StateReport s;
   s.id = static_cast<VehicleId>(m.vehicle_id);
-  s.name = std::string(proto::AsStringView(m.name));
+  s.name = std::string(proto::AsBoundedView(m.name));
   s.cycle = m.cycle;
   s.time_s = static_cast<double>(m.cycle) / control_rate_hz;
   s.state.position_m = {m.x_m, m.y_m};
@@ -101,7 +109,10 @@ proto::VehicleState ToWire(const StateReport& s, std::uint64_t server_instance, 
   m.stamp_ns = stamp_ns;
   m.server_instance = server_instance;
   m.cycle = s.cycle;
-  m.name = proto::BorrowString(s.name);
+  if (!proto::CopyBounded(m.name, s.name)) {
+    throw std::invalid_argument(fmt::format("vehicle {}: name '{}' is longer than a state carries ({} characters)", s.id,
+                                            s.name.substr(0, 20), proto::BoundOf(m.name)));
+  }
   m.x_m = s.state.position_m.x();
   m.y_m = s.state.position_m.y();
   m.heading_rad = s.state.heading_rad;

@@ -46,7 +46,7 @@ void Publish(int domain, const std::string& config, int instances, int rate_hz, 
   auto next = Clock::now();
   for (int tick = 0; tick < rate_hz * seconds; ++tick) {
     for (int id = 0; id < instances; ++id) {
-      writer.Write(VehicleState{static_cast<uint32_t>(id), NowNs(), 0, 0, const_cast<char*>("rov"), 1.0 * tick, 0, 0, 0, 0, 0, 0, 0});
+      writer.Write(VehicleState{static_cast<uint32_t>(id), NowNs(), 0, 0, "rov", 1.0 * tick, 0, 0, 0, 0, 0, 0, 0});
       ++sent;
     }
     next += period;

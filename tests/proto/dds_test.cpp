@@ -72,7 +72,7 @@ TEST(DdsEntities, KeyedVehicleStateRoundTripsFiftyInstances) {
   Writer<VehicleState> writer(participant, VehicleStateWriterQos());
   ASSERT_TRUE(writer.WaitForReaders(1, 2s));
   for (uint32_t id = 0; id < 50; ++id) {
-    writer.Write(VehicleState{id, 1000 + id, 0, 0, const_cast<char*>("rov"), 1.5 * id, -2.0 * id, 0.01 * id, 0.5, -0.25,
+    writer.Write(VehicleState{id, 1000 + id, 0, 0, "rov", 1.5 * id, -2.0 * id, 0.01 * id, 0.5, -0.25,
                               0.1 * id, -0.7, 3u * id});
   }
   std::map<uint32_t, VehicleState> latest;
@@ -99,6 +99,44 @@ TEST(DdsEntities, KeyedVehicleStateRoundTripsFiftyInstances) {
   }
 }
 
+// A state's name is a bounded string held in the sample (no allocation a take): names of 0 to 64
+// characters (a scenario's limit) cross whole, and one longer is refused by the copy, which leaves
+// the field empty rather than cut short.
+TEST(DdsEntities, StateNamesUpToTheirBoundCrossWhole) {
+  const std::vector<std::string> names = {"", "a", "rov-0007", std::string(63, 'x'), std::string(64, 'y')};
+  VehicleState probe{};
+  EXPECT_EQ(BoundOf(probe.name), 64u);
+  probe.name[0] = 'z';
+  EXPECT_FALSE(CopyBounded(probe.name, std::string(65, 'q')));
+  EXPECT_EQ(AsBoundedView(probe.name), "");
+  std::fill(std::begin(probe.name), std::end(probe.name), 'w');  // no terminator at all
+  EXPECT_EQ(AsBoundedView(probe.name).size(), sizeof probe.name);
+
+  const DomainReservation domain = ReserveTestDomain();
+  Participant participant(domain.domain_id(), TestConfig());
+  Reader<VehicleState> reader(participant, VehicleStateReaderQos());
+  Writer<VehicleState> writer(participant, VehicleStateWriterQos());
+  ASSERT_TRUE(writer.WaitForReaders(1, 2s));
+  for (uint32_t id = 0; id < names.size(); ++id) {
+    VehicleState s{};
+    s.vehicle_id = id;
+    ASSERT_TRUE(CopyBounded(s.name, names[id]));
+    writer.Write(s);
+  }
+  std::map<uint32_t, std::string> got;
+  TakeUntil(
+      reader,
+      [&](const std::vector<Sample<VehicleState>>& samples) {
+        for (const auto& sample : samples) {
+          if (sample.valid_data()) got[sample.data().vehicle_id] = std::string(AsBoundedView(sample.data().name));
+        }
+        return got.size() == names.size();
+      },
+      2000ms);
+  ASSERT_EQ(got.size(), names.size());
+  for (uint32_t id = 0; id < names.size(); ++id) EXPECT_EQ(got[id], names[id]) << "vehicle " << id;
+}
+
 // A 400-element sequence<double> reaches readers created after the write (transient-local),
 // through both the owning Take() and the loaned TakeEach().
 // An agent host's neighbour reader (NeighbourStateQos) hears the other hosts' vehicles and not
@@ -113,8 +151,8 @@ TEST(DdsEntities, NeighbourReaderHearsOtherHostsOnly) {
   ASSERT_TRUE(own.WaitForReaders(1, 2s));  // the plain reader (the neighbour reader never matches it)
   ASSERT_TRUE(theirs.WaitForReaders(2, 2s));
   for (uint32_t id = 0; id < 5; ++id) {
-    own.Write(VehicleState{id, 1, 0, 0, const_cast<char*>("own"), 1.0, 0, 0, 0, 0, 0, 0, 0});
-    theirs.Write(VehicleState{100 + id, 1, 0, 0, const_cast<char*>("theirs"), 2.0, 0, 0, 0, 0, 0, 0, 0});
+    own.Write(VehicleState{id, 1, 0, 0, "own", 1.0, 0, 0, 0, 0, 0, 0, 0});
+    theirs.Write(VehicleState{100 + id, 1, 0, 0, "theirs", 2.0, 0, 0, 0, 0, 0, 0, 0});
   }
   const auto ids_of = [](Reader<VehicleState>& reader, std::size_t want) {
     std::vector<uint32_t> ids;
@@ -154,7 +192,7 @@ TEST(DdsEntities, BatchedWritesGoOutOnFlush) {
       Writer<VehicleState> writer(host, VehicleStateWriterQos());
       if (!writer.WaitForReaders(1, 5s)) throw std::runtime_error("no reader");
       dds_sleepfor(DDS_MSECS(300));  // the reader's side of the match too
-      for (uint32_t id = 0; id < 20; ++id) writer.Write(VehicleState{id, 1, 0, 0, const_cast<char*>("rov"), 1.0 * id, 0, 0, 0, 0, 0, 0, 0});
+      for (uint32_t id = 0; id < 20; ++id) writer.Write(VehicleState{id, 1, 0, 0, "rov", 1.0 * id, 0, 0, 0, 0, 0, 0, 0});
       if (write(told[1], "w", 1) != 1) throw std::runtime_error("pipe");
       dds_sleepfor(DDS_MSECS(600));
       writer.Flush();
@@ -240,7 +278,7 @@ TEST(DdsEntities, KilledVehicleReadsNotAliveNoWriters) {
       Participant vehicle(domain.domain_id(), TestConfig());
       Writer<VehicleState> writer(vehicle, VehicleStateWriterQos(500ms));
       for (int tick = 0; tick < 200; ++tick) {  // 10 s at most, should the parent die
-        writer.Write(VehicleState{kVehicleId, tick, 0, 0, const_cast<char*>("rov"), 1.0, 2.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0});
+        writer.Write(VehicleState{kVehicleId, tick, 0, 0, "rov", 1.0, 2.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0});
         dds_sleepfor(DDS_MSECS(50));
       }
     } catch (const std::exception& e) {
@@ -296,12 +334,12 @@ TEST(DdsEntities, DisposeAndWriterLossAreDistinguished) {
   {
     Writer<VehicleState> writer(participant, VehicleStateWriterQos());
     ASSERT_TRUE(writer.WaitForReaders(1, 2s));
-    for (uint32_t id : {5u, 6u, 7u}) writer.Write(VehicleState{id, 1, 0, 0, const_cast<char*>("rov"), 0, 0, 0, 0, 0, 0, 0, 0});
+    for (uint32_t id : {5u, 6u, 7u}) writer.Write(VehicleState{id, 1, 0, 0, "rov", 0, 0, 0, 0, 0, 0, 0, 0});
     collect(3);
     ASSERT_EQ(state_of.size(), 3u);
     state_of.clear();
-    writer.Dispose(VehicleState{5, 2, 0, 0, const_cast<char*>("rov"), 0, 0, 0, 0, 0, 0, 0, 0});
-    writer.Unregister(VehicleState{6, 2, 0, 0, const_cast<char*>("rov"), 0, 0, 0, 0, 0, 0, 0, 0});
+    writer.Dispose(VehicleState{5, 2, 0, 0, "rov", 0, 0, 0, 0, 0, 0, 0, 0});
+    writer.Unregister(VehicleState{6, 2, 0, 0, "rov", 0, 0, 0, 0, 0, 0, 0, 0});
     collect(2);
   }  // writer deleted: vehicle 7 loses its only writer
   collect(3);

@@ -352,7 +352,7 @@ TEST(SecureDds, StatesAreNotReadableOnTheWire) {
       while (Clock::now() < end) {
         states.WaitForData(50ms);
         states.TakeEach([&](const VehicleState& s, const dds_sample_info_t& info) {
-          read += info.valid_data && std::string(s.name) == marker ? 1 : 0;
+          read += info.valid_data && AsBoundedView(s.name) == marker ? 1 : 0;
         });
       }
       return std::to_string(read);
@@ -365,7 +365,7 @@ TEST(SecureDds, StatesAreNotReadableOnTheWire) {
         VehicleState s{};
         s.vehicle_id = 7;
         s.cycle = cycle;
-        s.name = const_cast<char*>(marker.c_str());
+        if (!CopyBounded(s.name, marker)) return std::string("the marker does not fit a state's name");
         s.x_m = 12.5;
         states.Write(s);
         std::this_thread::sleep_for(20ms);

@@ -71,7 +71,9 @@ Qos StateQos() { return VehicleStateReaderQos(); }
 TEST(WireBytes, VehicleStateMatchesCyclone) {
   std::vector<VehicleState> samples;
   for (std::size_t i = 0; i < kNames.size(); ++i) {
-    samples.push_back(VehicleState{static_cast<uint32_t>(i), 1, 2, 3, BorrowString(kNames[i]), 1, 2, 3, 4, 5, 6, 7, 8});
+    VehicleState s{static_cast<uint32_t>(i), 1, 2, 3, {}, 1, 2, 3, 4, 5, 6, 7, 8};
+    ASSERT_TRUE(CopyBounded(s.name, kNames[i]));
+    samples.push_back(s);
   }
   ExpectSizesMatch(samples, &StateQos);
 }

@@ -8,9 +8,11 @@
 #include <gtest/gtest.h>
 
 #include <limits>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
+#include "agents/node/wire.h"
 #include "maps/world.h"
 
 namespace sage::agents {
@@ -172,6 +174,24 @@ TEST_F(HostDoorTest, KeepsTheLastStatesOfOtherHostsVehicles) {
   EXPECT_EQ(door_.others().count(6), 0u);
   door_.TakeNeighbour(Neighbour(5, 5, 1.0), true, false);  // lost
   EXPECT_TRUE(door_.others().empty());
+}
+
+// A state goes out with its vehicle's whole name or not at all: a name beyond the state's bound
+// (64 characters, a scenario's limit) is refused with the vehicle named, never cut short.
+TEST(Wire, StateNamesBeyondTheBoundAreRefusedNotCut) {
+  StateReport report;
+  report.id = 12;
+  report.name = std::string(64, 'n');
+  const proto::VehicleState m = wire::ToWire(report, kServer, 5);
+  EXPECT_EQ(wire::FromWire(m, 10.0).name, report.name);
+  report.name += "o";
+  try {
+    (void)wire::ToWire(report, kServer, 5);
+    ADD_FAILURE() << "a 65-character name went out";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("vehicle 12: name"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("64 characters"), std::string::npos) << e.what();
+  }
 }
 
 // The probe's forged snapshot of mission time 1e300 (and one of cycle 2^64 - 1) from the followed

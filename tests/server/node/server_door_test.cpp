@@ -32,7 +32,7 @@ class ServerDoorTest : public ::testing::Test {
     m.vehicle_id = id;
     m.server_instance = kInstance;
     m.cycle = cycle;
-    m.name = proto::BorrowString(name_);
+    EXPECT_TRUE(proto::CopyBounded(m.name, name_));
     m.x_m = x;
     m.y_m = y;
     return m;
