@@ -892,14 +892,7 @@ FleetTourPlan Plan(const maps::OccupancyGrid& grid, const Points& valves_m, cons
       out.tour.ok = out.tour.ok && !out.tour.legs.back().empty();
       out.tour.length_m += PathLength(out.tour.legs.back());
     }
-    // (w_i / max w)^alpha: the same ratios as w_i^alpha, without overflow for raw weights.
-    out.weights.resize(size);
-    double heaviest = 0.0;
-    for (int v : out.valves) heaviest = std::max(heaviest, weights[v]);
-    for (int i = 0; i < size; ++i) {
-      out.weights[i] = heaviest > 0.0 ? std::pow(weights[out.valves[i]] / heaviest, options.weight_exponent) : 1.0;
-    }
-    out.weights /= out.weights.sum();  // the sum is >= 1: the heaviest valve's term is 1, as is 0^0
+    out.weights = TourWeights(out.valves, weights, options.weight_exponent);
     out.lap_time_s = out.tour.length_m / vehicles[k].speed_mps;
     for (int i = 0; i < size; ++i) out.lap_time_s += wait_per_lap_s * out.weights[i];
     plan.ok = plan.ok && out.tour.ok;
@@ -912,6 +905,18 @@ FleetTourPlan Plan(const maps::OccupancyGrid& grid, const Points& valves_m, cons
 
 }  // namespace fleet_tours
 }  // namespace
+
+Eigen::VectorXd TourWeights(const std::vector<int>& valves, const Eigen::VectorXd& weights, double exponent) {
+  // (w_i / max w)^alpha: the same ratios as w_i^alpha, without overflow for raw weights.
+  const auto size = static_cast<Eigen::Index>(valves.size());
+  Eigen::VectorXd out(size);
+  double heaviest = 0.0;
+  for (int v : valves) heaviest = std::max(heaviest, weights[v]);
+  for (Eigen::Index i = 0; i < size; ++i) {
+    out[i] = heaviest > 0.0 ? std::pow(weights[valves[static_cast<std::size_t>(i)]] / heaviest, exponent) : 1.0;
+  }
+  return out / out.sum();  // the sum is >= 1: the heaviest valve's term is 1, as is 0^0
+}
 
 FleetTourPlan PlanFleetTours(const maps::OccupancyGrid& grid, const std::vector<Eigen::Vector2d>& valves_m,
                              const Eigen::VectorXd& weights, const std::vector<FleetVehicle>& vehicles,

@@ -140,6 +140,10 @@ struct FleetTourPlan {
   bool ok = false;                    ///< false if some leg has no grid path (tour.ok false)
 };
 
+/// A tour's waits: per valves[k], (w / max w)^exponent over the tour's valves, summing to 1 (equal
+/// where every weight is 0). valves: indices into weights, not empty.
+Eigen::VectorXd TourWeights(const std::vector<int>& valves, const Eigen::VectorXd& weights, double exponent);
+
 /// Partitions the valves (m) among the vehicles, balanced on lap time, one closed tour each (see
 /// the file comment). weights: one per valve, finite, >= 0 (normalised or not: only ratios within
 /// a tour matter); a tour whose weights are all 0 waits equally at its valves. grid: the A* grid,

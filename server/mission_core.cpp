@@ -404,36 +404,53 @@ void MissionCore::AssignTargets(const std::vector<int>& alive, bool risk_changed
 // 2 s after the first), and planned again replan_delay_s after a vehicle joins, is lost or
 // leaves, or a risk changes; meanwhile the old tours are flown (a lost vehicle's valves wait for
 // the re-plan, a new vehicle holds station). Waits within a tour follow risk changes at once,
-// from each tour's next lap (the snapshot's weights).
+// from each tour's next lap (the snapshot's weights). On a field of 1,000 valves or more a plan
+// is made on a thread of its own and taken when due (RegionSplitDelayCycles, as the regions'
+// split), the fleet flying its old tours meanwhile, or at the start each valve's nearest vehicle's
+// (QuickFleetTours): the 10,000-vehicle field's first plan had taken 9-14 s in one server cycle.
 void MissionCore::AssignTours(const std::vector<int>& alive, bool risk_changed, CycleOutput& out) {
   constexpr double kFirstPlanWait_s = 2.0;
-  if (alive.empty()) return;
   TourPlan& plan = tour_plan_;
+  if (plan.pending && cycle_ >= plan.pending->due_cycle()) {
+    TakeTours(plan.pending->Take(), plan.pending_for, time_s_ - plan.pending_started_s, out);
+    plan.pending.reset();
+  }
+  if (alive.empty()) return;
   if (plan.first_join_s < 0.0) plan.first_join_s = time_s_;
   if (plan.planned && (alive != plan.planned_for || risk_changed) && plan.change_s < 0.0) plan.change_s = time_s_;
-  const bool due = plan.planned ? plan.change_s >= 0.0 && time_s_ - plan.change_s >= scenario_.astar.replan_delay_s - 1e-9
-                                : alive.size() >= scenario_.vehicles.size() || time_s_ - plan.first_join_s >= kFirstPlanWait_s;
+  const bool due =
+      !plan.pending && (plan.planned ? plan.change_s >= 0.0 && time_s_ - plan.change_s >= scenario_.astar.replan_delay_s - 1e-9
+                                     : alive.size() >= scenario_.vehicles.size() || time_s_ - plan.first_join_s >= kFirstPlanWait_s);
   if (due) {
-    const agents::FleetTourPlan tours = PlanShares(alive, scenario_.astar.weight_exponent);
     plan.planned = true;
     plan.planned_for = alive;
     plan.change_s = -1.0;
-    plan.tours.clear();
-    for (std::size_t k = 0; k < alive.size(); ++k) {
-      const agents::VehicleTour& v = tours.vehicles[k];
-      agents::Assignment a;
-      a.id = alive[k];
-      a.cycle = out.snapshot.cycle;
-      a.shared = false;
-      for (int i : v.tour.order) a.tour.push_back(v.valves[i]);
-      a.tour_weights.resize(static_cast<Eigen::Index>(v.tour.order.size()));
-      for (std::size_t i = 0; i < v.tour.order.size(); ++i) a.tour_weights[static_cast<Eigen::Index>(i)] = v.weights[v.tour.order[i]];
-      plan.tours[a.id] = std::move(a);
-      roster_.Find(alive[k])->target_sent = false;
+    const std::int64_t delay = RegionSplitDelayCycles(scenario_.ValvePositions().size(), scenario_.control_rate_hz);
+    if (delay == 0) {
+      TakeTours(PlanShares(alive, scenario_.astar.weight_exponent), alive, 0.0, out);
+    } else {
+      // The fleet as it is now, copied for the planning thread (the grid and scenario are fixed).
+      const bool first = plan.tours.empty();
+      std::vector<agents::FleetVehicle> vehicles = FleetVehicles(alive);
+      Eigen::VectorXd weights = fleet_.schedule().back().weights;
+      if (first) TakeTours(QuickFleetTours(scenario_, vehicles, weights, scenario_.astar.weight_exponent), alive, -1.0, out);
+      agents::FleetTourOptions options;
+      options.seed = scenario_.seed;
+      options.weight_exponent = scenario_.astar.weight_exponent;
+      // The hosts plan their own legs: without them (a third of the 10,000-vehicle field's plan)
+      // each lap is priced on the search's grid distances, at most 8.2 % above the flown legs.
+      options.legs = false;
+      plan.pending = std::make_unique<PendingPlan<agents::FleetTourPlan>>(
+          [&grid = world_.astar_grid(), valves = scenario_.ValvePositions(), weights = std::move(weights),
+           vehicles = std::move(vehicles), wait_s = scenario_.astar.wait_per_lap_s,
+           options](const std::atomic<bool>* cancel) mutable {
+            options.cancel = cancel;
+            return agents::PlanFleetTours(grid, valves, weights, vehicles, wait_s, options);
+          },
+          cycle_ + delay, true);
+      plan.pending_for = alive;
+      plan.pending_started_s = time_s_;
     }
-    Note("tours", fmt::format("{} tours planned for {} vehicles: laps {:.1f} s at most, {:.1f} s on average{}",
-                              tours.vehicles.size(), alive.size(), tours.max_lap_s, tours.mean_lap_s,
-                              tours.ok ? "" : " (some leg has no path)"));
   }
   for (int id : alive) {
     Roster::Member& m = *roster_.Find(id);
@@ -442,6 +459,33 @@ void MissionCore::AssignTours(const std::vector<int>& alive, bool risk_changed, 
     out.assignments.push_back(tour->second);
     m.target_sent = true;
   }
+}
+
+// Tours take effect: each vehicle they were planned for (planned_for, in the plan's order) gets
+// its own, sent on this cycle (a vehicle gone meanwhile leaves its valves unflown until the next
+// plan). planning_s: how long the plan took in mission time (0 within the cycle, < 0 provisional).
+void MissionCore::TakeTours(const agents::FleetTourPlan& tours, const std::vector<int>& planned_for, double planning_s,
+                            const CycleOutput& out) {
+  TourPlan& plan = tour_plan_;
+  plan.tours.clear();
+  for (std::size_t k = 0; k < planned_for.size(); ++k) {
+    const agents::VehicleTour& v = tours.vehicles[k];
+    agents::Assignment a;
+    a.id = planned_for[k];
+    a.cycle = out.snapshot.cycle;
+    a.shared = false;
+    for (int i : v.tour.order) a.tour.push_back(v.valves[i]);
+    a.tour_weights.resize(static_cast<Eigen::Index>(v.tour.order.size()));
+    for (std::size_t i = 0; i < v.tour.order.size(); ++i) a.tour_weights[static_cast<Eigen::Index>(i)] = v.weights[v.tour.order[i]];
+    plan.tours[a.id] = std::move(a);
+    if (Roster::Member* m = roster_.Find(planned_for[k])) m->target_sent = false;
+  }
+  const std::string how = planning_s < 0.0 ? " (provisional: each valve to its nearest vehicle while the tours are planned)"
+                          : planning_s > 0.0 ? fmt::format(", planned over {:.1f} s (laps on grid distances)", planning_s)
+                                             : std::string();
+  Note("tours", fmt::format("{} tours planned for {} vehicles{}: laps {:.1f} s at most, {:.1f} s on average{}",
+                            tours.vehicles.size(), planned_for.size(), how, tours.max_lap_s, tours.mean_lap_s,
+                            tours.ok ? "" : " (some leg has no path)"));
 }
 
 std::vector<agents::FleetVehicle> MissionCore::FleetVehicles(const std::vector<int>& alive) const {

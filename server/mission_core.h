@@ -234,6 +234,8 @@ class MissionCore {
   // The valves split among the live vehicles, balanced on travel (the fleet's tours).
   agents::FleetTourPlan PlanShares(const std::vector<int>& alive, double weight_exponent) const;
   void TakeSplit(RegionSplit split);
+  void TakeTours(const agents::FleetTourPlan& tours, const std::vector<int>& planned_for, double planning_s,
+                 const CycleOutput& out);
   double next_time_s() const;  // the mission time of the coming cycle, when input takes effect
   double RiskMass(const std::vector<int>& valves) const;
   // A partition share's phi_k with the layer's leaves nearest its valves (the share alone when none).
@@ -271,11 +273,14 @@ class MissionCore {
   // A* fleets: the tours flown, and when the fleet or the risk last changed since they were
   // planned (-1: not since).
   struct TourPlan {
-    bool planned = false;
+    bool planned = false;                       // a plan was taken or is under way
     std::vector<int> planned_for;               // the live vehicles it was planned for
     std::map<int, agents::Assignment> tours;    // vehicle id -> its tour
     double first_join_s = -1.0;
     double change_s = -1.0;
+    std::unique_ptr<PendingPlan<agents::FleetTourPlan>> pending;  // a large field's, on its own thread
+    std::vector<int> pending_for;                                  // the vehicles it is for
+    double pending_started_s = 0.0;
   };
   TourPlan tour_plan_;
   // Regions: each live vehicle's share of the valves, its box, basis and risk field there, and

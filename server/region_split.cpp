@@ -51,13 +51,15 @@ int Nearest(const maps::NearbyPoints& index, const std::vector<Eigen::Vector2d>&
   return std::max(0, nearest_of(found));
 }
 
-// The closed tour through p taken nearest-first from p[0] (straight line, m).
-double NearestNeighbourTour(const std::vector<Eigen::Vector2d>& p) {
-  if (p.size() < 2) return 0.0;
+// The closed tour through p taken nearest-first from p[0] (straight line): the visiting order
+// (order[0] = 0) and its length (m).
+std::vector<int> NearestNeighbourOrder(const std::vector<Eigen::Vector2d>& p, double& length) {
+  length = 0.0;
+  if (p.empty()) return {};
+  std::vector<int> order{0};
   std::vector<bool> done(p.size(), false);
   std::size_t at = 0;
   done[0] = true;
-  double length = 0.0;
   for (std::size_t step = 1; step < p.size(); ++step) {
     std::size_t next = 0;
     double best = std::numeric_limits<double>::infinity();
@@ -66,9 +68,33 @@ double NearestNeighbourTour(const std::vector<Eigen::Vector2d>& p) {
     }
     length += best;
     done[next] = true;
+    order.push_back(static_cast<int>(next));
     at = next;
   }
-  return length + (p[at] - p[0]).norm();
+  length += (p[at] - p[0]).norm();
+  return order;
+}
+
+// Each valve to its nearest vehicle (straight line; ties to the lower index), as scenario valve
+// indices ascending per vehicle; a vehicle left without one takes its nearest valve.
+std::vector<std::vector<int>> NearestVehicleShares(const maps::Scenario& scenario, const std::vector<Eigen::Vector2d>& starts,
+                                                   const std::vector<Eigen::Vector2d>& valve_points) {
+  // Cells of about one vehicle's (and one valve's) share of the field.
+  const double area = scenario.workspace.width_m * scenario.workspace.height_m;
+  const double vehicle_cell_m = std::max(1.0, std::sqrt(area / static_cast<double>(starts.size())));
+  const double valve_cell_m = std::max(1.0, std::sqrt(area / static_cast<double>(valve_points.size())));
+  const maps::NearbyPoints by_vehicle(starts, vehicle_cell_m), by_valve(valve_points, valve_cell_m);
+  const double reach_m = 2.0 * std::hypot(scenario.workspace.width_m, scenario.workspace.height_m);
+  std::vector<std::vector<int>> shares(starts.size());
+  std::vector<int> found;
+  for (std::size_t i = 0; i < valve_points.size(); ++i) {
+    shares[static_cast<std::size_t>(Nearest(by_vehicle, starts, vehicle_cell_m, reach_m, valve_points[i], found))].push_back(
+        static_cast<int>(i));
+  }
+  for (std::size_t k = 0; k < starts.size(); ++k) {
+    if (shares[k].empty()) shares[k].push_back(Nearest(by_valve, valve_points, valve_cell_m, reach_m, starts[k], found));
+  }
+  return shares;
 }
 
 }  // namespace
@@ -81,30 +107,19 @@ RegionSplit QuickRegionSplit(const maps::OccupancyGrid& blocked, const maps::Sce
   std::vector<Eigen::Vector2d> starts, valve_points;
   for (const agents::FleetVehicle& v : input.vehicles) starts.push_back(v.position_m);
   for (const maps::Valve& v : valves) valve_points.push_back(v.position_m);
-  // Cells of about one vehicle's (and one valve's) share of the field.
-  const double area = scenario.workspace.width_m * scenario.workspace.height_m;
-  const double vehicle_cell_m = std::max(1.0, std::sqrt(area / static_cast<double>(n)));
-  const double valve_cell_m = std::max(1.0, std::sqrt(area / static_cast<double>(valves.size())));
-  const maps::NearbyPoints by_vehicle(starts, vehicle_cell_m), by_valve(valve_points, valve_cell_m);
-  const double reach_m = 2.0 * std::hypot(scenario.workspace.width_m, scenario.workspace.height_m);
-  std::vector<std::vector<int>> shares(n);
-  std::vector<int> found;
-  for (std::size_t i = 0; i < valves.size(); ++i) {
-    shares[static_cast<std::size_t>(Nearest(by_vehicle, starts, vehicle_cell_m, reach_m, valve_points[i], found))].push_back(
-        static_cast<int>(i));
-  }
+  std::vector<std::vector<int>> shares = NearestVehicleShares(scenario, starts, valve_points);
   RegionSplit split;
   split.provisional = true;
   split.regions.resize(n);
   // The regions' bases and targets are most of the work (1.9 s of the 10,000-vehicle field's,
   // in one server cycle): built on two threads, each region by itself, so the same either way.
   const auto build = [&](std::size_t begin, std::size_t end) {
-    std::vector<int> near;
     for (std::size_t k = begin; k < end; ++k) {
-      if (shares[k].empty()) shares[k].push_back(Nearest(by_valve, valve_points, valve_cell_m, reach_m, starts[k], near));
       std::vector<Eigen::Vector2d> points;
       for (int i : shares[k]) points.push_back(valve_points[static_cast<std::size_t>(i)]);
-      const double lap_s = NearestNeighbourTour(points) / input.vehicles[k].speed_mps + scenario.astar.wait_per_lap_s;
+      double length_m = 0.0;
+      (void)NearestNeighbourOrder(points, length_m);
+      const double lap_s = length_m / input.vehicles[k].speed_mps + scenario.astar.wait_per_lap_s;
       split.regions[k] = MakeRegion(std::move(shares[k]), lap_s, valves, scenario, blocked);
     }
   };
@@ -118,6 +133,33 @@ RegionSplit QuickRegionSplit(const maps::OccupancyGrid& blocked, const maps::Sce
   }
   split.input = std::move(input);
   return split;
+}
+
+agents::FleetTourPlan QuickFleetTours(const maps::Scenario& scenario, const std::vector<agents::FleetVehicle>& vehicles,
+                                      const Eigen::VectorXd& weights, double weight_exponent) {
+  const std::vector<Eigen::Vector2d> valve_points = scenario.ValvePositions();
+  if (vehicles.empty() || valve_points.empty() || weights.size() != static_cast<Eigen::Index>(valve_points.size())) {
+    throw std::invalid_argument("QuickFleetTours: no vehicles, no valves, or a weight per valve missing");
+  }
+  std::vector<Eigen::Vector2d> starts;
+  for (const agents::FleetVehicle& v : vehicles) starts.push_back(v.position_m);
+  std::vector<std::vector<int>> shares = NearestVehicleShares(scenario, starts, valve_points);
+  agents::FleetTourPlan plan;
+  plan.ok = true;
+  for (std::size_t k = 0; k < vehicles.size(); ++k) {
+    agents::VehicleTour out;
+    out.valves = std::move(shares[k]);
+    std::vector<Eigen::Vector2d> points;
+    for (int i : out.valves) points.push_back(valve_points[static_cast<std::size_t>(i)]);
+    out.tour.order = NearestNeighbourOrder(points, out.tour.length_m);
+    out.tour.ok = true;
+    out.weights = agents::TourWeights(out.valves, weights, weight_exponent);
+    out.lap_time_s = out.tour.length_m / vehicles[k].speed_mps + scenario.astar.wait_per_lap_s;
+    plan.max_lap_s = std::max(plan.max_lap_s, out.lap_time_s);
+    plan.mean_lap_s += out.lap_time_s / static_cast<double>(vehicles.size());
+    plan.vehicles.push_back(std::move(out));
+  }
+  return plan;
 }
 
 RegionSplit PlanRegionSplit(const maps::OccupancyGrid& astar_grid, const maps::OccupancyGrid& blocked,
@@ -158,17 +200,10 @@ std::string FleetTooSmallForField(std::size_t valves, std::size_t vehicles) {
 PendingRegionSplit::PendingRegionSplit(const maps::OccupancyGrid& astar_grid, const maps::OccupancyGrid& blocked,
                                        const maps::Scenario& scenario, RegionSplitInput input, std::int64_t due_cycle,
                                        bool in_background)
-    : due_cycle_(due_cycle) {
-  auto plan = [&astar_grid, &blocked, &scenario, input = std::move(input), cancel = cancel_.get()]() mutable {
-    return PlanRegionSplit(astar_grid, blocked, scenario, std::move(input), cancel);
-  };
-  split_ = std::async(in_background ? std::launch::async : std::launch::deferred, std::move(plan));
-}
-
-// The future's destructor then joins a thread that is at most one grid search (or 65,536 of its
-// cells) from giving up; its PlanCancelled stays in the future, never taken.
-PendingRegionSplit::~PendingRegionSplit() { cancel_->store(true, std::memory_order_relaxed); }
-
-RegionSplit PendingRegionSplit::Take() { return split_.get(); }
+    : PendingPlan(
+          [&astar_grid, &blocked, &scenario, input = std::move(input)](const std::atomic<bool>* cancel) mutable {
+            return PlanRegionSplit(astar_grid, blocked, scenario, std::move(input), cancel);
+          },
+          due_cycle, in_background) {}
 
 }  // namespace sage::server

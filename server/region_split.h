@@ -81,26 +81,48 @@ constexpr int kMostValvesPerVehicle = 100;
 /// with the fleet size that would do (the caller refuses the mission with it).
 std::string FleetTooSmallForField(std::size_t valves, std::size_t vehicles);
 
-/// A split under way: planned at once when its delay is 0, else on a thread of its own. Dropped
-/// before it is taken (the mission ended first), its thread gives the plan up at its next grid
-/// search rather than finish it: the mission's end had waited for it (hours for ten vehicles on a
-/// 35,000-valve field).
-class PendingRegionSplit {
+/// The tours a large field's fleet flies while its first tours are planned (the regions'
+/// provisional split, as tours): each valve to the nearest vehicle (straight line; ties to the
+/// lower index), a vehicle left without one takes its nearest valve, each share flown
+/// nearest-first from its lowest valve with the planner's waits (agents::TourWeights), its lap
+/// priced on straight lines. No legs (the hosts plan their own). O(valves + vehicles).
+agents::FleetTourPlan QuickFleetTours(const maps::Scenario& scenario, const std::vector<agents::FleetVehicle>& vehicles,
+                                      const Eigen::VectorXd& weights, double weight_exponent);
+
+/// A plan under way (a split, the tours): made at once when its delay is 0, else on a thread of
+/// its own, and taken at due_cycle. Dropped before it is taken (the mission ended first), its
+/// thread gives the plan up at its next grid search rather than finish it: the mission's end had
+/// waited for it (hours for ten vehicles on a 35,000-valve field).
+template <class Plan>
+class PendingPlan {
  public:
-  PendingRegionSplit(const maps::OccupancyGrid& astar_grid, const maps::OccupancyGrid& blocked,
-                     const maps::Scenario& scenario, RegionSplitInput input, std::int64_t due_cycle,
-                     bool in_background);
-  ~PendingRegionSplit();
-  PendingRegionSplit(const PendingRegionSplit&) = delete;
-  PendingRegionSplit& operator=(const PendingRegionSplit&) = delete;
+  /// make(cancel) returns the plan, giving it up (agents::PlanCancelled) once *cancel is set.
+  template <class Make>
+  PendingPlan(Make make, std::int64_t due_cycle, bool in_background) : due_cycle_(due_cycle) {
+    plan_ = std::async(in_background ? std::launch::async : std::launch::deferred,
+                       [make = std::move(make), cancel = cancel_.get()]() mutable { return make(cancel); });
+  }
+  // The future's destructor then joins a thread that is at most one grid search (or 65,536 of its
+  // cells) from giving up; its PlanCancelled stays in the future, never taken.
+  ~PendingPlan() { cancel_->store(true, std::memory_order_relaxed); }
+  PendingPlan(const PendingPlan&) = delete;
+  PendingPlan& operator=(const PendingPlan&) = delete;
   std::int64_t due_cycle() const { return due_cycle_; }
-  /// The split; waits for its thread if it is still planning. Once only.
-  RegionSplit Take();
+  /// The plan; waits for its thread if it is still planning. Once only.
+  Plan Take() { return plan_.get(); }
 
  private:
   std::int64_t due_cycle_;
   std::unique_ptr<std::atomic<bool>> cancel_ = std::make_unique<std::atomic<bool>>(false);
-  std::future<RegionSplit> split_;  // after cancel_: destroyed (its thread joined) first
+  std::future<Plan> plan_;  // after cancel_: destroyed (its thread joined) first
+};
+
+/// The regions' split under way (PlanRegionSplit).
+class PendingRegionSplit : public PendingPlan<RegionSplit> {
+ public:
+  PendingRegionSplit(const maps::OccupancyGrid& astar_grid, const maps::OccupancyGrid& blocked,
+                     const maps::Scenario& scenario, RegionSplitInput input, std::int64_t due_cycle,
+                     bool in_background);
 };
 
 }  // namespace sage::server

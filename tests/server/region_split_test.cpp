@@ -7,7 +7,9 @@
 #include <atomic>
 #include <cmath>
 #include <limits>
+#include <map>
 #include <random>
+#include <set>
 #include <string>
 #include <tuple>
 #include <vector>
@@ -213,6 +215,102 @@ TEST(RegionSplit, ProvisionalSplitGivesEachValveItsNearestVehicle) {
       for (int i : r.valves) EXPECT_TRUE(r.field->box().Contains(valves[i], 1e-9)) << k;
     }
   }
+}
+
+// The provisional tours against brute force: each vehicle's tour holds the same valves as its
+// provisional region (every valve with its nearest vehicle; one left without any takes its
+// nearest valve), visits each once nearest-first from its lowest valve, waits as the planner's
+// (w / max w)^alpha summing to 1, and its lap is the straight-line closed tour at its speed plus
+// the scenario's wait.
+TEST(RegionSplit, ProvisionalToursFlyTheProvisionalSplitNearestFirst) {
+  const maps::Scenario s = Field(60, 200, 45, 10.0);
+  const maps::World world(s);
+  RegionSplitInput input;
+  std::mt19937_64 rng(23);
+  std::uniform_real_distribution<double> x(0.0, s.workspace.width_m), y(0.0, s.workspace.height_m);
+  for (int k = 0; k < 45; ++k) {
+    input.vehicle_ids.push_back(k);
+    input.vehicles.push_back({{x(rng), y(rng)}, 0.4 + 0.01 * k});
+  }
+  const Eigen::VectorXd weights = Eigen::VectorXd::LinSpaced(200, 0.5, 4.0);
+  const RegionSplit split = QuickRegionSplit(world.blocked(), s, input);
+  const agents::FleetTourPlan tours = QuickFleetTours(s, input.vehicles, weights, 0.5);
+  ASSERT_EQ(tours.vehicles.size(), 45u);
+  EXPECT_TRUE(tours.ok);
+  const std::vector<Eigen::Vector2d> valves = s.ValvePositions();
+  double longest = 0.0;
+  for (std::size_t k = 0; k < 45; ++k) {
+    const agents::VehicleTour& t = tours.vehicles[k];
+    EXPECT_EQ(t.valves, split.regions[k].valves) << k;
+    ASSERT_EQ(t.tour.order.size(), t.valves.size()) << k;
+    ASSERT_EQ(t.tour.order.front(), 0) << k;
+    std::vector<int> seen = t.tour.order;
+    std::sort(seen.begin(), seen.end());
+    for (std::size_t i = 0; i < seen.size(); ++i) ASSERT_EQ(seen[i], static_cast<int>(i)) << k;
+    double length = 0.0;
+    for (std::size_t i = 1; i < t.tour.order.size(); ++i) {
+      const Eigen::Vector2d at = valves[t.valves[t.tour.order[i - 1]]];
+      const double step = (valves[t.valves[t.tour.order[i]]] - at).norm();
+      for (std::size_t j = i; j < t.tour.order.size(); ++j) {  // none left unvisited was nearer
+        EXPECT_LE(step, (valves[t.valves[t.tour.order[j]]] - at).norm() + 1e-12) << k;
+      }
+      length += step;
+    }
+    length += (valves[t.valves[t.tour.order.back()]] - valves[t.valves.front()]).norm();
+    EXPECT_NEAR(t.tour.length_m, length, 1e-9) << k;
+    EXPECT_NEAR(t.lap_time_s, length / input.vehicles[k].speed_mps + s.astar.wait_per_lap_s, 1e-9) << k;
+    double heaviest = 0.0, sum = 0.0;
+    for (int v : t.valves) heaviest = std::max(heaviest, weights[v]);
+    for (std::size_t i = 0; i < t.valves.size(); ++i) sum += std::sqrt(weights[t.valves[i]] / heaviest);
+    for (std::size_t i = 0; i < t.valves.size(); ++i) {
+      EXPECT_NEAR(t.weights[static_cast<Eigen::Index>(i)], std::sqrt(weights[t.valves[i]] / heaviest) / sum, 1e-12) << k;
+    }
+    longest = std::max(longest, t.lap_time_s);
+  }
+  EXPECT_DOUBLE_EQ(tours.max_lap_s, longest);
+}
+
+struct TourNotes final : public MissionRecorder {
+  void OnSample(const TrajectorySample& s, const std::string&) override { samples.push_back(s); }
+  void OnFleetEvent(const FleetEventRecord& e) override {
+    if (e.what == "tours") notes.push_back({e.time_s, e.detail});
+  }
+  void OnRiskEvent(const RiskEventRecord&) override {}
+  std::vector<TrajectorySample> samples;
+  std::vector<std::pair<double, std::string>> notes;
+};
+
+// The tour baseline on a field of 1,050 valves: the fleet flies provisional tours from the first
+// cycle, and the planned tours (made on a thread of their own) are taken 4 cycles later, as the
+// regions' split (0.3 ms x 1,050 = 0.315 s), not when the thread happens to end; two runs of the
+// mission are sample for sample the same, and every vehicle moves before the plan is taken.
+TEST(RegionSplit, ALargeFieldsToursAreTakenWhenDue) {
+  const maps::Scenario s = Field(300, 1050, 20, 3.0);
+  std::vector<TourNotes> runs(2);
+  for (TourNotes& record : runs) {
+    MissionOptions options;
+    options.controller = ControllerKind::kAstar;
+    options.recorder = &record;
+    options.keep_trajectory = false;
+    Mission(s, options).Run();
+  }
+  ASSERT_EQ(runs[0].notes.size(), 2u);
+  EXPECT_NEAR(runs[0].notes[0].first, 0.0, 1e-9);
+  EXPECT_NE(runs[0].notes[0].second.find("20 tours planned for 20 vehicles (provisional"), std::string::npos)
+      << runs[0].notes[0].second;
+  EXPECT_NEAR(runs[0].notes[1].first, 0.4, 1e-9);
+  EXPECT_NE(runs[0].notes[1].second.find("planned over 0.4 s"), std::string::npos) << runs[0].notes[1].second;
+  ASSERT_EQ(runs[0].samples.size(), runs[1].samples.size());
+  std::map<int, Eigen::Vector2d> first_at;
+  std::set<int> moved;
+  for (std::size_t i = 0; i < runs[0].samples.size(); ++i) {
+    const TrajectorySample& a = runs[0].samples[i];
+    ASSERT_EQ(a.position_m, runs[1].samples[i].position_m) << "sample " << i;
+    if (a.time_s > 0.35) continue;
+    const auto [at, first] = first_at.try_emplace(a.vehicle, a.position_m);
+    if (!first && (a.position_m - at->second).norm() > 0.01) moved.insert(a.vehicle);
+  }
+  EXPECT_EQ(moved.size(), 20u) << "vehicles that moved on their provisional tours before the plan was due";
 }
 
 // A vehicle far off the field (beyond the rings searched) still gets the valve nearest to it, and
