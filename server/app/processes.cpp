@@ -9,13 +9,11 @@
 #include <cerrno>
 #include <chrono>
 #include <cstdio>
-#include <cstdlib>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
 #include <stdexcept>
-#include <string_view>
 #include <thread>
 
 #include <fmt/format.h>
@@ -170,22 +168,6 @@ void TerminalRelay::Print(const std::string& line) {
   std::fflush(stderr);
   std::fputs(line.c_str(), stdout);
   std::fflush(stdout);
-}
-
-std::optional<std::string> HugePageTunables(const char* tunables, const char* sage_huge_pages) {
-  if (sage_huge_pages != nullptr && std::string_view(sage_huge_pages) == "0") return std::nullopt;
-  const std::string_view current = tunables != nullptr ? tunables : "";
-  if (current.find("glibc.malloc.hugetlb") != std::string_view::npos) return std::nullopt;
-  return current.empty() ? std::string("glibc.malloc.hugetlb=1") : std::string(current) + ":glibc.malloc.hugetlb=1";
-}
-
-void StartWithHugePages(char** argv) {
-  const std::optional<std::string> tunables = HugePageTunables(std::getenv("GLIBC_TUNABLES"), std::getenv("SAGE_HUGE_PAGES"));
-  if (!tunables || argv == nullptr || argv[0] == nullptr) return;
-  if (setenv("GLIBC_TUNABLES", tunables->c_str(), 1) != 0) return;
-  execv("/proc/self/exe", argv);
-  // Not started again (no /proc?): on as it is, with the tunable left for its children, which
-  // then start with huge pages themselves.
 }
 
 }  // namespace sage::server

@@ -4,7 +4,6 @@
 // relayed above a live progress line).
 #include <sys/types.h>
 
-#include <optional>
 #include <string>
 #include <vector>
 
@@ -23,19 +22,6 @@ pid_t Spawn(const std::vector<std::string>& args, const std::string& log_path, b
 /// The options that give a child process `network` (--interface, --peer..., --multicast); none
 /// for this machine alone (the default).
 std::vector<std::string> NetworkArgs(const maps::NetworkSettings& network);
-
-/// The GLIBC_TUNABLES value under which glibc's malloc backs its heaps with transparent huge
-/// pages (glibc.malloc.hugetlb=1: madvise, which is all this kernel's THP setting honours), given
-/// the current value (null: unset) and SAGE_HUGE_PAGES (null: unset); nullopt when nothing is to
-/// change: the tunable already set (by the user, either way, or by this sage's first start) or
-/// SAGE_HUGE_PAGES=0. Any other tunables are kept.
-std::optional<std::string> HugePageTunables(const char* tunables, const char* sage_huge_pages);
-
-/// At the start of `sage`: glibc reads its tunables once, at a process's start, so when
-/// HugePageTunables asks for a change this process sets it and starts itself again (execv of
-/// /proc/self/exe with the same arguments); it returns only if it cannot. A 10,000-vehicle mission
-/// waits on memory (every vehicle's data is out of the caches by its turn, 3.5 GB in 4 kB pages).
-void StartWithHugePages(char** argv);
 
 /// "exited with status 1", "was killed by SIGKILL", from a waitpid status.
 std::string DescribeExit(int wait_status);
