@@ -434,9 +434,7 @@ void MissionCore::AssignTours(const std::vector<int>& alive, bool risk_changed, 
       std::vector<agents::FleetVehicle> vehicles = FleetVehicles(alive);
       Eigen::VectorXd weights = fleet_.schedule().back().weights;
       if (first) TakeTours(QuickFleetTours(scenario_, vehicles, weights, scenario_.astar.weight_exponent), alive, -1.0, out);
-      agents::FleetTourOptions options;
-      options.seed = scenario_.seed;
-      options.weight_exponent = scenario_.astar.weight_exponent;
+      agents::FleetTourOptions options = TourOptions(scenario_.astar.weight_exponent);
       // The hosts plan their own legs: without them (a third of the 10,000-vehicle field's plan)
       // each lap is priced on the search's grid distances, at most 8.2 % above the flown legs.
       options.legs = false;
@@ -499,13 +497,17 @@ std::vector<agents::FleetVehicle> MissionCore::FleetVehicles(const std::vector<i
   return vehicles;
 }
 
-agents::FleetTourPlan MissionCore::PlanShares(const std::vector<int>& alive, double weight_exponent) const {
-  const std::vector<agents::FleetVehicle> vehicles = FleetVehicles(alive);
+agents::FleetTourOptions MissionCore::TourOptions(double weight_exponent) const {
   agents::FleetTourOptions options;
   options.seed = scenario_.seed;
   options.weight_exponent = weight_exponent;
+  return options;
+}
+
+agents::FleetTourPlan MissionCore::PlanShares(const std::vector<int>& alive, double weight_exponent) const {
+  const std::vector<agents::FleetVehicle> vehicles = FleetVehicles(alive);
   return agents::PlanFleetTours(world_.astar_grid(), scenario_.ValvePositions(), fleet_.schedule().back().weights,
-                                vehicles, scenario_.astar.wait_per_lap_s, options);
+                                vehicles, scenario_.astar.wait_per_lap_s, TourOptions(weight_exponent));
 }
 
 Eigen::VectorXd MissionCore::ShareOfLayer(int id) const {

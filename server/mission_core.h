@@ -232,6 +232,7 @@ class MissionCore {
   // The live vehicles as the planners see them: where each last reported (or its start), its speed.
   std::vector<agents::FleetVehicle> FleetVehicles(const std::vector<int>& alive) const;
   // The valves split among the live vehicles, balanced on travel (the fleet's tours).
+  agents::FleetTourOptions TourOptions(double weight_exponent) const;  // the scenario's seed, the given exponent
   agents::FleetTourPlan PlanShares(const std::vector<int>& alive, double weight_exponent) const;
   void TakeSplit(RegionSplit split);
   void TakeTours(const agents::FleetTourPlan& tours, const std::vector<int>& planned_for, double planning_s,
