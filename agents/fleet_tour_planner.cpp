@@ -7,8 +7,11 @@
 #include "maps/nearby_points.h"
 
 #include <algorithm>
+#include <array>
+#include <bit>
 #include <chrono>
 #include <cmath>
+#include <cstring>
 #include <deque>
 #include <limits>
 #include <map>
@@ -16,7 +19,6 @@
 #include <random>
 #include <stdexcept>
 #include <tuple>
-#include <unordered_map>
 #include <utility>
 
 namespace sage::agents {
@@ -58,6 +60,65 @@ int SnapCell(const maps::OccupancyGrid& grid, const Eigen::Vector2d& x_m) {
   return -1;
 }
 
+// A hash map without a node per entry: open addressing, linear probing, at most half full,
+// `empty` the key no entry has. The planner's tables hold up to a million small entries, each
+// looked up many times (std::unordered_map and std::map: a cache miss or two and an allocation
+// per entry, and a fifth of a 10,000-vehicle split). Hash(key) mixes all 64 bits; the slot is
+// its top bits.
+template <class Key, class Value, class Hash>
+class FlatMap {
+ public:
+  explicit FlatMap(const Key& empty) : empty_(empty) {}
+  // The slot of key's value and whether it was just added (its value then Value{}).
+  std::pair<Value*, bool> FindOrAdd(const Key& key) {
+    if (2 * (size_ + 1) > slots_.size()) Grow();
+    for (std::size_t at = Home(key);; at = (at + 1) & mask_) {
+      Slot& slot = slots_[at];
+      if (slot.key == key) return {&slot.value, false};
+      if (slot.key == empty_) {
+        slot.key = key, ++size_;
+        return {&slot.value, true};
+      }
+    }
+  }
+
+ private:
+  struct Slot {
+    Key key;
+    Value value;
+  };
+  std::size_t Home(const Key& key) const { return static_cast<std::size_t>(Hash{}(key) >> shift_); }
+  void Grow() {
+    std::vector<Slot> old = std::exchange(slots_, std::vector<Slot>(std::max<std::size_t>(64, 2 * slots_.size()), Slot{empty_, Value{}}));
+    mask_ = slots_.size() - 1;
+    shift_ = 64 - std::countr_zero(slots_.size());
+    for (Slot& slot : old) {
+      if (slot.key == empty_) continue;
+      std::size_t at = Home(slot.key);
+      while (!(slots_[at].key == empty_)) at = (at + 1) & mask_;
+      slots_[at] = std::move(slot);
+    }
+  }
+  Key empty_;
+  std::vector<Slot> slots_;
+  std::size_t size_ = 0, mask_ = 0;
+  int shift_ = 64;
+};
+
+constexpr std::uint64_t kGolden = 0x9E3779B97F4A7C15ull;  // 2^64 / phi: Fibonacci hashing
+struct PairHash {
+  std::uint64_t operator()(std::uint64_t key) const { return key * kGolden; }
+};
+// A set of at most kExactTourSize valves, ascending, padded with -1.
+using ValveSet = std::array<int, kExactTourSize>;
+struct ValveSetHash {
+  std::uint64_t operator()(const ValveSet& set) const {
+    std::uint64_t h = 0;
+    for (const int v : set) h = (h ^ static_cast<std::uint32_t>(v)) * kGolden;
+    return h;
+  }
+};
+
 // Valve-to-valve grid distances: A* between the valves' cells on the graph and costs of
 // PlanGridPath's (8-connected, no corner cutting, octile heuristic, so the cost is exact), ties
 // in f to the deeper cell so that open water costs O(L / r) cells; cached per pair. Valves in
@@ -67,19 +128,10 @@ class ValveDistances {
  public:
   ValveDistances(const maps::OccupancyGrid& grid, const Points& valves, const std::atomic<bool>* cancel = nullptr)
       : cancel_(cancel), grid_(grid), pad_rows_(grid.rows() + 2), r_(grid.resolution_m()), cells_((grid.cols() + 2) * pad_rows_),
-        free_(cells_, 0), component_(cells_, -1), stamp_(cells_, 0), g_(cells_) {
+        free_(cells_, 0), component_(cells_, -1) {
     // One cell of occupied padding: no bounds checks in the searches.
     for (int i = 0; i < grid.cols(); ++i) {
       for (int j = 0; j < grid.rows(); ++j) free_[(i + 1) * pad_rows_ + j + 1] = !grid.Occupied(i, j);
-    }
-    for (int di = -1; di <= 1; ++di) {
-      for (int dj = -1; dj <= 1; ++dj) {
-        const bool diagonal = di != 0 && dj != 0;
-        if (di != 0 || dj != 0) {
-          steps_.push_back({di * pad_rows_ + dj, diagonal ? di * pad_rows_ : 0, diagonal ? dj : 0,
-                            diagonal ? GridSteps{0, 1} : GridSteps{1, 0}});
-        }
-      }
     }
     for (const Eigen::Vector2d& x : valves) {
       const int cell = SnapCell(grid, x);
@@ -93,9 +145,9 @@ class ValveDistances {
     if (cell_[i] < 0 || cell_[j] < 0 || component_[cell_[i]] != component_[cell_[j]]) return kUnreachable;
     if (cell_[i] == cell_[j]) return 0.0;
     const auto key = static_cast<std::uint64_t>(std::min(i, j)) << 32 | static_cast<std::uint32_t>(std::max(i, j));
-    const auto [it, inserted] = cache_.try_emplace(key, 0.0);
-    if (inserted) it->second = Search(cell_[std::min(i, j)], cell_[std::max(i, j)]);
-    return it->second;
+    const auto [value, added] = cache_.FindOrAdd(key);
+    if (added) *value = Search(cell_[std::min(i, j)], cell_[std::max(i, j)]);
+    return *value;
   }
   /// Centre of valve i's cell (m): straight lines between centres bound d from below.
   const Eigen::Vector2d& centre(int i) const { return centre_[i]; }
@@ -104,10 +156,21 @@ class ValveDistances {
   struct Step {
     int offset, side_a, side_b;  // to the neighbour; the two cells a diagonal passes (0: none)
     GridSteps cost;
+    int dx, dy;  // the neighbour's coordinates less the cell's
   };
-  bool Passable(int c, const Step& step) const {
-    return free_[c + step.offset] && free_[c + step.side_a] && free_[c + step.side_b];
-  }
+  // A grid for one search: cell (x, y) at x * stride + y, free[c] != 0 for a free cell, every
+  // cell a path may reach has all eight neighbours in it (a border of blocked cells).
+  struct Space {
+    const char* free;
+    int stride;
+    std::uint32_t* stamp;  // g[c] is valid iff stamp[c] == generation_
+    GridSteps* g;
+  };
+  // Padded cells [lo, hi] (inclusive), x the grid's column.
+  struct Window {
+    Eigen::Vector2i lo, hi;
+    bool Contains(const Window& w) const { return (lo.array() <= w.lo.array()).all() && (w.hi.array() <= hi.array()).all(); }
+  };
 
   void Label(int seed, int label) {  // flood fill of seed's component
     std::vector<int> stack{seed};
@@ -122,11 +185,61 @@ class ValveDistances {
   }
 
   // The grid distance between two padded cells: the octile cost at once when their rectangle is
-  // free (no shortest path leaves it; most pairs of a field's valves), else by A*.
+  // free (no shortest path leaves it; most pairs of a field's valves), else by A* in a window of
+  // the grid around the pair (the pair's rectangle and a margin of half its longer side, copied
+  // out: a search over the whole grid's per-cell arrays touched a cold cache line or two in
+  // each column it crossed, ~25 us a search on the 10,000-vehicle field). The window's answer
+  // c0 is a path, so the shortest is no longer; any cell x on a path no longer than c0 has
+  // cheb(s, x) + cheb(x, g) <= c0 (octile >= Chebyshev), a box (Reach). If the window holds that
+  // box, its search found the shortest; else a search in the box does. Only when no path stays
+  // in the first window is the whole grid searched.
   double Search(int start, int goal) {
-    const Eigen::Vector2i a(start / pad_rows_ - 1, start % pad_rows_ - 1), b(goal / pad_rows_ - 1, goal % pad_rows_ - 1);
-    if (grid_.RectangleFree(a, b)) return Octile(b.x() - a.x(), b.y() - a.y()).Metres(r_);
-    return AStar(start, goal);
+    const Eigen::Vector2i s(start / pad_rows_, start % pad_rows_), g(goal / pad_rows_, goal % pad_rows_);
+    const Eigen::Vector2i one(1, 1);
+    if (grid_.RectangleFree(s - one, g - one)) return Octile(g.x() - s.x(), g.y() - s.y()).Metres(r_);
+    ThrowIfCancelled();
+    const int margin = kWindowMargin + (s - g).cwiseAbs().maxCoeff() / 2;
+    const Window first = Clip({s.cwiseMin(g) - margin * one, s.cwiseMax(g) + margin * one});
+    if (const std::optional<GridSteps> c0 = WindowAStar(first, start, goal)) {
+      const Window reach = Clip(Reach(s, g, *c0));
+      if (first.Contains(reach)) return c0->Metres(r_);
+      if (const std::optional<GridSteps> c = WindowAStar(reach, start, goal)) return c->Metres(r_);
+    }
+    if (whole_stamp_.empty()) whole_stamp_.assign(cells_, 0), whole_g_.resize(cells_);  // first need only
+    const std::optional<GridSteps> c = AStar({free_.data(), pad_rows_, whole_stamp_.data(), whole_g_.data()}, start, goal);
+    return c ? c->Metres(r_) : kUnreachable;  // not reached: the component check comes first
+  }
+
+  // The box of cells x with cheb(s, x) + cheb(x, g) <= c (cells), one cell wider each way for
+  // c's rounding: per axis |x - s| + |x - g| <= c.
+  static Window Reach(const Eigen::Vector2i& s, const Eigen::Vector2i& g, const GridSteps& c) {
+    const double length = c.a + kSqrt2 * c.b;
+    Window w;
+    for (int k = 0; k < 2; ++k) {
+      w.lo[k] = static_cast<int>(std::floor((s[k] + g[k] - length) / 2.0)) - 1;
+      w.hi[k] = static_cast<int>(std::ceil((s[k] + g[k] + length) / 2.0)) + 1;
+    }
+    return w;
+  }
+  Window Clip(Window w) const {
+    const Eigen::Vector2i last(static_cast<int>(cells_ / static_cast<std::size_t>(pad_rows_)) - 1, pad_rows_ - 1);
+    return {w.lo.cwiseMax(Eigen::Vector2i::Zero()), w.hi.cwiseMin(last)};
+  }
+
+  // A* in window w of the padded grid, its cells copied out with a blocked border: the shortest
+  // path that stays in w, or none.
+  std::optional<GridSteps> WindowAStar(const Window& w, int start, int goal) {
+    const int stride = w.hi.y() - w.lo.y() + 3, columns = w.hi.x() - w.lo.x() + 3;
+    const auto cells = static_cast<std::size_t>(stride) * static_cast<std::size_t>(columns);
+    window_free_.assign(cells, 0);
+    if (window_stamp_.size() < cells) window_stamp_.resize(cells, 0), window_g_.resize(cells);
+    const auto rows = static_cast<std::size_t>(w.hi.y() - w.lo.y() + 1);
+    for (int x = w.lo.x(); x <= w.hi.x(); ++x) {
+      std::memcpy(&window_free_[static_cast<std::size_t>(x - w.lo.x() + 1) * stride + 1],
+                  &free_[static_cast<std::size_t>(x) * pad_rows_ + w.lo.y()], rows);
+    }
+    const auto local = [&](int c) { return (c / pad_rows_ - w.lo.x() + 1) * stride + c % pad_rows_ - w.lo.y() + 1; };
+    return AStar({window_free_.data(), stride, window_stamp_.data(), window_g_.data()}, local(start), local(goal));
   }
 
   // Asked at each search and every kPopsBetweenChecks cells of one (a search across a large field
@@ -135,13 +248,31 @@ class ValveDistances {
     if (cancel_ != nullptr && cancel_->load(std::memory_order_relaxed)) throw PlanCancelled();
   }
   static constexpr std::uint32_t kPopsBetweenChecks = 1u << 16;
+  static constexpr int kWindowMargin = 4;  // cells around a pair's rectangle, besides half its side
 
-  double AStar(int start, int goal) {
+  // A* from start to goal on space. A popped cell's coordinates are worked out once and its
+  // neighbours' from them, so that the heuristic costs no division (two per neighbour were most
+  // of a search's time); an open entry holds its keys and cell only (its exact g is space.g's
+  // when it is not stale).
+  std::optional<GridSteps> AStar(const Space& space, int start, int goal) {
     ThrowIfCancelled();
     std::uint32_t pops = 0;
     ++generation_;
-    const int gi = goal / pad_rows_, gj = goal % pad_rows_;
-    const auto h = [&](int c) { return Octile(c / pad_rows_ - gi, c % pad_rows_ - gj); };
+    const int stride = space.stride, gx = goal / stride, gy = goal % stride;
+    std::array<Step, 8> steps;
+    std::size_t n = 0;
+    for (int di = -1; di <= 1; ++di) {
+      for (int dj = -1; dj <= 1; ++dj) {
+        const bool diagonal = di != 0 && dj != 0;
+        if (di != 0 || dj != 0) {
+          steps[n++] = {di * stride + dj, diagonal ? di * stride : 0, diagonal ? dj : 0,
+                        diagonal ? GridSteps{0, 1} : GridSteps{1, 0}, di, dj};
+        }
+      }
+    }
+    const auto passable = [&](int c, const Step& step) {
+      return space.free[c + step.offset] && space.free[c + step.side_a] && space.free[c + step.side_b];
+    };
     // The open list is ordered on doubles, a + b sqrt 2, where Compare's branches were a fifth of
     // a 10,000-vehicle split: two different costs of at most N steps differ by at least
     // 1 / (N (1 + sqrt 2)) (p^2 - 2 q^2 is a nonzero integer), and each double is within
@@ -152,28 +283,30 @@ class ValveDistances {
     const auto key = [](const GridSteps& x) { return x.a + kSqrt2 * x.b; };
     const auto later = [](const OpenEntry& x, const OpenEntry& y) { return x.f > y.f || (x.f == y.f && x.g < y.g); };
     open_.clear();  // its capacity stays: no allocation per search
-    const auto push = [&](const GridSteps& g, int cell) {
-      open_.push_back({key(g + h(cell)), key(g), g, cell});
+    const auto push = [&](const GridSteps& g, int cell, int x, int y) {
+      open_.push_back({key(g + Octile(x - gx, y - gy)), key(g), cell});
       std::push_heap(open_.begin(), open_.end(), later);
     };
-    stamp_[start] = generation_, g_[start] = GridSteps{};
-    push(GridSteps{}, start);
+    space.stamp[start] = generation_, space.g[start] = GridSteps{};
+    push(GridSteps{}, start, start / stride, start % stride);
     while (!open_.empty()) {
       std::pop_heap(open_.begin(), open_.end(), later);
       const OpenEntry e = open_.back();
       open_.pop_back();
       if (++pops % kPopsBetweenChecks == 0) ThrowIfCancelled();
-      if (e.g > key(g_[e.cell])) continue;  // stale entry
-      if (e.cell == goal) return e.steps.Metres(r_);
-      for (const Step& step : steps_) {
+      const GridSteps at = space.g[e.cell];
+      if (e.g > key(at)) continue;  // stale entry
+      if (e.cell == goal) return at;
+      const int x = e.cell / stride, y = e.cell % stride;
+      for (const Step& step : steps) {
         const int k = e.cell + step.offset;
-        const GridSteps g = e.steps + step.cost;
-        if (!Passable(e.cell, step) || (stamp_[k] == generation_ && Compare(g, g_[k]) >= 0)) continue;
-        stamp_[k] = generation_, g_[k] = g;
-        push(g, k);
+        const GridSteps g = at + step.cost;
+        if (!passable(e.cell, step) || (space.stamp[k] == generation_ && Compare(g, space.g[k]) >= 0)) continue;
+        space.stamp[k] = generation_, space.g[k] = g;
+        push(g, k, x + step.dx, y + step.dy);
       }
     }
-    return kUnreachable;  // not reached: the component check comes first
+    return std::nullopt;
   }
 
   const std::atomic<bool>* cancel_;
@@ -183,20 +316,24 @@ class ValveDistances {
   std::size_t cells_;
   std::vector<char> free_;  // padded grid: cell (i, j) at (i + 1) * pad_rows_ + j + 1
   std::vector<int> component_;
-  std::vector<std::uint32_t> stamp_;  // g_[c] is valid iff stamp_[c] == generation_
-  std::vector<GridSteps> g_;
+  // The whole grid's search state, made at the first search no window held (none on most fields).
+  std::vector<std::uint32_t> whole_stamp_;
+  std::vector<GridSteps> whole_g_;
+  std::vector<char> window_free_;  // a window's cells (WindowAStar), kept between searches
+  std::vector<std::uint32_t> window_stamp_;
+  std::vector<GridSteps> window_g_;
   struct OpenEntry {
     double f, g;      // keys: f = g + h and g, as a + b sqrt 2
-    GridSteps steps;  // g exactly
     int cell;
   };
   static constexpr double kSqrt2 = 1.4142135623730951;
   std::vector<OpenEntry> open_;  // AStar's open list (a binary heap), kept between searches
   std::uint32_t generation_ = 0;
-  std::vector<Step> steps_;
   std::vector<int> cell_;
   Points centre_;
-  std::unordered_map<std::uint64_t, double> cache_;
+  // The distances found, by pair key (never 0: two different valves, the smaller index in the
+  // high word).
+  FlatMap<std::uint64_t, double, PairHash> cache_{0};
 };
 
 // The larger side of the points' bounding box (m; at least 1e-6): what a bucket index's cell size
@@ -313,7 +450,7 @@ double ExactOrder(ValveDistances& dist, std::vector<int>& order) {
   if (m <= 3) return ClosedLength(dist, order);  // one cyclic order up to direction
   std::vector<double> d(m * m);
   for (int a = 0; a < m; ++a) {
-    for (int b = 0; b < m; ++b) d[a * m + b] = dist(order[a], order[b]);
+    for (int b = a + 1; b < m; ++b) d[a * m + b] = d[b * m + a] = dist(order[a], order[b]);
   }
   const int n = m - 1, subsets = 1 << n;
   std::vector<double> cost(subsets * n, kInf);
@@ -552,13 +689,30 @@ class Search {
   }
 
   // The shortest closed tour through a set of at most kExactTourSize valves, memoised by the set:
-  // the search prices the same few sets again and again.
+  // the search prices the same few sets again and again (1.9 million times, 0.8 million sets, on
+  // the 10,000-vehicle field). A set's tour is kept in exact_ (the set, its tour as positions in
+  // it); exact_index_ maps the set's 64-bit hash to the last tour kept with it, whose `next`
+  // holds the one before: 16 bytes a set in the table (a std::map of vectors had ~150 and two
+  // allocations).
   Candidate Exact(std::vector<int> order) {
-    std::vector<int> key = order;
-    std::sort(key.begin(), key.end());
-    const auto [it, inserted] = exact_.try_emplace(std::move(key));
-    if (inserted) it->second.length = ExactOrder(dist_, order), it->second.order = std::move(order);
-    return it->second;
+    KeptTour tour;
+    tour.valves.fill(-1);
+    std::copy(order.begin(), order.end(), tour.valves.begin());
+    const auto size = static_cast<std::ptrdiff_t>(order.size());
+    std::sort(tour.valves.begin(), tour.valves.begin() + size);
+    const auto [last, added] = exact_index_.FindOrAdd(ValveSetHash{}(tour.valves) | 1);  // never 0, the empty key
+    for (std::uint32_t k = added ? kNoTour : *last; k != kNoTour; k = exact_[k].next) {
+      if (exact_[k].valves == tour.valves) return Unpack(exact_[k], size);
+    }
+    tour.length = ExactOrder(dist_, order);
+    for (std::ptrdiff_t i = 0; i < size; ++i) {
+      tour.order[i] = static_cast<std::uint8_t>(
+          std::lower_bound(tour.valves.begin(), tour.valves.begin() + size, order[i]) - tour.valves.begin());
+    }
+    tour.next = added ? kNoTour : *last;
+    *last = static_cast<std::uint32_t>(exact_.size());
+    exact_.push_back(tour);
+    return {std::move(order), tour.length};
   }
 
   // c without `remove` and with `add` (-1: none), priced exactly if it has at most
@@ -733,7 +887,20 @@ class Search {
   Eigen::VectorXd mass_;  // each valve's share of the field's risk (sums to 1)
   std::mt19937_64& rng_;
   Clock::time_point deadline_;
-  std::map<std::vector<int>, Candidate> exact_;
+  static constexpr std::uint32_t kNoTour = 0xFFFFFFFFu;
+  struct KeptTour {
+    ValveSet valves;                            // ascending, -1 after the last
+    std::array<std::uint8_t, kExactTourSize> order{};  // the tour, as positions in valves
+    std::uint32_t next = kNoTour;               // the tour kept before it with the same hash
+    double length = 0.0;
+  };
+  static Candidate Unpack(const KeptTour& tour, std::ptrdiff_t size) {
+    Candidate c{std::vector<int>(static_cast<std::size_t>(size)), tour.length};
+    for (std::ptrdiff_t i = 0; i < size; ++i) c.order[static_cast<std::size_t>(i)] = tour.valves[tour.order[i]];
+    return c;
+  }
+  std::vector<KeptTour> exact_;
+  FlatMap<std::uint64_t, std::uint32_t, PairHash> exact_index_{0};
   std::vector<Merge> merges_;
   std::uint64_t versions_ = 0;
 };

@@ -193,6 +193,67 @@ TEST(FleetTourPlanner, WithoutLegsALapIsItsGridDistancesSummed) {
   }
 }
 
+// The planner searches a pair's grid distance in a window around the pair (its rectangle and a
+// margin), then in the box that every path no longer than the window's answer keeps to, and over
+// the whole grid only when no path stays in the window. Three traps, and random valves:
+// - far gap: valves 2 m apart across the foot of a long wall whose only gap is 11 m up (no path
+//   in any window: the whole grid);
+// - trap: a pair 2 m apart across a wall with two gaps, the near one (in the window) reached from
+//   one side only through a pocket (a 5.2 m path in the window) and the far one just outside it
+//   (4.1 m): the window's answer is not the grid's (taking it unchecked fails here);
+// - block: a pair either side of a block, found in the window, whose box of paths is wider.
+// One vehicle flies each set, so its tour takes those legs; its lap must be GridDistance's sum
+// over the tour (itself tested against Dijkstra) to 1e-9 s.
+TEST(FleetTourPlanner, GridDistancesAreExactWhereverTheShortestPathGoes) {
+  OccupancyGrid far_gap(40.0, 14.0, 0.1);
+  far_gap.FillBox({19.8, 0.0}, {20.2, 12.0});
+  far_gap.FillBox({8.0, 5.0}, {9.0, 6.0});
+  far_gap = far_gap.Inflated(0.3);
+  const auto make_trap = [](bool far_gap_open) {
+    OccupancyGrid grid(20.0, 14.0, 0.1);
+    grid.FillBox({10.9, 0.0}, {11.1, 4.5});  // the wall at x = 11, gaps y 4.5-5.5 and 7.6-8.6
+    grid.FillBox({10.9, 5.5}, {11.1, far_gap_open ? 7.6 : 8.6});
+    grid.FillBox({10.9, 8.6}, {11.1, 14.0});
+    grid.FillBox({5.0, 5.6}, {8.7, 5.7});  // the pocket's roof, open at x 8.7-9.7
+    grid.FillBox({9.7, 5.6}, {10.9, 5.7});
+    return grid.Inflated(0.3);
+  };
+  const OccupancyGrid trap = make_trap(true);
+  const auto centre = [](const OccupancyGrid& grid, double x, double y) { return grid.CenterOf(grid.CellOf({x, y})); };
+  struct Set {
+    const OccupancyGrid* grid;
+    Points valves;
+    double longer_than_m;  // the tour's grid length must exceed this
+  };
+  std::vector<Set> sets = {
+      {&far_gap, {centre(far_gap, 19.0, 1.0), centre(far_gap, 21.0, 1.0), centre(far_gap, 19.0, 3.0), centre(far_gap, 21.0, 3.0)}, 40.0},
+      {&trap, {centre(trap, 10.0, 6.3), centre(trap, 12.0, 6.3)}, 8.0},  // there and back
+      {&far_gap, {centre(far_gap, 8.5, 4.2), centre(far_gap, 8.5, 6.8), centre(far_gap, 6.0, 5.5)}, 0.0}};
+  for (const unsigned seed : {21u, 22u, 23u}) sets.push_back({&far_gap, RandomFreePoints(far_gap, 8, seed), 0.0});
+  // The trap's pair: by the far gap, shorter than through the pocket (the far gap closed).
+  const double by_far_gap = GridDistance(trap, sets[1].valves[0], sets[1].valves[1]);
+  EXPECT_LT(by_far_gap + 0.1, GridDistance(make_trap(false), sets[1].valves[0], sets[1].valves[1]));
+  for (std::size_t k = 0; k < sets.size(); ++k) {
+    const OccupancyGrid& grid = *sets[k].grid;
+    const Points& valves = sets[k].valves;
+    const auto count = static_cast<int>(valves.size());
+    FleetTourOptions options;
+    options.legs = false;
+    const FleetTourPlan plan = PlanFleetTours(grid, valves, RandomWeights(count, 40 + k), Vehicles(1, 0.5), 3.0, options);
+    ASSERT_TRUE(plan.ok) << "set " << k;
+    ASSERT_EQ(plan.vehicles.size(), 1u);
+    const VehicleTour& v = plan.vehicles[0];
+    ASSERT_EQ(static_cast<int>(v.valves.size()), count);
+    double travel_m = 0.0;
+    for (std::size_t i = 0; i < v.tour.order.size(); ++i) {
+      travel_m += GridDistance(grid, valves[v.valves[v.tour.order[i]]],
+                               valves[v.valves[v.tour.order[(i + 1) % v.tour.order.size()]]]);
+    }
+    EXPECT_NEAR(v.lap_time_s, travel_m / 0.5 + 3.0 * v.weights.sum(), 1e-9) << "set " << k;
+    EXPECT_GT(travel_m, sets[k].longer_than_m) << "set " << k;
+  }
+}
+
 // Shortest closed tour length through the points `subset` of d (brute force over orders).
 double BruteForceTour(const std::vector<std::vector<double>>& d, std::vector<int> subset) {
   if (subset.size() <= 1) return 0.0;
