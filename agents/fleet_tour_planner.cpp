@@ -253,7 +253,11 @@ class ValveDistances {
   // A* from start to goal on space. A popped cell's coordinates are worked out once and its
   // neighbours' from them, so that the heuristic costs no division (two per neighbour were most
   // of a search's time); an open entry holds its keys and cell only (its exact g is space.g's
-  // when it is not stale).
+  // when it is not stale). A neighbour with the popped cell's own f (a step straight on towards
+  // the goal, most steps) goes on a stack that is popped before the heap: the heap holds nothing
+  // below that f (the heuristic is consistent), so it is a least-f cell as the heap's would be,
+  // without the heap's sifting. Which of equal-f cells comes first changes the path, not its
+  // cost, and only the cost is kept.
   std::optional<GridSteps> AStar(const Space& space, int start, int goal) {
     ThrowIfCancelled();
     std::uint32_t pops = 0;
@@ -283,16 +287,30 @@ class ValveDistances {
     const auto key = [](const GridSteps& x) { return x.a + kSqrt2 * x.b; };
     const auto later = [](const OpenEntry& x, const OpenEntry& y) { return x.f > y.f || (x.f == y.f && x.g < y.g); };
     open_.clear();  // its capacity stays: no allocation per search
+    straight_on_.clear();
+    double f_popped = -1.0;
     const auto push = [&](const GridSteps& g, int cell, int x, int y) {
-      open_.push_back({key(g + Octile(x - gx, y - gy)), key(g), cell});
+      const OpenEntry entry{key(g + Octile(x - gx, y - gy)), key(g), cell};
+      if (entry.f == f_popped) {
+        straight_on_.push_back(entry);
+        return;
+      }
+      open_.push_back(entry);
       std::push_heap(open_.begin(), open_.end(), later);
     };
     space.stamp[start] = generation_, space.g[start] = GridSteps{};
     push(GridSteps{}, start, start / stride, start % stride);
-    while (!open_.empty()) {
-      std::pop_heap(open_.begin(), open_.end(), later);
-      const OpenEntry e = open_.back();
-      open_.pop_back();
+    while (!open_.empty() || !straight_on_.empty()) {
+      OpenEntry e;
+      if (!straight_on_.empty()) {
+        e = straight_on_.back();
+        straight_on_.pop_back();
+      } else {
+        std::pop_heap(open_.begin(), open_.end(), later);
+        e = open_.back();
+        open_.pop_back();
+      }
+      f_popped = e.f;
       if (++pops % kPopsBetweenChecks == 0) ThrowIfCancelled();
       const GridSteps at = space.g[e.cell];
       if (e.g > key(at)) continue;  // stale entry
@@ -328,6 +346,7 @@ class ValveDistances {
   };
   static constexpr double kSqrt2 = 1.4142135623730951;
   std::vector<OpenEntry> open_;  // AStar's open list (a binary heap), kept between searches
+  std::vector<OpenEntry> straight_on_;  // AStar's entries at the popped cell's f
   std::uint32_t generation_ = 0;
   std::vector<int> cell_;
   Points centre_;
