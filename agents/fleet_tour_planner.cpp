@@ -725,7 +725,8 @@ class Search {
     const auto size = static_cast<std::ptrdiff_t>(order.size());
     std::sort(tour.valves.begin(), tour.valves.begin() + size);
     const auto [last, added] = exact_index_.FindOrAdd(ValveSetHash{}(tour.valves) | 1);  // never 0, the empty key
-    for (std::uint32_t k = added ? kNoTour : *last; k != kNoTour; k = exact_[k].next) {
+    if (added) *last = kNoTour;  // no tour with this hash yet (so also if ExactOrder throws below)
+    for (std::uint32_t k = *last; k != kNoTour; k = exact_[k].next) {
       if (exact_[k].valves == tour.valves) return Unpack(exact_[k], size);
     }
     tour.length = ExactOrder(dist_, order);
@@ -733,7 +734,7 @@ class Search {
       tour.order[i] = static_cast<std::uint8_t>(
           std::lower_bound(tour.valves.begin(), tour.valves.begin() + size, order[i]) - tour.valves.begin());
     }
-    tour.next = added ? kNoTour : *last;
+    tour.next = *last;
     *last = static_cast<std::uint32_t>(exact_.size());
     exact_.push_back(tour);
     return {std::move(order), tour.length};
