@@ -959,32 +959,6 @@ std::vector<int> Match(const Points& centroids, const std::vector<FleetVehicle>&
   return BisectedMatch(centroids, at, cost, kMatchLeaf);
 }
 
-// PlanGridPath(grid, from, to) on the window of the grid that holds every cell its A* can pop or
-// test (header, step 5), mapped back to the grid's cell centres. octile_m: the leg's grid
-// distance. Falls back to the whole grid when an end is not free (the snap could leave the
-// window) or the window would not be much smaller.
-std::vector<Eigen::Vector2d> LegPath(const maps::OccupancyGrid& grid, const Eigen::Vector2d& from,
-                                     const Eigen::Vector2d& to, double octile_m) {
-  const Eigen::Vector2i a = grid.CellOf(from), b = grid.CellOf(to);
-  if (octile_m >= kUnreachable || grid.Occupied(a.x(), a.y()) || grid.Occupied(b.x(), b.y())) {
-    return PlanGridPath(grid, from, to);
-  }
-  const double r = grid.resolution_m();
-  const Eigen::Vector2i mid = grid.CellOf(0.5 * (grid.CenterOf(a) + grid.CenterOf(b)));
-  const int reach = static_cast<int>(std::ceil(0.5 * octile_m / r)) + 4;
-  const Eigen::Vector2i lo(std::max(0, mid.x() - reach), std::max(0, mid.y() - reach));
-  const Eigen::Vector2i hi(std::min(grid.cols() - 1, mid.x() + reach), std::min(grid.rows() - 1, mid.y() + reach));
-  const Eigen::Vector2i size = hi - lo + Eigen::Vector2i::Ones();
-  if (2.0 * size.x() * size.y() > static_cast<double>(grid.cols()) * grid.rows()) return PlanGridPath(grid, from, to);
-  maps::OccupancyGrid window(size.x() * r, size.y() * r, r);
-  for (int i = 0; i < size.x(); ++i) {
-    for (int j = 0; j < size.y(); ++j) window.SetOccupied(i, j, grid.Occupied(lo.x() + i, lo.y() + j));
-  }
-  std::vector<Eigen::Vector2d> path = PlanGridPath(window, window.CenterOf(a - lo), window.CenterOf(b - lo));
-  for (Eigen::Vector2d& x : path) x = grid.CenterOf(window.CellOf(x) + lo);
-  return path;
-}
-
 FleetTourPlan Plan(const maps::OccupancyGrid& grid, const Points& valves_m, const Eigen::VectorXd& weights,
                    const std::vector<FleetVehicle>& vehicles, double wait_per_lap_s, const FleetTourOptions& options) {
   const int m = static_cast<int>(valves_m.size()), n = static_cast<int>(vehicles.size());
@@ -1080,7 +1054,7 @@ FleetTourPlan Plan(const maps::OccupancyGrid& grid, const Points& valves_m, cons
         out.tour.length_m += d;
         continue;
       }
-      out.tour.legs.push_back(LegPath(grid, valves_m[from], valves_m[to], dist(from, to)));
+      out.tour.legs.push_back(PlanGridPath(grid, valves_m[from], valves_m[to]));
       out.tour.ok = out.tour.ok && !out.tour.legs.back().empty();
       out.tour.length_m += PathLength(out.tour.legs.back());
     }

@@ -53,12 +53,9 @@
 //     (max, sum) is kept.
 //  5. Each tour is rotated so that order[0] = 0 and legs[i] = PlanGridPath(valve order[i] ->
 //     order[i + 1]) in the direction flown, so the lap time is exactly what TourController flies:
-//     sum_i |legs[i]| / v_k + sum_i W w_i. PlanGridPath runs on a window of the grid: A* pops only
-//     cells with f = g + h <= L (L the leg's grid distance, h consistent) and g, h are at least
-//     the straight lines, so every popped cell lies in the disc of radius L / 2 about the leg's
-//     midpoint; that disc plus 4 cells holds every cell the full-grid search pops or tests, and
-//     the window's cell indices are ordered as the grid's (ties break alike), so the leg is the
-//     full-grid one at a cost independent of the grid's size.
+//     sum_i |legs[i]| / v_k + sum_i W w_i. PlanGridPath searches a window of the grid round
+//     the leg, grown only as far as a shortest path could reach (tour_planner.cpp, AStar): the
+//     full-grid leg at a cost independent of the grid's size.
 //
 // Complexity, with C grid cells, q = M / N valves per tour and l the length of a leg in cells:
 // O(C) to copy and label the grid; straight-line neighbours O(M^2); seeding O(M N); a k-medoids

@@ -10,15 +10,21 @@
 
 namespace sage::agents {
 
+/// Where a grid search looks: a window round the ends, grown only as far as the shortest path
+/// could reach (the default; the very path and cost of the whole grid's search), or the whole
+/// grid (the reference the tests hold the window to).
+enum class GridSearch { kWindowed, kWholeGrid };
+
 /// Shortest 8-connected grid path from `from` to `to` (m) on free cells; start and goal are
 /// snapped to the nearest free cell. Returns waypoints (cell centres, first = from snapped,
 /// last = to snapped) with collinear points removed; empty if unreachable.
 std::vector<Eigen::Vector2d> PlanGridPath(const maps::OccupancyGrid& grid, const Eigen::Vector2d& from,
-                                          const Eigen::Vector2d& to);
+                                          const Eigen::Vector2d& to, GridSearch search = GridSearch::kWindowed);
 
 /// Length (m) of the shortest 8-connected cell path PlanGridPath searches, before its shortcut:
 /// r (a + b sqrt(2)) for a orthogonal and b diagonal steps; infinity if unreachable.
-double GridDistance(const maps::OccupancyGrid& grid, const Eigen::Vector2d& from, const Eigen::Vector2d& to);
+double GridDistance(const maps::OccupancyGrid& grid, const Eigen::Vector2d& from, const Eigen::Vector2d& to,
+                    GridSearch search = GridSearch::kWindowed);
 
 double PathLength(const std::vector<Eigen::Vector2d>& path);
 

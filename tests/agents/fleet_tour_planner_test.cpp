@@ -122,7 +122,7 @@ TEST(FleetTourPlanner, LapTimeIsPlanGridPathLengthOverSpeedPlusWeightedWaits) {
     for (int v : vt.valves) weight_sum += std::sqrt(weights[v]);
     for (int i = 0; i < m; ++i) {
       const int from = vt.valves[vt.tour.order[i]], to = vt.valves[vt.tour.order[(i + 1) % m]];
-      const auto path = PlanGridPath(grid, valves[from], valves[to]);
+      const auto path = PlanGridPath(grid, valves[from], valves[to], GridSearch::kWholeGrid);
       ASSERT_EQ(path.size(), vt.tour.legs[i].size()) << "vehicle " << k << " leg " << i;
       for (std::size_t w = 0; w < path.size(); ++w) EXPECT_LT((path[w] - vt.tour.legs[i][w]).norm(), 1e-12);
       length += PathLength(path);
@@ -185,7 +185,7 @@ TEST(FleetTourPlanner, WithoutLegsALapIsItsGridDistancesSummed) {
       double travel_m = 0.0;
       for (std::size_t i = 0; order.size() > 1 && i < order.size(); ++i) {
         const int from = v.valves[order[i]], to = v.valves[order[(i + 1) % order.size()]];
-        travel_m += GridDistance(grid, valves[from], valves[to]);
+        travel_m += GridDistance(grid, valves[from], valves[to], GridSearch::kWholeGrid);
       }
       EXPECT_NEAR(v.lap_time_s, travel_m / vehicles[k].speed_mps + 3.0 * v.weights.sum(), 1e-9)
           << "seed " << seed << ", vehicle " << k;
@@ -247,7 +247,7 @@ TEST(FleetTourPlanner, GridDistancesAreExactWhereverTheShortestPathGoes) {
     double travel_m = 0.0;
     for (std::size_t i = 0; i < v.tour.order.size(); ++i) {
       travel_m += GridDistance(grid, valves[v.valves[v.tour.order[i]]],
-                               valves[v.valves[v.tour.order[(i + 1) % v.tour.order.size()]]]);
+                               valves[v.valves[v.tour.order[(i + 1) % v.tour.order.size()]]], GridSearch::kWholeGrid);
     }
     EXPECT_NEAR(v.lap_time_s, travel_m / 0.5 + 3.0 * v.weights.sum(), 1e-9) << "set " << k;
     EXPECT_GT(travel_m, sets[k].longer_than_m) << "set " << k;

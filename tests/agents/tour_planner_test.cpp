@@ -181,6 +181,71 @@ TEST(GridPath, CostEqualsDijkstra) {
   }
 }
 
+// A search looks in a window round its ends first, then in the box every path no longer than the
+// window's answer keeps to, and over the whole grid only when the window holds no path: each
+// answer must be the whole grid's search's, waypoint for waypoint and cost for cost (==). Fields:
+// - far gap: ends either side of the foot of a long wall whose only gap is 11 m up (no path in
+//   the window: the whole grid);
+// - trap: ends 2 m apart either side of a wall with two gaps, the near one (in the window)
+//   reached from one side only through a pocket, the far one just outside the window and
+//   shorter: the window's own path is not the grid's (taking it unchecked fails here);
+// - random blocks and speckle on three seeds, 40 pairs each.
+TEST(GridPath, WindowedSearchIsTheWholeGridsSearch) {
+  OccupancyGrid far_gap(40.0, 14.0, 0.1);
+  far_gap.FillBox({19.8, 0.0}, {20.2, 12.0});
+  far_gap = far_gap.Inflated(0.3);
+  const auto make_trap = [](bool far_gap_open) {
+    OccupancyGrid grid(20.0, 14.0, 0.1);
+    grid.FillBox({10.9, 0.0}, {11.1, 4.5});  // the wall at x = 11, gaps y 4.5-5.5 and 7.6-8.6
+    grid.FillBox({10.9, 5.5}, {11.1, far_gap_open ? 7.6 : 8.6});
+    grid.FillBox({10.9, 8.6}, {11.1, 14.0});
+    grid.FillBox({5.0, 5.6}, {8.7, 5.7});  // the pocket's roof, open at x 8.7-9.7
+    grid.FillBox({9.7, 5.6}, {10.9, 5.7});
+    return grid.Inflated(0.3);
+  };
+  const OccupancyGrid trap = make_trap(true);
+  const Eigen::Vector2d trap_from(10.05, 6.35), trap_to(12.05, 6.35);
+  // The trap holds: by the far gap is shorter than through the pocket (the far gap closed).
+  ASSERT_LT(GridDistance(trap, trap_from, trap_to, GridSearch::kWholeGrid) + 0.1,
+            GridDistance(make_trap(false), trap_from, trap_to, GridSearch::kWholeGrid));
+  struct Pair {
+    const OccupancyGrid* grid;
+    Eigen::Vector2d from, to;
+  };
+  std::vector<Pair> pairs = {{&far_gap, {19.05, 1.05}, {21.05, 1.05}}, {&trap, trap_from, trap_to}, {&trap, trap_to, trap_from}};
+  std::vector<OccupancyGrid> fields;
+  for (const unsigned seed : {31u, 32u, 33u}) {
+    std::mt19937 rng(seed);
+    OccupancyGrid grid(30.0, 20.0, 0.1);
+    std::uniform_real_distribution<double> x(0.0, 30.0), y(0.0, 20.0), size(0.3, 4.0);
+    for (int b = 0; b < 25; ++b) {
+      const Eigen::Vector2d corner(x(rng), y(rng));
+      grid.FillBox(corner, corner + (seed % 2 == 0 ? Eigen::Vector2d(size(rng), 0.2) : Eigen::Vector2d(0.2, size(rng))));
+    }
+    for (int c = 0; c < 300; ++c) grid.SetOccupied(static_cast<int>(x(rng) * 10), static_cast<int>(y(rng) * 10));
+    fields.push_back(std::move(grid));
+  }
+  for (std::size_t f = 0; f < fields.size(); ++f) {
+    std::mt19937 rng(40 + static_cast<unsigned>(f));
+    std::uniform_real_distribution<double> x(0.0, 30.0), y(0.0, 20.0);
+    for (int k = 0; k < 40; ++k) pairs.push_back({&fields[f], {x(rng), y(rng)}, {x(rng), y(rng)}});
+  }
+  int found = 0;
+  for (std::size_t k = 0; k < pairs.size(); ++k) {
+    const Pair& p = pairs[k];
+    const std::vector<Eigen::Vector2d> windowed = PlanGridPath(*p.grid, p.from, p.to);
+    const std::vector<Eigen::Vector2d> whole = PlanGridPath(*p.grid, p.from, p.to, GridSearch::kWholeGrid);
+    ASSERT_EQ(windowed.size(), whole.size()) << "pair " << k;
+    for (std::size_t w = 0; w < whole.size(); ++w) EXPECT_EQ(windowed[w], whole[w]) << "pair " << k << " waypoint " << w;
+    EXPECT_EQ(GridDistance(*p.grid, p.from, p.to), GridDistance(*p.grid, p.from, p.to, GridSearch::kWholeGrid)) << "pair " << k;
+    found += whole.empty() ? 0 : 1;
+  }
+  EXPECT_GE(found, 100);
+  // The far gap's path does go round the wall's end, the trap's through the far gap.
+  EXPECT_GT(GridDistance(far_gap, pairs[0].from, pairs[0].to), 20.0);
+  EXPECT_LT(GridDistance(trap, trap_from, trap_to), GridDistance(make_trap(false), trap_from, trap_to) - 0.1);
+}
+
 // A start inside an obstacle snaps to the nearest free cell centre.
 TEST(GridPath, SnapsEndpointsToNearestFreeCell) {
   OccupancyGrid grid(10.0, 10.0, 0.1);
