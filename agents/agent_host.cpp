@@ -37,7 +37,7 @@ constexpr int kPhysicsShards = 4;
 int PhysicsShards(const maps::Scenario& s) { return s.vehicles.size() >= kShardedFleet ? kPhysicsShards : 1; }
 
 // Threads kept for the host's life, so that what they keep per thread (the A* search's per-cell
-// state, sized to the grid: 256 MB on a 10,000-vehicle field) is built once, not every cycle.
+// state, sized to the largest window searched) is built once, not every cycle.
 // Run(job, parts) runs job(0) on the caller and job(1 .. parts-1) on the workers, and returns
 // when all are done; the first exception any part threw is thrown again there.
 class WorkerPool {
@@ -491,6 +491,20 @@ void AgentHost::Step(double time_s) {
 // Bodies asked for ahead of the loop that reads every vehicle's position (maps/prefetch.h).
 constexpr std::size_t kBodyAhead = 8;
 
+void AgentHost::ForEachBlock(std::size_t n, const std::function<void(std::size_t, std::size_t)>& block) {
+  const int parts = static_cast<int>(std::clamp<std::size_t>(n / static_cast<std::size_t>(impl_->vehicles_per_thread), 1,
+                                                             static_cast<std::size_t>(impl_->threads)));
+  if (parts == 1) {
+    block(0, n);
+    return;
+  }
+  const std::function<void(int)> part = [&](int k) {
+    block(n * static_cast<std::size_t>(k) / static_cast<std::size_t>(parts),
+          n * static_cast<std::size_t>(k + 1) / static_cast<std::size_t>(parts));
+  };
+  impl_->Pool().Run(part, parts);
+}
+
 void AgentHost::Steer(double time_s) {
   Move();  // a cycle steered but not moved moves first, as Step would have
   // Everyone's position at the start of the cycle, so the order of vehicles does not matter.
@@ -535,18 +549,7 @@ void AgentHost::Steer(double time_s) {
       }
     }
   };
-  const std::size_t n = impl_->vehicles.size();
-  const int parts = static_cast<int>(std::clamp<std::size_t>(n / static_cast<std::size_t>(impl_->vehicles_per_thread), 1,
-                                                             static_cast<std::size_t>(impl_->threads)));
-  if (parts == 1) {
-    guide(0, n);
-  } else {
-    const std::function<void(int)> part = [&](int k) {
-      guide(n * static_cast<std::size_t>(k) / static_cast<std::size_t>(parts),
-            n * static_cast<std::size_t>(k + 1) / static_cast<std::size_t>(parts));
-    };
-    impl_->Pool().Run(part, parts);
-  }
+  ForEachBlock(impl_->vehicles.size(), guide);
   for (const Impl::Vehicle& v : impl_->vehicles) {
     impl_->world.SetVelocityCommand(v.body, v.command);
     if (impl_->gaze.active()) impl_->world.SetHeadingCommand(v.body, v.heading);

@@ -77,6 +77,10 @@ class AgentHost {
   /// saves); the commands are the same for any count (each vehicle's guidance reads the shared
   /// world and writes only its own vehicle). Throws std::invalid_argument below 1.
   void SetThreads(int threads, int min_vehicles_per_thread = 256);
+  /// block(begin, end) over [0, n) in contiguous blocks on the host's threads, split as its
+  /// guidance splits the vehicles (one block below two threads' worth); returns when all are
+  /// done. For per-vehicle work around the guidance: the blocks must touch disjoint state.
+  void ForEachBlock(std::size_t n, const std::function<void(std::size_t, std::size_t)>& block);
   /// One control cycle at mission time t: every vehicle's guidance turns its state into a
   /// command; then physics advances one control period in physics_rate substeps. The same as
   /// Steer(t) then Move().

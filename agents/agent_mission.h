@@ -12,6 +12,7 @@
 #include <map>
 #include <memory>
 #include <optional>
+#include <span>
 #include <string>
 #include <utility>
 #include <vector>
@@ -56,6 +57,9 @@ class AgentMission {
   /// the door: false, counted in rejected(). A region target without phi names its valves and
   /// weights: phi is made here from them, as the server made it (maps::ShareRegion).
   bool OnAssignment(const Assignment& assignment);
+  /// OnAssignment for each, in order (a cycle's targets): the same outcome, the work spread over
+  /// the host's threads when no vehicle comes twice.
+  void OnAssignments(std::span<const Assignment> assignments);
   /// The server's snapshot of the field and the fleet's coverage. An older one than held is
   /// ignored (false), unless a new server has taken over since (OnNewServer); one whose phi,
   /// sums or valve weights are not finite or not of the field's sizes is refused (counted).
@@ -113,6 +117,9 @@ class AgentMission {
   };
 
   std::optional<VehicleTarget> TargetOf(VehicleId id, Member& member, double time_s) const;
+  // OnAssignment's work: true if applied; a refusal's reason into `why` (not counted here, so
+  // that blocks of a batch may run at once).
+  bool Apply(const Assignment& assignment, std::string& why);
   // Empty if the message fits the mission, else what is wrong with it (one line).
   std::string Refusal(const Assignment& assignment) const;
   std::string Refusal(const FleetSnapshot& snapshot) const;

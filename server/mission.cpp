@@ -121,7 +121,7 @@ struct Mission::Impl {
     };
     agents.Move(serve);
     agents.OnFleetSnapshot(answer.snapshot);
-    for (const agents::Assignment& a : answer.assignments) agents.OnAssignment(a);
+    agents.OnAssignments(answer.assignments);
     ++cycle;
     return cycle <= cycles_total;
   }

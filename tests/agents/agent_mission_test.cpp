@@ -5,7 +5,9 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <limits>
+#include <random>
 #include <string>
 
 #include "maps/region.h"
@@ -271,6 +273,73 @@ TEST(AgentMissionRegions, ATargetByItsValvesSteersAsTheOneWithTheServersPhi) {
   }
   EXPECT_GT(moved, 50);  // the vehicle steered on them, not held still
   EXPECT_EQ(by_valves.rejected(), 0u);
+}
+
+// A cycle's targets taken as a batch (OnAssignments: blocks of vehicles on the host's two
+// threads) leave every vehicle steering as when taken one at a time (OnAssignment), and refuse
+// the same targets with the same last reason; a batch naming a vehicle twice keeps their order.
+TEST(AgentMissionRegions, ABatchOfTargetsOverTheHostsThreadsIsTheSameAsOneAtATime) {
+  const maps::Scenario scenario = maps::LoadScenario(kTwoXt);
+  const maps::World world(scenario);
+  const std::vector<maps::Valve> all = scenario.AllValves();
+  constexpr int kVehicles = 600;  // two blocks of at least 256 vehicles each
+  AgentMission serial(world, scenario, Guidance::kErgodic), batched(world, scenario, Guidance::kErgodic);
+  FleetSnapshot snapshot;
+  snapshot.cycle = 1;
+  for (AgentMission* m : {&serial, &batched}) {
+    m->SetThreads(2);
+    for (int id = 0; id < kVehicles; ++id) m->AddVehicle(id, scenario.vehicles.front());
+    ASSERT_TRUE(m->OnFleetSnapshot(snapshot));
+  }
+  std::mt19937 rng(5);
+  std::uniform_int_distribution<int> valve(0, static_cast<int>(all.size()) - 1);
+  std::uniform_real_distribution<double> weight(0.1, 1.0);
+  const auto batch = [&](std::uint64_t cycle, bool repeat_one) {
+    std::vector<Assignment> out;
+    for (int id = 0; id < kVehicles; ++id) {
+      std::vector<int> valves = {valve(rng), valve(rng)};
+      if (valves[0] == valves[1]) valves.pop_back();
+      const std::unique_ptr<maps::RegionField> region = maps::ShareRegion(valves, all, scenario, world.blocked());
+      Assignment a;
+      a.id = id;
+      a.cycle = cycle;
+      a.shared = false;
+      a.region_origin_m = region->box().origin_m;
+      a.region_size_m = region->box().size_m;
+      a.region_order = region->box().order;
+      a.region_valves = valves;
+      a.region_weights = Eigen::VectorXd::NullaryExpr(static_cast<Eigen::Index>(valves.size()), [&] { return weight(rng); });
+      if (id % 97 == 5) a.region_weights[0] = std::nan("");                    // refused: weights
+      if (id % 89 == 7) a.region_size_m.x() += 1.0;                            // refused: not its valves' box
+      out.push_back(std::move(a));
+    }
+    if (repeat_one) {  // vehicle 3 twice: the later target (an older cycle) must lose as it would in order
+      Assignment again = out[3];
+      again.cycle = cycle - 1;
+      again.region_weights.setConstant(0.5);
+      out.push_back(std::move(again));
+    }
+    return out;
+  };
+  for (std::int64_t cycle = 0; cycle < 8; ++cycle) {
+    if (cycle == 0 || cycle == 4) {
+      const std::vector<Assignment> targets = batch(static_cast<std::uint64_t>(cycle) + 1, cycle == 4);
+      for (const Assignment& a : targets) serial.OnAssignment(a);
+      batched.OnAssignments(targets);
+      ASSERT_EQ(batched.rejected(), serial.rejected());
+      ASSERT_EQ(batched.last_rejection(), serial.last_rejection());
+    }
+    const AgentMission::CycleOutput a = serial.Step(cycle), b = batched.Step(cycle);
+    ASSERT_EQ(a.states.size(), b.states.size());
+    for (std::size_t i = 0; i < a.states.size(); ++i) {
+      ASSERT_EQ(a.states[i].command_mps, b.states[i].command_mps) << "cycle " << cycle << " vehicle " << i;
+      ASSERT_EQ(a.states[i].target_cycle, b.states[i].target_cycle) << "cycle " << cycle << " vehicle " << i;
+    }
+  }
+  EXPECT_GE(serial.rejected(), 2u * (kVehicles / 97 + kVehicles / 89));
+  int steering = 0;
+  for (const StateReport& s : serial.Step(8).states) steering += s.command_mps.norm() > 0.0 ? 1 : 0;
+  EXPECT_GT(steering, kVehicles / 2);
 }
 
 }  // namespace
