@@ -12,6 +12,8 @@
 
 #include <gtest/gtest.h>
 
+#include "tests/support/grid_traps.h"
+
 namespace sage::agents {
 namespace {
 
@@ -194,15 +196,7 @@ TEST(GridPath, WindowedSearchIsTheWholeGridsSearch) {
   OccupancyGrid far_gap(40.0, 14.0, 0.1);
   far_gap.FillBox({19.8, 0.0}, {20.2, 12.0});
   far_gap = far_gap.Inflated(0.3);
-  const auto make_trap = [](bool far_gap_open) {
-    OccupancyGrid grid(20.0, 14.0, 0.1);
-    grid.FillBox({10.9, 0.0}, {11.1, 4.5});  // the wall at x = 11, gaps y 4.5-5.5 and 7.6-8.6
-    grid.FillBox({10.9, 5.5}, {11.1, far_gap_open ? 7.6 : 8.6});
-    grid.FillBox({10.9, 8.6}, {11.1, 14.0});
-    grid.FillBox({5.0, 5.6}, {8.7, 5.7});  // the pocket's roof, open at x 8.7-9.7
-    grid.FillBox({9.7, 5.6}, {10.9, 5.7});
-    return grid.Inflated(0.3);
-  };
+  const auto make_trap = sage::testing::WallTrap;
   const OccupancyGrid trap = make_trap(true);
   const Eigen::Vector2d trap_from(10.05, 6.35), trap_to(12.05, 6.35);
   // The trap holds: by the far gap is shorter than through the pocket (the far gap closed).
