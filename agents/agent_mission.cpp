@@ -191,7 +191,7 @@ bool AgentMission::OnAssignment(const Assignment& assignment) {
   return why.empty() ? applied : Refuse(std::move(why));
 }
 
-void AgentMission::OnAssignments(std::span<const Assignment> assignments) {
+std::size_t AgentMission::OnAssignments(std::span<const Assignment> assignments) {
   // Each assignment touches only its own vehicle (its member here, its controller in the host):
   // a batch that names every vehicle once goes over the host's threads in blocks, as its
   // guidance does. Serial if a vehicle comes twice (the order of its targets counts).
@@ -199,18 +199,22 @@ void AgentMission::OnAssignments(std::span<const Assignment> assignments) {
   ids.reserve(assignments.size());
   for (const Assignment& a : assignments) ids.push_back(a.id);
   std::sort(ids.begin(), ids.end());
+  std::size_t applied = 0;
   if (std::adjacent_find(ids.begin(), ids.end()) != ids.end()) {
-    for (const Assignment& a : assignments) OnAssignment(a);
-    return;
+    for (const Assignment& a : assignments) applied += OnAssignment(a) ? 1 : 0;
+    return applied;
   }
   std::vector<std::string> refused(assignments.size());
+  std::vector<char> took(assignments.size(), 0);
   host_.ForEachBlock(assignments.size(), [&](std::size_t begin, std::size_t end) {
-    for (std::size_t i = begin; i < end; ++i) Apply(assignments[i], refused[i]);
+    for (std::size_t i = begin; i < end; ++i) took[i] = Apply(assignments[i], refused[i]) ? 1 : 0;
   });
   // Counted in the batch's order: the last refusal is the one a serial loop would have kept.
   for (std::string& why : refused) {
     if (!why.empty()) Refuse(std::move(why));
   }
+  for (const char t : took) applied += static_cast<std::size_t>(t);
+  return applied;
 }
 
 bool AgentMission::Apply(const Assignment& assignment, std::string& why) {

@@ -58,8 +58,8 @@ class AgentMission {
   /// weights: phi is made here from them, as the server made it (maps::ShareRegion).
   bool OnAssignment(const Assignment& assignment);
   /// OnAssignment for each, in order (a cycle's targets): the same outcome, the work spread over
-  /// the host's threads when no vehicle comes twice.
-  void OnAssignments(std::span<const Assignment> assignments);
+  /// the host's threads when no vehicle comes twice. Returns how many were applied.
+  std::size_t OnAssignments(std::span<const Assignment> assignments);
   /// The server's snapshot of the field and the fleet's coverage. An older one than held is
   /// ignored (false), unless a new server has taken over since (OnNewServer); one whose phi,
   /// sums or valve weights are not finite or not of the field's sizes is refused (counted).

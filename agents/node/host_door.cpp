@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <vector>
 
 #include <spdlog/spdlog.h>
 
@@ -50,7 +51,7 @@ bool HostDoor::Ahead(std::uint64_t cycle, double time_s, std::int64_t now_cycle)
   return static_cast<double>(cycle) * period > latest || !(time_s <= latest);
 }
 
-bool HostDoor::TakeTarget(const proto::ErgodicTarget& m, std::int64_t now_cycle) {
+bool HostDoor::Takes(const proto::ErgodicTarget& m, std::int64_t now_cycle) {
   if (m.server_instance != clock_.instance || clock_.instance == 0) return false;
   // Only this host's vehicles' assignments are converted (every host reads every vehicle's).
   if (!mission_.Contains(static_cast<VehicleId>(m.vehicle_id))) return false;
@@ -58,14 +59,22 @@ bool HostDoor::TakeTarget(const proto::ErgodicTarget& m, std::int64_t now_cycle)
     ++ahead_;
     return false;
   }
-  return mission_.OnAssignment(wire::FromWire(m));
+  return true;
+}
+
+bool HostDoor::TakeTarget(const proto::ErgodicTarget& m, std::int64_t now_cycle) {
+  return Takes(m, now_cycle) && mission_.OnAssignment(wire::FromWire(m));
 }
 
 std::size_t HostDoor::TakeTargets(const proto::ErgodicTargets& m, std::int64_t now_cycle) {
   if (m.server_instance != clock_.instance || clock_.instance == 0) return 0;
-  std::size_t taken = 0;
-  for (const proto::ErgodicTarget& target : proto::AsSpan(m.targets)) taken += TakeTarget(target, now_cycle) ? 1 : 0;
-  return taken;
+  // This host's share of the batch, handed to the mission at once: its vehicles' targets (at a
+  // new split of a large field, each a region's quadrature) are applied over the host's threads.
+  std::vector<Assignment> mine;
+  for (const proto::ErgodicTarget& target : proto::AsSpan(m.targets)) {
+    if (Takes(target, now_cycle)) mine.push_back(wire::FromWire(target));
+  }
+  return mission_.OnAssignments(mine);
 }
 
 bool HostDoor::TakeSnapshot(const proto::FleetCoverage& m, std::int64_t now_cycle) {

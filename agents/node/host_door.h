@@ -60,7 +60,8 @@ class HostDoor {
   /// one after it look old (the probe's snapshot of mission time 1e300).
   bool TakeTarget(const proto::ErgodicTarget& m, std::int64_t now_cycle);
   /// A cycle's batch of changed assignments: each as TakeTarget, if the batch and the element are
-  /// of the current server; the number the mission took.
+  /// of the current server, applied together (AgentMission::OnAssignments); the number the
+  /// mission took.
   std::size_t TakeTargets(const proto::ErgodicTargets& m, std::int64_t now_cycle);
   /// The server's fleet snapshot; true if the mission took it (the newest of its server).
   bool TakeSnapshot(const proto::FleetCoverage& m, std::int64_t now_cycle);
@@ -99,6 +100,9 @@ class HostDoor {
   bool other_world_ = false;
   bool ended_elsewhere_ = false;
   std::map<std::uint32_t, std::deque<std::pair<std::int64_t, Eigen::Vector2d>>> others_;
+  // A target the mission may see: of the followed server, for this host's vehicle, not ahead of
+  // the clock (counted if it is).
+  bool Takes(const proto::ErgodicTarget& m, std::int64_t now_cycle);
   // True if a word of cycle `cycle` (and mission time `time_s`) is past now_cycle + kMaxLead_s.
   bool Ahead(std::uint64_t cycle, double time_s, std::int64_t now_cycle) const;
 

@@ -323,9 +323,14 @@ TEST(AgentMissionRegions, ABatchOfTargetsOverTheHostsThreadsIsTheSameAsOneAtATim
   };
   for (std::int64_t cycle = 0; cycle < 8; ++cycle) {
     if (cycle == 0 || cycle == 4) {
-      const std::vector<Assignment> targets = batch(static_cast<std::uint64_t>(cycle) + 1, cycle == 4);
-      for (const Assignment& a : targets) serial.OnAssignment(a);
-      batched.OnAssignments(targets);
+      std::vector<Assignment> targets = batch(static_cast<std::uint64_t>(cycle) + 1, cycle == 4);
+      Assignment stranger = targets.front();  // a vehicle of another host: not applied, not refused
+      stranger.id = static_cast<VehicleId>(kVehicles + 7);
+      targets.push_back(std::move(stranger));
+      std::size_t applied = 0;
+      for (const Assignment& a : targets) applied += serial.OnAssignment(a) ? 1 : 0;
+      ASSERT_LT(applied, targets.size());
+      ASSERT_EQ(batched.OnAssignments(targets), applied) << "cycle " << cycle;
       ASSERT_EQ(batched.rejected(), serial.rejected());
       ASSERT_EQ(batched.last_rejection(), serial.last_rejection());
     }
