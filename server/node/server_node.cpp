@@ -626,8 +626,10 @@ int RunServerNode(const maps::Scenario& scenario, const ServerNodeOptions& optio
                cycle_blocked);
   if (live) {
     // What the live view cost: the loop's copy (inside the cycle times above) and its own thread.
-    spdlog::info("server: live view: {} frames, {:.3f} ms a frame in the server's loop, {:.3f} ms in the view's thread",
-                 live_frames, live_copy_ms / std::max(1L, live_frames), live->publisher_ms_per_frame());
+    spdlog::info("server: live view: {} frames, {:.3f} ms a frame in the server's loop, {:.3f} ms in the view's thread "
+                 "({:.3f} ms of it on the CPU)",
+                 live_frames, live_copy_ms / std::max(1L, live_frames), live->publisher_ms_per_frame(),
+                 live->publisher_cpu_ms_per_frame());
   }
   // In lockstep the mission is the one sage run flies with the same scenario and seed.
   spdlog::info("server: {} of {} cycles in lockstep with the vehicles{}", cycles_run - cycles_not_in_step, cycles_run,

@@ -224,6 +224,40 @@ TEST(ViewServer, AnUnwatchedViewMakesItsFramesJsonWhenFirstAsked) {
   EXPECT_GT(Json::parse(live.HeatJson(std::nullopt))["nx"].get<int>(), 0);
 }
 
+// Trails go on while nobody watches, though frames carry them only for a watcher: a page that
+// opens late gets each vehicle's points of the last trail_s in its first frame (the next one
+// published after it asked), and a vehicle that joins in front of another in the frame's order
+// does not take over the other's trail.
+TEST(ViewServer, APageOpenedLateGetsTheTrailsKeptWhileNobodyWatched) {
+  LiveView live(Scene(), Options());
+  const auto publish = [&](double t, float x, bool joined) {
+    const std::uint64_t before = live.frames_published();
+    LiveFrame frame = Frame(t);
+    frame.vehicles[0].id = 5;
+    frame.vehicles[0].x_m = x;
+    if (joined) frame.vehicles.insert(frame.vehicles.begin(), {2, "rov3", 9.0f, 7.0f, 0.0f, VehicleStatus::kAlive});
+    live.Publish(std::move(frame));
+    for (int i = 0; i < 500 && live.frames_published() == before; ++i) std::this_thread::sleep_for(2ms);
+    EXPECT_EQ(live.frames_published(), before + 1);
+  };
+  // A point each 0.5 s (4 s of trail, 8 points): one a frame at 0.6 s apart.
+  for (int k = 0; k < 3; ++k) publish(0.6 * k, 1.0f + static_cast<float>(k), false);
+  EXPECT_FALSE(live.watched());
+  std::thread later([&] {
+    std::this_thread::sleep_for(100ms);
+    publish(1.8, 4.0f, true);
+  });
+  std::uint64_t seq = 0;
+  const std::shared_ptr<const std::string> first = live.NextFrame(0, /*with_trails=*/true, 5000ms, &seq);
+  later.join();
+  ASSERT_NE(first, nullptr);
+  EXPECT_EQ(seq, 4u) << "the frame published after the page asked: the first with trails";
+  const Json j = Json::parse(*first);
+  ASSERT_EQ(j["trails"].size(), 2u);
+  EXPECT_EQ(j["trails"][0].get<std::vector<float>>(), (std::vector<float>{9.0f, 7.0f})) << "the newcomer's own";
+  EXPECT_EQ(j["trails"][1].get<std::vector<float>>(), (std::vector<float>{1.0f, 1.0f, 2.0f, 1.0f, 3.0f, 1.0f, 4.0f, 1.0f}));
+}
+
 TEST(ViewServer, AfterTheMissionEveryRequestIsAnsweredSo) {
   LiveView live(Scene(), Options());
   live.Close("the mission has ended");
