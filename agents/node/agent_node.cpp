@@ -168,12 +168,16 @@ int RunAgentNode(const maps::Scenario& scenario, const AgentNodeOptions& options
       std::this_thread::sleep_for(std::chrono::milliseconds(100));  // let the disposes go out
       return 0;
     }
+    std::vector<Assignment> first_targets;
     const auto take_targets = [&] {
-      // Every host sees every vehicle's assignment (one topic); each takes its own.
+      // Every host sees every vehicle's assignment (one topic); each takes its own, all of them
+      // at once (a 10,000-vehicle fleet's first targets are 10,000 regions' quadratures).
+      first_targets.clear();
       while (targets.TakeEach([&](const proto::ErgodicTarget& m, const dds_sample_info_t& info) {
-        if (info.valid_data) door.TakeTarget(m, k);
+        if (info.valid_data) door.GatherTarget(m, k, first_targets);
       }, 1024) == 1024) {
       }
+      door.ApplyTargets(first_targets);
       // Then the later changes (a vehicle's first target goes alone; an older one is not taken
       // over a newer, whichever comes first).
       target_batches.TakeEach([&](const proto::ErgodicTargets& m, const dds_sample_info_t& info) {

@@ -66,15 +66,17 @@ bool HostDoor::TakeTarget(const proto::ErgodicTarget& m, std::int64_t now_cycle)
   return Takes(m, now_cycle) && mission_.OnAssignment(wire::FromWire(m));
 }
 
+void HostDoor::GatherTarget(const proto::ErgodicTarget& m, std::int64_t now_cycle, std::vector<Assignment>& into) {
+  if (Takes(m, now_cycle)) into.push_back(wire::FromWire(m));
+}
+
+std::size_t HostDoor::ApplyTargets(std::span<const Assignment> gathered) { return mission_.OnAssignments(gathered); }
+
 std::size_t HostDoor::TakeTargets(const proto::ErgodicTargets& m, std::int64_t now_cycle) {
   if (m.server_instance != clock_.instance || clock_.instance == 0) return 0;
-  // This host's share of the batch, handed to the mission at once: its vehicles' targets (at a
-  // new split of a large field, each a region's quadrature) are applied over the host's threads.
   std::vector<Assignment> mine;
-  for (const proto::ErgodicTarget& target : proto::AsSpan(m.targets)) {
-    if (Takes(target, now_cycle)) mine.push_back(wire::FromWire(target));
-  }
-  return mission_.OnAssignments(mine);
+  for (const proto::ErgodicTarget& target : proto::AsSpan(m.targets)) GatherTarget(target, now_cycle, mine);
+  return ApplyTargets(mine);
 }
 
 bool HostDoor::TakeSnapshot(const proto::FleetCoverage& m, std::int64_t now_cycle) {

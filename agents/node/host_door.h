@@ -10,6 +10,7 @@
 #include <deque>
 #include <map>
 #include <optional>
+#include <span>
 #include <utility>
 #include <vector>
 
@@ -59,9 +60,14 @@ class HostDoor {
   /// past it is refused (counted in ahead_of_the_clock()): taken, it would have made every real
   /// one after it look old (the probe's snapshot of mission time 1e300).
   bool TakeTarget(const proto::ErgodicTarget& m, std::int64_t now_cycle);
+  /// TakeTarget in two steps, for many at once: Gather converts a target the mission may see (as
+  /// TakeTarget checks it) into `into`; Apply hands them over together (AgentMission::OnAssignments:
+  /// over the host's threads; at a new split of a large field each is a region's quadrature),
+  /// returning the number the mission took. The same outcome as TakeTarget of each in turn.
+  void GatherTarget(const proto::ErgodicTarget& m, std::int64_t now_cycle, std::vector<Assignment>& into);
+  std::size_t ApplyTargets(std::span<const Assignment> gathered);
   /// A cycle's batch of changed assignments: each as TakeTarget, if the batch and the element are
-  /// of the current server, applied together (AgentMission::OnAssignments); the number the
-  /// mission took.
+  /// of the current server, applied together; the number the mission took.
   std::size_t TakeTargets(const proto::ErgodicTargets& m, std::int64_t now_cycle);
   /// The server's fleet snapshot; true if the mission took it (the newest of its server).
   bool TakeSnapshot(const proto::FleetCoverage& m, std::int64_t now_cycle);

@@ -158,6 +158,29 @@ TEST_F(HostDoorTest, TakesABatchOfTargetsElementByElement) {
   EXPECT_EQ(door_.TakeTargets(batch, 6), 0u);
 }
 
+// Targets gathered and applied together (the host's first targets of a cycle, over its threads)
+// pass the same checks as one alone: only the followed server's, for this host's vehicles, not
+// ahead of the clock (counted), and never an older one over a newer.
+TEST_F(HostDoorTest, GatheredTargetsAreCheckedAsOneAlone) {
+  ASSERT_TRUE(door_.TakeStatus(Status(kServer)));
+  proto::ErgodicTarget own{};
+  own.server_instance = kServer;
+  own.shared = true;
+  own.cycle = 4;
+  proto::ErgodicTarget second = own, other_host = own, other_server = own, ahead = own, older = own;
+  second.vehicle_id = 1;
+  other_host.vehicle_id = 9;
+  other_server.server_instance = kServer + 1;
+  ahead.cycle = 4 + 1000;  // 100 s past the host's cycle 4 at fleet_field's 10 Hz
+  older.cycle = 3;
+  std::vector<Assignment> gathered;
+  for (const proto::ErgodicTarget& m : {own, other_host, other_server, ahead, second, older}) door_.GatherTarget(m, 4, gathered);
+  EXPECT_EQ(gathered.size(), 3u) << "own, second and older; the rest refused at the door";
+  EXPECT_EQ(door_.ahead_of_the_clock(), 1u);
+  EXPECT_EQ(door_.ApplyTargets(gathered), 2u) << "the older target of vehicle 0 loses to its cycle-4 one";
+  EXPECT_EQ(door_.ApplyTargets({}), 0u);
+}
+
 // Other hosts' vehicles: the last few states each, none with no finite position (counted), not
 // this host's own, forgotten when lost or left.
 TEST_F(HostDoorTest, KeepsTheLastStatesOfOtherHostsVehicles) {
