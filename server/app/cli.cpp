@@ -155,6 +155,16 @@ void AddLiveView(CLI::App& cmd, std::string& http, std::string& foxglove) {
       ->capture_default_str();
 }
 
+void AddCyclePriority(CLI::App& cmd, int& priority) {
+  cmd.add_option("--cycle-priority", priority,
+                 "Real-time priority (SCHED_FIFO, 1..99) of the server's cycle, the fleet's critical path, so that the "
+                 "vehicles' physics and a browser on the same machine do not hold it up; the threads it starts run at "
+                 "normal priority. Needs root or CAP_SYS_NICE (without, the server says so and runs at normal "
+                 "priority); 0: none")
+      ->check(CLI::Range(0, 99))
+      ->capture_default_str();
+}
+
 void AddMissionDir(CLI::App& cmd, OperatorCommand& o) {
   cmd.add_option("--mission", o.mission_dir, "Run directory of the mission (default: $SAGE_MISSION or runs/latest)");
   AddNetwork(cmd, o.network, "the mission's, in mission.json");
@@ -265,6 +275,7 @@ int RunCli(int argc, char** argv) {
                    "Security on)")
       ->excludes(launch_security);
   AddLiveView(*launch, launch_cmd.http, launch_cmd.foxglove);
+  AddCyclePriority(*launch, launch_cmd.cycle_priority);
   launch->add_option("--resume", launch_cmd.resume_dir,
                      "Bring back the mission whose server died, from the checkpoint in this run directory (no "
                      "scenario or overrides: the run's own are used); vehicles still flying carry on, the others are "
@@ -294,6 +305,7 @@ int RunCli(int argc, char** argv) {
       ->capture_default_str();
 
   AddLiveView(*server, server_cmd.http, server_cmd.foxglove);
+  AddCyclePriority(*server, server_cmd.cycle_priority);
 
   ViewCommand view_cmd;
   CLI::App* view = app.add_subcommand(

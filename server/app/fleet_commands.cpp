@@ -96,6 +96,7 @@ int CmdServer(const ServerCommand& c) {
     throw maps::ScenarioError(fmt::format("--start-in = {}: must be in [0, 600] wall seconds", c.start_in_s));
   }
   options.start_in_s = c.resume ? 0.0 : c.start_in_s;
+  options.cycle_priority = c.cycle_priority;
   options.show_progress = !c.quiet;
   options.stop = stop;
   options.on_started = [&] {

@@ -234,6 +234,7 @@ int Launch(const LaunchCommand& c) {
   }
   // The live view: the server prints its addresses (with the mission's token).
   server_args.insert(server_args.end(), {"--http", c.http, "--foxglove", c.foxglove});
+  server_args.insert(server_args.end(), {"--cycle-priority", std::to_string(c.cycle_priority)});
   server_args.insert(server_args.end(), common.begin(), common.end());
   int server_stdout = -1;
   const pid_t server = Spawn(server_args, "", false, &server_stdout);

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "server/app/cli_scenario.h"
+#include "server/node/cycle_priority.h"
 
 namespace sage::server {
 
@@ -42,6 +43,7 @@ struct LaunchCommand {
   bool insecure = false;         ///< plain DDS: no authentication, no encryption (--insecure)
   std::string http = "0";        ///< the live view's port: "off", or 0..65535 (0: any free one)
   std::string foxglove = "0";    ///< the Foxglove WebSocket's port: "off", or 0..65535
+  int cycle_priority = kDefaultCyclePriority;  ///< the server's cycle's real-time priority (0: none)
   const std::atomic<bool>* stop = nullptr;
 };
 
@@ -60,6 +62,7 @@ struct ServerCommand {
   bool launched = false;         ///< started by sage launch, whose mission.json it is (else the server writes one)
   std::string http = "0";        ///< the live view's port: "off", or 0..65535 (0: any free one)
   std::string foxglove = "0";    ///< the Foxglove WebSocket's port: "off", or 0..65535
+  int cycle_priority = kDefaultCyclePriority;  ///< the cycle's real-time priority (0: none)
 };
 
 /// sage view

@@ -374,6 +374,9 @@ int RunServerNode(const maps::Scenario& scenario, const ServerNodeOptions& optio
         core.OnVehicleGone(id, lost);
       }
     };
+  // Every long-lived thread is started by now (DDS, the live view): the cycle's priority is its own.
+  const CyclePriority priority(options.cycle_priority);
+  spdlog::info("server: {}", priority.line());
   for (; cycle <= cycles_total; ++cycle) {
     const double t = static_cast<double>(cycle) / rate;
     const auto due = wall_of(t + 0.5 / rate);

@@ -15,6 +15,7 @@
 #include "maps/scenario/scenario.h"
 #include "proto/dds_config.h"
 #include "server/mission_core.h"
+#include "server/node/cycle_priority.h"
 
 namespace sage::server {
 
@@ -32,6 +33,9 @@ struct ServerNodeOptions {
   /// server's clock in the future and all step from cycle 0, as every vehicle does in sage run.
   double start_in_s = 0.0;
   double checkpoint_period_s = 2.0;  ///< wall seconds between checkpoints
+  /// Real-time priority (SCHED_FIFO, 1..99) of the cycle's thread while the mission runs; 0: none
+  /// (server/node/cycle_priority.h).
+  int cycle_priority = kDefaultCyclePriority;
   bool show_progress = true;       ///< a progress line on stderr
   const std::atomic<bool>* stop = nullptr;  ///< set (e.g. by SIGINT) to end the mission early
   /// Called once the server knows it is the mission's only server (no other on its domain),
