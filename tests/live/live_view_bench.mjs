@@ -9,7 +9,7 @@
 //   build/bin/sage field generate --xts 300 --valves 1000 --vehicles 1000 --seed 1 -o /tmp/f1000.yaml
 //   node tests/live/live_view_bench.mjs --sage build/bin/sage --source-dir . --out /tmp/live_bench \
 //        --field /tmp/f1000.yaml --duration 60 --runs 2 [--configs off,idle,stream,viewer,viewer-niced,viewer-user,viewer-user-niced,viewer-user-idle,replay] [--secured]
-//        [--page-fps N]
+//        [--page-fps N] [--cycle-priority N]
 // (replay: the page alone, `sage view` of the run "off" just recorded, played at 1x, no mission running;
 // viewer-niced: the page in a chromium run under `nice -n 19`, the browser taking only the CPU the
 // mission leaves, as a browser on the operator's own machine would take none of the mission's
@@ -46,6 +46,8 @@ for (const config of configs) {
   }
 }
 const extra = args.vehicles ? ["-n", args.vehicles] : [];
+// --cycle-priority N: the server cycle's real-time priority for every launch (0: none; default: the launch's own, 10).
+if (args["cycle-priority"] !== undefined) extra.push("--cycle-priority", String(args["cycle-priority"]));
 const load = () => os.loadavg().map((x) => x.toFixed(2)).join(" ");
 // CPU seconds used so far by every chromium process (user + system).
 const chromiumCpu = () => {
