@@ -218,17 +218,17 @@ std::string LiveView::HeatJson(std::optional<double>) {
   return heat_json_ ? *heat_json_ : std::string("{\"seq\":0,\"nx\":0,\"ny\":0}");
 }
 
-// Trails: a point each trail_s / trail_points mission seconds, those of the last trail_s kept.
 LiveView::Trail& LiveView::TrailOf(std::size_t i, int id) {
   if (i < last_ids_.size() && last_ids_[i] == id) return trails_[last_slots_[i]];
   const auto [at, fresh] = trail_slot_.try_emplace(id, static_cast<std::uint32_t>(trails_.size()));
-  if (fresh) trails_.emplace_back().points.reserve(static_cast<std::size_t>(std::max(1, options_.trail_points)) + 1);
+  if (fresh) trails_.emplace_back().reserve(static_cast<std::size_t>(std::max(1, options_.trail_points)) + 1);
   if (last_ids_.size() <= i) last_ids_.resize(i + 1), last_slots_.resize(i + 1);
   last_ids_[i] = id;
   last_slots_[i] = at->second;
   return trails_[at->second];
 }
 
+// Trails: a point each trail_s / trail_points mission seconds, those of the last trail_s kept.
 void LiveView::Digest(LiveFrame& frame, std::vector<EventView>& events) {
   const double step = options_.trail_s / std::max(1, options_.trail_points);
   // The trails go on whether anyone watches or not (a page opened later gets them); a frame
@@ -237,7 +237,7 @@ void LiveView::Digest(LiveFrame& frame, std::vector<EventView>& events) {
   if (watching) frame.trails.resize(frame.vehicles.size());
   for (std::size_t i = 0; i < frame.vehicles.size(); ++i) {
     const VehicleView& v = frame.vehicles[i];
-    std::vector<TrailPoint>& points = TrailOf(i, v.id).points;
+    Trail& points = TrailOf(i, v.id);
     const bool flying = v.status != VehicleStatus::kLost && v.status != VehicleStatus::kLeft;
     if (flying && (points.empty() || frame.time_s - points.back().time_s >= step)) {
       points.push_back({frame.time_s, v.x_m, v.y_m});

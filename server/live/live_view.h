@@ -129,9 +129,7 @@ class LiveView final : public ViewSource {
     double time_s;
     float x_m, y_m;
   };
-  struct Trail {
-    std::vector<TrailPoint> points;  // oldest first; at most trail_points + 1
-  };
+  using Trail = std::vector<TrailPoint>;  // oldest first; at most trail_points + 1
   // Each vehicle's trail in a slot of its own, found through the last frame's order (a frame
   // lists the vehicles in ascending id, every one ever heard of, so the order changes only when
   // one joins): a map of 10,000 deques walked every frame had been most of the view's thread at
