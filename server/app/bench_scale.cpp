@@ -251,7 +251,9 @@ std::map<pid_t, std::string> LaunchChildren(pid_t launcher) {
 ScaleRow RunDds(const std::string& field_path, ControllerKind kind, const BenchScaleCommand& c, ScaleRow base,
                 const std::string& label) {
   base.transport = "dds";
-  const fs::path dir = fs::path(c.out_dir) / "runs" / fmt::format("n{}_dds_{}", base.vehicles, ToString(kind));
+  // Run 1 keeps the name it had before --repeat; later runs have their own directory.
+  const fs::path dir = fs::path(c.out_dir) / "runs" /
+                       fmt::format("n{}_dds_{}{}", base.vehicles, ToString(kind), base.run > 1 ? fmt::format("_run{}", base.run) : "");
   const fs::path log = fs::path(dir.string() + ".log");
   // The benchmark's own earlier run of this row: launch refuses a directory with an unfinished mission.
   std::error_code ignored;
@@ -333,6 +335,7 @@ int CmdBenchScale(const BenchScaleCommand& c) {
   if (!(c.duration_s > 0.0) || !std::isfinite(c.duration_s)) {
     throw maps::ScenarioError(fmt::format("--duration = {}: must be a finite number > 0", c.duration_s));
   }
+  if (c.repeat < 1 || c.repeat > 10) throw maps::ScenarioError(fmt::format("--repeat = {}: must be 1..10", c.repeat));
   std::vector<std::string> transports;
   if (c.transport != "dds") transports.push_back("inproc");
   if (c.transport != "inproc") transports.push_back("dds");
@@ -343,14 +346,17 @@ int CmdBenchScale(const BenchScaleCommand& c) {
 
   std::string vehicles_text;
   for (int n : counts) vehicles_text += (vehicles_text.empty() ? "" : ",") + std::to_string(n);
-  const std::string command = fmt::format("sage bench scale --vehicles {} --transport {} --duration {} --seed {}",
-                                          vehicles_text, c.transport, c.duration_s, c.seed);
+  const std::string command =
+      fmt::format("sage bench scale --vehicles {} --transport {} --duration {} --seed {}{}", vehicles_text, c.transport,
+                  c.duration_s, c.seed, c.repeat > 1 ? fmt::format(" --repeat {}", c.repeat) : "");
   const std::string machine = MachineLine();
-  const int total = static_cast<int>(counts.size() * transports.size() * 2);
+  const int total = static_cast<int>(counts.size() * transports.size() * 2) * c.repeat;
   int stage = 0;
   bool failed = false;
   double parent_rss_mb = 0.0;
   std::vector<ScaleRow> rows;
+  // Each N's field once; then the runs, round by round.
+  std::vector<std::pair<ScaleRow, maps::FleetAssignment>> fields;
   for (const int n : counts) {
     const auto generate_start = Clock::now();
     const maps::Scenario field = maps::GenerateField(ScaleFieldOptions(n, c.seed));
@@ -369,31 +375,42 @@ int CmdBenchScale(const BenchScaleCommand& c) {
     base.field_width_m = field.workspace.width_m;
     base.field_height_m = field.workspace.height_m;
     base.duration_s = c.duration_s;
-    for (const std::string& transport : transports) {
-      for (const ControllerKind kind : {ControllerKind::kErgodic, ControllerKind::kAstar}) {
-        ScaleRow row_base = base;
-        row_base.controller = ToString(kind);
-        row_base.assignment = kind == ControllerKind::kAstar ? "tours" : ToString(field.fleet.assignment);
-        const std::string label = fmt::format("bench scale [{}/{}] N = {}, {}, {}", ++stage, total, n, transport,
-                                              kind == ControllerKind::kAstar ? "A* tours" : "ergodic");
-        ScaleRow row;
-        try {
-          row = transport == "inproc" ? RunInproc(field_path, kind, c.duration_s, row_base, label, parent_rss_mb)
-                                      : RunDds(field_path, kind, c, row_base, label);
-        } catch (const std::exception& e) {
-          row = row_base;
-          row.transport = transport;
-          row.note = e.what();
+    fields.emplace_back(base, field.fleet.assignment);
+  }
+  for (int run = 1; run <= c.repeat; ++run) {
+    for (const auto& [base, assignment] : fields) {
+      const int n = base.vehicles;
+      const std::string& field_path = base.field;
+      for (const std::string& transport : transports) {
+        for (const ControllerKind kind : {ControllerKind::kErgodic, ControllerKind::kAstar}) {
+          ScaleRow row_base = base;
+          row_base.run = run;
+          row_base.controller = ToString(kind);
+          row_base.assignment = kind == ControllerKind::kAstar ? "tours" : ToString(assignment);
+          const std::string label =
+              fmt::format("bench scale [{}/{}] N = {}, {}, {}{}", ++stage, total, n, transport,
+                          kind == ControllerKind::kAstar ? "A* tours" : "ergodic",
+                          c.repeat > 1 ? fmt::format(", run {}/{}", run, c.repeat) : "");
+          ScaleRow row;
+          try {
+            row = transport == "inproc" ? RunInproc(field_path, kind, c.duration_s, row_base, label, parent_rss_mb)
+                                        : RunDds(field_path, kind, c, row_base, label);
+          } catch (const std::exception& e) {
+            row = row_base;
+            row.transport = transport;
+            row.note = e.what();
+          }
+          row.run = run;
+          failed = failed || !std::isfinite(row.real_time_factor);
+          spdlog::info("{}: {}", label, RowSummary(row));
+          rows.push_back(row);
+          const std::string preamble = fmt::format(
+              "Command: `{}`. Machine: {}. Fields in {}/fields (weak scaling: N XTs, 3.5 N valves, N BlueROV2s), DDS "
+              "run directories and launcher logs in {}/runs. In-process runs are forked from the benchmark process, "
+              "whose resident memory at the fork ({:.0f} MB at most) is part of their peak RSS.",
+              command, machine, c.out_dir, c.out_dir, parent_rss_mb);
+          WriteScaleReport(out.string(), rows, preamble);
         }
-        failed = failed || !std::isfinite(row.real_time_factor);
-        spdlog::info("{}: {}", label, RowSummary(row));
-        rows.push_back(row);
-        const std::string preamble = fmt::format(
-            "Command: `{}`. Machine: {}. Fields in {}/fields (weak scaling: N XTs, 3.5 N valves, N BlueROV2s), DDS run "
-            "directories and launcher logs in {}/runs. In-process runs are forked from the benchmark process, whose "
-            "resident memory at the fork ({:.0f} MB at most) is part of their peak RSS.",
-            command, machine, c.out_dir, c.out_dir, parent_rss_mb);
-        WriteScaleReport(out.string(), rows, preamble);
       }
     }
   }

@@ -448,6 +448,13 @@ int RunCli(int argc, char** argv) {
   bench_scale->add_option("--seed", bench_cmd.seed, "Seed of the fields and the missions")
       ->check(MustBeWholeNumber)
       ->capture_default_str();
+  bench_scale
+      ->add_option("--repeat", bench_cmd.repeat,
+                   "Runs of each configuration, 1..10, made round by round (every configuration once, then again), so "
+                   "that a shared machine's slow spells fall on all of them: the table shows each one's median run, "
+                   "scale.json every run, and scale.md lists them all")
+      ->check(CLI::Range(1, 10))
+      ->capture_default_str();
 
   BenchLeaksCommand leaks_cmd;
   CLI::App* bench_leaks = bench->add_subcommand(

@@ -96,6 +96,7 @@ struct BenchScaleCommand {
   std::string out_dir = "runs/bench_scale";
   double duration_s = 60.0;                ///< mission seconds of each run
   std::uint64_t seed = 1;                  ///< the fields' and missions' seed
+  int repeat = 1;                          ///< runs of each N, transport and controller (round by round)
 };
 
 /// sage bench leaks

@@ -8,6 +8,7 @@
 #include <fstream>
 #include <iterator>
 #include <map>
+#include <string_view>
 #include <tuple>
 #include <utility>
 
@@ -26,6 +27,7 @@ using Json = nlohmann::ordered_json;
 template <class Row, class Visit>
 void VisitFields(Row& r, Visit&& v) {
   v("vehicles", r.vehicles);
+  v("run", r.run);
   v("transport", r.transport);
   v("controller", r.controller);
   v("assignment", r.assignment);
@@ -114,7 +116,28 @@ std::vector<ScaleRow> Sorted(std::vector<ScaleRow> rows) {
   return rows;
 }
 
-std::string TableText(const std::vector<ScaleRow>& rows) {
+// Rows of one vehicle count, transport and controller, in the order given.
+std::vector<std::vector<ScaleRow>> Groups(const std::vector<ScaleRow>& rows) {
+  std::vector<std::vector<ScaleRow>> groups;
+  for (const ScaleRow& r : Sorted(rows)) {
+    const bool same = !groups.empty() && groups.back().front().vehicles == r.vehicles &&
+                      groups.back().front().transport == r.transport && groups.back().front().controller == r.controller;
+    if (same) groups.back().push_back(r);
+    else groups.push_back({r});
+  }
+  return groups;
+}
+
+double Median(std::vector<double> values) {
+  std::erase_if(values, [](double v) { return !std::isfinite(v); });
+  if (values.empty()) return ScaleRow::kNaN;
+  std::sort(values.begin(), values.end());
+  const std::size_t half = values.size() / 2;
+  return values.size() % 2 == 1 ? values[half] : 0.5 * (values[half - 1] + values[half]);
+}
+
+std::string TableText(const std::vector<ScaleRow>& all_rows) {
+  const std::vector<ScaleRow> rows = MedianRuns(all_rows);
   std::string out =
       "| vehicles | transport | controller | real-time factor (2nd half) | server cycle mean / p99 / max | CPU per vehicle-s "
       "(2nd half) | peak RSS | "
@@ -195,13 +218,80 @@ std::string DecadeLabel(int decade) {
 
 namespace internal = scale_report_internal;
 
+std::vector<ScaleRow> MedianRuns(const std::vector<ScaleRow>& rows) {
+  std::vector<ScaleRow> out;
+  for (std::vector<ScaleRow>& group : internal::Groups(rows)) {
+    const auto speed = [](const ScaleRow& r) { return std::isfinite(r.real_time_factor) ? r.real_time_factor : -1.0; };
+    std::stable_sort(group.begin(), group.end(), [&](const ScaleRow& a, const ScaleRow& b) { return speed(a) < speed(b); });
+    out.push_back(group[(group.size() - 1) / 2]);
+  }
+  return out;
+}
+
+std::string ScaleSpread(const std::vector<ScaleRow>& rows) {
+  const std::vector<std::vector<ScaleRow>> groups = internal::Groups(rows);
+  const auto label = [](const ScaleRow& r) {
+    return fmt::format("{} {}, {}", internal::Thousands(r.vehicles), r.transport, internal::ControllerLabel(r));
+  };
+  const auto cpu_ms = [](double s) { return std::isfinite(s) ? internal::Ms(1e3 * s) : std::string("-"); };
+  std::string runs;
+  for (std::vector<ScaleRow> group : groups) {
+    if (group.size() < 2) continue;
+    std::stable_sort(group.begin(), group.end(), [](const ScaleRow& a, const ScaleRow& b) { return a.run < b.run; });
+    std::string speeds, cpus;
+    for (const ScaleRow& r : group) {
+      speeds += (speeds.empty() ? "" : " / ") + internal::Factor(r.real_time_factor);
+      cpus += (cpus.empty() ? "" : " / ") + cpu_ms(r.cpu_s_per_vehicle_s);
+    }
+    runs += fmt::format("- {}: {} runs, real-time factor {}; CPU per vehicle-s {} ms\n", label(group.front()),
+                        group.size(), speeds, cpus);
+  }
+  // Per transport and controller: the median CPU per vehicle-second at each N against the smallest N's.
+  // (A small fleet may fly another assignment than a large one: the label names it only if all agree.)
+  std::map<std::pair<std::string, std::string>, std::vector<std::pair<int, double>>> by_kind;
+  std::map<std::pair<std::string, std::string>, std::string> kind_label;
+  for (const std::vector<ScaleRow>& group : groups) {
+    std::vector<double> cpu;
+    for (const ScaleRow& r : group) cpu.push_back(r.cpu_s_per_vehicle_s);
+    const ScaleRow& first = group.front();
+    const auto kind = std::pair(first.transport, first.controller);
+    by_kind[kind].emplace_back(first.vehicles, internal::Median(cpu));
+    const auto [at, added] = kind_label.emplace(kind, internal::ControllerLabel(first));
+    if (!added && at->second != internal::ControllerLabel(first)) at->second = first.controller;
+  }
+  std::string flat;
+  for (const auto& [kind, sizes] : by_kind) {
+    if (sizes.size() < 2 || !std::isfinite(sizes.front().second) || !(sizes.front().second > 0.0)) continue;
+    std::string ratios;
+    for (std::size_t i = 1; i < sizes.size(); ++i) {
+      ratios += fmt::format("{}{}{} at {}", ratios.empty() ? "" : ", ", internal::Factor(sizes[i].second / sizes.front().second),
+                            ratios.empty() ? " that" : "", internal::Thousands(sizes[i].first));
+    }
+    flat += fmt::format("- {}, {}: {} ms at {}; {}\n", kind.first, kind_label.at(kind), cpu_ms(sizes.front().second),
+                        internal::Thousands(sizes.front().first), ratios);
+  }
+  std::string out;
+  if (!runs.empty()) {
+    out += "Each configuration ran several times, round by round (so the machine's slower and faster spells fall on "
+           "all of them); the table shows the run with the median real-time factor. Every run, in order:\n\n" +
+           runs + "\n";
+  }
+  if (!flat.empty()) {
+    out += "CPU per vehicle-second against the smallest fleet's (with --repeat, the median of each size's runs):\n\n" + flat;
+  }
+  return out;
+}
+
 std::string ScaleRowJson(const ScaleRow& row) { return internal::RowToJson(row).dump(); }
 
 ScaleRow ParseScaleRowJson(const std::string& text) {
   ScaleRow row;
   try {
     const internal::Json j = internal::Json::parse(text);
-    internal::VisitFields(row, [&](const char* key, auto& value) { internal::FromJson(j.at(key), value); });
+    internal::VisitFields(row, [&](const char* key, auto& value) {
+      if (std::string_view(key) == "run" && !j.contains(key)) return;  // rows written before --repeat: run 1
+      internal::FromJson(j.at(key), value);
+    });
   } catch (const nlohmann::json::exception& e) {
     throw maps::ScenarioError(std::string("not a scale row: ") + e.what());
   }
@@ -214,12 +304,17 @@ std::string ScaleJson(const std::vector<ScaleRow>& rows) {
   return array.dump(2) + "\n";
 }
 
-std::string ScaleTable(const std::vector<ScaleRow>& rows) { return internal::TableText(rows); }
+std::string ScaleTable(const std::vector<ScaleRow>& rows) {
+  const std::string spread = ScaleSpread(rows);
+  return internal::TableText(rows) + (spread.empty() ? "" : "\n" + spread);
+}
 
 std::string ScaleMarkdown(const std::vector<ScaleRow>& rows, const std::string& preamble) {
   std::string out = "# sage bench scale\n\n";
   if (!preamble.empty()) out += preamble + (preamble.back() == '\n' ? "\n" : "\n\n");
   out += internal::TableText(rows);
+  const std::string spread = ScaleSpread(rows);
+  if (!spread.empty()) out += "\n" + spread;
   out +=
       "\n- **real-time factor**: mission seconds per wall second of the mission loop (over DDS the server's loop, "
       "paced to real time, so at most 1.00x: below it the server fell behind). In brackets, in-process: the same "
@@ -247,7 +342,8 @@ std::string ScaleMarkdown(const std::vector<ScaleRow>& rows, const std::string& 
   return out;
 }
 
-std::string ScaleSvg(const std::vector<ScaleRow>& rows) {
+std::string ScaleSvg(const std::vector<ScaleRow>& all_rows) {
+  const std::vector<ScaleRow> rows = MedianRuns(all_rows);
   constexpr double kPanelW = 360.0, kPanelH = 260.0, kLeft = 70.0, kTop = 60.0, kGap = 90.0;
   constexpr double kWidthPx = kLeft + 2.0 * kPanelW + kGap + 30.0;
   constexpr double kHeightPx = kTop + kPanelH + 100.0;

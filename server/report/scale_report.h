@@ -19,6 +19,7 @@ struct ScaleRow {
   static constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
   int vehicles = 0;             ///< N: vehicles in the fleet (and XTs in the field)
+  int run = 1;                  ///< which repetition of this N, transport and controller (1-based; --repeat)
   std::string transport;        ///< "inproc" (Mission in one process) or "dds" (sage launch)
   std::string controller;       ///< "ergodic" or "astar" (the tour baseline)
   std::string assignment;       ///< the ergodic fleet's coverage (shared, regions, ...); "tours" for astar
@@ -59,19 +60,30 @@ struct ScaleRow {
   std::string note;             ///< what went wrong, if anything (empty: nothing)
 };
 
+/// One row per vehicle count, transport and controller: of its repetitions, the run with the
+/// median real-time factor (the lower of the two middle ones; a failed run counts as slowest),
+/// sorted as the table is. Rows without repetitions come back as they are.
+std::vector<ScaleRow> MedianRuns(const std::vector<ScaleRow>& rows);
+/// What the repetitions measured: per vehicle count, transport and controller with more than one
+/// run, each run's real-time factor and CPU per vehicle-second in the order run; and, per
+/// transport and controller over two fleet sizes or more, the median CPU per vehicle-second at
+/// each size against the smallest's (the scale goal: flat within 1.5x). Markdown, "" if neither.
+std::string ScaleSpread(const std::vector<ScaleRow>& rows);
+
 /// One row as a one-line JSON object; keys are the member names (units in their names).
 std::string ScaleRowJson(const ScaleRow& row);
 /// The row back from ScaleRowJson's text. Throws maps::ScenarioError (one line) if it is not one.
 ScaleRow ParseScaleRowJson(const std::string& text);
-/// scale.json: an array of rows, in the given order.
+/// scale.json: an array of rows (every run), in the given order.
 std::string ScaleJson(const std::vector<ScaleRow>& rows);
-/// scale.md: a heading line, `preamble` (e.g. the command and the machine), the table (rows
-/// sorted by vehicles, transport, then ergodic before astar) and what each column means.
+/// scale.md: a heading line, `preamble` (e.g. the command and the machine), the table (the
+/// MedianRuns, sorted by vehicles, transport, then ergodic before astar), ScaleSpread and what each
+/// column means.
 std::string ScaleMarkdown(const std::vector<ScaleRow>& rows, const std::string& preamble = "");
-/// The table alone (the rows of ScaleMarkdown), for the terminal.
+/// The table alone (the rows of ScaleMarkdown) and ScaleSpread, for the terminal.
 std::string ScaleTable(const std::vector<ScaleRow>& rows);
 /// scale.svg: real-time factor and server cycle mean against vehicles (log-log), one line per
-/// controller and transport.
+/// controller and transport, through the MedianRuns.
 std::string ScaleSvg(const std::vector<ScaleRow>& rows);
 /// Writes DIR/scale.json, DIR/scale.md and DIR/scale.svg, each atomically. Throws
 /// std::runtime_error naming the file.

@@ -54,7 +54,8 @@ TEST(BenchScaleCli, RefusesBadInputBeforeRunning) {
   const std::vector<std::vector<std::string>> bad = {
       {"--vehicles", "0"},       {"--vehicles", "ten"},   {"--vehicles", "20000"},
       {"--transport", "udp"},    {"--duration", "0"},     {"--duration", "soon"},
-      {"--seed", "-3"},          {"--frobnicate"},
+      {"--seed", "-3"},          {"--frobnicate"},        {"--repeat", "0"},
+      {"--repeat", "11"},        {"--repeat", "twice"},
   };
   for (const std::vector<std::string>& options : bad) {
     std::vector<std::string> args = {"sage", "bench", "scale", "--out", out};

@@ -4,12 +4,14 @@
 // run with ergodic before tours, and a plot with a line per controller and transport.
 #include "server/report/scale_report.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
 
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
@@ -103,9 +105,9 @@ TEST(ScaleTable, OneRowPerRunErgodicNextToTours) {
                                       Row(10, "inproc", "ergodic", 1315, 0.045), Row(10, "dds", "ergodic", 1.0, 0.26),
                                       Row(1, "inproc", "ergodic", 15308, 0.001), Row(10, "inproc", "astar", 1318, 0.04)};
   const std::string table = ScaleTable(rows);
-  std::vector<std::string> lines;
+  std::vector<std::string> lines;  // the table's (the terminal's text goes on with the CPU against N = 1)
   std::istringstream in(table);
-  for (std::string line; std::getline(in, line);) lines.push_back(line);
+  for (std::string line; std::getline(in, line) && line.rfind("|", 0) == 0;) lines.push_back(line);
   ASSERT_EQ(lines.size(), 2 + rows.size());
   const std::vector<std::string> expected = {"| 1 | inproc | ergodic",  "| 1 | inproc | A* tours", "| 10 | inproc | ergodic",
                                              "| 10 | inproc | A* tours", "| 10 | dds | ergodic",    "| 10 | dds | A* tours"};
@@ -120,6 +122,62 @@ TEST(ScaleTable, OneRowPerRunErgodicNextToTours) {
   const std::string md = ScaleMarkdown(rows, "Command: `sage bench scale`.");
   EXPECT_NE(md.find("Command: `sage bench scale`."), std::string::npos);
   EXPECT_NE(md.find(table), std::string::npos);
+}
+
+// Repetitions: the table keeps one row per N, transport and controller, the run with the median
+// real-time factor (a failed run counting as slowest; of two, the slower); every run is listed in
+// run order; and the CPU per vehicle-second against the smallest fleet is the ratio of the runs'
+// medians, computed here by hand.
+TEST(ScaleSpread, MedianRunInTheTableEveryRunListed) {
+  std::vector<ScaleRow> rows;
+  const auto add = [&](int n, const std::string& controller, int run, double rtf, double cpu_ms) {
+    ScaleRow r = Row(n, "inproc", controller, rtf, 1.0);
+    r.run = run;
+    r.cpu_s_per_vehicle_s = cpu_ms * 1e-3;
+    rows.push_back(r);
+  };
+  // Round by round, as the bench runs them.
+  add(100, "ergodic", 1, 180.0, 0.061);
+  add(10000, "ergodic", 1, 1.84, 0.097);
+  add(10000, "astar", 1, 2.65, 0.065);
+  add(100, "ergodic", 2, 150.0, 0.055);
+  add(10000, "ergodic", 2, ScaleRow::kNaN, 0.120);  // failed
+  add(10000, "astar", 2, 2.40, 0.070);
+  add(100, "ergodic", 3, 200.0, 0.058);
+  add(10000, "ergodic", 3, 2.21, 0.080);
+
+  const std::vector<ScaleRow> median = MedianRuns(rows);
+  ASSERT_EQ(median.size(), 3u);
+  EXPECT_EQ(median[0].vehicles, 100);
+  EXPECT_EQ(median[0].run, 1);  // 150 < 180 < 200
+  EXPECT_EQ(median[1].controller, "ergodic");
+  EXPECT_EQ(median[1].run, 1);  // failed < 1.84 < 2.21
+  EXPECT_EQ(median[2].controller, "astar");
+  EXPECT_EQ(median[2].run, 2);  // two runs: the slower, 2.40
+  EXPECT_EQ(MedianRuns({rows[1]}).front().run, 1);
+
+  const std::string table = ScaleTable(rows);
+  EXPECT_NE(table.find("| 10,000 | inproc | ergodic (regions) | 1.84x"), std::string::npos) << table;
+  EXPECT_EQ(table.find("| 2.21x"), std::string::npos) << table;  // not the median: listed below only
+  const std::string spread = ScaleSpread(rows);
+  EXPECT_NE(spread.find("10,000 inproc, ergodic (regions): 3 runs, real-time factor 1.84x / - / 2.21x; CPU per "
+                        "vehicle-s 0.097 / 0.120 / 0.080 ms"),
+            std::string::npos)
+      << spread;
+  EXPECT_NE(spread.find("10,000 inproc, A* tours: 2 runs"), std::string::npos) << spread;
+  // Medians by hand: ergodic 0.058 at 100 (0.055, 0.058, 0.061) and 0.097 at 10,000 (0.080, 0.097, 0.120).
+  const std::string ratio = fmt::format("{:.2f}x that at 10,000", 0.097 / 0.058);
+  EXPECT_NE(spread.find("- inproc, ergodic (regions): 0.058 ms at 100; " + ratio), std::string::npos) << spread;
+  EXPECT_EQ(spread.find("- inproc, A* tours:"), std::string::npos) << spread;  // one size only: no ratio
+  EXPECT_NE(ScaleMarkdown(rows).find(spread), std::string::npos);
+  // One run of one size: nothing to say.
+  EXPECT_EQ(ScaleSpread({rows[0]}), "");
+
+  // The run survives JSON; rows written before --repeat read as run 1.
+  EXPECT_EQ(ParseScaleRowJson(ScaleRowJson(rows[4])).run, 2);
+  nlohmann::json old = nlohmann::json::parse(ScaleRowJson(rows[4]));
+  old.erase("run");
+  EXPECT_EQ(ParseScaleRowJson(old.dump()).run, 1);
 }
 
 // Four lines in each of the two panels (2 controllers x 2 transports), dashed over DDS, the
