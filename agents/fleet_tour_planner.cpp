@@ -601,8 +601,7 @@ std::vector<int> SeedMedoids(const Points& p, int k, std::mt19937_64& rng) {
     medoids.push_back(next);
     is_medoid[next] = 1;
     if (static_cast<int>(medoids.size()) == k) break;
-    const bool first = medoids.size() == 1;
-    if (first) {
+    if (medoids.size() == 1) {  // every d^2 is still infinite: every valve
       near.resize(m);
       for (int v = 0; v < m; ++v) near[v] = v;
     } else {
@@ -871,7 +870,8 @@ class Search {
   // Applies the change of tours ks to cs if it passes the rule; 2-opt only shortens, so a change
   // that passed on its price stays an improvement.
   bool Try(Tours& s, std::initializer_list<int> ks, std::initializer_list<Candidate> cs) {
-    std::array<double, 3> laps{};
+    std::array<double, 3> laps{};  // a move or swap changes two tours, a split-merge three
+    if (ks.size() > laps.size()) throw std::logic_error("fleet tours: a change of more than three tours");
     auto c = cs.begin();
     for (std::size_t i = 0; i < ks.size(); ++i, ++c) laps[i] = Lap(ks.begin()[i], *c);
     if (!Passes(s, ks, {laps.data(), ks.size()})) return false;
