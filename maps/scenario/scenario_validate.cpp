@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <vector>
 
 #include "maps/scenario/scenario_detail.h"
 #include "maps/scenario/printable_text.h"
@@ -347,13 +348,29 @@ void Scenario::Validate() const {
              "footprint of size " + FormatVector(tree.size_m) + " must lie inside the workspace " + workspace_text);
     }
   }
-  // Checked after all footprints are known: a valve may sit inside another XT's footprint.
+  // Checked after all footprints are known: a valve may sit inside another XT's footprint. The
+  // footprints by the x of their centres, so a point looks only at those whose x-extent can hold
+  // it (each valve and start against every footprint had been 450 million tests on a generated
+  // 10,000-XT field); the first footprint in the file's order that holds it is named.
+  std::vector<std::size_t> by_x(structures.size());
+  double widest_half_m = 0.0;
+  for (std::size_t i = 0; i < structures.size(); ++i) {
+    by_x[i] = i;
+    if (!std::isnan(structures[i].size_m.x())) widest_half_m = std::max(widest_half_m, structures[i].size_m.x() / 2);
+  }
+  const auto centre_x = [&](std::size_t i) { return structures[i].center_m.x(); };
+  std::erase_if(by_x, [&](std::size_t i) { return !std::isfinite(centre_x(i)); });  // refused above; holds nothing
+  std::sort(by_x.begin(), by_x.end(), [&](std::size_t a, std::size_t b) { return centre_x(a) < centre_x(b); });
   const auto inside_structure = [&](const Eigen::Vector2d& p) -> const ChristmasTree* {
-    for (const ChristmasTree& tree : structures) {
+    const ChristmasTree* first = nullptr;
+    auto it = std::lower_bound(by_x.begin(), by_x.end(), p.x() - widest_half_m,
+                               [&](std::size_t i, double x) { return centre_x(i) < x; });
+    for (; it != by_x.end() && centre_x(*it) <= p.x() + widest_half_m; ++it) {
+      const ChristmasTree& tree = structures[*it];
       const Eigen::Vector2d half = tree.size_m / 2;
-      if (((p - tree.center_m).array().abs() < half.array()).all()) return &tree;
+      if (((p - tree.center_m).array().abs() < half.array()).all() && (first == nullptr || &tree < first)) first = &tree;
     }
-    return nullptr;
+    return first;
   };
   // A valve or a vehicle's start: finite, inside the workspace, outside every footprint.
   const auto check_in_open_water = [&](const std::string& field, const Eigen::Vector2d& p) {
