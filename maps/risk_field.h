@@ -81,6 +81,9 @@ class RiskField {
 
  private:
   void Recompute();
+  // ExcludeBlocked on components [begin, end): each by itself, so two threads may share them out.
+  void ExcludeBlocked(const SpectralBasis& basis, const OccupancyGrid& blocked, const Eigen::Vector2d& origin_m,
+                      int begin, int end, double cell_area_m2);
 
   std::vector<GaussianComponent> components_;
   Eigen::MatrixXd per_component_;  // size() x M

@@ -2,13 +2,13 @@
 
 #include <algorithm>
 #include <cmath>
-#include <future>
 #include <limits>
 #include <stdexcept>
 #include <utility>
 
 #include <fmt/format.h>
 
+#include "maps/in_two_halves.h"
 #include "maps/nearby_points.h"
 
 namespace sage::server {
@@ -123,14 +123,7 @@ RegionSplit QuickRegionSplit(const maps::OccupancyGrid& blocked, const maps::Sce
       split.regions[k] = MakeRegion(std::move(shares[k]), lap_s, valves, scenario, blocked);
     }
   };
-  constexpr std::size_t kTwoThreadsFrom = 256;
-  if (n >= kTwoThreadsFrom) {
-    auto half = std::async(std::launch::async, build, n / 2, n);
-    build(0, n / 2);
-    half.get();
-  } else {
-    build(0, n);
-  }
+  maps::InTwoHalves(n, /*two_threads_from=*/256, build);
   split.input = std::move(input);
   return split;
 }

@@ -6,6 +6,7 @@
 // each row reports what the split gives the fleet: the longest and the mean lap of a share (s) and
 // the valves of the largest share, so a faster planner is seen not to give a worse split.
 // Figures only: nothing here asserts on time (the machine is shared).
+// Also the field's own risk on its global basis, which World builds before the first cycle.
 // Run: build/bin/sage_bench_region_split [--benchmark_filter=Planned/10000]
 #include <algorithm>
 #include <map>
@@ -90,6 +91,21 @@ void BM_ProvisionalSplit(benchmark::State& state) {
   }
 }
 BENCHMARK(BM_ProvisionalSplit)->Arg(100)->Arg(1000)->Arg(10000)->Unit(benchmark::kMillisecond)->Iterations(1);
+
+// The field's risk on its global basis (RiskField::ForValves, as World builds it before the first
+// cycle): each valve's closed-form coefficients at the field's K (64 on these fields) with the
+// water no hull can be in taken out; on two threads from 2,000 valves (risk_field.cpp), so the
+// time is the wall's.
+void BM_FieldRisk(benchmark::State& state) {
+  const Field& field = FieldOf(static_cast<int>(state.range(0)));
+  for (auto _ : state) {
+    const sage::maps::RiskField risk =
+        sage::maps::RiskField::ForValves(field.scenario, field.world->basis(), field.world->blocked());
+    benchmark::DoNotOptimize(risk.blocked_mass().data());
+  }
+  state.counters["valves"] = static_cast<double>(field.scenario.ValveCount());
+}
+BENCHMARK(BM_FieldRisk)->Arg(1000)->Arg(10000)->Unit(benchmark::kMillisecond)->Iterations(1)->UseRealTime();
 
 }  // namespace
 
