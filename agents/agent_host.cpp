@@ -244,12 +244,16 @@ struct AgentHost::Impl {
       maps::PrefetchObject(v.ergodic.get());
       maps::PrefetchObject(v.keep_clear.get());
       maps::PrefetchObject(v.region_basis.get());
+      maps::PrefetchObject(v.tour.get());
+      maps::PrefetchObject(v.transit.get());
       world.Prefetch(v.body);
     }
     if (i + kArrays < end) {
       const Vehicle& v = vehicles[i + kArrays];
       if (v.smc && v.ergodic) v.ergodic->Prefetch();
       if (v.keep_clear) v.keep_clear->Prefetch(positions[i + kArrays]);
+      if (v.tour) v.tour->Prefetch();
+      if (v.transit) v.transit->Prefetch();
     }
   }
 

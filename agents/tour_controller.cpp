@@ -9,6 +9,8 @@
 #include <string>
 #include <utility>
 
+#include "maps/prefetch.h"
+
 namespace sage::agents {
 namespace {
 
@@ -35,6 +37,14 @@ Eigen::VectorXd Normalised(const Eigen::VectorXd& weights, std::size_t valve_cou
   }
   // Dividing by the sum keeps the wait per lap at wait_per_lap_s even for raw weights.
   return weights / weights.sum();
+}
+
+// The waypoints FollowPath reads next: path[index - 1] to path[index + 2].
+void PrefetchWaypoints(const std::vector<Eigen::Vector2d>& path, std::size_t index) {
+  if (path.empty()) return;
+  const std::size_t from = std::min(index, path.size() - 1);
+  const std::size_t first = from > 0 ? from - 1 : 0;
+  maps::PrefetchBytes(path.data() + first, (std::min(from + 3, path.size()) - first) * sizeof(Eigen::Vector2d));
 }
 
 }  // namespace
@@ -110,6 +120,22 @@ std::vector<Eigen::Vector2d> PlanAround(const maps::OccupancyGrid& grid, const E
         if ((grid.CenterOf({i, j}) - other).norm() <= radius) blocked.SetOccupied(i, j);
   }
   return PlanGridPath(blocked, from_m, to_m);
+}
+
+void GridFlight::Prefetch() const {
+  maps::PrefetchBytes(nearby_.data(), nearby_.capacity() * sizeof(Eigen::Vector2d));
+  if (active_) PrefetchWaypoints(path_, index_);
+}
+
+void TourController::Prefetch() const {
+  maps::PrefetchBytes(nearby_.data(), nearby_.capacity() * sizeof(Eigen::Vector2d));
+  if (!detour_.empty()) {
+    PrefetchWaypoints(detour_, detour_index_);
+  } else if (on_tour_ && static_cast<std::size_t>(leg_) < tour_.legs.size()) {
+    PrefetchWaypoints(tour_.legs[static_cast<std::size_t>(leg_)], waypoint_);
+  } else {
+    PrefetchWaypoints(approach_, approach_index_);
+  }
 }
 
 GridFlight::GridFlight(const maps::OccupancyGrid& grid, double speed_mps, double arrive_radius_m)

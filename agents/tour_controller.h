@@ -43,6 +43,9 @@ class GridFlight {
   void Stop() { active_ = false; }
   /// The other vehicles near this one now (m), for a re-plan round them.
   void SetNearby(const std::vector<Eigen::Vector2d>& nearby_m) { nearby_.assign(nearby_m.begin(), nearby_m.end()); }
+  /// Asks for the blocks the next SetNearby and Command touch (the path's next waypoints, the
+  /// nearby list) to be brought into cache; changes nothing.
+  void Prefetch() const;
 
  private:
   const maps::OccupancyGrid* grid_;
@@ -70,6 +73,8 @@ class TourController final : public VehicleController {
   /// The other vehicles near this one now (m): a pinned vehicle re-plans round them.
   void SetNearby(const std::vector<Eigen::Vector2d>& nearby_m) { nearby_.assign(nearby_m.begin(), nearby_m.end()); }
   int laps_completed() const { return laps_completed_; }
+  /// As GridFlight::Prefetch: the leg's next waypoints and the nearby list; changes nothing.
+  void Prefetch() const;
 
  private:
   // Pursues path[index] (from path[1] on), advancing index past reached waypoints; true (and no
