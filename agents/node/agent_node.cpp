@@ -201,6 +201,20 @@ int RunAgentNode(const maps::Scenario& scenario, const AgentNodeOptions& options
       if (snapshot) take_targets();
     };
     take_server_words();
+    const auto server_silent = [&] {
+      const double silent_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - last_heard).count();
+      if (silent_s <= options.server_timeout_s) return false;
+      spdlog::warn("agents: no word from the server for {:.0f} s; stopping", silent_s);
+      return true;
+    };
+    // Past the mission's last cycle (the server's length, t = duration) nothing is steered: the
+    // server has no cycle left to answer, and a host that stepped on waited for that answer and
+    // counted it as a cycle out of lockstep at the end of every launch. It waits for the server's
+    // word that the mission is over.
+    if (std::isfinite(door.duration_s()) && k > std::llround(door.duration_s() * rate)) {
+      if (server_silent()) break;
+      continue;
+    }
     // Lockstep where it can be: cycle k steers on the server's word of cycle k - 1 (its snapshot
     // numbered k), as in the in-process mission; it waits up to 0.45 of a period for it, then goes
     // on (counted). (It had waited only for the word of cycle k - 2: unseen while the server is
@@ -228,11 +242,7 @@ int RunAgentNode(const maps::Scenario& scenario, const AgentNodeOptions& options
         take_server_words();
       }
     }
-    const double silent_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - last_heard).count();
-    if (silent_s > options.server_timeout_s) {
-      spdlog::warn("agents: no word from the server for {:.0f} s; stopping", silent_s);
-      break;
-    }
+    if (server_silent()) break;
     const auto take_neighbours = [&] {
       while (neighbours.TakeEach(
                  [&](const proto::VehicleState& m, const dds_sample_info_t& info) {

@@ -8,6 +8,7 @@
 #include <chrono>
 #include <cstdint>
 #include <deque>
+#include <limits>
 #include <map>
 #include <optional>
 #include <span>
@@ -47,6 +48,9 @@ class HostDoor {
   const MissionClock& clock() const { return clock_; }
   /// The server has said the mission is over.
   bool finished() const { return finished_; }
+  /// The mission's length (s) as the current server announces it (its --duration, not this
+  /// host's); NaN before its first status.
+  double duration_s() const { return duration_s_; }
   /// A server not followed said its mission is over (a host started after its end hears that first).
   bool ended_elsewhere() const { return ended_elsewhere_; }
   /// A server of another world (scenario or options) was heard.
@@ -103,6 +107,7 @@ class HostDoor {
   std::uint64_t fingerprint_;
   MissionClock clock_;
   bool finished_ = false;
+  double duration_s_ = std::numeric_limits<double>::quiet_NaN();
   bool other_world_ = false;
   bool ended_elsewhere_ = false;
   std::map<std::uint32_t, std::deque<std::pair<std::int64_t, Eigen::Vector2d>>> others_;

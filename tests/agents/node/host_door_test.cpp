@@ -7,6 +7,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <limits>
 #include <stdexcept>
 #include <string>
@@ -91,6 +92,27 @@ TEST_F(HostDoorTest, OnlyTheFollowedServerEndsTheMission) {
   EXPECT_EQ(door_.clock().instance, kServer);
   EXPECT_TRUE(door_.TakeStatus(Status(kServer, /*finished=*/true)));
   EXPECT_TRUE(door_.finished());
+}
+
+// The mission's length a host steps to is the server's (a host started with another --duration
+// still ends with it): unknown before a status, taken only from an accepted one, never from a
+// length that cannot be.
+TEST_F(HostDoorTest, KnowsTheMissionsLengthFromItsServer) {
+  EXPECT_TRUE(std::isnan(door_.duration_s()));
+  proto::MissionStatus other_world = Status(kServer);
+  other_world.vehicle_fingerprint ^= 1;
+  other_world.duration_s = 30.0;
+  EXPECT_FALSE(door_.TakeStatus(other_world));
+  EXPECT_TRUE(std::isnan(door_.duration_s()));
+  proto::MissionStatus s = Status(kServer);
+  s.duration_s = 75.0;
+  ASSERT_TRUE(door_.TakeStatus(s));
+  EXPECT_EQ(door_.duration_s(), 75.0);
+  for (const double bad : {0.0, -5.0, std::numeric_limits<double>::quiet_NaN(), std::numeric_limits<double>::infinity()}) {
+    s.duration_s = bad;
+    EXPECT_TRUE(door_.TakeStatus(s));
+    EXPECT_EQ(door_.duration_s(), 75.0) << bad;
+  }
 }
 
 TEST_F(HostDoorTest, RetiresOnlyItsOwnVehiclesOnItsServersOrder) {
