@@ -403,16 +403,19 @@ int RunCli(int argc, char** argv) {
   generate->add_option("--name", field_options.name, "The scenario's name (default: field_<xts>xt_<valves>v_<vehicles>rov_s<seed>)");
   generate->add_option("--out,-o", field_out, "Scenario file to write")->required();
   std::uint64_t seabed_seed = 7;
-  std::string seabed_name = "manifold_slope", seabed_out;
+  std::string seabed_name, seabed_out;
   CLI::App* seabed = field->add_subcommand(
       "seabed", "Write the example seabed field: a manifold, four XTs, their jumpers, an export line and an "
                 "umbilical on a slope with sand waves, a rock ridge, a scarp, a pockmark and boulders, flown by three "
                 "BlueROV2s 0.8-2.0 m above the local seabed; the bathymetry (gridded XYZ depths) is written beside "
-                "the scenario as NAME.xyz. The same seed gives the same files (scenarios/manifold_slope.yaml is seed 7)");
+                "the scenario as NAME.xyz (another scenario's map is not written over). The same seed gives the same files "
+                "(scenarios/manifold_slope.yaml is seed 7)");
   seabed->add_option("--seed", seabed_seed, "Moves the boulders, the sand waves and the risk; also the mission's seed")
       ->check(MustBeWholeNumber)
       ->capture_default_str();
-  seabed->add_option("--name", seabed_name, "The scenario's name and its map's file name (NAME.xyz)")->capture_default_str();
+  seabed->add_option("--name", seabed_name,
+                     "The scenario's name and its map's file name (NAME.xyz; default: the --out file's name, "
+                     "manifold_slope for -o manifold_slope.yaml)");
   seabed->add_option("--out,-o", seabed_out, "Scenario file to write (the map goes in the same folder)")->required();
 
   BenchScaleCommand bench_cmd;

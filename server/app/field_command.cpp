@@ -4,6 +4,9 @@
 #include <cctype>
 #include <chrono>
 #include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <string>
 
 #include <spdlog/spdlog.h>
 
@@ -11,6 +14,14 @@
 #include "server/report/mission_file.h"
 
 namespace sage::server {
+namespace {
+
+std::string FileText(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+}
+
+}  // namespace
 
 int CmdFieldGenerate(const maps::FieldOptions& options, const std::string& out_path) {
   const auto start = std::chrono::steady_clock::now();
@@ -29,18 +40,29 @@ int CmdFieldGenerate(const maps::FieldOptions& options, const std::string& out_p
   return 0;
 }
 
-int CmdFieldSeabed(std::uint64_t seed, const std::string& name, const std::string& out_path) {
-  // The name is also the map's file name, beside the scenario.
+int CmdFieldSeabed(std::uint64_t seed, const std::string& requested_name, const std::string& out_path) {
+  // The name is also the map's file name, beside the scenario: by default the scenario file's own
+  // (slope11.yaml and slope11.xyz), so that two examples in one folder do not share one map.
+  const std::string name = requested_name.empty() ? std::filesystem::path(out_path).stem().string() : requested_name;
   const bool plain = !name.empty() && name.size() <= maps::kMaxNameLength &&
                      std::all_of(name.begin(), name.end(), [](unsigned char c) {
                        return std::isalnum(c) || c == '_' || c == '-' || c == '.';
                      }) && name.front() != '.';
   if (!plain) {
-    throw maps::ScenarioError("--name = " + name + ": must be 1-64 letters, digits, '_', '-' or '.' (it names the map file)");
+    throw maps::ScenarioError("--name = " + name + ": must be 1-64 letters, digits, '_', '-' or '.' (it names the map file" +
+                              (requested_name.empty() ? "; by default the --out file's name" : "") + ")");
   }
   const auto start = std::chrono::steady_clock::now();
   const maps::SeabedExample field = maps::GenerateSeabedExample(seed, name);
   const std::string map_path = (std::filesystem::path(out_path).parent_path() / (name + ".xyz")).string();
+  // Another scenario's map is not written over: a scenario beside it would fly on this seabed
+  // without a word. Writing the same pair again (the scenario file exists) replaces both.
+  std::error_code ec;
+  if (std::filesystem::exists(map_path, ec) && !std::filesystem::exists(out_path, ec) &&
+      FileText(map_path) != field.map_xyz) {
+    throw maps::ScenarioError("--name = " + name + ": " + map_path +
+                              " exists and is another seabed (another scenario's map?); choose another --name or --out");
+  }
   try {
     WriteFilesTogether({{map_path, field.map_xyz}, {out_path, field.yaml}});
   } catch (const std::runtime_error& e) {
