@@ -11,6 +11,7 @@
 #include <map>
 #include <optional>
 #include <thread>
+#include <vector>
 
 #include <spdlog/spdlog.h>
 
@@ -69,8 +70,10 @@ int RunAgentNode(const maps::Scenario& scenario, const AgentNodeOptions& options
   // the vehicles keep apart on the last cycle's.
   proto::Reader<proto::VehicleState> neighbours(participant, proto::NeighbourStateQos(3));
   std::uint64_t reported_rejections = 0;  // refused at the door (logged)
-  long cycles_not_in_step = 0, cycles_run = 0;  // cycles that went on without the server's last word
-  double first_not_in_step_s = -1.0;
+  // Cycles that went on without the server's last word (their numbers), and the cycles stepped.
+  std::vector<std::int64_t> not_in_step;
+  long cycles_run = 0;
+  std::int64_t last_stepped = -1;
   std::int64_t next_rejection_report = 0;
 
   const std::uint64_t fingerprint =
@@ -235,7 +238,7 @@ int RunAgentNode(const maps::Scenario& scenario, const AgentNodeOptions& options
                                      last_snapshot_at + std::chrono::duration_cast<Clock::duration>(kSlowServerWait));
       while (behind_server()) {
         if (std::chrono::system_clock::now() >= deadline) {
-          if (cycles_not_in_step++ == 0) first_not_in_step_s = static_cast<double>(k) / rate;
+          not_in_step.push_back(k);
           break;
         }
         fleet.WaitForData(std::chrono::milliseconds(1));
@@ -277,7 +280,7 @@ int RunAgentNode(const maps::Scenario& scenario, const AgentNodeOptions& options
                                    : clock.WallOf((static_cast<double>(k) + 0.45) / rate);
       while (!near_ones_in()) {
         if (std::chrono::system_clock::now() >= deadline) {
-          if (cycles_not_in_step++ == 0) first_not_in_step_s = static_cast<double>(k) / rate;
+          not_in_step.push_back(k);
           break;
         }
         std::this_thread::sleep_for(proto::kStreamPoll);
@@ -301,6 +304,7 @@ int RunAgentNode(const maps::Scenario& scenario, const AgentNodeOptions& options
     // already, and the overlap made them contend.)
     const AgentMission::CycleOutput out = mission.Step(k);
     ++cycles_run;
+    last_stepped = k;
     const long long stamp = proto::NowRealtimeNs();
     // Coverage and scans first: the server waits for the states of the cycle, and by then a
     // report sent before them is in as well.
@@ -314,10 +318,18 @@ int RunAgentNode(const maps::Scenario& scenario, const AgentNodeOptions& options
     states.Flush();
   }
   for (const VehicleId id : mission.ids()) leave(id);
-  if (cycles_not_in_step > 0) {
+  // A mission the server ended before its length (an operator's stop) leaves the host a cycle or
+  // two past the server's last one, waiting for a word that no cycle sends: those are not the
+  // mission's and not counted.
+  if (const std::optional<std::uint64_t> ended = door.ended_at_cycle()) {
+    const auto end = static_cast<std::int64_t>(*ended);
+    std::erase_if(not_in_step, [&](std::int64_t c) { return c > end; });
+    cycles_run -= static_cast<long>(std::max<std::int64_t>(0, last_stepped - end));
+  }
+  if (!not_in_step.empty()) {
     spdlog::warn("agents: {} of {} cycles went on without the last cycle's word of the server or a neighbour (not in "
                  "lockstep), the first at t = {:.1f} s",
-                 cycles_not_in_step, cycles_run, first_not_in_step_s);
+                 not_in_step.size(), cycles_run, static_cast<double>(not_in_step.front()) / rate);
   }
   if (mission.rejected() > 0 || door.bad_neighbours() > 0 || door.bad_statuses() > 0 || door.ahead_of_the_clock() > 0) {
     spdlog::warn("agents: refused {} message(s) from the server, {} more stamped over {:.0f} s ahead of the clock, {} "

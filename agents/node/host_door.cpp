@@ -32,6 +32,7 @@ bool HostDoor::TakeStatus(const proto::MissionStatus& s) {
     }
     clock_ = {s.server_instance, s.start_ns, s.time_scale};
   }
+  if (s.finished && !finished_) ended_at_cycle_ = s.cycle;
   finished_ = finished_ || s.finished;
   if (std::isfinite(s.duration_s) && s.duration_s > 0.0) duration_s_ = s.duration_s;
   return true;

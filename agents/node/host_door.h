@@ -48,6 +48,9 @@ class HostDoor {
   const MissionClock& clock() const { return clock_; }
   /// The server has said the mission is over.
   bool finished() const { return finished_; }
+  /// The first cycle the server did not run, from its status that said the mission is over (its
+  /// length's end, or an operator's stop); none before that.
+  std::optional<std::uint64_t> ended_at_cycle() const { return ended_at_cycle_; }
   /// The mission's length (s) as the current server announces it (its --duration, not this
   /// host's); NaN before its first status.
   double duration_s() const { return duration_s_; }
@@ -107,6 +110,7 @@ class HostDoor {
   std::uint64_t fingerprint_;
   MissionClock clock_;
   bool finished_ = false;
+  std::optional<std::uint64_t> ended_at_cycle_;
   double duration_s_ = std::numeric_limits<double>::quiet_NaN();
   bool other_world_ = false;
   bool ended_elsewhere_ = false;

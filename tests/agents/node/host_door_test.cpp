@@ -115,6 +115,28 @@ TEST_F(HostDoorTest, KnowsTheMissionsLengthFromItsServer) {
   }
 }
 
+// Where the server's mission ended (the first cycle it did not run), from its status saying so:
+// a host's waits past it are not cycles of the mission. Not from a status of another instance.
+TEST_F(HostDoorTest, KnowsTheCycleTheMissionEndedAt) {
+  EXPECT_FALSE(door_.ended_at_cycle().has_value());
+  proto::MissionStatus s = Status(kServer);
+  s.cycle = 120;
+  ASSERT_TRUE(door_.TakeStatus(s));
+  EXPECT_FALSE(door_.ended_at_cycle().has_value());
+  proto::MissionStatus stray = Status(kServer + 1, /*finished=*/true);
+  stray.cycle = 50;
+  EXPECT_FALSE(door_.TakeStatus(stray));
+  EXPECT_FALSE(door_.ended_at_cycle().has_value());
+  proto::MissionStatus last = Status(kServer, /*finished=*/true);
+  last.cycle = 299;
+  ASSERT_TRUE(door_.TakeStatus(last));
+  ASSERT_TRUE(door_.ended_at_cycle().has_value());
+  EXPECT_EQ(*door_.ended_at_cycle(), 299u);
+  last.cycle = 400;  // said again, later: the first word stands
+  ASSERT_TRUE(door_.TakeStatus(last));
+  EXPECT_EQ(*door_.ended_at_cycle(), 299u);
+}
+
 TEST_F(HostDoorTest, RetiresOnlyItsOwnVehiclesOnItsServersOrder) {
   EXPECT_FALSE(door_.TakeCommand(Retire(kServer, 1))) << "an order before any server was followed";
   ASSERT_TRUE(door_.TakeStatus(Status(kServer)));
