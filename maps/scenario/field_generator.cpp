@@ -254,6 +254,10 @@ void CheckOptions(const FieldOptions& o) {
   if (!(o.area_per_xt_m2 >= 50 && o.area_per_xt_m2 <= 10000)) {
     fail("--area-per-xt", FormatNumber(o.area_per_xt_m2), "must be in [50, 10000] m^2 (XT clusters need room)");
   }
+  // The loader's rule: a field written under a name it refuses could not be run.
+  if (const std::string problem = o.name.empty() ? std::string() : detail::NameProblem(o.name); !problem.empty()) {
+    throw ScenarioError("--name = " + problem);
+  }
 }
 
 // Refuses a field an OctoMap at its A* grid cannot span, naming the option that sized it.

@@ -12,6 +12,11 @@
 
 namespace sage::maps::detail {
 
+/// What is wrong with a name of the scenario or of one of its entries (shown in logs, tables and
+/// CSV files: 1..kMaxNameLength characters of UTF-8, none a control character), with the name as
+/// it can be shown: "" if it is a good name. The loader and the field generator both ask it.
+std::string NameProblem(const std::string& name);
+
 // Shortest text that reads back to the very same double (std::to_chars), so that emitting and
 // re-parsing is exact; YAML spellings for the non-finite values.
 inline std::string FormatNumber(double value) {

@@ -11,6 +11,22 @@
 #include "maps/scenario/printable_text.h"
 
 namespace sage::maps {
+std::string detail::NameProblem(const std::string& name) {
+  if (name.empty()) return "\"\": must not be empty";
+  // Shown as printable UTF-8 (a cut never splits a character, a control shows as ?).
+  if (name.size() > kMaxNameLength) {
+    return PrintableUtf8(name, 20) + ": must be at most " + std::to_string(kMaxNameLength) + " characters";
+  }
+  if (FirstNonUtf8(name) != std::string::npos) {
+    return PrintableUtf8(name, 20) + ": must be UTF-8 text (a byte that is not shown as ?)";
+  }
+  const auto control = [](char ch) { return static_cast<unsigned char>(ch) < 0x20 || ch == 0x7f; };
+  if (std::any_of(name.begin(), name.end(), control)) {
+    return PrintableUtf8(name, kMaxNameLength) + ": must not hold control characters (newline, tab, escape: shown as ?)";
+  }
+  return {};
+}
+
 namespace {
 
 using detail::EventKey;
@@ -63,18 +79,8 @@ class Checker {
   // A name goes into logs, tables and CSV files: 1..kMaxNameLength characters, none a control
   // character (a valve named with a newline or ESC forged log lines and broke fleet_events.csv).
   void Name(const std::string& field, const std::string& name) const {
-    if (name.empty()) Fail(field, "\"\"", "must not be empty");
-    // Shown as printable UTF-8 (a cut never splits a character, a control shows as ?).
-    if (name.size() > kMaxNameLength) {
-      Fail(field, PrintableUtf8(name, 20), "must be at most " + std::to_string(kMaxNameLength) + " characters");
-    }
-    if (FirstNonUtf8(name) != std::string::npos) {
-      Fail(field, PrintableUtf8(name, 20), "must be UTF-8 text (a byte that is not shown as ?)");
-    }
-    const auto control = [](char ch) { return static_cast<unsigned char>(ch) < 0x20 || ch == 0x7f; };
-    if (std::any_of(name.begin(), name.end(), control)) {
-      Fail(field, PrintableUtf8(name, kMaxNameLength), "must not hold control characters (newline, tab, escape: shown as ?)");
-    }
+    const std::string problem = detail::NameProblem(name);
+    if (!problem.empty()) throw ScenarioError(OneLine(file_ + ": " + field + " = " + problem));
   }
   // A valid name not used before by another entry of the same kind.
   void UniqueName(std::map<std::string, std::string>& seen, const std::string& field, const std::string& name) const {

@@ -4,8 +4,11 @@
 #include "server/app/cli.h"
 
 #include <algorithm>
+#include <charconv>
+#include <cstdint>
 #include <iostream>
 #include <string>
+#include <system_error>
 
 #include <CLI/CLI.hpp>
 #include <spdlog/spdlog.h>
@@ -50,10 +53,15 @@ std::string MustBeTimeScale(const std::string& text) {
   return "must be a number in 0.001..1000";
 }
 
-// CLI11 reads "-3" into an unsigned option as 2^64 - 3; a seed is a whole number as typed.
+// CLI11 reads "-3" into an unsigned option as 2^64 - 3, and a number past 2^64 - 1 as 2^64 - 1; a
+// seed is a whole number as typed that fits in 64 bits, as the scenario's seed: must be.
 std::string MustBeWholeNumber(const std::string& text) {
-  return text.find_first_not_of("0123456789") == std::string::npos && !text.empty() ? std::string()
-                                                                                    : std::string("must be a whole number >= 0");
+  const bool digits = !text.empty() && text.find_first_not_of("0123456789") == std::string::npos;
+  std::uint64_t value = 0;
+  const auto [end, error] = std::from_chars(text.data(), text.data() + text.size(), value);
+  return digits && error == std::errc() && end == text.data() + text.size()
+             ? std::string()
+             : std::string("must be a whole number >= 0 (at most 18446744073709551615)");
 }
 
 void AddScenarioOverrides(CLI::App& cmd, ScenarioOverrides& o, OverrideSet set, const std::string& example_scenario,

@@ -337,6 +337,23 @@ TEST(FieldGenerator, BadOptionsAreOneLineErrors) {
   o = FieldOptions{};
   o.area_per_xt_m2 = 10;
   EXPECT_EQ(ErrorOf(o), "--area-per-xt = 10: must be in [50, 10000] m^2 (XT clusters need room)");
+  // A name the loader refuses is refused here, by the loader's own rule (a field written under it
+  // could not be run); a name it takes is the scenario's, and loads.
+  o = FieldOptions{};
+  o.name = std::string(80, 'x');
+  EXPECT_EQ(ErrorOf(o), "--name = xxxxxxxxxxxxxxxxxxxx...: must be at most 64 characters");
+  o.name = "a\tb";
+  EXPECT_EQ(ErrorOf(o), "--name = a?b: must not hold control characters (newline, tab, escape: shown as ?)");
+  o.name = "\xff";
+  EXPECT_EQ(ErrorOf(o).rfind("--name = ", 0), 0u);
+  o = FieldOptions{};
+  o.xts = 2;
+  o.valves = 6;
+  o.vehicles = 1;
+  o.name = std::string(64, 'y');
+  const Scenario named = GenerateField(o);
+  EXPECT_EQ(named.name, o.name);
+  EXPECT_NO_THROW(ParseScenario(EmitScenario(named), "named.yaml"));
 }
 
 // Beyond what an OctoMap can hold, refused at once (before anything is laid out), naming the

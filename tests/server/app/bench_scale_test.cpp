@@ -55,6 +55,7 @@ TEST(BenchScaleCli, RefusesBadInputBeforeRunning) {
       {"--vehicles", "0"},       {"--vehicles", "ten"},   {"--vehicles", "20000"},
       {"--transport", "udp"},    {"--duration", "0"},     {"--duration", "soon"},
       {"--seed", "-3"},          {"--frobnicate"},        {"--repeat", "0"},
+      {"--seed", "18446744073709551616"},  // one past 2^64 - 1: CLI11 alone would take 2^64 - 1
       {"--repeat", "11"},        {"--repeat", "twice"},
   };
   for (const std::vector<std::string>& options : bad) {
