@@ -130,8 +130,8 @@ void ViewServer::Routes() {
       if (!Authorised(token)) {
         ++refused_;
         res.status = 403;
-        res.set_content(AnswerJson(false, token.empty() ? "refused: no token (the mission's token is in the address "
-                                                          "sage launch printed, after #token=)"
+        res.set_content(AnswerJson(false, token.empty() ? "refused: no token (it is in the address sage launch or "
+                                                          "sage view printed, after #token=)"
                                                         : "refused: wrong token"),
                         kJson);
         return;
