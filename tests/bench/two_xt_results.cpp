@@ -124,8 +124,13 @@ int main(int argc, char** argv) {
     const auto& times = m.valves.at(0).visit_times_s;
     const auto soon = std::count_if(times.begin(), times.end(),
                                     [&](double t) { return t >= e.time_s && t < e.time_s + 60.0; });
-    md << fmt::format("| {} | {:.1f} deg | {} | {} | {} | {} |\n", label, e.heading_change_rad * 180.0 / M_PI,
-                      Fmt(e.time_to_next_visit_s), soon, Fmt(e.interval_before_s), Fmt(e.interval_after_s));
+    // Unknown when the vehicle never steered on a target that carries the event (a tour vehicle:
+    // its tour does not change, only its waits, from the next lap), as in the run table.
+    const std::string turn = std::isnan(e.heading_change_rad)
+                                 ? std::string("unknown (no new target)")
+                                 : fmt::format("{:.1f} deg", e.heading_change_rad * 180.0 / M_PI);
+    md << fmt::format("| {} | {} | {} | {} | {} | {} |\n", label, turn, Fmt(e.time_to_next_visit_s), soon,
+                      Fmt(e.interval_before_s), Fmt(e.interval_after_s));
   };
   leak_row("A* (new waits from the next lap)", paper, ControllerKind::kAstar);
   leak_row("ergodic, no forgetting (paper)", paper, ControllerKind::kErgodic);
