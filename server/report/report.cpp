@@ -17,6 +17,7 @@
 #include <nlohmann/json.hpp>
 
 #include "server/report/atomic_write.h"
+#include "server/report/plots/weight_text.h"
 
 namespace sage::server {
 
@@ -133,9 +134,6 @@ std::string RenderTable(const std::vector<Block>& blocks, std::size_t rows, std:
   return out;
 }
 
-// A normalised weight: two decimals (the paper's 0.55), two significant digits below 0.01 (a
-// 1,000-valve field's 0.00093 had printed as 0.00 on every row).
-std::string WeightText(double w) { return w >= 0.01 || w <= 0.0 ? fmt::format("{:.2f}", w) : fmt::format("{:.2g}", w); }
 
 std::string Seconds(double s) { return std::isfinite(s) ? fmt::format("{:.1f} s", s) : "---"; }
 

@@ -13,6 +13,7 @@
 #include "server/report/plots/mission_plots.h"
 #include "server/report/plots/nice_scale.h"
 #include "server/report/plots/render.h"
+#include "server/report/plots/weight_text.h"
 #include "server/report/plots/svg_writer.h"
 
 namespace sage::server::plots {
@@ -551,7 +552,7 @@ std::string FieldPlotSvg(const MissionPlotInput& input, FieldPlotLayout* layout_
     for (std::size_t k = 0; k < valve_labels_tried; ++k) {
       const std::size_t i = by_weight[k];
       // The weight as the run table prints it.
-      const std::string text = fmt::format("{} {:.2f}", valves[i].name, weights[i]);
+      const std::string text = valves[i].name + " " + WeightText(weights[i]);
       if (!place(layout.valve_markers[i], text, valves[i].name, "#111")) ++valve_labels_out;
     }
   };
