@@ -1319,8 +1319,16 @@ TEST_F(FleetDds, LaunchFliesTheInProcessMission) {
                                      over_dds, FreeDomainForLaunch(), cwd);
   ASSERT_EQ(WaitMissionEnd(launch, 30.0), std::optional<int>(0));
   EXPECT_FALSE(fs::exists(cwd / "runs" / "latest")) << "--no-latest: runs/latest was pointed at the mission";
-  const std::vector<std::string> a = TrajectoryRowsAfterStart(in_process / "trajectory.csv"), b = TrajectoryRowsAfterStart(over_dds / "trajectory.csv");
-  ASSERT_GT(a.size(), 4u * 290u);
+  // On a loaded machine (ctest -j2 runs another launch beside this one) a state can miss the
+  // server's wait (0.45 of a 25 ms period at this time scale); the server goes on and the missions
+  // part from that cycle: they are compared up to it, and a break before the join (10 s) leaves
+  // the join unchecked, which is a failure.
+  const Lockstep lockstep = LockstepOf(launch.LogText());
+  ASSERT_GT(lockstep.cycles, 290) << "the launch did not log its lockstep:\n" << launch.LogText();
+  ASSERT_GT(lockstep.first_out_s, 11.0) << lockstep.in_step << " of " << lockstep.cycles << " cycles in lockstep";
+  const std::vector<std::string> a = TrajectoryRowsAfterStart(in_process / "trajectory.csv", lockstep.first_out_s),
+                                  b = TrajectoryRowsAfterStart(over_dds / "trajectory.csv", lockstep.first_out_s);
+  ASSERT_GT(a.size(), 4u * 105u);  // four vehicles for 10.5 s at 10 Hz, then rov5 too
   EXPECT_EQ(a.size(), b.size());
   std::size_t differ = 0;
   for (std::size_t i = 0; i < std::min(a.size(), b.size()); ++i) {
@@ -1329,10 +1337,15 @@ TEST_F(FleetDds, LaunchFliesTheInProcessMission) {
   }
   EXPECT_EQ(differ, 0u);
   EXPECT_NE(text.find("rov5"), std::string::npos);
-  const Json ma = ReadJson(in_process / "metrics.json"), mb = ReadJson(over_dds / "metrics.json");
-  EXPECT_EQ(ma.at("visit_weight_correlation"), mb.at("visit_weight_correlation"));
-  for (std::size_t v = 0; v < ma.at("valves").size(); ++v) {
-    EXPECT_EQ(ma.at("valves")[v].at("visits"), mb.at("valves")[v].at("visits")) << ma.at("valves")[v].at("name");
+  if (lockstep.in_step == lockstep.cycles) {
+    const Json ma = ReadJson(in_process / "metrics.json"), mb = ReadJson(over_dds / "metrics.json");
+    EXPECT_EQ(ma.at("visit_weight_correlation"), mb.at("visit_weight_correlation"));
+    for (std::size_t v = 0; v < ma.at("valves").size(); ++v) {
+      EXPECT_EQ(ma.at("valves")[v].at("visits"), mb.at("valves")[v].at("visits")) << ma.at("valves")[v].at("name");
+    }
+  } else {
+    std::cout << "lockstep broke at t = " << lockstep.first_out_s << " s (" << lockstep.in_step << " of "
+              << lockstep.cycles << " cycles): compared up to there\n";
   }
   const std::string log = launch.LogText();
   EXPECT_NE(log.find("rov2 lost"), std::string::npos) << log;
