@@ -88,7 +88,10 @@ async function main() {
   check(mission.alive === VEHICLES && mission.time_s > 0, `/sage/mission: ${mission.alive} alive at t = ${mission.time_s} s`);
   check(times > 0, `the server publishes the mission clock (${times} time messages)`);
 
-  const scene = await waitFor("a scene", () => latest["/sage/scene"], 10000);
+  // The scene goes out less often than the poses: the latest one may still be from before every
+  // host was in (a loaded machine, chromium's test beside this one). Wait for one with every vehicle.
+  const everyVehicle = (s) => s && s.entities.some((e) => e.id === "vehicles" && e.arrows.length === VEHICLES);
+  const scene = await waitFor("a scene with every vehicle", () => everyVehicle(latest["/sage/scene"]) ? latest["/sage/scene"] : null, 10000);
   const entity = (id) => scene.entities.find((e) => e.id === id);
   check(entity("valves") && entity("valves").spheres.length === VALVES && entity("valves").texts.length === VALVES,
         `/sage/scene: ${entity("valves") ? entity("valves").spheres.length : 0} valve spheres with labels`);
