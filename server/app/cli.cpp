@@ -400,9 +400,15 @@ int RunCli(int argc, char** argv) {
       "generate", "Write a realistic scenario of any size: XTs in manifold clusters, valves at the inspection "
                   "standoff, graded risk with leaks, a fleet of BlueROV2s, settings sized for the field; the same "
                   "seed gives the same field (the field grows with the counts: about 80 m^2 of seabed per XT)");
-  generate->add_option("--xts", field_options.xts, "Christmas trees (>= 1)")->capture_default_str();
-  generate->add_option("--valves", field_options.valves, "Valves in all, 2 to 5 per XT")->capture_default_str();
-  generate->add_option("--vehicles", field_options.vehicles, "BlueROV2s (>= 1)")->capture_default_str();
+  CLI::Option* generate_xts = generate->add_option(
+      "--xts", field_options.xts, "Christmas trees (>= 1); without it, as many as --valves needs at the default's rate")
+      ->capture_default_str();
+  CLI::Option* generate_valves = generate->add_option(
+      "--valves", field_options.valves, "Valves in all, 2 to 5 per XT; without it, about 3.1 per XT (87 for 28)")
+      ->capture_default_str();
+  CLI::Option* generate_vehicles =
+      generate->add_option("--vehicles", field_options.vehicles, "BlueROV2s (>= 1); without it, 24 for every 28 XTs")
+          ->capture_default_str();
   generate->add_option("--seed", field_options.seed, "Same seed, same field; also the mission's seed")
       ->check(MustBeWholeNumber)
       ->capture_default_str();
@@ -562,7 +568,11 @@ int RunCli(int argc, char** argv) {
     if (*risk_set) return SetRisk(mission(), op.valve, op.weight, op.source, op.insecure);
     if (*stop) return StopMission(mission(), op.insecure);
     if (*security_init) return CmdSecurityInit(security_cmd);
-    if (*generate) return CmdFieldGenerate(field_options, field_out);
+    if (*generate) {
+      return CmdFieldGenerate(WithCountsSizedToEachOther(field_options, generate_xts->count() > 0, generate_valves->count() > 0,
+                                                         generate_vehicles->count() > 0),
+                              field_out);
+    }
     if (*seabed) return CmdFieldSeabed(seabed_seed, seabed_name, seabed_out);
     if (*bench_scale) return CmdBenchScale(bench_cmd);
     if (*bench_leaks) return CmdBenchLeaks(leaks_cmd);

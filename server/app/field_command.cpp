@@ -3,9 +3,11 @@
 #include <algorithm>
 #include <cctype>
 #include <chrono>
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
+#include <limits>
 #include <string>
 
 #include <spdlog/spdlog.h>
@@ -22,6 +24,27 @@ std::string FileText(const std::string& path) {
 }
 
 }  // namespace
+
+maps::FieldOptions WithCountsSizedToEachOther(maps::FieldOptions options, bool xts_given, bool valves_given,
+                                              bool vehicles_given) {
+  const maps::FieldOptions defaults;
+  const double per_xt = static_cast<double>(defaults.valves) / defaults.xts;
+  if (xts_given && !valves_given && options.xts >= 1) {
+    const long long xts = options.xts;
+    const long long valves = std::clamp(std::llround(per_xt * static_cast<double>(xts)), 2 * xts, 5 * xts);
+    // A count past int's range stays refused by the generator, as a typed one would be.
+    options.valves = static_cast<int>(std::min<long long>(valves, std::numeric_limits<int>::max()));
+  } else if (valves_given && !xts_given && options.valves >= 2) {
+    // At least valves / 5 XTs (rounded up) and at most valves / 2 (rounded down): that range is never empty from 2 on.
+    const long long valves = options.valves;
+    options.xts = static_cast<int>(std::clamp(std::llround(static_cast<double>(valves) / per_xt), (valves + 4) / 5, valves / 2));
+  }
+  if (!vehicles_given && (xts_given || valves_given) && options.xts >= 1) {
+    const double per_vehicle = static_cast<double>(defaults.xts) / defaults.vehicles;
+    options.vehicles = static_cast<int>(std::max(1LL, std::llround(static_cast<double>(options.xts) / per_vehicle)));
+  }
+  return options;
+}
 
 int CmdFieldGenerate(const maps::FieldOptions& options, const std::string& out_path) {
   const auto start = std::chrono::steady_clock::now();

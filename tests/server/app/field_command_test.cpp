@@ -5,6 +5,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
@@ -70,6 +71,52 @@ TEST_F(FieldSeabedCommand, NamesTheMapAfterTheScenarioAndKeepsAnotherScenariosMa
   EXPECT_THROW(CmdFieldSeabed(7, "", (dir_ / "my slope.yaml").string()), maps::ScenarioError);
   EXPECT_EQ(CmdFieldSeabed(7, "my_slope", (dir_ / "my slope.yaml").string()), 0);
   EXPECT_TRUE(fs::exists(dir_ / "my_slope.xyz"));
+}
+
+// `sage field generate --xts 4` alone was refused for the default --valves = 87 the user never
+// typed; a count left out is now sized to the one given, at the default field's rate.
+TEST(FieldGenerateCounts, ACountLeftOutIsSizedToTheOneGiven) {
+  const maps::FieldOptions defaults;
+  const double per_xt = static_cast<double>(defaults.valves) / defaults.xts;
+  for (int xts = 1; xts <= 2000; ++xts) {
+    maps::FieldOptions o;
+    o.xts = xts;
+    const maps::FieldOptions sized = WithCountsSizedToEachOther(o, true, false, false);
+    ASSERT_EQ(sized.xts, xts);
+    ASSERT_GE(sized.valves, 2 * xts) << xts;
+    ASSERT_LE(sized.valves, 5 * xts) << xts;
+    ASSERT_LE(std::abs(sized.valves - per_xt * xts), 0.5 + 1e-9) << xts;  // the default's rate, rounded
+    ASSERT_GE(sized.vehicles, 1) << xts;
+    ASSERT_LE(std::abs(sized.vehicles - xts * static_cast<double>(defaults.vehicles) / defaults.xts), 0.5 + 1e-9) << xts;
+  }
+  for (int valves = 2; valves <= 5000; ++valves) {
+    maps::FieldOptions o;
+    o.valves = valves;
+    const maps::FieldOptions sized = WithCountsSizedToEachOther(o, false, true, false);
+    ASSERT_EQ(sized.valves, valves);
+    ASSERT_GE(5 * sized.xts, valves) << valves;  // 2 to 5 valves per XT
+    ASSERT_LE(2 * sized.xts, valves) << valves;
+  }
+  // The default field is the default's own size either way.
+  maps::FieldOptions o;
+  EXPECT_EQ(WithCountsSizedToEachOther(o, true, false, false).valves, defaults.valves);
+  o.valves = defaults.valves;
+  EXPECT_EQ(WithCountsSizedToEachOther(o, false, true, false).xts, defaults.xts);
+  // Both typed, or neither: as given (a typed pair out of range is still refused by the generator).
+  o.xts = 4;
+  o.valves = 87;
+  EXPECT_EQ(WithCountsSizedToEachOther(o, true, true, true).valves, 87);
+  EXPECT_EQ(WithCountsSizedToEachOther(o, false, false, false).xts, 4);
+  // A typed fleet stays as typed.
+  o.vehicles = 500;
+  EXPECT_EQ(WithCountsSizedToEachOther(o, true, false, true).vehicles, 500);
+  // A field of four XTs alone is made, with valves on every one.
+  maps::FieldOptions four;
+  four.xts = 4;
+  const maps::Scenario field = maps::GenerateField(WithCountsSizedToEachOther(four, true, false, false));
+  EXPECT_EQ(field.structures.size(), 4u);
+  EXPECT_EQ(field.ValveCount(), 12);      // 87 / 28 x 4 = 12.4
+  EXPECT_EQ(field.vehicles.size(), 3u);   // 24 / 28 x 4 = 3.4
 }
 
 }  // namespace
