@@ -6,6 +6,7 @@
 #include <stdexcept>
 
 #include <Eigen/Cholesky>
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 
 #include "maps/risk_field.h"
@@ -24,7 +25,7 @@ maps::Scenario MakeScenario(const std::vector<Eigen::Vector2d>& valve_positions)
   xt.center_m = {6.0, 9.0};
   for (std::size_t i = 0; i < valve_positions.size(); ++i) {
     maps::Valve valve;
-    valve.name = "P" + std::to_string(i + 1);
+    valve.name = fmt::format("P{}", i + 1);  // GCC 12 warns (-Wrestrict, a false positive) on "P" + to_string
     valve.position_m = valve_positions[i];
     xt.valves.push_back(valve);
   }

@@ -18,7 +18,10 @@ const std::string kTwoXtLeaks = std::string(SAGE_SOURCE_DIR) + "/scenarios/two_x
 maps::Scenario OneLeak(double false_alarms_per_s = 0.0) {
   maps::Scenario s = maps::LoadScenario(kTwoXtLeaks);
   s.sensors[0].false_alarms_per_s = false_alarms_per_s;
-  s.leaks = {maps::LeakSpec{"P1", {}, 10.0, 1.0}};
+  maps::LeakSpec leak;
+  leak.valve = "P1";
+  leak.start_s = 10.0;
+  s.leaks = {leak};
   s.Validate();
   return s;
 }

@@ -326,7 +326,9 @@ TEST(RiskLoop, FlowlineJointsDrawTheVehiclesUntilLookedAt) {
   std::int64_t k = 2;
   for (; k < 2 + 10 * 20; ++k) {
     ASSERT_TRUE(core.OnState(State(0, k, from, 0.0)));
-    if (core.risk_loop().belief().sensors()[0].ScansAt(k)) ASSERT_TRUE(core.OnScan(Scan(0, k, from, 0.0)));
+    if (core.risk_loop().belief().sensors()[0].ScansAt(k)) {
+      ASSERT_TRUE(core.OnScan(Scan(0, k, from, 0.0)));
+    }
     core.Cycle(k);
   }
   const double looked = layer.Excess(tee);
