@@ -16,6 +16,7 @@
 #include <spdlog/spdlog.h>
 
 #include "agents/node/host_door.h"
+#include "agents/node/out_of_step.h"
 #include "agents/node/network.h"
 #include "agents/node/wire.h"
 #include "maps/world.h"
@@ -70,8 +71,8 @@ int RunAgentNode(const maps::Scenario& scenario, const AgentNodeOptions& options
   // the vehicles keep apart on the last cycle's.
   proto::Reader<proto::VehicleState> neighbours(participant, proto::NeighbourStateQos(3));
   std::uint64_t reported_rejections = 0;  // refused at the door (logged)
-  // Cycles that went on without the server's last word (their numbers), and the cycles stepped.
-  std::vector<std::int64_t> not_in_step;
+  // Cycles that went on without the server's last word, and the cycles stepped.
+  OutOfStepCycles not_in_step;
   long cycles_run = 0;
   std::int64_t last_stepped = -1;
   std::int64_t next_rejection_report = 0;
@@ -238,7 +239,7 @@ int RunAgentNode(const maps::Scenario& scenario, const AgentNodeOptions& options
                                      last_snapshot_at + std::chrono::duration_cast<Clock::duration>(kSlowServerWait));
       while (behind_server()) {
         if (std::chrono::system_clock::now() >= deadline) {
-          not_in_step.push_back(k);
+          not_in_step.Mark(k);
           break;
         }
         fleet.WaitForData(std::chrono::milliseconds(1));
@@ -280,7 +281,7 @@ int RunAgentNode(const maps::Scenario& scenario, const AgentNodeOptions& options
                                    : clock.WallOf((static_cast<double>(k) + 0.45) / rate);
       while (!near_ones_in()) {
         if (std::chrono::system_clock::now() >= deadline) {
-          not_in_step.push_back(k);
+          not_in_step.Mark(k);
           break;
         }
         std::this_thread::sleep_for(proto::kStreamPoll);
@@ -323,13 +324,13 @@ int RunAgentNode(const maps::Scenario& scenario, const AgentNodeOptions& options
   // mission's and not counted.
   if (const std::optional<std::uint64_t> ended = door.ended_at_cycle()) {
     const auto end = static_cast<std::int64_t>(*ended);
-    std::erase_if(not_in_step, [&](std::int64_t c) { return c > end; });
+    not_in_step.DropAfter(end);
     cycles_run -= static_cast<long>(std::max<std::int64_t>(0, last_stepped - end));
   }
-  if (!not_in_step.empty()) {
+  if (not_in_step.count() > 0) {
     spdlog::warn("agents: {} of {} cycles went on without the last cycle's word of the server or a neighbour (not in "
                  "lockstep), the first at t = {:.1f} s",
-                 not_in_step.size(), cycles_run, static_cast<double>(not_in_step.front()) / rate);
+                 not_in_step.count(), cycles_run, static_cast<double>(*not_in_step.first()) / rate);
   }
   if (mission.rejected() > 0 || door.bad_neighbours() > 0 || door.bad_statuses() > 0 || door.ahead_of_the_clock() > 0) {
     spdlog::warn("agents: refused {} message(s) from the server, {} more stamped over {:.0f} s ahead of the clock, {} "
