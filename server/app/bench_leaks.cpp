@@ -190,6 +190,11 @@ int CmdBenchLeaks(const BenchLeaksCommand& c) {
       LoadAverage());
   WriteLeakBench(dir.string(), summaries, runs, preamble, baseline, title);
   std::cout << LeakBenchTable(summaries);
+  for (const std::string& name : names) {
+    if (baseline.empty() || name == baseline) continue;
+    std::cout << name << " against " << baseline << ", time to detection leak by leak: "
+              << PairingText(PairDetections(runs, name, baseline)) << "\n";
+  }
   spdlog::info("{} missions in {:.0f} s; wrote {}/leaks.md, leaks.json, leaks.svg", tasks, wall_s, dir.string());
   return 0;
 }

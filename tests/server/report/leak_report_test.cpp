@@ -3,9 +3,11 @@
 // alarms per run; the files are JSON that parses back, Markdown with the ratios, an SVG.
 #include "server/report/leak_report.h"
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <random>
 #include <sstream>
 
 #include <gtest/gtest.h>
@@ -56,9 +58,9 @@ TEST(LeakReport, SummariesMatchAHandCount) {
   EXPECT_TRUE(j["summaries"][0]["time_to_detection_s"]["max"].is_null());
   EXPECT_EQ(j["summaries"][0]["time_to_detection_s"]["p90"], 9.0);
   EXPECT_TRUE(j["runs"][9]["detected_s"].is_null());
-  const std::string md = LeakBenchMarkdown(s, "preamble here", "b");
+  const std::string md = LeakBenchMarkdown(s, runs, "preamble here", "b");
   EXPECT_NE(md.find("preamble here"), std::string::npos);
-  EXPECT_NE(md.find("| A | 2.50x | 4.50x | 2.67x |"), std::string::npos) << md;
+  EXPECT_NE(md.find("| A | 2.50x | 4.50x | 2.67x | "), std::string::npos) << md;
   EXPECT_NE(md.find("never"), std::string::npos);
   const std::string svg = LeakBenchSvg(s, runs, "t <&> title");
   EXPECT_NE(svg.find("t &lt;&amp;&gt; title"), std::string::npos);
@@ -70,6 +72,89 @@ TEST(LeakReport, SummariesMatchAHandCount) {
   WriteLeakBench(dir.string(), s, runs, "p", "b", "title");
   for (const char* f : {"leaks.json", "leaks.md", "leaks.svg"}) EXPECT_TRUE(std::filesystem::exists(dir / f)) << f;
   std::filesystem::remove_all(dir);
+}
+
+// Leak by leak: the same leak (run, site, onset) under both configurations, against a direct
+// computation of the differences; a shift common to every leak is known exactly however much the
+// leaks themselves spread.
+TEST(LeakReport, PairsEachLeakWithTheBaselinesSameLeak) {
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> spread(0.0, 12.0);
+  std::normal_distribution<double> change(0.4, 1.0);
+  std::vector<LeakRun> runs;
+  std::vector<double> differences;
+  for (int k = 0; k < 200; ++k) {
+    const double start = 30.0 + k, base = spread(rng), mine = std::max(0.1, base + change(rng));
+    runs.push_back(Row("astar", k, start, start + base));
+    runs.push_back(Row("bayes", k, start, start + mine));
+    differences.push_back(mine - base);
+  }
+  // A leak only one of them met (another run) has no partner; one detected by one only is counted apart.
+  runs.push_back(Row("bayes", 500, 40.0, 45.0));
+  runs.push_back(Row("astar", 201, 40.0, 41.0));
+  runs.push_back(Row("bayes", 201, 40.0, std::nan("")));
+  const LeakPairing p = PairDetections(runs, "bayes", "astar");
+  EXPECT_EQ(p.pairs, 200);
+  EXPECT_EQ(p.only_config, 0);
+  EXPECT_EQ(p.only_baseline, 1);
+  double sum = 0.0, sum_squares = 0.0;
+  int sooner = 0;
+  for (double d : differences) {
+    sum += d;
+    sum_squares += d * d;
+    sooner += d < 0.0 ? 1 : 0;
+  }
+  const double n = 200.0, mean = sum / n;
+  const double sd = std::sqrt((sum_squares - n * mean * mean) / (n - 1.0));  // the one-pass form, as a check
+  EXPECT_NEAR(p.mean_difference_s, mean, 1e-9);
+  EXPECT_NEAR(p.mean_half_width_s, 1.96 * sd / std::sqrt(n), 1e-9);
+  EXPECT_NEAR(p.sooner_share, sooner / n, 1e-12);
+  // Not every leak detected by both: no p90 interval.
+  EXPECT_TRUE(std::isnan(p.p90_difference_s));
+  EXPECT_NE(PairingText(p).find("detected under one only: 0 / 1"), std::string::npos) << PairingText(p);
+
+  // Every leak 2 s later, over leaks that spread over 12 s: the difference and its interval are 2 s exactly.
+  std::vector<LeakRun> shifted;
+  for (int k = 0; k < 100; ++k) {
+    const double base = spread(rng);
+    shifted.push_back(Row("astar", k, 100.0, 100.0 + base));
+    shifted.push_back(Row("late", k, 100.0, 100.0 + base + 2.0));
+  }
+  const LeakPairing q = PairDetections(shifted, "late", "astar");
+  EXPECT_NEAR(q.mean_difference_s, 2.0, 1e-9);
+  EXPECT_NEAR(q.mean_half_width_s, 0.0, 1e-9);
+  EXPECT_DOUBLE_EQ(q.sooner_share, 0.0);
+  EXPECT_NEAR(q.p90_difference_s, 2.0, 1e-9);
+  EXPECT_NEAR(q.p90_low_s, 2.0, 1e-9);
+  EXPECT_NEAR(q.p90_high_s, 2.0, 1e-9);
+  EXPECT_EQ(PairingText(q), "+2.0 s ± 0.0 s (95 %, 100 pairs), sooner in 0 %; p90 +2.0 s (+2.0 s .. +2.0 s)");
+
+  // The bootstrap's interval holds the p90 difference of the leaks themselves and is not a point
+  // when the leaks' changes differ.
+  std::vector<LeakRun> noisy;
+  for (int k = 0; k < 150; ++k) {
+    const double base = spread(rng);
+    noisy.push_back(Row("astar", k, 100.0, 100.0 + base));
+    noisy.push_back(Row("bayes", k, 100.0, 100.0 + std::max(0.1, base + change(rng))));
+  }
+  const LeakPairing r = PairDetections(noisy, "bayes", "astar");
+  ASSERT_TRUE(std::isfinite(r.p90_difference_s));
+  EXPECT_LE(r.p90_low_s, r.p90_difference_s);
+  EXPECT_GE(r.p90_high_s, r.p90_difference_s);
+  EXPECT_LT(r.p90_low_s, r.p90_high_s);
+  // Too few pairs for an interval.
+  std::vector<LeakRun> few(noisy.begin(), noisy.begin() + 20);
+  const LeakPairing f = PairDetections(few, "bayes", "astar");
+  EXPECT_EQ(f.pairs, 10);
+  EXPECT_TRUE(std::isnan(f.mean_half_width_s));
+  EXPECT_NE(PairingText(f).find("too few for an interval"), std::string::npos);
+
+  // In leaks.json, beside the summary of every configuration but the baseline.
+  const std::vector<LeakSummary> s = SummariseLeakRuns(shifted, {"astar", "late"}, {"A", "L"});
+  const nlohmann::json j = nlohmann::json::parse(LeakBenchJson(s, shifted, "astar"));
+  EXPECT_FALSE(j["summaries"][0].contains("against_baseline"));
+  EXPECT_EQ(j["summaries"][1]["against_baseline"]["pairs"], 100);
+  EXPECT_NEAR(j["summaries"][1]["against_baseline"]["mean_difference_s"].get<double>(), 2.0, 1e-9);
 }
 
 }  // namespace
