@@ -72,7 +72,9 @@ int CmdBenchLeaks(const BenchLeaksCommand& c) {
     throw maps::ScenarioError(fmt::format("--leaks = {}: must be in 1..{}", c.leaks, maps::kMaxLeaks));
   }
   if (c.jobs < 1 || c.jobs > 64) throw maps::ScenarioError(fmt::format("--jobs = {}: must be in 1..64", c.jobs));
-  const maps::Scenario scenario = LoadWithOverrides(c.scenario);
+  ScenarioOverrides overrides = c.scenario;
+  if (!overrides.random_leaks) overrides.random_leaks = 0;  // the file's leaks are not the bench's: it draws its own
+  const maps::Scenario scenario = LoadWithOverrides(overrides);
   if (scenario.sensors.empty()) {
     throw maps::ScenarioError(scenario.source_path + ": sensors: none: the vehicles could not see a leak (give them a "
                               "sensors: section, as scenarios/two_xt_leaks.yaml does)");

@@ -2,9 +2,11 @@
 
 #include <algorithm>
 #include <cmath>
+#include <string>
 #include <vector>
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 #include <spdlog/spdlog.h>
 
 #include "maps/seabed/seabed_obstacles.h"
@@ -18,8 +20,9 @@ namespace {
 // project's words: "--duration = -5: must be > 0".
 void CheckOverrides(const ScenarioOverrides& o) {
   if (o.vehicles && *o.vehicles < 1) throw maps::ScenarioError(fmt::format("--vehicles = {}: must be >= 1", *o.vehicles));
-  if (o.duration_s && !(*o.duration_s > 0.0 && std::isfinite(*o.duration_s))) {
-    throw maps::ScenarioError(fmt::format("--duration = {}: must be a finite number > 0", *o.duration_s));
+  if (o.duration_s && !(*o.duration_s > 0.0 && *o.duration_s <= maps::kMaxDuration_s)) {
+    throw maps::ScenarioError(fmt::format("--duration = {}: must be > 0 and <= {:.0f} s (a week)", *o.duration_s,
+                                          maps::kMaxDuration_s));
   }
   if (o.basis_order && (*o.basis_order < 1 || *o.basis_order > 64)) {
     throw maps::ScenarioError(fmt::format("--basis-order = {}: must be in 1..64", *o.basis_order));
@@ -59,6 +62,24 @@ maps::NetworkSettings NetworkOverrides::Applied(maps::NetworkSettings network) c
   return network;
 }
 
+std::string LeftOutByDuration(const maps::Scenario& scenario, double duration_s, bool leaks_drawn_anew) {
+  std::vector<std::string> dropped;
+  if (!leaks_drawn_anew) {
+    for (const maps::LeakSpec& leak : scenario.leaks) {
+      if (leak.start_s > duration_s) dropped.push_back(fmt::format("the leak at {} from {} s", maps::LeakWhere(leak), leak.start_s));
+    }
+  }
+  std::size_t risk_events = 0, fleet_events = 0;
+  for (const maps::RiskProfile& p : scenario.profiles) {
+    for (const maps::RiskEvent& e : p.events) risk_events += e.time_s > duration_s ? 1 : 0;
+  }
+  for (const maps::FleetEvent& e : scenario.fleet_events) fleet_events += e.time_s > duration_s ? 1 : 0;
+  if (risk_events > 0) dropped.push_back(fmt::format("{} risk event(s) of the profiles", risk_events));
+  if (fleet_events > 0) dropped.push_back(fmt::format("{} fleet event(s)", fleet_events));
+  if (dropped.empty()) return "";
+  return fmt::format("--duration = {}: left out, as they come after the mission's end: {}", duration_s, fmt::join(dropped, ", "));
+}
+
 maps::Scenario LoadWithOverrides(const ScenarioOverrides& o) {
   CheckOverrides(o);
   maps::Scenario scenario = maps::LoadScenario(o.scenario_path);
@@ -83,7 +104,14 @@ maps::Scenario LoadWithOverrides(const ScenarioOverrides& o) {
     }
   }
   if (o.assignment) scenario.fleet.assignment = maps::ParseFleetAssignment(*o.assignment, "--assignment");
-  if (o.duration_s) scenario = maps::WithDuration(scenario, *o.duration_s);
+  if (o.duration_s) {
+    // What starts after the shorter mission's end is left out; say so (a leak that silently went
+    // read as "none hidden" in the run's table).
+    if (const std::string left_out = LeftOutByDuration(scenario, *o.duration_s, o.random_leaks.has_value()); !left_out.empty()) {
+      spdlog::warn("{}", left_out);
+    }
+    scenario = maps::WithDuration(scenario, *o.duration_s);
+  }
   if (o.seed) scenario.seed = *o.seed;
   if (o.weight_exponent) scenario.ergodic.weight_exponent = scenario.astar.weight_exponent = *o.weight_exponent;
   if (o.start_jitter_m) scenario.start_jitter_m = *o.start_jitter_m;
@@ -104,6 +132,11 @@ maps::Scenario LoadWithOverrides(const ScenarioOverrides& o) {
   // them) and agent hosts given the same options meet the same leaks.
   if (o.leak_sites && !o.random_leaks) {
     throw maps::ScenarioError("--leak-sites = " + *o.leak_sites + ": says where --random-leaks N draws its leaks; give N");
+  }
+  if (o.random_leaks && *o.random_leaks > 0 && scenario.sensors.empty()) {
+    throw maps::ScenarioError(fmt::format("--random-leaks = {}: {} has no sensors: the vehicles could not see a leak (give "
+                                          "them a sensors: section, as scenarios/two_xt_leaks.yaml does)",
+                                          *o.random_leaks, o.scenario_path));
   }
   if (o.random_leaks) {
     const maps::LeakSites sites = maps::ParseLeakSites(o.leak_sites.value_or("valves"), "--leak-sites");

@@ -47,6 +47,11 @@ struct ScenarioOverrides {
   std::optional<std::string> steer;          // posterior | prior
 };
 
+/// What a mission of duration_s leaves out of `scenario` (its leaks, unless they are drawn anew
+/// for the shorter mission, its profiles' risk events and its fleet events after the end), as one
+/// line for the operator; empty if nothing.
+std::string LeftOutByDuration(const maps::Scenario& scenario, double duration_s, bool leaks_drawn_anew);
+
 /// Loads the scenario and applies the overrides; each bad value is a maps::ScenarioError naming
 /// the option, and the result passes the same validation as a file.
 maps::Scenario LoadWithOverrides(const ScenarioOverrides& o);

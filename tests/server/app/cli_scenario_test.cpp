@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <string>
+#include <vector>
 
 #include <gtest/gtest.h>
 
@@ -65,7 +66,11 @@ TEST(ScenarioOverrides, BadValuesNameTheOption) {
   };
   const Case cases[] = {
       {[](ScenarioOverrides& o) { o.vehicles = 0; }, "--vehicles = 0: must be >= 1"},
-      {[](ScenarioOverrides& o) { o.duration_s = -5.0; }, "--duration = -5: must be a finite number > 0"},
+      {[](ScenarioOverrides& o) { o.duration_s = -5.0; }, "--duration = -5: must be > 0 and <= 604800 s"},
+      // The option's name, not the file's (it had read "fleet_field.yaml: duration_s = 1e+09").
+      {[](ScenarioOverrides& o) { o.duration_s = 1e9; }, "--duration = 1000000000: must be > 0 and <= 604800 s"},
+      // Leaks no vehicle could see: refused as sage bench leaks refuses them.
+      {[](ScenarioOverrides& o) { o.random_leaks = 2; }, "--random-leaks = 2: " + kFleetField + " has no sensors"},
       {[](ScenarioOverrides& o) { o.basis_order = 65; }, "--basis-order = 65: must be in 1..64"},
       {[](ScenarioOverrides& o) { o.forgetting_time_s = 0.0; }, "--forgetting = 0: must be > 0"},
       {[](ScenarioOverrides& o) { o.min_turn_radius_m = -0.1; }, "--turn-radius = -0.1: must be a finite number >= 0"},
@@ -84,6 +89,28 @@ TEST(ScenarioOverrides, BadValuesNameTheOption) {
       EXPECT_NE(std::string(e.what()).find(c.expected), std::string::npos) << e.what();
     }
   }
+}
+
+// A shorter mission leaves out the leaks and events after its end, and says so: the run's table
+// had read "none hidden" for a leak --duration cut, without a word.
+TEST(ScenarioOverrides, AShorterMissionSaysWhatItLeavesOut) {
+  const maps::Scenario file = maps::LoadScenario(std::string(SAGE_SOURCE_DIR) + "/scenarios/two_xt_leaks.yaml");
+  ASSERT_EQ(file.leaks.size(), 1u);  // at P3 from 120 s; leak_injection's event at 150 s
+  EXPECT_EQ(LeftOutByDuration(file, 60.0, false),
+            "--duration = 60: left out, as they come after the mission's end: the leak at P3 from 120 s, 1 risk event(s) "
+            "of the profiles");
+  EXPECT_EQ(LeftOutByDuration(file, 130.0, false),
+            "--duration = 130: left out, as they come after the mission's end: 1 risk event(s) of the profiles");
+  EXPECT_EQ(LeftOutByDuration(file, 60.0, true),  // --random-leaks draws the shorter mission's own
+            "--duration = 60: left out, as they come after the mission's end: 1 risk event(s) of the profiles");
+  EXPECT_EQ(LeftOutByDuration(file, 200.0, false), "");
+  // fleet_field: a join at 200 s and a loss at 400 s.
+  EXPECT_EQ(LeftOutByDuration(maps::LoadScenario(kFleetField), 300.0, false),
+            "--duration = 300: left out, as they come after the mission's end: 1 fleet event(s)");
+  ScenarioOverrides o;
+  o.scenario_path = std::string(SAGE_SOURCE_DIR) + "/scenarios/two_xt_leaks.yaml";
+  o.duration_s = 60.0;
+  EXPECT_TRUE(LoadWithOverrides(o).leaks.empty());
 }
 
 // Regions or tours on a field of 1,000 valves or more want a vehicle per 100 valves: refused
