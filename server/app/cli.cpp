@@ -545,6 +545,11 @@ int RunCli(int argc, char** argv) {
       if (!launch_cmd.resume_dir.empty() && !launch_cmd.scenario.scenario_path.empty()) {
         throw maps::ScenarioError("--resume: resumes the run's own scenario; give no scenario file with it");
       }
+      if (const std::string given = FirstScenarioOverride(launch_cmd.scenario);
+          !launch_cmd.resume_dir.empty() && !given.empty()) {
+        throw maps::ScenarioError("--resume: resumes the run's own scenario with its own options; give no " + given +
+                                  " with it");
+      }
       if (!launch_cmd.resume_dir.empty() && (launch_cmd.insecure || !launch_cmd.security_dir.empty())) {
         throw maps::ScenarioError("--resume: the mission keeps its own security (mission.json security_dir); give no "
                                   "--security or --insecure with it");

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <fmt/format.h>
@@ -60,6 +61,31 @@ maps::NetworkSettings NetworkOverrides::Applied(maps::NetworkSettings network) c
     throw maps::ScenarioError(problem);
   }
   return network;
+}
+
+std::string FirstScenarioOverride(const ScenarioOverrides& o) {
+  const std::pair<const char*, bool> given[] = {
+      {"--profile", !o.profile.empty()},
+      {"--duration", o.duration_s.has_value()},
+      {"--seed", o.seed.has_value()},
+      {"--guard", o.guard.has_value()},
+      {"--forgetting", o.forgetting_time_s.has_value()},
+      {"--basis-order", o.basis_order.has_value()},
+      {"--turn-radius", o.min_turn_radius_m.has_value()},
+      {"--model", o.model.has_value()},
+      {"--vehicles", o.vehicles.has_value()},
+      {"--assignment", o.assignment.has_value()},
+      {"--start-jitter", o.start_jitter_m.has_value()},
+      {"--weight-exponent", o.weight_exponent.has_value()},
+      {"--age-weighting", o.age_weighting_laps.has_value()},
+      {"--risk-share", o.risk_share.has_value()},
+      {"--random-leaks", o.random_leaks.has_value()},
+      {"--leak-sites", o.leak_sites.has_value()},
+      {"--steer", o.steer.has_value()},
+  };
+  for (const auto& [name, is_given] : given)
+    if (is_given) return name;
+  return "";
 }
 
 std::string LeftOutByDuration(const maps::Scenario& scenario, double duration_s, bool leaks_drawn_anew) {

@@ -47,6 +47,11 @@ struct ScenarioOverrides {
   std::optional<std::string> steer;          // posterior | prior
 };
 
+/// The first option of `o` that changes the scenario (--profile, --duration, --seed, ... as the
+/// command line spells it), or empty if none: `sage launch --resume` flies the run's own scenario
+/// and refuses them rather than ignore them. The network options are not among them.
+std::string FirstScenarioOverride(const ScenarioOverrides& o);
+
 /// What a mission of duration_s leaves out of `scenario` (its leaks, unless they are drawn anew
 /// for the shorter mission, its profiles' risk events and its fleet events after the end), as one
 /// line for the operator; empty if nothing.

@@ -50,12 +50,13 @@ const std::atomic<bool>* StopOnSignals() {
 
 int StopSignal() { return g_stop_signal.load(); }
 
-std::optional<int> PortOption(const std::string& flag, const std::string& text) {
-  if (text == "off") return std::nullopt;
+std::optional<int> PortOption(const std::string& flag, const std::string& text, bool off_allowed) {
+  if (text == "off" && off_allowed) return std::nullopt;
   int port = -1;
   const auto [end, error] = std::from_chars(text.data(), text.data() + text.size(), port);
   if (error != std::errc() || end != text.data() + text.size() || port < 0 || port > 65535) {
-    throw maps::ScenarioError(fmt::format("{} = {}: must be a port in 0..65535 (0: any free one) or off", flag, text));
+    throw maps::ScenarioError(fmt::format("{} = {}: must be a port in 0..65535 (0: any free one){}", flag, text,
+                                          off_allowed ? " or off" : ""));
   }
   return port;
 }

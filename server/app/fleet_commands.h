@@ -15,9 +15,10 @@ const std::atomic<bool>* StopOnSignals();
 /// The signal that set the stop flag, or 0.
 int StopSignal();
 
-/// A port option as given: "off" (none), or a whole number 0..65535 (0: any free port). Throws
-/// maps::ScenarioError naming the flag ("--http = 80000: must be a port ...").
-std::optional<int> PortOption(const std::string& flag, const std::string& text);
+/// A port option as given: "off" (none; where off_allowed), or a whole number 0..65535 (0: any
+/// free port). Throws maps::ScenarioError naming the flag ("--http = 80000: must be a port ...")
+/// and offering off only where it is allowed.
+std::optional<int> PortOption(const std::string& flag, const std::string& text, bool off_allowed = true);
 /// A port that must be free on 127.0.0.1 now (a launch checks its --http and --foxglove before it
 /// starts anything). Throws maps::ScenarioError naming the flag if something listens there.
 void CheckPortFree(const std::string& flag, int port);

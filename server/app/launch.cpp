@@ -363,8 +363,11 @@ int Launch(const LaunchCommand& c) {
                        : std::string("launch: --insecure: plain DDS, no authentication or encryption: any local process "
                                      "can join domain ") + std::to_string(domain),
                /*warning=*/!secured);
-  terminal.Log(std::string("launch: in another shell: sage risk set P1 0.9 | sage vehicle add --count 2 | sage vehicle "
-                           "remove ID | ") +
+  // The example names a valve of this field (manifold_slope has no P1).
+  const std::vector<maps::Valve> valves = scenario.AllValves();
+  const std::string example_valve = valves.empty() ? std::string("VALVE") : valves.front().name;
+  terminal.Log("launch: in another shell: sage risk set " + example_valve + " 0.9 | sage vehicle add --count 2 | sage vehicle "
+               "remove ID | " +
                (c.point_latest ? std::string("sage stop (they find this mission through runs/latest)")
                                : fmt::format("sage stop, each with --mission {}", out_dir)));
   if (c.http != "off") {

@@ -16,8 +16,8 @@ namespace sage::server {
 
 int CmdView(const ViewCommand& c) {
   const std::atomic<bool>* stop = StopOnSignals();
-  const std::optional<int> port = PortOption("--http", c.http);
-  if (!port) throw maps::ScenarioError("--http = off: sage view is nothing but its page; give a port (0: any free one)");
+  if (c.http == "off") throw maps::ScenarioError("--http = off: sage view is nothing but its page; give a port (0: any free one)");
+  const std::optional<int> port = PortOption("--http", c.http, /*off_allowed=*/false);
   const auto started = std::chrono::steady_clock::now();
   RunRecord record = ReadRunRecord(c.run_dir);
   const double read_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();

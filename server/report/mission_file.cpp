@@ -53,11 +53,18 @@ void WriteRunFile(const std::string& dir, const std::string& name, const std::st
 }
 
 MissionFile ReadMissionFile(const std::string& dir) {
+  // Said of the directory as given: a file, a missing path or a run of sage run each read as
+  // "DIR/mission.json: cannot read" with a hint at an option the command may not have.
+  std::error_code error;
+  if (!fs::exists(dir, error)) throw maps::ScenarioError(dir + ": no such directory (a run directory of sage launch)");
+  if (!fs::is_directory(dir, error)) {
+    throw maps::ScenarioError(dir + ": a file, not a run directory (a run directory of sage launch holds mission.json)");
+  }
   const fs::path file = fs::path(dir) / "mission.json";
   std::ifstream in(file);
   if (!in) {
-    throw maps::ScenarioError(file.string() + ": cannot read: no mission there (start one with sage launch, or give "
-                              "--mission RUN_DIR)");
+    throw maps::ScenarioError(dir + ": no mission.json: not the run directory of a sage launch (sage run writes none; "
+                              "start a mission with sage launch)");
   }
   try {
     const nlohmann::json j = nlohmann::json::parse(in);

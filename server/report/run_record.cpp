@@ -124,6 +124,7 @@ void ReadMetrics(const std::string& dir, RunRecord& record) {
 }  // namespace
 
 RunRecord ReadRunRecord(const std::string& dir, std::size_t max_poses) {
+  if (!fs::exists(dir)) throw maps::ScenarioError(dir + ": no such directory (give a mission's run directory)");
   if (!fs::is_directory(dir)) throw maps::ScenarioError(dir + ": not a directory (give a mission's run directory)");
   RunRecord record;
   const std::string scenario_path = (fs::path(dir) / "scenario.yaml").string();

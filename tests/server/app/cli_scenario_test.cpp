@@ -1,12 +1,17 @@
 #include "server/app/cli_scenario.h"
 
 #include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include <gtest/gtest.h>
 
 #include "maps/scenario/field_generator.h"
+#include "server/app/fleet_commands.h"
+#include "server/report/mission_file.h"
 
 namespace sage::server {
 namespace {
@@ -140,6 +145,69 @@ TEST(CheckFleetFitsField, RefusesRegionsAndToursForAFleetFarSmallerThanItsField)
   s.fleet.assignment = maps::FleetAssignment::kRegions;
   EXPECT_NO_THROW(CheckFleetFitsField(s, true));
   EXPECT_NO_THROW(CheckFleetFitsField(maps::LoadScenario(kFleetField), true));  // 20 valves: planned at once
+}
+
+}  // namespace
+}  // namespace sage::server
+
+namespace sage::server {
+namespace {
+
+// `sage launch --resume` flies the run's own scenario: an override given with it is named and
+// refused (a resumed --duration 100 had run to the run's 60 s with exit 0); the network options
+// are this machine's and pass.
+TEST(ScenarioOverrides, ResumeNamesTheFirstOverrideGiven) {
+  ScenarioOverrides o;
+  EXPECT_EQ(FirstScenarioOverride(o), "");
+  o.network.interface_name = "lo";
+  o.network.peers = {"127.0.0.1"};
+  EXPECT_EQ(FirstScenarioOverride(o), "");
+  o.duration_s = 100.0;
+  EXPECT_EQ(FirstScenarioOverride(o), "--duration");
+  ScenarioOverrides p;
+  p.steer = "prior";
+  EXPECT_EQ(FirstScenarioOverride(p), "--steer");
+  p.profile = "graded";
+  EXPECT_EQ(FirstScenarioOverride(p), "--profile");
+}
+
+// Where a mission's directory is asked for, a wrong path says what it is, not
+// "PATH/mission.json: cannot read" with a hint at an option the command may not have.
+TEST(MissionFileDoor, SaysWhatTheGivenPathIs) {
+  const std::filesystem::path dir = std::filesystem::temp_directory_path() / "sage_mission_file_door";
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir);
+  const auto message = [](const std::string& path) {
+    try {
+      ReadMissionFile(path);
+    } catch (const maps::ScenarioError& e) {
+      return std::string(e.what());
+    }
+    return std::string("accepted");
+  };
+  EXPECT_EQ(message((dir / "nothing").string()), (dir / "nothing").string() + ": no such directory (a run directory of sage launch)");
+  std::ofstream((dir / "file.txt").string()) << "x";
+  EXPECT_NE(message((dir / "file.txt").string()).find("file.txt: a file, not a run directory"), std::string::npos);
+  EXPECT_NE(message(dir.string()).find(": no mission.json: not the run directory of a sage launch"), std::string::npos);
+  std::filesystem::remove_all(dir);
+}
+
+// A port option offers "off" only where it is allowed (sage view is nothing but its page).
+TEST(PortOption, OffersOffOnlyWhereAllowed) {
+  EXPECT_EQ(PortOption("--http", "off"), std::nullopt);
+  EXPECT_EQ(PortOption("--http", "8080"), 8080);
+  const auto message = [](const std::string& text, bool off_allowed) {
+    try {
+      PortOption("--http", text, off_allowed);
+    } catch (const maps::ScenarioError& e) {
+      return std::string(e.what());
+    }
+    return std::string("accepted");
+  };
+  EXPECT_EQ(message("abc", true), "--http = abc: must be a port in 0..65535 (0: any free one) or off");
+  EXPECT_EQ(message("abc", false), "--http = abc: must be a port in 0..65535 (0: any free one)");
+  EXPECT_EQ(message("off", false), "--http = off: must be a port in 0..65535 (0: any free one)");
+  EXPECT_EQ(message("65536", true), "--http = 65536: must be a port in 0..65535 (0: any free one) or off");
 }
 
 }  // namespace
