@@ -4,6 +4,7 @@
 // leaks found at the same times; the loop and the layer through a checkpoint; metrics.json's leaks.
 #include "server/perception/risk_loop.h"
 
+#include <algorithm>
 #include <cmath>
 #include <sstream>
 
@@ -220,6 +221,17 @@ TEST(RiskLoop, SameSeedSameFindingsAndCheckpointRoundTrip) {
   EXPECT_EQ(ma.leaks[0].detected_s, mb.leaks[0].detected_s);
   EXPECT_EQ(ma.leaks[0].confirmed_s, mb.leaks[0].confirmed_s);
   EXPECT_GT(a.core().risk_layer().nonzero_leaves(), 0);
+  // Visits to the leaking valve after its detection, as a rate only over 30 s or more (a
+  // detection just before the end read as hundreds of visits a minute): against a count of the
+  // valve's visit times.
+  const double found = ma.leaks[0].detected_s;
+  ASSERT_LE(found + 30.0, 200.0);
+  EXPECT_TRUE(std::isnan(a.core().Metrics(found + 29.9).leaks[0].visits_per_min_after_detection));
+  const MissionMetrics at30 = a.core().Metrics(found + 30.0);
+  const std::vector<double>& p3 = at30.valves[static_cast<std::size_t>(s.ValveIndex("P3"))].visit_times_s;
+  const double counted = static_cast<double>(
+      std::count_if(p3.begin(), p3.end(), [&](double t) { return t >= found && t <= found + 30.0; }));
+  EXPECT_NEAR(at30.leaks[0].visits_per_min_after_detection, 60.0 * counted / 30.0, 1e-9);
 
   const MissionCheckpoint c = DecodeCheckpoint(EncodeCheckpoint(a.core().Checkpoint()), "memory");
   EXPECT_FALSE(c.risk_layer_ot.empty());
