@@ -56,7 +56,7 @@ MissionFile ReadMissionFile(const std::string& dir) {
   // Said of the directory as given: a file, a missing path or a run of sage run each read as
   // "DIR/mission.json: cannot read" with a hint at an option the command may not have.
   std::error_code error;
-  if (!fs::exists(dir, error)) throw maps::ScenarioError(dir + ": no such directory (a run directory of sage launch)");
+  if (!fs::exists(dir, error)) throw maps::ScenarioError(dir + ": no such directory (a run directory of sage launch: start one with sage launch)");
   if (!fs::is_directory(dir, error)) {
     throw maps::ScenarioError(dir + ": a file, not a run directory (a run directory of sage launch holds mission.json)");
   }

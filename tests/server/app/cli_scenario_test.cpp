@@ -185,7 +185,7 @@ TEST(MissionFileDoor, SaysWhatTheGivenPathIs) {
     }
     return std::string("accepted");
   };
-  EXPECT_EQ(message((dir / "nothing").string()), (dir / "nothing").string() + ": no such directory (a run directory of sage launch)");
+  EXPECT_EQ(message((dir / "nothing").string()), (dir / "nothing").string() + ": no such directory (a run directory of sage launch: start one with sage launch)");
   std::ofstream((dir / "file.txt").string()) << "x";
   EXPECT_NE(message((dir / "file.txt").string()).find("file.txt: a file, not a run directory"), std::string::npos);
   EXPECT_NE(message(dir.string()).find(": no mission.json: not the run directory of a sage launch"), std::string::npos);
