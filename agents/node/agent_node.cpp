@@ -135,8 +135,10 @@ int RunAgentNode(const maps::Scenario& scenario, const AgentNodeOptions& options
   const std::int64_t first_cycle = scenario.CycleAt(options.start_at_s);
   const std::int64_t end_cycle =
       std::isfinite(options.end_at_s) ? scenario.CycleAt(options.end_at_s) : std::numeric_limits<std::int64_t>::max();
-  std::int64_t k = std::max(first_cycle,
-                            static_cast<std::int64_t>(std::ceil(clock.MissionTime(proto::NowRealtimeNs()) * rate)));
+  // Not before the server's own first cycle: a resumed server's clock starts a lead ahead, while
+  // the hosts it restarts come up.
+  std::int64_t k = std::max({first_cycle, door.clock_first_cycle(),
+                             static_cast<std::int64_t>(std::ceil(clock.MissionTime(proto::NowRealtimeNs()) * rate))});
   spdlog::info("agents: found the server on DDS domain {}; {} vehicle(s) joining the mission at t = {:.1f} s",
                options.domain_id, mission.vehicle_count(), static_cast<double>(k) / rate);
   const std::int64_t own_first_cycle = k;  // this host's first cycle: it steps it without the server's word
@@ -155,8 +157,11 @@ int RunAgentNode(const maps::Scenario& scenario, const AgentNodeOptions& options
     const std::uint64_t instance = clock.instance;
     if (take_status()) last_heard = std::chrono::steady_clock::now();
     if (door.finished()) break;
-    if (clock.instance != instance) {  // a new clock: this cycle's number is on it
-      k = static_cast<std::int64_t>(std::ceil(clock.MissionTime(proto::NowRealtimeNs()) * rate));
+    if (clock.instance != instance) {  // a new clock: this cycle's number is on it, from the server's first on
+      k = std::max(door.clock_first_cycle(),
+                   static_cast<std::int64_t>(std::ceil(clock.MissionTime(proto::NowRealtimeNs()) * rate)));
+      // A resumed server's first cycle may lie ahead (its start-up lead): wait for it, as at the start.
+      std::this_thread::sleep_until(clock.WallOf(static_cast<double>(k) / rate));
     }
     commands.TakeEach([&](const proto::FleetCommand& c, const dds_sample_info_t& info) {
       if (!info.valid_data) return;

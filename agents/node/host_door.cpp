@@ -31,6 +31,7 @@ bool HostDoor::TakeStatus(const proto::MissionStatus& s) {
       mission_.OnNewServer();
     }
     clock_ = {s.server_instance, s.start_ns, s.time_scale};
+    clock_first_cycle_ = static_cast<std::int64_t>(std::min<std::uint64_t>(s.cycle, INT64_MAX));
   }
   if (s.finished && !finished_) ended_at_cycle_ = s.cycle;
   finished_ = finished_ || s.finished;

@@ -46,6 +46,10 @@ class HostDoor {
   /// new instance that says the mission is over is refused. Returns false for a refused one.
   bool TakeStatus(const proto::MissionStatus& s);
   const MissionClock& clock() const { return clock_; }
+  /// The cycle of the first word this host took from the current server: for a server that
+  /// starts (or resumes) with its clock ahead of now, the cycle it begins at, which no host steps
+  /// before; for a server already running, about its current cycle.
+  std::int64_t clock_first_cycle() const { return clock_first_cycle_; }
   /// The server has said the mission is over.
   bool finished() const { return finished_; }
   /// The first cycle the server did not run, from its status that said the mission is over (its
@@ -111,6 +115,7 @@ class HostDoor {
   MissionClock clock_;
   bool finished_ = false;
   std::optional<std::uint64_t> ended_at_cycle_;
+  std::int64_t clock_first_cycle_ = 0;
   double duration_s_ = std::numeric_limits<double>::quiet_NaN();
   bool other_world_ = false;
   bool ended_elsewhere_ = false;

@@ -307,8 +307,9 @@ int RunCli(int argc, char** argv) {
                    "Continue the mission recorded in --out from its checkpoint (give the run's scenario.yaml)");
   server->add_option("--resumes", server_cmd.resumes, "How many times the mission was resumed before (for metrics.json)");
   server->add_option("--start-in", server_cmd.start_in_s,
-                     "Wall seconds from now to the mission's t = 0, so that agent hosts started with the server are "
-                     "all in from the first cycle (sage launch gives 1 s + 1 ms per vehicle); not for --resume")
+                     "Wall seconds from now to the mission's first cycle (t = 0, or a resumed mission's next), so "
+                     "that agent hosts started with the server are all in from it (sage launch gives 1 s + 1 ms per "
+                     "vehicle)")
       ->check(CLI::Range(0.0, 600.0))
       ->capture_default_str();
 

@@ -223,15 +223,28 @@ int Launch(const LaunchCommand& c) {
   std::vector<std::string> server_args = {"server", scenario_file, "--out", out_dir, "--time-scale",
                                           Number(mission.time_scale), "--quiet", "--launched"};
   if (!mission.profile.empty()) server_args.insert(server_args.end(), {"--profile", mission.profile});
+  // A resumed mission's vehicles whose hosts still fly (they step on without a server, and say so
+  // in their states) carry on; the others are restarted where the record last saw them. Asked
+  // before the server starts, so that their hosts start with it.
+  std::set<int> live;
   if (resume) {
+    proto::Reader<proto::VehicleState> states(participant, proto::VehicleStateReaderQos());
+    const auto until = std::chrono::steady_clock::now() + std::chrono::milliseconds(1500);
+    while (std::chrono::steady_clock::now() < until) {
+      states.WaitForData(std::chrono::milliseconds(100));
+      while (states.TakeEach([&](const proto::VehicleState& s, const dds_sample_info_t& info) {
+        if (info.valid_data && info.instance_state == DDS_ALIVE_INSTANCE_STATE) live.insert(static_cast<int>(s.vehicle_id));
+      }, 1024) == 1024) {
+      }
+    }
     server_args.insert(server_args.end(), {"--resume", "--resumes", std::to_string(mission.resumes)});
-  } else {
-    // The hosts start with the server; its clock starts far enough ahead that every host is in
-    // by t = 0 (each builds its Box2D world and finds the server over DDS meanwhile), so all of
-    // the fleet steps from cycle 0 as in sage run (1,000 vehicles had joined over two cycles).
-    const double lead_s = 1.0 + 0.001 * static_cast<double>(scenario.vehicles.size());
-    server_args.insert(server_args.end(), {"--start-in", Number(lead_s)});
   }
+  // The hosts start with the server; its clock starts far enough ahead that every host is in by
+  // its first cycle (each builds its Box2D world and finds the server over DDS meanwhile), so all
+  // of the fleet steps from it as in sage run (1,000 vehicles had joined over two cycles; a resumed
+  // mission's restarted vehicles had rejoined 2 s of wall time after its clock went on).
+  const double lead_s = 1.0 + 0.001 * static_cast<double>(scenario.vehicles.size());
+  server_args.insert(server_args.end(), {"--start-in", Number(lead_s)});
   // The live view: the server prints its addresses (with the mission's token).
   server_args.insert(server_args.end(), {"--http", c.http, "--foxglove", c.foxglove});
   server_args.insert(server_args.end(), {"--cycle-priority", std::to_string(c.cycle_priority)});
@@ -306,35 +319,6 @@ int Launch(const LaunchCommand& c) {
       });
     }
   } else {
-    // The resumed server's first status gives its clock; vehicles whose hosts still run carry
-    // on under it, the others are restarted where the record last saw them.
-    const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(30);
-    bool heard = false;
-    while (!heard && std::chrono::steady_clock::now() < deadline) {
-      status.WaitForData(std::chrono::milliseconds(200));
-      terminal.Relay();
-      status.TakeEach([&](const proto::MissionStatus& s, const dds_sample_info_t& info) {
-        if (info.valid_data) heard = true, resumed_at = s.mission_time_s;
-      });
-      int ws = 0;
-      if (waitpid(server, &ws, WNOHANG) == server) {
-        terminal.Relay(/*to_eof=*/true);
-        throw maps::ScenarioError(fmt::format("--resume = {}: the server {} before it resumed", out_dir, DescribeExit(ws)));
-      }
-    }
-    if (!heard) throw std::runtime_error("the resumed server did not start within 30 s");
-    std::set<int> live;
-    {
-      proto::Reader<proto::VehicleState> states(participant, proto::VehicleStateReaderQos());
-      const auto until = std::chrono::steady_clock::now() + std::chrono::milliseconds(1500);
-      while (std::chrono::steady_clock::now() < until) {
-        states.WaitForData(std::chrono::milliseconds(100));
-        while (states.TakeEach([&](const proto::VehicleState& s, const dds_sample_info_t& info) {
-          if (info.valid_data && info.instance_state == DDS_ALIVE_INSTANCE_STATE) live.insert(static_cast<int>(s.vehicle_id));
-        }, 1024) == 1024) {
-        }
-      }
-    }
     std::vector<std::pair<int, std::string>> restart;
     for (const ResumedVehicle& v : to_resume) {
       if (live.count(v.id)) continue;
@@ -349,6 +333,31 @@ int Launch(const LaunchCommand& c) {
       for (const auto& [id, name] : group) ids += (ids.empty() ? "" : ",") + std::to_string(id);
       return std::vector<std::string>{"agents", scenario_file, "--resume", out_dir, "--ids", ids};
     });
+    // The resumed server's first status gives its clock (and the mission time it goes on from).
+    // A server that fails first takes the hosts just started with it along (they would wait for it).
+    const auto stop_started_hosts = [&] {
+      for (const Host& h : hosts) kill(h.pid, SIGTERM);
+      for (const Host& h : hosts) waitpid(h.pid, nullptr, 0);
+    };
+    const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(30);
+    bool heard = false;
+    while (!heard && std::chrono::steady_clock::now() < deadline) {
+      status.WaitForData(std::chrono::milliseconds(200));
+      terminal.Relay();
+      status.TakeEach([&](const proto::MissionStatus& s, const dds_sample_info_t& info) {
+        if (info.valid_data) heard = true, resumed_at = s.mission_time_s;
+      });
+      int ws = 0;
+      if (waitpid(server, &ws, WNOHANG) == server) {
+        terminal.Relay(/*to_eof=*/true);
+        stop_started_hosts();
+        throw maps::ScenarioError(fmt::format("--resume = {}: the server {} before it resumed", out_dir, DescribeExit(ws)));
+      }
+    }
+    if (!heard) {
+      stop_started_hosts();
+      throw std::runtime_error("the resumed server did not start within 30 s");
+    }
     terminal.Log(fmt::format("launch: resumed mission '{}' at t = {:.1f} s: {} vehicle(s) carried on, {} restarted where "
                              "the record last saw them",
                              scenario.name, resumed_at, to_resume.size() - restart.size(), restart.size()));

@@ -217,10 +217,12 @@ int RunServerNode(const maps::Scenario& scenario, const ServerNodeOptions& optio
   const std::uint64_t instance = NewServerInstance();
   ServerDoor door(core, instance, scenario.control_rate_hz);
   const std::uint32_t order = static_cast<std::uint32_t>(scenario.ergodic.basis_order);
-  // The mission clock: cycle k is at mission time k / rate; a fresh mission's t = 0 is start_in_s
-  // from now, a resumed mission's clock is set so that its first cycle is now. Vehicles step at
-  // k / rate, the server half a period later, when their states of cycle k are in.
-  const double lead_s = first_cycle == 0 ? std::max(0.0, options.start_in_s) : 0.0;
+  // The mission clock: cycle k is at mission time k / rate; the first cycle (t = 0, or a resumed
+  // mission's next) is start_in_s from now, so that the hosts started with this server are all in
+  // by then (a resumed mission's restarted vehicles had rejoined 2 s of wall time late, a hole in
+  // the record). Vehicles step at k / rate, the server half a period later, when their states of
+  // cycle k are in.
+  const double lead_s = std::max(0.0, options.start_in_s);
   const long long start_ns =
       NowRealtimeNs() + static_cast<long long>(lead_s * 1e9) -
       static_cast<long long>(static_cast<double>(first_cycle) / rate / options.time_scale * 1e9);
@@ -333,7 +335,7 @@ int RunServerNode(const maps::Scenario& scenario, const ServerNodeOptions& optio
   // A resumed mission's vehicles must be heard from again: one whose host is gone (and was not
   // restarted) is lost once its hosts had time to start and discover this server.
   if (options.resume) {
-    const auto deadline = SteadyClock::now() + std::chrono::seconds(10);
+    const auto deadline = wall_start + std::chrono::seconds(10);  // ten seconds from the first cycle
     for (const int id : core.roster().alive()) suspect.emplace(id, deadline);
   }
   bool empty_warned = false;

@@ -137,6 +137,25 @@ TEST_F(HostDoorTest, KnowsTheCycleTheMissionEndedAt) {
   EXPECT_EQ(*door_.ended_at_cycle(), 299u);
 }
 
+// A server's first word names the cycle it begins at: a resumed server whose clock starts a lead
+// ahead (while the hosts it restarts come up) says its next cycle, and no host steps before it;
+// its later words do not move that mark, a new server's first word does.
+TEST_F(HostDoorTest, KnowsTheFirstCycleOfEachServersClock) {
+  EXPECT_EQ(door_.clock_first_cycle(), 0);
+  proto::MissionStatus resumed = Status(kServer);
+  resumed.cycle = 198;
+  ASSERT_TRUE(door_.TakeStatus(resumed));
+  EXPECT_EQ(door_.clock_first_cycle(), 198);
+  proto::MissionStatus later = Status(kServer);
+  later.cycle = 260;
+  ASSERT_TRUE(door_.TakeStatus(later));
+  EXPECT_EQ(door_.clock_first_cycle(), 198) << "the same server's later word";
+  proto::MissionStatus again = Status(kServer + 1);
+  again.cycle = 301;
+  ASSERT_TRUE(door_.TakeStatus(again));
+  EXPECT_EQ(door_.clock_first_cycle(), 301) << "a new server's first word";
+}
+
 TEST_F(HostDoorTest, RetiresOnlyItsOwnVehiclesOnItsServersOrder) {
   EXPECT_FALSE(door_.TakeCommand(Retire(kServer, 1))) << "an order before any server was followed";
   ASSERT_TRUE(door_.TakeStatus(Status(kServer)));
