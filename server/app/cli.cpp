@@ -5,12 +5,14 @@
 
 #include <algorithm>
 #include <charconv>
+#include <cmath>
 #include <cstdint>
 #include <iostream>
 #include <string>
 #include <system_error>
 
 #include <CLI/CLI.hpp>
+#include <fmt/format.h>
 #include <spdlog/spdlog.h>
 
 #include "server/app/bench_leaks.h"
@@ -53,6 +55,12 @@ std::string MustBeTimeScale(const std::string& text) {
   return "must be a number in 0.001..1000";
 }
 
+// A check of a number option's range, in the project's words (RangeProblem).
+CLI::Validator MustBeIn(double low, double high, bool whole = false) {
+  return CLI::Validator([=](std::string& text) { return RangeProblem(text, low, high, whole); },
+                        whole ? fmt::format("{}..{}", low, high) : fmt::format("[{}, {}]", low, high));
+}
+
 // CLI11 reads "-3" into an unsigned option as 2^64 - 3, and a number past 2^64 - 1 as 2^64 - 1; a
 // seed is a whole number as typed that fits in 64 bits, as the scenario's seed: must be.
 std::string MustBeWholeNumber(const std::string& text) {
@@ -81,15 +89,15 @@ void AddScenarioOverrides(CLI::App& cmd, ScenarioOverrides& o, OverrideSet set, 
     cmd.add_option("--weight-exponent", o.weight_exponent,
                    "Target shaping alpha: vehicles aim for visit rates by w^alpha (1 = by risk, the paper; 0.5 = the "
                    "square-root law, least expected time a leak goes unnoticed); sets ergodic and A* alike")
-        ->check(CLI::Range(0.0, 4.0));
+        ->check(MustBeIn(0.0, 4.0));
     cmd.add_option("--age-weighting", o.age_weighting_laps,
                    "Regions: a valve weighs w (1 + age / (L lap)) in its region's target, age the time since its last "
                    "visit (L laps of its region's tour; default: the scenario's, 1; 0 = the weights alone)")
-        ->check(CLI::Range(0.0, 100.0));
+        ->check(MustBeIn(0.0, 100.0));
     cmd.add_option("--risk-share", o.risk_share,
                    "Regions: the split balances lap x (1 + beta n W), W a region's share of the field's risk, so the "
                    "riskier valves come in smaller regions (default: the scenario's, 0.5; 0 = laps alone)")
-        ->check(CLI::Range(0.0, 10.0));
+        ->check(MustBeIn(0.0, 10.0));
     cmd.add_option("--guard", o.guard,
                    "No-starving-valve guard (weight floor + revisit bound): on|off (default: the scenario's; off "
                    "reproduces the paper)")
@@ -100,7 +108,7 @@ void AddScenarioOverrides(CLI::App& cmd, ScenarioOverrides& o, OverrideSet set, 
   cmd.add_option("--random-leaks", o.random_leaks,
                  "Hide N random leaks from the server, drawn from the seed (onsets uniform in [0.1, 0.9] of the "
                  "mission), replacing the scenario's leaks: the vehicles' sensors can see them, the server is not told")
-      ->check(CLI::Range(0, 1000));
+      ->check(MustBeIn(0, 1000, /*whole=*/true));
   cmd.add_option("--leak-sites", o.leak_sites,
                  "Where random leaks are: valves (by the default profile's risk), valves-even, seabed (open water "
                  "1 m from every valve), flowlines (along the scenario's flowlines, 1 m from every valve) or joints "
@@ -169,7 +177,7 @@ void AddCyclePriority(CLI::App& cmd, int& priority) {
                  "vehicles' physics and a browser on the same machine do not hold it up; the threads it starts run at "
                  "normal priority. Needs root or CAP_SYS_NICE (without, the server says so and runs at normal "
                  "priority); 0: none")
-      ->check(CLI::Range(0, 99))
+      ->check(MustBeIn(0, 99, /*whole=*/true))
       ->capture_default_str();
 }
 
@@ -218,6 +226,19 @@ bool ReportUnknownCommand(const CLI::App& app, int argc, char** argv, std::strin
 }
 
 }  // namespace
+
+std::string RangeProblem(const std::string& text, double low, double high, bool whole) {
+  double value = 0.0;
+  std::size_t used = 0;
+  try {
+    value = std::stod(text, &used);
+  } catch (const std::exception&) {
+    used = 0;
+  }
+  const bool number = used > 0 && used == text.size() && std::isfinite(value);
+  if (number && value >= low && value <= high && (!whole || value == std::floor(value))) return "";
+  return whole ? fmt::format("must be a whole number in {}..{}", low, high) : fmt::format("must be a number in [{}, {}]", low, high);
+}
 
 int RunCli(int argc, char** argv) {
   CLI::App app{
@@ -310,7 +331,7 @@ int RunCli(int argc, char** argv) {
                      "Wall seconds from now to the mission's first cycle (t = 0, or a resumed mission's next), so "
                      "that agent hosts started with the server are all in from it (sage launch gives 1 s + 1 ms per "
                      "vehicle)")
-      ->check(CLI::Range(0.0, 600.0))
+      ->check(MustBeIn(0.0, 600.0))
       ->capture_default_str();
 
   AddLiveView(*server, server_cmd.http, server_cmd.foxglove);
@@ -390,7 +411,7 @@ int RunCli(int argc, char** argv) {
   security_init->add_option("dir", security_cmd.dir, "Directory to create (must not exist, or be empty)")->required();
   security_init->add_option("--validity-days", security_cmd.validity_days,
                             "Days the certificates and permissions are valid, from an hour ago (1..3650)")
-      ->check(CLI::Range(1.0, 3650.0))
+      ->check(MustBeIn(1, 3650, /*whole=*/true))
       ->capture_default_str();
 
   maps::FieldOptions field_options;
@@ -471,7 +492,7 @@ int RunCli(int argc, char** argv) {
                    "Runs of each configuration, 1..10, made round by round (every configuration once, then again), so "
                    "that a shared machine's slow spells fall on all of them: the table shows each one's median run, "
                    "scale.json every run, and scale.md lists them all")
-      ->check(CLI::Range(1, 10))
+      ->check(MustBeIn(1, 10, /*whole=*/true))
       ->capture_default_str();
 
   BenchLeaksCommand leaks_cmd;
@@ -488,7 +509,7 @@ int RunCli(int argc, char** argv) {
   bench_leaks->add_option("--leaks", leaks_cmd.leaks, "Hidden leaks per run (onsets uniform in [0.1, 0.9] of the mission)")
       ->capture_default_str();
   bench_leaks
-      ->add_option("--sites", leaks_cmd.sites,
+      ->add_option("--sites,--leak-sites", leaks_cmd.sites,
                    "Where the leaks are: valves (by the default profile's risk), valves-even, seabed (open water 1 m "
                    "from every valve), flowlines (along the scenario's flowlines, 1 m from every valve) or joints (at "
                    "the flowlines' vertices, the same clearances)")

@@ -10,6 +10,7 @@
 #include <gtest/gtest.h>
 
 #include "maps/scenario/field_generator.h"
+#include "server/app/cli.h"
 #include "server/app/fleet_commands.h"
 #include "server/report/mission_file.h"
 
@@ -208,6 +209,31 @@ TEST(PortOption, OffersOffOnlyWhereAllowed) {
   EXPECT_EQ(message("abc", false), "--http = abc: must be a port in 0..65535 (0: any free one)");
   EXPECT_EQ(message("off", false), "--http = off: must be a port in 0..65535 (0: any free one)");
   EXPECT_EQ(message("65536", true), "--http = 65536: must be a port in 0..65535 (0: any free one) or off");
+}
+
+}  // namespace
+}  // namespace sage::server
+
+namespace sage::server {
+namespace {
+
+// A number option out of its range is told in the project's words (CLI11 had said "Value 5 not
+// in range 0.000000 to 4.000000"), and the command refuses it with status 2.
+TEST(RangeProblem, SaysWhatIsAllowed) {
+  EXPECT_EQ(RangeProblem("0.5", 0.0, 4.0, false), "");
+  EXPECT_EQ(RangeProblem("4", 0.0, 4.0, false), "");
+  EXPECT_EQ(RangeProblem("5", 0.0, 4.0, false), "must be a number in [0, 4]");
+  EXPECT_EQ(RangeProblem("-0.1", 0.0, 4.0, false), "must be a number in [0, 4]");
+  EXPECT_EQ(RangeProblem("nan", 0.0, 4.0, false), "must be a number in [0, 4]");
+  EXPECT_EQ(RangeProblem("2x", 0.0, 4.0, false), "must be a number in [0, 4]");
+  EXPECT_EQ(RangeProblem("", 0.0, 4.0, false), "must be a number in [0, 4]");
+  EXPECT_EQ(RangeProblem("1000", 0, 1000, true), "");
+  EXPECT_EQ(RangeProblem("1001", 0, 1000, true), "must be a whole number in 0..1000");
+  EXPECT_EQ(RangeProblem("2.5", 0, 1000, true), "must be a whole number in 0..1000");
+  std::string sage = "sage", run = "run", file = std::string(SAGE_SOURCE_DIR) + "/scenarios/two_xt.yaml",
+              flag = "--weight-exponent", value = "5";
+  char* argv[] = {sage.data(), run.data(), file.data(), flag.data(), value.data()};
+  EXPECT_EQ(RunCli(5, argv), 2);
 }
 
 }  // namespace
