@@ -138,6 +138,7 @@ Scenario WithVehicleCount(const Scenario& scenario, int count) {
       // A large fleet (scale runs): fill a lattice row by row from the bottom edge, 1.0 m apart,
       // or 0.8 m (still clear of a 0.73 m hull diagonal) if that is the only way to fit them.
       const std::size_t existing = taken.size();
+      std::size_t dense_room = 0;  // free lattice points at the dense spacing (all of them when too few)
       for (double spacing : {separation, dense_separation}) {
         std::vector<Eigen::Vector2d> lattice;
         for (double y = kStartEdgeMargin_m; y <= s.workspace.height_m - kStartEdgeMargin_m && lattice.size() < added;
@@ -153,14 +154,26 @@ Scenario WithVehicleCount(const Scenario& scenario, int count) {
             if (free) lattice.push_back(p);
           }
         }
+        if (spacing == dense_separation) dense_room = lattice.size();
         if (lattice.size() < added) continue;
         for (const Eigen::Vector2d& p : lattice) make_vehicle(p);
         break;
       }
       if (s.vehicles.size() < wanted) {
-        throw ScenarioError(option + ": the workspace has room for fewer vehicles (" +
-                            FormatNumber(dense_separation) + " m apart, " +
-                            FormatNumber(kStartFootprintMargin_m) + " m from structures)");
+        // At most what the lattice holds, and what the workspace's area holds (Validate's rule:
+        // an area per vehicle), joins included.
+        const auto area_of = [](const VehicleSpec& v) {
+          return v.model == MotionModel::kBlueRov2 ? kMinAreaPerBlueRov2_m2 : kMinAreaPerPointVehicle_m2;
+        };
+        double used_m2 = 0.0;
+        for (const VehicleSpec& v : s.vehicles) used_m2 += area_of(v);
+        for (const FleetEvent& e : s.fleet_events) used_m2 += e.kind == FleetEvent::Kind::kJoin ? area_of(e.vehicle) : 0.0;
+        const double free_m2 = s.workspace.width_m * s.workspace.height_m * (1.0 + 1e-12) - used_m2;
+        const std::size_t by_area = free_m2 > 0.0 ? static_cast<std::size_t>(std::floor(free_m2 / area_of(first))) : 0;
+        throw ScenarioError(option + ": the workspace has room for at most " +
+                            std::to_string(s.vehicles.size() + std::min(dense_room, by_area)) + " vehicles (starts " +
+                            FormatNumber(dense_separation) + " m apart and " + FormatNumber(kStartFootprintMargin_m) +
+                            " m from structures, " + FormatNumber(area_of(first)) + " m^2 of workspace each)");
       }
     }
     for (std::size_t k = 0; s.vehicles.size() < wanted; ++k) {

@@ -8,6 +8,7 @@
 #include <fstream>
 #include <map>
 #include <set>
+#include <regex>
 #include <string>
 #include <vector>
 
@@ -765,6 +766,24 @@ TEST(Scenario, WithVehicleCountPacksPointVehiclesCloser) {
       closest = std::min(closest, (s.vehicles[i].start_m - s.vehicles[j].start_m).norm());
   EXPECT_GE(closest, 0.2 - 1e-9);
   EXPECT_LT(closest, 1.0);
+}
+
+// A fleet too large for the workspace is refused with how many fit (it had said "room for fewer
+// vehicles" and left the user to guess): that many fit, one more does not.
+TEST(Scenario, WithVehicleCountSaysHowManyFit) {
+  const Scenario field = LoadScenario(kFleetFieldPath);
+  std::string message;
+  try {
+    WithVehicleCount(field, 100000);
+  } catch (const ScenarioError& e) {
+    message = e.what();
+  }
+  std::smatch most;
+  ASSERT_TRUE(std::regex_search(message, most, std::regex("room for at most ([0-9]+) vehicles"))) << message;
+  const std::size_t fit = std::stoul(most[1]);
+  ASSERT_GT(fit, field.vehicles.size());
+  EXPECT_EQ(WithVehicleCount(field, static_cast<int>(fit)).vehicles.size(), fit);
+  EXPECT_THROW(WithVehicleCount(field, static_cast<int>(fit) + 1), ScenarioError);
 }
 
 // A server and an agent host compare VehicleFingerprint before the host joins: it ignores what
