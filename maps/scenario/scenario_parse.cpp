@@ -14,7 +14,9 @@
 #include <initializer_list>
 #include <limits>
 #include <memory>
+#include <string>
 #include <string_view>
+#include <unordered_set>
 
 #include <yaml-cpp/yaml.h>
 
@@ -55,17 +57,17 @@ class Reader {
   // A map with unique plain keys, each in `allowed` (any key if `allowed` is empty).
   void ExpectMap(const YAML::Node& node, const std::string& path, Keys allowed) const {
     if (!node.IsMap()) Fail(path, node, "must be a map");
-    std::vector<std::string> seen;
+    // A hash set: a field's profile names every valve (35,000 on the largest generated field), and
+    // a scan of the keys seen so far for each made loading it quadratic (5 % of a 10,000-vehicle bench).
+    std::unordered_set<std::string> seen;
     for (const auto& entry : node) {
       if (!entry.first.IsScalar()) Fail(path, entry.first, "keys must be plain names");
       const std::string& key = entry.first.Scalar();
-      const std::string key_path = Join(path, key);
-      if (std::find(seen.begin(), seen.end(), key) != seen.end()) Fail(key_path, "duplicate key");
-      seen.push_back(key);
+      if (!seen.insert(key).second) Fail(Join(path, key), "duplicate key");
       if (allowed.size() != 0 && std::find(allowed.begin(), allowed.end(), key) == allowed.end()) {
         std::string list;
         for (std::string_view name : allowed) list += (list.empty() ? "" : ", ") + std::string(name);
-        Fail(key_path, "unknown key (allowed: " + list + ")");
+        Fail(Join(path, key), "unknown key (allowed: " + list + ")");
       }
     }
   }
