@@ -55,32 +55,6 @@ double FootprintGap(const Eigen::Vector2d& ca, const Eigen::Vector2d& sa, const 
   return ((ca - cb).cwiseAbs() - (sa + sb) / 2).cwiseMax(0.0).norm();
 }
 
-// Indices bucketed in square cells: Any() looks at the 3 x 3 cells around a point, so it sees
-// everything within one cell side of it at a cost that does not grow with the field.
-class Buckets {
- public:
-  explicit Buckets(double cell_m) : cell_m_(cell_m) {}
-  void Add(const Eigen::Vector2d& p, int index) { cells_[Key(p, 0, 0)].push_back(index); }
-  template <typename Conflict>
-  bool Any(const Eigen::Vector2d& p, const Conflict& conflict) const {
-    for (int i = -1; i <= 1; ++i) {
-      for (int j = -1; j <= 1; ++j) {
-        const auto it = cells_.find(Key(p, i, j));
-        if (it != cells_.end() && std::any_of(it->second.begin(), it->second.end(), conflict)) return true;
-      }
-    }
-    return false;
-  }
-
- private:
-  std::int64_t Key(const Eigen::Vector2d& p, int i, int j) const {
-    return (static_cast<std::int64_t>(std::floor(p.x() / cell_m_)) + i) * (std::int64_t{1} << 32) +
-           static_cast<std::int64_t>(std::floor(p.y() / cell_m_)) + j;
-  }
-  double cell_m_;
-  std::unordered_map<std::int64_t, std::vector<int>> cells_;
-};
-
 // A valve's place on its XT. Faces 0-3 are south, east, north and west: face f looks along
 // axis 1 - f % 2, towards + for east and north.
 struct ValveSlot {
@@ -203,7 +177,7 @@ bool PlaceClusters(Rng& rng, std::vector<ClusterPlan>& clusters, const Workspace
   for (ClusterPlan& c : clusters) order.push_back(&c);
   std::stable_sort(order.begin(), order.end(), [](auto* a, auto* b) { return a->envelope_m > b->envelope_m; });
   for (int round = 0; round < kPlacementRounds; ++round) {
-    Buckets placed(2 * order.front()->envelope_m + kFieldClusterGap_m);
+    detail::Buckets placed(2 * order.front()->envelope_m + kFieldClusterGap_m);
     bool all = true;
     for (std::size_t k = 0; k < order.size() && all; ++k) {
       ClusterPlan& c = *order[k];
@@ -323,7 +297,7 @@ void AddProfiles(Rng& rng, Scenario& s) {
 // footprints, valves and other starts.
 std::vector<VehicleSpec> PlaceVehicles(Rng& rng, const Scenario& s, int count) {
   const double width = s.workspace.width_m, height = s.workspace.height_m;
-  Buckets xts(2.5), points(2.5);  // >= a query's reach: 1 m + a 1.5 m footprint's half diagonal
+  detail::Buckets xts(2.5), points(2.5);  // >= a query's reach: 1 m + a 1.5 m footprint's half diagonal
   std::vector<std::pair<Eigen::Vector2d, double>> kept;  // valves and starts, and how far to keep
   const auto keep = [&](const Eigen::Vector2d& p, double distance) {
     points.Add(p, static_cast<int>(kept.size()));

@@ -4,7 +4,10 @@
 #include <algorithm>
 #include <charconv>
 #include <cmath>
+#include <cstdint>
 #include <string>
+#include <unordered_map>
+#include <vector>
 
 #include <Eigen/Core>
 
@@ -62,5 +65,32 @@ void ResolveSeabedMap(SeabedSettings& seabed, const std::string& source);
 // The rules on sensors, leaks and fusion (scenario_perception.cpp); Scenario::Validate calls it
 // last. `file` starts each message.
 void ValidatePerception(const Scenario& scenario, const std::string& file);
+
+// Indices bucketed in square cells (the field generator's spacing checks, the added vehicles'
+// start lattice): Any() looks at the 3 x 3 cells around a point, so it sees everything within
+// one cell side of it at a cost that does not grow with the field.
+class Buckets {
+ public:
+  explicit Buckets(double cell_m) : cell_m_(cell_m) {}
+  void Add(const Eigen::Vector2d& p, int index) { cells_[Key(p, 0, 0)].push_back(index); }
+  template <typename Conflict>
+  bool Any(const Eigen::Vector2d& p, const Conflict& conflict) const {
+    for (int i = -1; i <= 1; ++i) {
+      for (int j = -1; j <= 1; ++j) {
+        const auto it = cells_.find(Key(p, i, j));
+        if (it != cells_.end() && std::any_of(it->second.begin(), it->second.end(), conflict)) return true;
+      }
+    }
+    return false;
+  }
+
+ private:
+  std::int64_t Key(const Eigen::Vector2d& p, int i, int j) const {
+    return (static_cast<std::int64_t>(std::floor(p.x() / cell_m_)) + i) * (std::int64_t{1} << 32) +
+           static_cast<std::int64_t>(std::floor(p.y() / cell_m_)) + j;
+  }
+  double cell_m_;
+  std::unordered_map<std::int64_t, std::vector<int>> cells_;
+};
 
 }  // namespace sage::maps::detail

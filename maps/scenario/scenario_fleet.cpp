@@ -139,18 +139,30 @@ Scenario WithVehicleCount(const Scenario& scenario, int count) {
       // or 0.8 m (still clear of a 0.73 m hull diagonal) if that is the only way to fit them.
       const std::size_t existing = taken.size();
       std::size_t dense_room = 0;  // free lattice points at the dense spacing (all of them when too few)
+      // Each lattice point is checked against the structures and the starts near it, not all of
+      // them: the 10,000-XT field's 1.25 million points against 10,000 of each had taken 187 s to
+      // refuse 99,999 vehicles. The same points are free as with every one checked.
+      double reach_m = separation;
+      for (const ChristmasTree& tree : s.structures) {
+        reach_m = std::max(reach_m, (tree.size_m / 2 + Eigen::Vector2d::Constant(kStartFootprintMargin_m)).norm());
+      }
+      detail::Buckets near_structures(reach_m), near_starts(separation);  // separation >= either spacing
+      for (std::size_t i = 0; i < s.structures.size(); ++i) near_structures.Add(s.structures[i].center_m, static_cast<int>(i));
+      for (std::size_t i = 0; i < existing; ++i) near_starts.Add(taken[i], static_cast<int>(i));
       for (double spacing : {separation, dense_separation}) {
         std::vector<Eigen::Vector2d> lattice;
         for (double y = kStartEdgeMargin_m; y <= s.workspace.height_m - kStartEdgeMargin_m && lattice.size() < added;
              y += spacing) {
           for (double x = kStartEdgeMargin_m; x <= width - kStartEdgeMargin_m && lattice.size() < added; x += spacing) {
             const Eigen::Vector2d p(x, y);
-            bool free = true;
-            for (const ChristmasTree& tree : s.structures) {
+            const bool on_structure = near_structures.Any(p, [&](int i) {
+              const ChristmasTree& tree = s.structures[static_cast<std::size_t>(i)];
               const Eigen::Vector2d half = tree.size_m / 2 + Eigen::Vector2d::Constant(kStartFootprintMargin_m);
-              if (((p - tree.center_m).cwiseAbs() - half).maxCoeff() < 0.0) free = false;
-            }
-            for (std::size_t i = 0; i < existing && free; ++i) free = (p - taken[i]).norm() >= spacing;
+              return ((p - tree.center_m).cwiseAbs() - half).maxCoeff() < 0.0;
+            });
+            const bool free = !on_structure && !near_starts.Any(p, [&](int i) {
+              return (p - taken[static_cast<std::size_t>(i)]).norm() < spacing;
+            });
             if (free) lattice.push_back(p);
           }
         }
