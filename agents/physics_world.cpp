@@ -40,9 +40,9 @@ double Drag(double linear, double quadratic, double x) { return (linear + quadra
 
 }  // namespace
 
-// A cache line or more each: the vehicles are dealt over the shards in turn (id mod shards), so
-// neighbouring records belong to shards stepped on different threads at once, and a record
-// sharing a line with another shard's was written by two cores every substep (the thrust).
+// A cache line or more each: records next to each other may belong to bands stepped on different
+// threads at once, and a record sharing a line with another band's was written by two cores
+// every substep (the thrust).
 struct alignas(64) PhysicsWorld::Vehicle {
   VehicleId id = -1;
   maps::MotionModel model = maps::MotionModel::kBlueRov2;
@@ -58,12 +58,23 @@ struct alignas(64) PhysicsWorld::Vehicle {
   Eigen::Vector3d thrust = Eigen::Vector3d::Zero();  // last applied: surge N, sway N, yaw N m
 };
 
-PhysicsWorld::PhysicsWorld(const maps::Workspace& /*workspace*/,
+PhysicsWorld::PhysicsWorld(const maps::Workspace& workspace,
                            const std::vector<maps::ChristmasTree>& structures, BlueRov2Params rov_params, int shards,
                            const std::vector<maps::CellRectangle>& terrain)
     : rov_params_(rov_params) {
   if (shards < 1) throw std::invalid_argument("PhysicsWorld: shards = " + std::to_string(shards) + ": must be >= 1");
+  if (shards > 1 && !(workspace.height_m > 0.0)) {
+    throw std::invalid_argument("PhysicsWorld: bands of a workspace need a positive height");
+  }
+  band_height_m_ = shards > 1 ? workspace.height_m / shards : 0.0;
+  constexpr double kInf = std::numeric_limits<double>::infinity();
   for (int k = 0; k < shards; ++k) {
+    // What this band's world holds: every static box reaching within kBandMargin_m of the band
+    // (the first and last bands reach on past the workspace). A vehicle is in a world while it is
+    // within kBandHysteresis_m of its band, so whatever its hull can touch is there.
+    const double lo = k == 0 ? -kInf : k * band_height_m_ - kBandMargin_m;
+    const double hi = k == shards - 1 ? kInf : (k + 1) * band_height_m_ + kBandMargin_m;
+    const auto near = [&](double y_min, double y_max) { return y_max >= lo && y_min <= hi; };
     auto world = std::make_unique<b2World>(b2Vec2(0.0f, 0.0f));
     // The workspace box has no walls: vehicles may leave it and the metrics count that.
     // Forces are re-applied every step, so nothing may fall asleep between commands.
@@ -72,38 +83,48 @@ PhysicsWorld::PhysicsWorld(const maps::Workspace& /*workspace*/,
     // 0.46 m hull and metre-wide structures, so nothing can tunnel, and Box2D's time-of-impact
     // pass over every vehicle was a fifth of the physics at 10,000 vehicles.
     world->SetContinuousPhysics(false);
-    // Every shard holds every structure: a vehicle meets the seabed's XTs whichever it is in.
     // One static body, a box fixture per XT: Box2D walks its list of bodies several times a
     // step (islands, forces, fixture sync), and 10,000 XTs as bodies of their own were 10,000
     // visits each time in every shard.
-    if (!structures.empty()) {
-      b2BodyDef def;
-      def.type = b2_staticBody;
-      b2Body* body = world->CreateBody(&def);
-      for (const maps::ChristmasTree& tree : structures) {
-        b2PolygonShape box;
-        box.SetAsBox(static_cast<float>(0.5 * tree.size_m.x()), static_cast<float>(0.5 * tree.size_m.y()),
-                     b2Vec2(static_cast<float>(tree.center_m.x()), static_cast<float>(tree.center_m.y())), 0.0f);
-        body->CreateFixture(&box, 0.0f);
+    b2Body* xts = nullptr;
+    for (const maps::ChristmasTree& tree : structures) {
+      if (!near(tree.center_m.y() - 0.5 * tree.size_m.y(), tree.center_m.y() + 0.5 * tree.size_m.y())) continue;
+      if (xts == nullptr) {
+        b2BodyDef def;
+        def.type = b2_staticBody;
+        xts = world->CreateBody(&def);
       }
+      b2PolygonShape box;
+      box.SetAsBox(static_cast<float>(0.5 * tree.size_m.x()), static_cast<float>(0.5 * tree.size_m.y()),
+                   b2Vec2(static_cast<float>(tree.center_m.x()), static_cast<float>(tree.center_m.y())), 0.0f);
+      xts->CreateFixture(&box, 0.0f);
     }
     // The blocked seabed: one static body, a box fixture per rectangle of blocked cells (a
     // vehicle glances off the rock as off a structure).
-    if (!terrain.empty()) {
-      b2BodyDef def;
-      def.type = b2_staticBody;
-      b2Body* body = world->CreateBody(&def);
-      for (const maps::CellRectangle& block : terrain) {
-        const Eigen::Vector2d center = (block.min_m + block.max_m) / 2, half = (block.max_m - block.min_m) / 2;
-        b2PolygonShape box;
-        box.SetAsBox(static_cast<float>(half.x()), static_cast<float>(half.y()),
-                     b2Vec2(static_cast<float>(center.x()), static_cast<float>(center.y())), 0.0f);
-        body->CreateFixture(&box, 0.0f);
+    b2Body* rock = nullptr;
+    for (const maps::CellRectangle& block : terrain) {
+      if (!near(block.min_m.y(), block.max_m.y())) continue;
+      if (rock == nullptr) {
+        b2BodyDef def;
+        def.type = b2_staticBody;
+        rock = world->CreateBody(&def);
       }
+      const Eigen::Vector2d center = (block.min_m + block.max_m) / 2, half = (block.max_m - block.min_m) / 2;
+      b2PolygonShape box;
+      box.SetAsBox(static_cast<float>(half.x()), static_cast<float>(half.y()),
+                   b2Vec2(static_cast<float>(center.x()), static_cast<float>(center.y())), 0.0f);
+      rock->CreateFixture(&box, 0.0f);
     }
     worlds_.push_back(std::move(world));
   }
   shard_members_.resize(worlds_.size());
+  leaving_.resize(worlds_.size());
+}
+
+int PhysicsWorld::BandAt(double y_m) const {
+  if (worlds_.size() == 1 || !std::isfinite(y_m)) return 0;
+  const double band = std::floor(y_m / band_height_m_);
+  return static_cast<int>(std::clamp(band, 0.0, static_cast<double>(worlds_.size() - 1)));
 }
 
 void PhysicsWorld::IndexShards() {
@@ -121,53 +142,95 @@ VehicleId PhysicsWorld::AddVehicle(const maps::VehicleSpec& spec) {
   vehicle.model = spec.model;
   vehicle.position_m = spec.start_m;
   vehicle.heading_rad = WrapAngle(spec.start_heading_rad);
-  vehicle.shard = static_cast<int>(vehicle.id % static_cast<VehicleId>(worlds_.size()));
-  b2World& world = *worlds_[static_cast<std::size_t>(vehicle.shard)];
-
+  vehicle.shard = BandAt(spec.start_m.y());
   b2BodyDef def;
   def.position.Set(static_cast<float>(spec.start_m.x()), static_cast<float>(spec.start_m.y()));
   def.angle = static_cast<float>(vehicle.heading_rad);
-  def.linearDamping = 0.0f;  // all damping is the explicit drag law
-  def.angularDamping = 0.0f;
-  if (spec.model == maps::MotionModel::kSingleIntegrator) {
-    // Kinematic and without a fixture: the paper's point model passes through structures and
-    // vehicles and pushes nothing.
-    def.type = b2_kinematicBody;
-    vehicle.body = world.CreateBody(&def);
-  } else {
-    def.type = b2_dynamicBody;
-    vehicle.body = world.CreateBody(&def);
-    const BlueRov2Params& p = rov_params_;
-    // Box2D mass is isotropic, so surge and sway added mass are averaged:
-    //   m_eff = m + (X_udot + Y_vdot) / 2   (20.24 kg for the Heavy; 19.86 / 20.62 per axis).
-    const double mass_eff = p.mass_kg + 0.5 * (p.added_mass_surge_kg + p.added_mass_sway_kg);
-    const double inertia_eff = p.yaw_inertia_kgm2 + p.added_inertia_yaw_kgm2;
-    b2PolygonShape hull;  // length along body x (surge), width along body y (sway)
-    hull.SetAsBox(static_cast<float>(0.5 * p.length_m), static_cast<float>(0.5 * p.width_m));
-    b2FixtureDef fixture;
-    fixture.shape = &hull;
-    fixture.density = static_cast<float>(mass_eff / (p.length_m * p.width_m));
-    fixture.friction = kHullFriction;
-    fixture.restitution = 0.0f;
-    // Default filter (category 1, mask all): collides with structures and other BlueROV2s.
-    vehicle.body->CreateFixture(&fixture);
-    // The hull's uniform-density inertia is not the vehicle's: override it with Izz + N_rdot.
-    b2MassData mass_data;
-    mass_data.mass = static_cast<float>(mass_eff);
-    mass_data.center.SetZero();
-    mass_data.I = static_cast<float>(inertia_eff);
-    vehicle.body->SetMassData(&mass_data);
-  }
+  vehicle.body = CreateVehicleBody(vehicle.shard, spec.model, def);
   vehicles_.push_back(vehicle);  // ids increase, so vehicles_ stays sorted by id
   shard_members_[static_cast<std::size_t>(vehicle.shard)].push_back(vehicles_.size() - 1);
   return vehicle.id;
 }
+
+b2Body* PhysicsWorld::CreateVehicleBody(int shard, maps::MotionModel model, b2BodyDef def) {
+  b2World& world = *worlds_[static_cast<std::size_t>(shard)];
+  def.linearDamping = 0.0f;  // all damping is the explicit drag law
+  def.angularDamping = 0.0f;
+  if (model == maps::MotionModel::kSingleIntegrator) {
+    // Kinematic and without a fixture: the paper's point model passes through structures and
+    // vehicles and pushes nothing.
+    def.type = b2_kinematicBody;
+    return world.CreateBody(&def);
+  }
+  def.type = b2_dynamicBody;
+  b2Body* body = world.CreateBody(&def);
+  const BlueRov2Params& p = rov_params_;
+  // Box2D mass is isotropic, so surge and sway added mass are averaged:
+  //   m_eff = m + (X_udot + Y_vdot) / 2   (20.24 kg for the Heavy; 19.86 / 20.62 per axis).
+  const double mass_eff = p.mass_kg + 0.5 * (p.added_mass_surge_kg + p.added_mass_sway_kg);
+  const double inertia_eff = p.yaw_inertia_kgm2 + p.added_inertia_yaw_kgm2;
+  b2PolygonShape hull;  // length along body x (surge), width along body y (sway)
+  hull.SetAsBox(static_cast<float>(0.5 * p.length_m), static_cast<float>(0.5 * p.width_m));
+  b2FixtureDef fixture;
+  fixture.shape = &hull;
+  fixture.density = static_cast<float>(mass_eff / (p.length_m * p.width_m));
+  fixture.friction = kHullFriction;
+  fixture.restitution = 0.0f;
+  // Default filter (category 1, mask all): collides with structures and other BlueROV2s.
+  body->CreateFixture(&fixture);
+  // The hull's uniform-density inertia is not the vehicle's: override it with Izz + N_rdot.
+  b2MassData mass_data;
+  mass_data.mass = static_cast<float>(mass_eff);
+  mass_data.center.SetZero();
+  mass_data.I = static_cast<float>(inertia_eff);
+  body->SetMassData(&mass_data);
+  return body;
+}
+
+bool PhysicsWorld::OutOfBand(const Vehicle& vehicle) const {
+  const double y = vehicle.body->GetPosition().y;
+  const double lo = vehicle.shard * band_height_m_ - kBandHysteresis_m;
+  const double hi = (vehicle.shard + 1) * band_height_m_ + kBandHysteresis_m;
+  return BandAt(y) != vehicle.shard && !(y >= lo && y <= hi);
+}
+
+int PhysicsWorld::Rebalance() {
+  if (worlds_.size() == 1) return 0;
+  // The vehicles each shard's last step found out of their band (its body was in cache then),
+  // taken in id order.
+  std::vector<std::size_t> leaving;
+  for (std::vector<std::size_t>& found : leaving_) {
+    leaving.insert(leaving.end(), found.begin(), found.end());
+    found.clear();
+  }
+  std::sort(leaving.begin(), leaving.end());
+  int moved = 0;
+  for (const std::size_t i : leaving) {
+    Vehicle& vehicle = vehicles_[i];
+    if (!OutOfBand(vehicle)) continue;
+    // The same body in the other world: pose and velocities carry over exactly (Box2D's floats).
+    b2BodyDef def;
+    def.position = vehicle.body->GetPosition();
+    def.angle = vehicle.body->GetAngle();
+    def.linearVelocity = vehicle.body->GetLinearVelocity();
+    def.angularVelocity = vehicle.body->GetAngularVelocity();
+    worlds_[static_cast<std::size_t>(vehicle.shard)]->DestroyBody(vehicle.body);
+    vehicle.shard = BandAt(def.position.y);
+    vehicle.body = CreateVehicleBody(vehicle.shard, vehicle.model, def);
+    ++moved;
+  }
+  if (moved > 0) IndexShards();
+  return moved;
+}
+
+int PhysicsWorld::ShardOf(VehicleId id) const { return Find(id).shard; }
 
 void PhysicsWorld::RemoveVehicle(VehicleId id) {
   Vehicle& vehicle = Find(id);
   worlds_[static_cast<std::size_t>(vehicle.shard)]->DestroyBody(vehicle.body);
   vehicles_.erase(vehicles_.begin() + (&vehicle - vehicles_.data()));
   IndexShards();  // the records after it moved down one
+  for (std::vector<std::size_t>& found : leaving_) found.clear();  // indices of before: found again next step
 }
 
 bool PhysicsWorld::Contains(VehicleId id) const {
@@ -292,6 +355,12 @@ void PhysicsWorld::StepShard(int shard, double dt_s, int steps) {
           b2Vec2(static_cast<float>(vehicle.position_m.x()), static_cast<float>(vehicle.position_m.y())),
           static_cast<float>(vehicle.heading_rad));
     }
+  }
+  if (worlds_.size() > 1) {
+    std::vector<std::size_t>& leaving = leaving_[static_cast<std::size_t>(shard)];
+    leaving.clear();
+    for (const std::size_t i : members)
+      if (OutOfBand(vehicles_[i])) leaving.push_back(i);
   }
 }
 

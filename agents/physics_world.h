@@ -18,6 +18,7 @@
 
 class b2World;
 class b2Body;
+struct b2BodyDef;
 
 namespace sage::agents {
 
@@ -45,12 +46,19 @@ struct BlueRov2Params {
 
 class PhysicsWorld {
  public:
-  /// shards (>= 1): how many Box2D worlds the vehicles are dealt over, vehicle id mod shards, each
-  /// holding every structure. Vehicles of one shard collide with each other; vehicles of
-  /// different shards pass through each other (guidance keeps them apart, as it keeps apart the
-  /// vehicles of different agent hosts), so the shards can be stepped on different threads.
+  /// shards (>= 1): how many Box2D worlds the vehicles are dealt over. The shards are bands of
+  /// the workspace across y (the first and last reaching on past its edges), each holding the
+  /// structures and terrain within kBandMargin_m of it; a vehicle is in the band it is over, and
+  /// Rebalance() moves one that has flown more than kBandHysteresis_m out of its band into the
+  /// band it is over now. Vehicles of one band collide with each other; a vehicle in a band
+  /// and one kept in the next by the hysteresis pass through each other (guidance keeps them
+  /// apart, as it keeps apart the vehicles of different agent hosts). A band is a small world
+  /// whose few hundred vehicles stay in a core's cache through the substeps of a cycle, and the
+  /// bands can be stepped on different threads.
   /// `terrain`: the seabed's obstacles that are not structures (maps::World::terrain_blocks()),
-  /// one static box fixture each, in every shard.
+  /// one static box fixture each.
+  static constexpr double kBandHysteresis_m = 1.0;
+  static constexpr double kBandMargin_m = 2.5;
   PhysicsWorld(const maps::Workspace& workspace, const std::vector<maps::ChristmasTree>& structures,
                BlueRov2Params rov_params = {}, int shards = 1, const std::vector<maps::CellRectangle>& terrain = {});
   ~PhysicsWorld();
@@ -76,6 +84,13 @@ class PhysicsWorld {
   /// dt_s. Shards share nothing but the (read-only) parameters: different shards may be stepped
   /// on different threads at once, and the result is the same as stepping them one by one.
   void StepShard(int shard, double dt_s, int steps);
+  /// Moves every vehicle more than kBandHysteresis_m outside its band at the end of its shard's
+  /// last StepShard into the band it is over, with its pose and velocities (its contacts are made
+  /// again in the new world); in id order, so a seed gives the same mission. Returns how many
+  /// moved. Call between steps, on one thread.
+  int Rebalance();
+  /// The band (shard) a vehicle is in.
+  int ShardOf(VehicleId id) const;
   VehicleState State(VehicleId id) const;
   /// Asks for what State(id) reads (the vehicle's Box2D body) to be brought into cache
   /// (maps/prefetch.h); changes nothing. An unknown id is ignored.
@@ -92,13 +107,22 @@ class PhysicsWorld {
   const Vehicle& Find(VehicleId id) const;
   const Vehicle* Lookup(VehicleId id) const;  // nullptr if there is no such vehicle
   void ApplyBlueRov2Forces(Vehicle& vehicle);
+  // The band over y (0 when there is one world), and a vehicle's body in a shard's world: `def`
+  // with the model's type, and a BlueROV2's hull and mass.
+  int BandAt(double y_m) const;
+  bool OutOfBand(const Vehicle& vehicle) const;
+  b2Body* CreateVehicleBody(int shard, maps::MotionModel model, b2BodyDef def);
 
   BlueRov2Params rov_params_;
   std::vector<std::unique_ptr<b2World>> worlds_;  // the shards
+  double band_height_m_ = 0.0;  // shards > 1: the workspace's height / shards
   std::vector<Vehicle> vehicles_;  // sorted by id
   // Each shard's vehicles, as indices into vehicles_ in id order: a shard's step walks its own,
   // not every vehicle of the host (rebuilt when a vehicle is added or removed).
   std::vector<std::vector<std::size_t>> shard_members_;
+  // Each shard's vehicles its last step left out of their band (indices into vehicles_), for
+  // Rebalance: written by the thread stepping the shard, read between steps.
+  std::vector<std::vector<std::size_t>> leaving_;
   VehicleId next_id_ = 0;
 
   void IndexShards();

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <limits>
 #include <numbers>
+#include <set>
 #include <stdexcept>
 #include <thread>
 #include <vector>
@@ -222,33 +223,93 @@ TEST(PhysicsWorld, BlueRov2sDoNotOverlap) {
   EXPECT_GT(worst, -0.05);  // they did meet
 }
 
-// Shards: vehicle ids dealt over the Box2D worlds (id mod shards). Driven head on, two
-// BlueROV2s of one shard (ids 0 and 2 of two) meet and stay a hull apart (> 0.4 m between
-// centres); two of different shards (ids 0 and 1) pass through each other (< 0.1 m), and each
-// then stops at the XT ahead of it (0.05 m), which every shard holds.
-TEST(PhysicsWorld, ShardsCollideWithinAndPassThroughAcross) {
+// Shards are bands of the workspace across y (here 20 m high, two bands of 10 m). Driven head
+// on, two BlueROV2s in one band meet and stay a hull apart (> 0.4 m between centres) and stop
+// at the XTs ahead of them; an XT standing across the bands' edge (y 9.2..10.8) stops a vehicle
+// coming at it from either band.
+TEST(PhysicsWorld, BandsCollideWithinAndHoldTheStructuresNearThem) {
   const BlueRov2Params p;
-  const std::vector<maps::ChristmasTree> trees{Tree({12.0, 5.0}, {1.5, 1.5}), Tree({-3.0, 5.0}, {1.5, 1.5})};
-  for (const bool same_shard : {true, false}) {
-    PhysicsWorld world({}, trees, {}, 2);
-    ASSERT_EQ(world.shard_count(), 2);
-    const VehicleId a = world.AddVehicle(Spec(maps::MotionModel::kBlueRov2, {3.0, 5.0}, 0.0));
-    if (same_shard) world.AddVehicle(Spec(maps::MotionModel::kBlueRov2, {30.0, 30.0}));  // id 1, parked
-    const VehicleId b = world.AddVehicle(Spec(maps::MotionModel::kBlueRov2, {6.0, 5.0}, std::numbers::pi));
-    world.SetVelocityCommand(a, {0.8, 0.0});
-    world.SetVelocityCommand(b, {-0.8, 0.0});
-    double closest = 1e9;
-    for (int n = 0; n < 1000; ++n) {
-      world.Step(kDt);
-      closest = std::min(closest, (world.State(a).position_m - world.State(b).position_m).norm());
+  const maps::Workspace field{40.0, 20.0};
+  const std::vector<maps::ChristmasTree> trees{Tree({12.0, 5.0}, {1.5, 1.5}), Tree({-3.0, 5.0}, {1.5, 1.5}),
+                                               Tree({20.0, 10.0}, {1.6, 1.6})};
+  PhysicsWorld world(field, trees, {}, 2);
+  ASSERT_EQ(world.shard_count(), 2);
+  const VehicleId a = world.AddVehicle(Spec(maps::MotionModel::kBlueRov2, {3.0, 5.0}, 0.0));
+  const VehicleId b = world.AddVehicle(Spec(maps::MotionModel::kBlueRov2, {6.0, 5.0}, std::numbers::pi));
+  const VehicleId below = world.AddVehicle(Spec(maps::MotionModel::kBlueRov2, {20.0, 6.0}, 0.5 * std::numbers::pi));
+  const VehicleId above = world.AddVehicle(Spec(maps::MotionModel::kBlueRov2, {20.0, 14.0}, -0.5 * std::numbers::pi));
+  EXPECT_EQ(world.ShardOf(a), 0);
+  EXPECT_EQ(world.ShardOf(above), 1);
+  world.SetVelocityCommand(a, {0.8, 0.0});
+  world.SetVelocityCommand(b, {-0.8, 0.0});
+  world.SetVelocityCommand(below, {0.0, 0.8});
+  world.SetVelocityCommand(above, {0.0, -0.8});
+  double closest = 1e9;
+  for (int n = 0; n < 1000; ++n) {
+    world.Step(kDt);
+    world.Rebalance();
+    closest = std::min(closest, (world.State(a).position_m - world.State(b).position_m).norm());
+  }
+  EXPECT_GT(closest, 0.4) << "one band: the hulls meet";
+  // After they met, each went on round the other and came to rest at the XT ahead of it, or
+  // against the other still; neither passed through the XT.
+  EXPECT_LT(world.State(a).position_m.x(), 11.25 - 0.5 * p.length_m + 0.05);
+  EXPECT_GT(world.State(b).position_m.x(), -2.25 + 0.5 * p.length_m - 0.05);
+  EXPECT_NEAR(world.State(below).position_m.y(), 9.2 - 0.5 * p.length_m, 0.05) << "stopped below the XT";
+  EXPECT_NEAR(world.State(above).position_m.y(), 10.8 + 0.5 * p.length_m, 0.05) << "stopped above the XT";
+  EXPECT_EQ(world.ShardOf(below), 0);
+  EXPECT_EQ(world.ShardOf(above), 1);
+  EXPECT_THROW(PhysicsWorld(maps::Workspace{40.0, 0.0}, trees, {}, 2), std::invalid_argument);
+}
+
+// A vehicle flying across bands changes worlds with its pose and velocities: in open water its
+// motion is the one it has in a single world (to Box2D's float rounding, 1e-4 m), and it is
+// moved only once it is kBandHysteresis_m past its band's edge. Three BlueROV2s and a single
+// integrator, 60 s of turning flight over a 30 m field in five bands of 6 m.
+TEST(PhysicsWorld, CrossingBandsKeepsTheMotionOfOneWorld) {
+  const maps::Workspace field{30.0, 30.0};
+  const std::vector<maps::ChristmasTree> none;
+  PhysicsWorld one(field, none, {}, 1), banded(field, none, {}, 5);
+  std::vector<VehicleId> ids;
+  for (int k = 0; k < 4; ++k) {
+    const maps::MotionModel model = k == 3 ? maps::MotionModel::kSingleIntegrator : maps::MotionModel::kBlueRov2;
+    const Eigen::Vector2d start(4.0 + 7.0 * k, 2.0 + 6.5 * k);
+    ids.push_back(one.AddVehicle(Spec(model, start, 0.4 * k)));
+    banded.AddVehicle(Spec(model, start, 0.4 * k));
+  }
+  int moves = 0;
+  std::vector<std::set<int>> bands_seen(ids.size());
+  for (int cycle = 0; cycle < 600; ++cycle) {
+    for (std::size_t k = 0; k < ids.size(); ++k) {
+      // A slow circle of ~8 m radius round each start: across two or three bands and back.
+      const double angle = 0.01 * cycle + static_cast<double>(k);  // 0.1 rad/s at 0.8 m/s
+      const Eigen::Vector2d command(0.8 * std::cos(angle), 0.8 * std::sin(angle));
+      one.SetVelocityCommand(ids[k], command);
+      banded.SetVelocityCommand(ids[k], command);
     }
-    if (same_shard) {
-      EXPECT_GT(closest, 0.4) << "one shard: the hulls meet";
-    } else {
-      EXPECT_LT(closest, 0.1) << "two shards: they pass through each other";
-      EXPECT_NEAR(world.State(a).position_m.x(), 11.25 - 0.5 * p.length_m, 0.05);
-      EXPECT_NEAR(world.State(b).position_m.x(), -2.25 + 0.5 * p.length_m, 0.05);
+    one.StepShard(0, kDt, 5);
+    for (int shard = 0; shard < banded.shard_count(); ++shard) banded.StepShard(shard, kDt, 5);
+    moves += banded.Rebalance();
+    for (std::size_t k = 0; k < ids.size(); ++k) {
+      const double y = banded.State(ids[k]).position_m.y();
+      const int band = banded.ShardOf(ids[k]);
+      bands_seen[k].insert(band);
+      // Within its band, or within the hysteresis of it (the edge bands reach on past the field).
+      if (band > 0) {
+        ASSERT_GE(y, 6.0 * band - PhysicsWorld::kBandHysteresis_m) << "vehicle " << ids[k];
+      }
+      if (band < 4) {
+        ASSERT_LE(y, 6.0 * (band + 1) + PhysicsWorld::kBandHysteresis_m) << "vehicle " << ids[k];
+      }
     }
+  }
+  EXPECT_GE(moves, 4);
+  for (std::size_t k = 0; k < ids.size(); ++k) {
+    EXPECT_GE(bands_seen[k].size(), 2u) << "vehicle " << ids[k] << " crossed a band's edge";
+    const VehicleState x = one.State(ids[k]), y = banded.State(ids[k]);
+    EXPECT_LT((x.position_m - y.position_m).norm(), 1e-4) << "vehicle " << ids[k];
+    EXPECT_LT((x.velocity_mps - y.velocity_mps).norm(), 1e-4) << "vehicle " << ids[k];
+    EXPECT_NEAR(x.heading_rad, y.heading_rad, 1e-4) << "vehicle " << ids[k];
   }
 }
 
@@ -296,7 +357,7 @@ TEST(PhysicsWorld, RemovalFromAShardLeavesTheOthersAsTheyWere) {
   std::vector<VehicleId> ids;
   for (int k = 0; k < 9; ++k) {
     const maps::MotionModel model = k == 7 ? maps::MotionModel::kSingleIntegrator : maps::MotionModel::kBlueRov2;
-    const Eigen::Vector2d start(8.0 * k, 3.0);
+    const Eigen::Vector2d start(8.0 * k, 1.5 + 3.4 * (k % 3));  // in bands 0, 1, 2 in turn
     ids.push_back(kept.AddVehicle(Spec(model, start, 0.2 * k)));
     removed.AddVehicle(Spec(model, start, 0.2 * k));
   }
@@ -313,6 +374,8 @@ TEST(PhysicsWorld, RemovalFromAShardLeavesTheOthersAsTheyWere) {
       kept.StepShard(shard, kDt, 5);
       removed.StepShard(shard, kDt, 5);
     }
+    kept.Rebalance();  // with the records moved down one, the moves found in the step still apply
+    removed.Rebalance();
   }
   ASSERT_FALSE(removed.Contains(ids[4]));
   EXPECT_EQ(removed.vehicle_count(), 8);
@@ -322,7 +385,7 @@ TEST(PhysicsWorld, RemovalFromAShardLeavesTheOthersAsTheyWere) {
     ASSERT_EQ(x.position_m, y.position_m) << "vehicle " << ids[k];
     ASSERT_EQ(x.velocity_mps, y.velocity_mps) << "vehicle " << ids[k];
     ASSERT_EQ(x.heading_rad, y.heading_rad) << "vehicle " << ids[k];
-    EXPECT_GT((x.position_m - Eigen::Vector2d(8.0 * k, 3.0)).norm(), 0.3) << "vehicle " << ids[k] << " moved";
+    EXPECT_GT((x.position_m - Eigen::Vector2d(8.0 * k, 1.5 + 3.4 * (k % 3))).norm(), 0.3) << "vehicle " << ids[k] << " moved";
   }
 }
 
