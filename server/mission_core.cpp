@@ -4,6 +4,7 @@
 #include <cmath>
 #include <limits>
 #include <optional>
+#include <span>
 #include <sstream>
 #include <stdexcept>
 
@@ -574,6 +575,12 @@ void MissionCore::TakeSplit(RegionSplit split) {
     plan.shares.emplace_back(id, std::move(share));
   }
   std::sort(plan.shares.begin(), plan.shares.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+  plan.walk_valves.clear();
+  for (auto& [id, share] : plan.shares) {
+    share.walk_at = plan.walk_valves.size();
+    plan.walk_valves.insert(plan.walk_valves.end(), share.valves.begin(), share.valves.end());
+  }
+  plan.walk_sent.assign(plan.walk_valves.size(), 0.0);
   plan.planned_for = split.input.vehicle_ids;
   plan.risk_seen = plan.pending_risk_seen;
   fleet_.SetRevisitBounds(bounds);
@@ -656,30 +663,24 @@ void MissionCore::AssignRegions(const std::vector<int>& alive, CycleOutput& out)
   // 22 MB/s a 1,000-vehicle mission sent.
   const Eigen::VectorXd& weights = fleet_.effective_weights();
   auto found = plan.shares.begin();  // both ascending by id: walked together, not looked up
-  // Each share's valves and sent weights, and each vehicle's roster entry, lie apart on the heap:
-  // at 10,000 vehicles the walk was a cache miss on each (3 % of the mission's main thread).
-  // Asked for a few shares ahead, they are in by the time the walk gets there; and once a share's
-  // valve indices are in, their weights (the field's, 35,000 of them: scattered reads that were
-  // half of the walk's time at 10,000 vehicles) are asked for too, with their last visits (the
-  // age weighting's clock, as scattered).
+  // Each vehicle's roster entry lies apart on the heap (at 10,000 vehicles a cache miss each on
+  // the walk), so it is asked for a few vehicles ahead; the shares' valves and sent proportions
+  // are read as one run (walk_valves, walk_sent). Once a share's valve indices are known, their
+  // weights (the field's, 35,000 of them) are asked for too, with their last visits (the age
+  // weighting's clock): scattered reads that were half of the walk's time at 10,000 vehicles.
   constexpr std::size_t kAhead = 8, kWeightsAhead = 3;
-  const auto PrefetchShare = [](const RegionShare& share) {
-    maps::PrefetchBytes(share.valves.data(), sizeof(int) * share.valves.size());
-    maps::PrefetchBytes(share.sent_weights.data(), sizeof(double) * static_cast<std::size_t>(share.sent_weights.size()));
-  };
   const bool aged = scenario_.fleet.age_weighting_laps > 0.0;
   const auto PrefetchShareWeights = [&](const RegionShare& share) {
-    for (int v : share.valves) {
+    for (std::size_t k = 0; k < share.valves.size(); ++k) {
+      const int v = plan.walk_valves[share.walk_at + k];
       maps::PrefetchObject(&weights[v]);
       if (aged) fleet_.PrefetchLastVisit(v);  // read by the age weighting, as scattered
     }
   };
-  for (std::size_t k = 0; k < std::min(kAhead, plan.shares.size()); ++k) PrefetchShare(plan.shares[k].second);
   for (std::size_t i = 0; i < alive.size(); ++i) {
     const int id = alive[i];
     if (i + kAhead < alive.size()) maps::PrefetchObject(roster_.Find(alive[i + kAhead]));
     const std::size_t at = static_cast<std::size_t>(found - plan.shares.begin());
-    if (at + kAhead < plan.shares.size()) PrefetchShare(plan.shares[at + kAhead].second);
     if (at + kWeightsAhead < plan.shares.size()) PrefetchShareWeights(plan.shares[at + kWeightsAhead].second);
     Roster::Member& m = *roster_.Find(id);
     while (found != plan.shares.end() && found->first < id) ++found;
@@ -695,23 +696,25 @@ void MissionCore::AssignRegions(const std::vector<int>& alive, CycleOutput& out)
     }
     RegionShare& share = found->second;
     Eigen::VectorXd& own = share_weights_scratch_;  // no allocation a share a cycle
-    own.resize(static_cast<Eigen::Index>(share.valves.size()));
-    for (std::size_t k = 0; k < share.valves.size(); ++k) own[static_cast<Eigen::Index>(k)] = weights[share.valves[k]];
+    const std::span<const int> valves(plan.walk_valves.data() + share.walk_at, share.valves.size());
+    Eigen::Map<Eigen::VectorXd> sent(plan.walk_sent.data() + share.walk_at, static_cast<Eigen::Index>(valves.size()));
+    own.resize(static_cast<Eigen::Index>(valves.size()));
+    for (std::size_t k = 0; k < valves.size(); ++k) own[static_cast<Eigen::Index>(k)] = weights[valves[k]];
     // Age weighting: w (1 + age / (L lap)); a valve just seen weighs its risk, one unseen for a
     // lap twice that (L = 1). A leak is as likely to have started at a valve as its risk and the
     // time since anyone looked: the target leans to where one would go unnoticed longest.
     const double laps = scenario_.fleet.age_weighting_laps;
     if (laps > 0.0) {
       const double scale = laps * std::max(share.lap_time_s, 1.0);
-      for (std::size_t k = 0; k < share.valves.size(); ++k) {
-        const double age = time_s_ - std::max(0.0, fleet_.LastVisit(share.valves[k]));
+      for (std::size_t k = 0; k < valves.size(); ++k) {
+        const double age = time_s_ - std::max(0.0, fleet_.LastVisit(valves[k]));
         own[static_cast<Eigen::Index>(k)] *= 1.0 + std::max(age, 0.0) / scale;
       }
     }
     if (!(own.sum() > 0.0)) own.setOnes();  // a share whose valves all weigh zero is still watched, evenly
     // Its weight in the field's units, for the layer's leaves in its box (below).
     double share_weight = 0.0;
-    for (int i : share.valves) share_weight += weights[i];
+    for (int i : valves) share_weight += weights[i];
     own /= own.sum();  // the target is the share's mixture: only the weights' proportions count
     double excess_mass = 0.0;
     Eigen::VectorXd excess;
@@ -729,11 +732,12 @@ void MissionCore::AssignRegions(const std::vector<int>& alive, CycleOutput& out)
     // when one of its proportions has moved by more than 5 % of itself since it was sent: a visit
     // to one of its valves, its own guard boosts, risk changes, operators'.
     constexpr double kSameProportion = 0.05;
-    if (m.target_sent && !excess_moved && own.size() == share.sent_weights.size() &&
-        ((own - share.sent_weights).array().abs() <= kSameProportion * share.sent_weights.array()).all()) {
+    if (m.target_sent && share.sent && !excess_moved &&
+        ((own - sent).array().abs() <= kSameProportion * sent.array()).all()) {
       continue;
     }
-    share.sent_weights = own;
+    sent = own;
+    share.sent = true;
     share.sent_excess = excess_mass;
     agents::Assignment a;
     a.id = id;

@@ -289,7 +289,10 @@ class MissionCore {
   struct RegionShare {
     std::vector<int> valves;
     std::unique_ptr<maps::RegionField> field;
-    Eigen::VectorXd sent_weights;  // proportions of the share's valve weights its target was made from
+    // Where its valves, and the proportions of their weights its target was last made from, are in
+    // RegionPlan's walk_valves and walk_sent; `sent`: a target was made in this split.
+    std::size_t walk_at = 0;
+    bool sent = false;
     double lap_time_s = 0.0;       // of its tour: the age weighting's and the guard's clock
     double split_mass = 0.0;       // its share of the field's risk when the field was split
     double sent_excess = 0.0;      // the layer's excess in its box its target was made with
@@ -303,6 +306,11 @@ class MissionCore {
     // By vehicle id, ascending: walked every cycle beside the live ids (a map's nodes were a cache
     // miss each at 10,000 vehicles).
     std::vector<std::pair<int, RegionShare>> shares;
+    // Every share's valves and its sent proportions, share after share in the order of `shares`:
+    // the cycle's walk reads them as one run (each share's own two heap arrays were two cache
+    // misses a vehicle a cycle at 10,000 vehicles, most of the walk's time).
+    std::vector<int> walk_valves;
+    std::vector<double> walk_sent;
     std::unique_ptr<PendingRegionSplit> pending;  // a split being planned, taken at its due cycle
     double pending_started_s = 0.0;
     std::size_t pending_risk_seen = 0;            // schedule entries when it started
