@@ -271,12 +271,12 @@ std::string FormatLeaks(const std::vector<MissionMetrics>& runs) {
     }
     if (run.sensing) {
       const FalseAlarmMetrics& fa = run.false_alarms;
-      out += fmt::format("  false alarms: {} raised, {} cleared{}, {} confirmed ({} false detections in {} scans)\n",
+      out += fmt::format("  false alarms: {} raised, {} cleared{}, {} confirmed ({} false detection{} in {} scans)\n",
                          fa.raised, fa.cleared,
                          fa.cleared > 0 ? fmt::format(" (mean {:.1f} s, at most {:.1f} s)", fa.mean_time_to_clear_s,
                                                       fa.max_time_to_clear_s)
                                         : "",
-                         fa.confirmed, fa.detections, run.scans);
+                         fa.confirmed, fa.detections, fa.detections == 1 ? "" : "s", run.scans);
     }
   }
   return out;

@@ -285,8 +285,9 @@ void RunDirectory::Finish(const MissionCore& core, const maps::World& world, dou
   const maps::Scenario ran = stopped_early ? maps::WithDuration(scenario_, end_s) : scenario_;
   const RunInfo info = Info(core, true, stopped_early);
   const std::string title =
-      fmt::format("{}: {} on '{}', {} vehicles, {:.0f} s", scenario_.name, ToString(core.controller()),
-                  core.fleet().profile().name, core.roster().members().size(), end_s);
+      fmt::format("{}: {} on '{}', {} vehicle{}, {:.0f} s", scenario_.name, ToString(core.controller()),
+                  core.fleet().profile().name, core.roster().members().size(),
+                  core.roster().members().size() == 1 ? "" : "s", end_s);
   const MissionMetrics metrics = core.Metrics(end_s);
   plots::MissionPlotInput plot{&scenario_, &metrics, &plot_.trajectory(), plot_.Events(), plot_.events_not_kept(), title};
   std::vector<std::string> contents, paths;
