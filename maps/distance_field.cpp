@@ -65,26 +65,26 @@ DistanceField::DistanceField(const OccupancyGrid& grid)
     for (int i = 0; i < cols_; ++i) f[i] = squared[i * rows_ + j];
     Transform1d(f, d, v, z);
     for (int i = 0; i < cols_; ++i) {
-      distance_m_[i * rows_ + j] =
+      distance_m_[static_cast<std::size_t>(j) * cols_ + i] =
           any ? std::sqrt(d[i]) * resolution_m_ : std::numeric_limits<double>::infinity();
     }
   }
   // The blocks' least distances, over the cells a point in the block interpolates between.
   if (cols_ <= 0 || rows_ <= 0) return;
-  const int block_cols = (cols_ + kBlockCells - 1) / kBlockCells;
-  block_rows_ = (rows_ + kBlockCells - 1) / kBlockCells;
-  block_least_m_.assign(static_cast<std::size_t>(block_cols) * block_rows_, std::numeric_limits<float>::infinity());
-  for (int bi = 0; bi < block_cols; ++bi) {
-    for (int bj = 0; bj < block_rows_; ++bj) {
+  block_cols_ = (cols_ + kBlockCells - 1) / kBlockCells;
+  const int block_rows = (rows_ + kBlockCells - 1) / kBlockCells;
+  block_least_m_.assign(static_cast<std::size_t>(block_cols_) * block_rows, std::numeric_limits<float>::infinity());
+  for (int bj = 0; bj < block_rows; ++bj) {
+    for (int bi = 0; bi < block_cols_; ++bi) {
       double least = std::numeric_limits<double>::infinity();
       for (int i = bi * kBlockCells; i <= std::min((bi + 1) * kBlockCells, cols_ - 1); ++i) {
         for (int j = bj * kBlockCells; j <= std::min((bj + 1) * kBlockCells, rows_ - 1); ++j) {
-          least = std::min(least, distance_m_[i * rows_ + j]);
+          least = std::min(least, At(i, j));
         }
       }
       float rounded = static_cast<float>(least);
       if (static_cast<double>(rounded) > least) rounded = std::nextafter(rounded, -std::numeric_limits<float>::infinity());
-      block_least_m_[static_cast<std::size_t>(bi) * block_rows_ + bj] = rounded;
+      block_least_m_[static_cast<std::size_t>(bj) * block_cols_ + bi] = rounded;
     }
   }
 }
@@ -96,7 +96,7 @@ bool DistanceField::FartherThan(const Eigen::Vector2d& x_m, double d) const {
   const double gy = std::clamp(x_m.y() / resolution_m_ - 0.5, -1.0, static_cast<double>(rows_));
   const int i = std::clamp(static_cast<int>(std::floor(gx)), 0, cols_ - 1);
   const int j = std::clamp(static_cast<int>(std::floor(gy)), 0, rows_ - 1);
-  const double least = block_least_m_[static_cast<std::size_t>(i / kBlockCells) * block_rows_ + j / kBlockCells];
+  const double least = block_least_m_[static_cast<std::size_t>(j / kBlockCells) * block_cols_ + i / kBlockCells];
   // A bilinear mean of values >= least is >= least up to a few ulps of rounding.
   return least * (1.0 - 1e-9) >= d;
 }
@@ -104,19 +104,19 @@ bool DistanceField::FartherThan(const Eigen::Vector2d& x_m, double d) const {
 void DistanceField::Prefetch(const Eigen::Vector2d& x_m, double d) const {
   if (!x_m.allFinite() || FartherThan(x_m, d)) return;
   // Distance's stencil is cells i..i+1 by j..j+1; AwayFromObstacle's central differences, one
-  // cell either way of x, widen it to i-1..i+2 by j-1..j+2 (a column's four cells are adjacent).
+  // cell either way of x, widen it to i-1..i+2 by j-1..j+2 (a row's four cells are adjacent).
   const int i = static_cast<int>(std::floor(std::clamp(x_m.x() / resolution_m_ - 0.5, -2.0, double(cols_))));
   const int j = static_cast<int>(std::floor(std::clamp(x_m.y() / resolution_m_ - 0.5, -2.0, double(rows_))));
-  const int j0 = std::clamp(j - 1, 0, rows_ - 1), j1 = std::clamp(j + 2, 0, rows_ - 1);
-  for (int c = std::max(i - 1, 0); c <= std::min(i + 2, cols_ - 1); ++c) {
-    PrefetchBytes(&distance_m_[static_cast<std::size_t>(c) * rows_ + j0], sizeof(double) * (j1 - j0 + 1));
+  const int i0 = std::clamp(i - 1, 0, cols_ - 1), i1 = std::clamp(i + 2, 0, cols_ - 1);
+  for (int r = std::max(j - 1, 0); r <= std::min(j + 2, rows_ - 1); ++r) {
+    PrefetchBytes(&distance_m_[static_cast<std::size_t>(r) * cols_ + i0], sizeof(double) * (i1 - i0 + 1));
   }
 }
 
 double DistanceField::At(int i, int j) const {
   i = std::clamp(i, 0, cols_ - 1);
   j = std::clamp(j, 0, rows_ - 1);
-  return distance_m_[i * rows_ + j];
+  return distance_m_[static_cast<std::size_t>(j) * cols_ + i];
 }
 
 double DistanceField::Distance(const Eigen::Vector2d& x_m) const {

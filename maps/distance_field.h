@@ -44,9 +44,12 @@ class DistanceField {
   int cols_;
   int rows_;
   double resolution_m_;
-  std::vector<double> distance_m_;  // i * rows_ + j
-  int block_rows_ = 0;
-  // Per block (bi * block_rows_ + bj), the least distance over its cells and the next row and
+  // Row by row (j * cols_ + i), as the cycle meets them: a fleet's vehicles are taken in id order
+  // and their ids run along x (the start lattice's rows), so neighbours in the walk read
+  // neighbouring cells rather than cells a column apart.
+  std::vector<double> distance_m_;
+  int block_cols_ = 0;
+  // Per block (bj * block_cols_ + bi), the least distance over its cells and the next row and
   // column of cells (the bilinear stencil of a point in the block reaches them), rounded down.
   std::vector<float> block_least_m_;
 };
