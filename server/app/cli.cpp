@@ -567,10 +567,16 @@ int RunCli(int argc, char** argv) {
       if (!launch_cmd.resume_dir.empty() && !launch_cmd.scenario.scenario_path.empty()) {
         throw maps::ScenarioError("--resume: resumes the run's own scenario; give no scenario file with it");
       }
-      if (const std::string given = FirstScenarioOverride(launch_cmd.scenario);
-          !launch_cmd.resume_dir.empty() && !given.empty()) {
-        throw maps::ScenarioError("--resume: resumes the run's own scenario with its own options; give no " + given +
-                                  " with it");
+      if (!launch_cmd.resume_dir.empty()) {
+        // A resumed mission flies on with the controller and time scale its mission.json keeps
+        // (its hosts that carried on run them already): one given here had been ignored in silence.
+        std::string given = FirstScenarioOverride(launch_cmd.scenario);
+        if (given.empty() && launch->count("--controller") > 0) given = "--controller";
+        if (given.empty() && launch->count("--time-scale") > 0) given = "--time-scale";
+        if (!given.empty()) {
+          throw maps::ScenarioError("--resume: resumes the run's own scenario with its own options (its controller and "
+                                    "time scale as in its mission.json); give no " + given + " with it");
+        }
       }
       if (!launch_cmd.resume_dir.empty() && (launch_cmd.insecure || !launch_cmd.security_dir.empty())) {
         throw maps::ScenarioError("--resume: the mission keeps its own security (mission.json security_dir); give no "

@@ -1,5 +1,6 @@
 #include "server/app/cli_scenario.h"
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -234,6 +235,44 @@ TEST(RangeProblem, SaysWhatIsAllowed) {
               flag = "--weight-exponent", value = "5";
   char* argv[] = {sage.data(), run.data(), file.data(), flag.data(), value.data()};
   EXPECT_EQ(RunCli(5, argv), 2);
+}
+
+}  // namespace
+}  // namespace sage::server
+
+namespace sage::server {
+namespace {
+
+// `sage launch --resume` goes on with the controller and time scale of the mission's own
+// mission.json: a -c or --time-scale given with it is refused by name (both had been taken and
+// ignored in silence), before the run directory is read; with neither, the same directory gets
+// past that door to the run directory's own checks.
+TEST(ScenarioOverrides, ResumeRefusesAControllerOrTimeScale) {
+  const std::string dir = (std::filesystem::temp_directory_path() / "sage_resume_options_test").string();
+  std::filesystem::remove_all(dir);
+  const auto launch = [&](std::vector<std::string> extra) {
+    std::vector<std::string> args = {"sage", "launch", "--resume", dir};
+    args.insert(args.end(), extra.begin(), extra.end());
+    std::vector<char*> argv;
+    for (std::string& a : args) argv.push_back(a.data());
+    testing::internal::CaptureStderr();
+    const int status = RunCli(static_cast<int>(argv.size()), argv.data());
+    return std::make_pair(status, testing::internal::GetCapturedStderr());
+  };
+  for (const auto& [extra, name] : std::vector<std::pair<std::vector<std::string>, std::string>>{
+           {{"-c", "astar"}, "--controller"},
+           {{"--controller", "ergodic"}, "--controller"},
+           {{"--time-scale", "4"}, "--time-scale"},
+           {{"--time-scale", "4", "-c", "astar"}, "--controller"}}) {
+    const auto [status, err] = launch(extra);
+    EXPECT_EQ(status, 2) << name;
+    EXPECT_NE(err.find("give no " + name + " with it"), std::string::npos) << err;
+    EXPECT_EQ(std::count(err.begin(), err.end(), '\n'), 1) << err;  // one line
+  }
+  const auto [status, err] = launch({});
+  EXPECT_NE(status, 0);
+  EXPECT_EQ(err.find("give no"), std::string::npos) << err;
+  EXPECT_FALSE(std::filesystem::exists(dir));
 }
 
 }  // namespace
