@@ -554,10 +554,13 @@ int RunCli(int argc, char** argv) {
         throw maps::ScenarioError("--domain = " + std::to_string(domain) + ": must be in 0..232");
       }
     }
-    if (*run) return CmdRun(run_cmd);
-    if (*compare) {
-      compare_cmd.calibrate_wait = calibrate == "on";
-      return CmdCompare(compare_cmd);
+    if (*run || *compare) {
+      // Ctrl-C (or SIGTERM, SIGHUP) ends the mission where it is, with its whole record written.
+      RunCommand& command = *run ? run_cmd : compare_cmd;
+      if (*compare) compare_cmd.calibrate_wait = calibrate == "on";
+      command.stop = StopOnSignals();
+      const int status = *run ? CmdRun(command) : CmdCompare(command);
+      return status == 130 && StopSignal() != 0 ? 128 + StopSignal() : status;
     }
     if (*evaluate) return CmdEvaluate(eval_cmd);
     if (*launch) {

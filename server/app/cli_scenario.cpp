@@ -95,12 +95,13 @@ std::string LeftOutByDuration(const maps::Scenario& scenario, double duration_s,
       if (leak.start_s > duration_s) dropped.push_back(fmt::format("the leak at {} from {} s", maps::LeakWhere(leak), leak.start_s));
     }
   }
+  // The mission flies its default profile (a --profile given has become it): only that one's events.
   std::size_t risk_events = 0, fleet_events = 0;
-  for (const maps::RiskProfile& p : scenario.profiles) {
-    for (const maps::RiskEvent& e : p.events) risk_events += e.time_s > duration_s ? 1 : 0;
-  }
+  for (const maps::RiskEvent& e : scenario.ProfileOrThrow("").events) risk_events += e.time_s > duration_s ? 1 : 0;
   for (const maps::FleetEvent& e : scenario.fleet_events) fleet_events += e.time_s > duration_s ? 1 : 0;
-  if (risk_events > 0) dropped.push_back(fmt::format("{} risk event(s) of the profiles", risk_events));
+  if (risk_events > 0) {
+    dropped.push_back(fmt::format("{} risk event(s) of profile {}", risk_events, scenario.ProfileOrThrow("").name));
+  }
   if (fleet_events > 0) dropped.push_back(fmt::format("{} fleet event(s)", fleet_events));
   if (dropped.empty()) return "";
   return fmt::format("--duration = {}: left out, as they come after the mission's end: {}", duration_s, fmt::join(dropped, ", "));
@@ -109,7 +110,12 @@ std::string LeftOutByDuration(const maps::Scenario& scenario, double duration_s,
 maps::Scenario LoadWithOverrides(const ScenarioOverrides& o) {
   CheckOverrides(o);
   maps::Scenario scenario = maps::LoadScenario(o.scenario_path);
-  if (!o.profile.empty()) scenario.ProfileOrThrow(o.profile);  // before anything starts, naming the user's file
+  if (!o.profile.empty()) {
+    scenario.ProfileOrThrow(o.profile);  // before anything starts, naming the user's file
+    // The effective scenario flies it by default: `sage run DIR/scenario.yaml` (and `sage evaluate
+    // DIR/trajectory.csv -s DIR/scenario.yaml`) fly and score the run's profile, not the file's.
+    scenario.default_profile = o.profile;
+  }
   if (o.vehicles) {
     const std::vector<maps::FleetEvent> events = scenario.fleet_events;
     const std::size_t own = scenario.vehicles.size();

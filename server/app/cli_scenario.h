@@ -53,7 +53,7 @@ struct ScenarioOverrides {
 std::string FirstScenarioOverride(const ScenarioOverrides& o);
 
 /// What a mission of duration_s leaves out of `scenario` (its leaks, unless they are drawn anew
-/// for the shorter mission, its profiles' risk events and its fleet events after the end), as one
+/// for the shorter mission, its default profile's risk events and its fleet events after the end), as one
 /// line for the operator; empty if nothing.
 std::string LeftOutByDuration(const maps::Scenario& scenario, double duration_s, bool leaks_drawn_anew);
 

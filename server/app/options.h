@@ -18,6 +18,10 @@ struct RunCommand {
   std::string controller = "ergodic";
   std::string out_dir;
   bool calibrate_wait = true;  ///< compare: the paper's A* wait calibration
+  /// Set (by a signal: SIGINT, SIGTERM, SIGHUP) to stop the mission where it is: it ends as
+  /// though its duration were up (the whole run directory written, stopped_early in
+  /// metrics.json) and the command returns 130.
+  const std::atomic<bool>* stop = nullptr;
 };
 
 /// sage evaluate

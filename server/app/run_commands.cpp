@@ -2,6 +2,9 @@
 
 #include <unistd.h>
 
+#include <algorithm>
+#include <atomic>
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -65,22 +68,47 @@ std::string DefaultOutDir(const maps::Scenario& scenario, const std::string& pro
 }
 
 // One in-process mission with its record streamed into `dir` as it runs, as a launch's server
-// writes it: the same files, the same checkpoints.
-MissionMetrics RunInto(const maps::Scenario& scenario, ControllerKind kind, const std::string& profile,
-                       const fs::path& dir) {
+// writes it: the same files, the same checkpoints. Stopped by `stop`, it ends at the cycle it has
+// reached as a launch's server does: the final files for the time flown, stopped_early.
+struct RunOutcome {
+  MissionMetrics metrics;
+  bool stopped = false;
+  double end_s = 0.0;
+};
+
+RunOutcome RunInto(const maps::Scenario& scenario, ControllerKind kind, const std::string& profile, const fs::path& dir,
+                   const std::atomic<bool>* stop) {
   RunDirectory run(dir.string(), scenario);
   MissionOptions options{profile, kind, &run, /*keep_trajectory=*/false};
   Mission mission(scenario, options);
   ProgressPrinter progress(fmt::format("{:>7}", ToString(kind)), scenario.duration_s);
   const long report_every = std::max(1L, std::lround(scenario.duration_s * scenario.control_rate_hz / 100));
   long cycle = 0;
+  RunOutcome outcome;
   while (mission.Step()) {
     run.Tick(mission.core());
     if (++cycle % report_every == 0) progress(mission.time_s() / scenario.duration_s);
+    if (stop != nullptr && stop->load()) {
+      outcome.stopped = true;
+      break;
+    }
   }
-  progress(1.0);
-  run.Finish(mission.core(), mission.world(), scenario.duration_s, /*stopped_early=*/false);
-  return mission.core().Metrics(scenario.duration_s);
+  if (outcome.stopped) {
+    if (isatty(fileno(stderr)) != 0) std::fprintf(stderr, "\n");
+    outcome.end_s = std::max(1.0 / scenario.control_rate_hz, std::min(scenario.duration_s, mission.core().time_s()));
+  } else {
+    progress(1.0);
+    outcome.end_s = scenario.duration_s;
+  }
+  run.Finish(mission.core(), mission.world(), outcome.end_s, outcome.stopped);
+  outcome.metrics = mission.core().Metrics(outcome.end_s);
+  return outcome;
+}
+
+void SayStopped(const std::string& what, const RunOutcome& outcome, double duration_s, const fs::path& dir) {
+  spdlog::warn("{} stopped by a signal at t = {:.1f} s of {:.0f} s: {} holds the record to there (metrics.json: "
+               "stopped_early)",
+               what, outcome.end_s, duration_s, dir.string());
 }
 
 }  // namespace
@@ -92,9 +120,13 @@ int CmdRun(const RunCommand& c) {
   const std::string profile = c.scenario.profile.empty() ? scenario.default_profile : c.scenario.profile;
   const fs::path dir = c.out_dir.empty() ? DefaultOutDir(scenario, profile, ToString(kind)) : c.out_dir;
   const auto start = std::chrono::steady_clock::now();
-  const MissionMetrics metrics = RunInto(scenario, kind, profile, dir);
-  std::cout << FormatTable({metrics});
-  PrintEventResponses(metrics);
+  const RunOutcome outcome = RunInto(scenario, kind, profile, dir, c.stop);
+  std::cout << FormatTable({outcome.metrics});
+  PrintEventResponses(outcome.metrics);
+  if (outcome.stopped) {
+    SayStopped("the mission", outcome, scenario.duration_s, dir);
+    return 130;
+  }
   spdlog::info("{:.0f} s mission simulated in {:.2f} s wall time; wrote {}/metrics.json, trajectory.csv, plot.svg and .png",
                scenario.duration_s, std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(),
                dir.string());
@@ -107,15 +139,26 @@ int CmdCompare(const RunCommand& c) {
   const std::string profile = c.scenario.profile.empty() ? scenario.default_profile : c.scenario.profile;
   const fs::path dir = c.out_dir.empty() ? DefaultOutDir(scenario, profile, "compare") : c.out_dir;
   PrepareRunDirectory(dir.string());
-  const MissionMetrics ergodic = RunInto(scenario, ControllerKind::kErgodic, profile, dir / "ergodic");
+  const RunOutcome first = RunInto(scenario, ControllerKind::kErgodic, profile, dir / "ergodic", c.stop);
+  const MissionMetrics& ergodic = first.metrics;
+  if (first.stopped) {  // the A* tour is not flown
+    std::cout << FormatTable({ergodic});
+    SayStopped("the ergodic mission", first, scenario.duration_s, dir / "ergodic");
+    return 130;
+  }
   if (c.calibrate_wait) {
     scenario.astar.wait_per_lap_s = CalibratedAstarWait(scenario, profile, ergodic);
     spdlog::info("A* wait per lap set to {:.2f} s so that A* spends as long near the dominant valve as ergodic "
                  "control (the paper's protocol; --calibrate-wait off keeps the scenario's)",
                  scenario.astar.wait_per_lap_s);
   }
-  const MissionMetrics astar = RunInto(scenario, ControllerKind::kAstar, profile, dir / "astar");
+  const RunOutcome second = RunInto(scenario, ControllerKind::kAstar, profile, dir / "astar", c.stop);
+  const MissionMetrics& astar = second.metrics;
   std::cout << FormatTable({astar, ergodic});
+  if (second.stopped) {
+    SayStopped("the A* mission", second, scenario.duration_s, dir / "astar");
+    return 130;
+  }
   if (!ergodic.events.empty()) {
     std::cout << "A*:\n";
     PrintEventResponses(astar);

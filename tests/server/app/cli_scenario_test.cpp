@@ -1,6 +1,7 @@
 #include "server/app/cli_scenario.h"
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -9,10 +10,13 @@
 #include <vector>
 
 #include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
 
 #include "maps/scenario/field_generator.h"
 #include "server/app/cli.h"
 #include "server/app/fleet_commands.h"
+#include "server/app/options.h"
+#include "server/app/run_commands.h"
 #include "server/report/mission_file.h"
 
 namespace sage::server {
@@ -101,15 +105,20 @@ TEST(ScenarioOverrides, BadValuesNameTheOption) {
 // A shorter mission leaves out the leaks and events after its end, and says so: the run's table
 // had read "none hidden" for a leak --duration cut, without a word.
 TEST(ScenarioOverrides, AShorterMissionSaysWhatItLeavesOut) {
-  const maps::Scenario file = maps::LoadScenario(std::string(SAGE_SOURCE_DIR) + "/scenarios/two_xt_leaks.yaml");
+  maps::Scenario file = maps::LoadScenario(std::string(SAGE_SOURCE_DIR) + "/scenarios/two_xt_leaks.yaml");
   ASSERT_EQ(file.leaks.size(), 1u);  // at P3 from 120 s; leak_injection's event at 150 s
+  // Flying one_extreme (the default, no events), another profile's event is not the mission's.
+  EXPECT_EQ(LeftOutByDuration(file, 60.0, false),
+            "--duration = 60: left out, as they come after the mission's end: the leak at P3 from 120 s");
+  EXPECT_EQ(LeftOutByDuration(file, 130.0, false), "");
+  file.default_profile = "leak_injection";  // as --profile leak_injection leaves it
   EXPECT_EQ(LeftOutByDuration(file, 60.0, false),
             "--duration = 60: left out, as they come after the mission's end: the leak at P3 from 120 s, 1 risk event(s) "
-            "of the profiles");
+            "of profile leak_injection");
   EXPECT_EQ(LeftOutByDuration(file, 130.0, false),
-            "--duration = 130: left out, as they come after the mission's end: 1 risk event(s) of the profiles");
+            "--duration = 130: left out, as they come after the mission's end: 1 risk event(s) of profile leak_injection");
   EXPECT_EQ(LeftOutByDuration(file, 60.0, true),  // --random-leaks draws the shorter mission's own
-            "--duration = 60: left out, as they come after the mission's end: 1 risk event(s) of the profiles");
+            "--duration = 60: left out, as they come after the mission's end: 1 risk event(s) of profile leak_injection");
   EXPECT_EQ(LeftOutByDuration(file, 200.0, false), "");
   // fleet_field: a join at 200 s and a loss at 400 s.
   EXPECT_EQ(LeftOutByDuration(maps::LoadScenario(kFleetField), 300.0, false),
@@ -273,6 +282,77 @@ TEST(ScenarioOverrides, ResumeRefusesAControllerOrTimeScale) {
   EXPECT_NE(status, 0);
   EXPECT_EQ(err.find("give no"), std::string::npos) << err;
   EXPECT_FALSE(std::filesystem::exists(dir));
+}
+
+}  // namespace
+}  // namespace sage::server
+
+namespace sage::server {
+namespace {
+
+nlohmann::json ReadJson(const std::filesystem::path& path) {
+  std::ifstream in(path);
+  return nlohmann::json::parse(in);
+}
+
+// `sage run` stopped by a signal (Ctrl-C: the flag its handler sets) ends where it is with its
+// whole run directory, as a launch does: the table, the final metrics.json (complete,
+// stopped_early, the time flown), the charts, the effective scenario cut to that time, no
+// checkpoint left behind; status 130. Not stopped, the same mission runs to its duration.
+TEST(RunStop, AStoppedRunWritesItsWholeRecord) {
+  const std::filesystem::path dir = std::filesystem::temp_directory_path() / "sage_run_stop_test";
+  std::filesystem::remove_all(dir);
+  RunCommand c;
+  c.scenario.scenario_path = std::string(SAGE_SOURCE_DIR) + "/scenarios/two_xt.yaml";
+  c.scenario.duration_s = 3.0;
+  c.out_dir = dir.string();
+  std::atomic<bool> stop{true};  // as though Ctrl-C came during the first cycle
+  c.stop = &stop;
+  testing::internal::CaptureStdout();
+  EXPECT_EQ(CmdRun(c), 130);
+  const std::string out = testing::internal::GetCapturedStdout();
+  EXPECT_NE(out.find("stopped by a signal at t = 0.1 s of 3 s"), std::string::npos) << out;
+  nlohmann::json m = ReadJson(dir / "metrics.json");
+  EXPECT_TRUE(m.at("complete").get<bool>());
+  EXPECT_TRUE(m.at("stopped_early").get<bool>());
+  EXPECT_NEAR(m.at("duration_s").get<double>(), 0.1, 1e-9);
+  for (const char* name : {"plot.svg", "plot.png", "metric.svg", "revisits.svg", "seabed.bt", "risk.ot", "scenario.yaml"})
+    EXPECT_TRUE(std::filesystem::exists(dir / name)) << name;
+  EXPECT_FALSE(std::filesystem::exists(dir / "checkpoint.bin"));
+  EXPECT_NEAR(maps::LoadScenario((dir / "scenario.yaml").string()).duration_s, 0.1, 1e-9);
+
+  stop = false;
+  testing::internal::CaptureStdout();
+  EXPECT_EQ(CmdRun(c), 0);
+  testing::internal::GetCapturedStdout();
+  m = ReadJson(dir / "metrics.json");
+  EXPECT_FALSE(m.at("stopped_early").get<bool>());
+  EXPECT_NEAR(m.at("duration_s").get<double>(), 3.0, 1e-9);
+  std::filesystem::remove_all(dir);
+}
+
+}  // namespace
+}  // namespace sage::server
+
+namespace sage::server {
+namespace {
+
+// --profile becomes the effective scenario's default profile, so the run directory's
+// scenario.yaml flies (and `sage evaluate` scores) the profile the run flew: it had kept the
+// file's default, and `sage run DIR/scenario.yaml` flew one_extreme after a run of graded.
+TEST(ScenarioOverrides, TheProfileGivenIsTheEffectiveScenariosDefault) {
+  ScenarioOverrides o;
+  o.scenario_path = std::string(SAGE_SOURCE_DIR) + "/scenarios/two_xt.yaml";
+  EXPECT_EQ(LoadWithOverrides(o).default_profile, "one_extreme");
+  o.profile = "graded";
+  const maps::Scenario effective = LoadWithOverrides(o);
+  EXPECT_EQ(effective.default_profile, "graded");
+  const std::filesystem::path file = std::filesystem::temp_directory_path() / "sage_effective_profile_test.yaml";
+  std::ofstream(file) << maps::EmitScenario(effective);
+  const maps::Scenario again = maps::LoadScenario(file.string());
+  EXPECT_EQ(again.default_profile, "graded");
+  EXPECT_EQ(again.ProfileWeights(again.ProfileOrThrow("")), effective.ProfileWeights(effective.ProfileOrThrow("graded")));
+  std::filesystem::remove(file);
 }
 
 }  // namespace
