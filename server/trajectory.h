@@ -26,6 +26,9 @@ struct WeightChange {
 struct Trajectory {
   std::vector<TrajectorySample> samples;  ///< sorted by time, then vehicle
   std::vector<std::string> vehicle_names; ///< index = TrajectorySample::vehicle (may be empty)
+  /// Read from a file whose last line, with no newline after it, did not read as a row (a record
+  /// cut short by a crash) and was left out.
+  bool cut_line = false;
 };
 
 /// Piecewise-constant weights: the entry in force at time t (the first entry applies before it).

@@ -173,6 +173,10 @@ int CmdEvaluate(const EvaluateCommand& c) {
   const maps::Scenario scenario = maps::LoadScenario(c.scenario_path);
   const maps::RiskProfile* profile = &scenario.ProfileOrThrow(c.profile);
   const Trajectory trajectory = ReadTrajectoryCsv(c.trajectory_path);
+  if (trajectory.cut_line) {
+    spdlog::warn("{}: its last line, cut short with no newline after it (a record a crash ended), was left out",
+                 c.trajectory_path);
+  }
   const MissionMetrics metrics = EvaluateRecorded(trajectory, scenario, *profile, c.duration_s, c.trajectory_path);
   std::cout << FormatTable({metrics});
   if (!c.out_dir.empty()) {

@@ -139,51 +139,61 @@ Trajectory ParseTrajectoryCsv(std::istream& in, const std::string& path) {
     int line;
   };
   std::vector<Row> rows;
+  bool cut_line = false;
   while (std::getline(in, text)) {
     ++line_number;
     if (Trim(text).empty()) continue;
-    const std::vector<std::string> fields = SplitCsv(text);
-    if (fields.size() != header.size()) {
-      throw ScenarioError(fmt::format("{}:{}: {} fields, the header has {}", path, line_number,
-                                      fields.size(), header.size()));
-    }
-    // A missing optional column reads as 0.
-    const auto number = [&](const char* name) {
-      const int c = column(name);
-      if (c < 0) return 0.0;
-      const std::string& field = fields[c];
-      const char* begin = field.data() + (!field.empty() && field[0] == '+' ? 1 : 0);
-      const char* end = field.data() + field.size();
-      double value = 0.0;
-      const auto [ptr, ec] = std::from_chars(begin, end, value);
-      if (ptr != end || field.empty() || (ec != std::errc() && ec != std::errc::result_out_of_range)) {
-        throw ScenarioError(
-            fmt::format("{}:{}: column '{}' = '{}': not a number", path, line_number, name, Shown(field)));
+    // A last line with no newline after it that does not read as a row is a record cut short
+    // (a crash mid-write: trajectory.csv is appended as the mission runs): left out, and said.
+    const bool unterminated = in.eof();
+    try {
+      const std::vector<std::string> fields = SplitCsv(text);
+      if (fields.size() != header.size()) {
+        throw ScenarioError(fmt::format("{}:{}: {} fields, the header has {}", path, line_number,
+                                        fields.size(), header.size()));
       }
-      // Out of range is an overflow (1e999, rejected below) or an underflow (1e-400, which
-      // strtod rounds to a tiny or zero value, fine for a position or speed).
-      if (ec == std::errc::result_out_of_range) value = std::strtod(field.c_str(), nullptr);
-      if (!std::isfinite(value)) {
-        throw ScenarioError(fmt::format("{}:{}: column '{}' = '{}': not finite", path, line_number, name, Shown(field)));
+      // A missing optional column reads as 0.
+      const auto number = [&](const char* name) {
+        const int c = column(name);
+        if (c < 0) return 0.0;
+        const std::string& field = fields[c];
+        const char* begin = field.data() + (!field.empty() && field[0] == '+' ? 1 : 0);
+        const char* end = field.data() + field.size();
+        double value = 0.0;
+        const auto [ptr, ec] = std::from_chars(begin, end, value);
+        if (ptr != end || field.empty() || (ec != std::errc() && ec != std::errc::result_out_of_range)) {
+          throw ScenarioError(
+              fmt::format("{}:{}: column '{}' = '{}': not a number", path, line_number, name, Shown(field)));
+        }
+        // Out of range is an overflow (1e999, rejected below) or an underflow (1e-400, which
+        // strtod rounds to a tiny or zero value, fine for a position or speed).
+        if (ec == std::errc::result_out_of_range) value = std::strtod(field.c_str(), nullptr);
+        if (!std::isfinite(value)) {
+          throw ScenarioError(fmt::format("{}:{}: column '{}' = '{}': not finite", path, line_number, name, Shown(field)));
+        }
+        return value;
+      };
+      Row row{{}, fields[column("vehicle")], line_number};
+      if (row.vehicle.empty()) {
+        throw ScenarioError(fmt::format("{}:{}: column 'vehicle' is empty", path, line_number));
       }
-      return value;
-    };
-    Row row{{}, fields[column("vehicle")], line_number};
-    if (row.vehicle.empty()) {
-      throw ScenarioError(fmt::format("{}:{}: column 'vehicle' is empty", path, line_number));
+      TrajectorySample& s = row.sample;
+      s.time_s = number("t");
+      s.position_m = {number("x"), number("y")};
+      s.heading_rad = number("heading");
+      s.velocity_mps = {number("vx"), number("vy")};
+      s.command_mps = {number("cmd_x"), number("cmd_y")};
+      rows.push_back(std::move(row));
+    } catch (const ScenarioError&) {
+      if (!unterminated) throw;
+      cut_line = true;
     }
-    TrajectorySample& s = row.sample;
-    s.time_s = number("t");
-    s.position_m = {number("x"), number("y")};
-    s.heading_rad = number("heading");
-    s.velocity_mps = {number("vx"), number("vy")};
-    s.command_mps = {number("cmd_x"), number("cmd_y")};
-    rows.push_back(std::move(row));
   }
 
   // Integer ids if every row has one; otherwise every value is a name (so "2" in a file of names
   // is a name too), numbered in order of first appearance.
   Trajectory trajectory;
+  trajectory.cut_line = cut_line;
   const bool ids = std::all_of(rows.begin(), rows.end(), [](const Row& r) {
     int unused = 0;
     return ParseInt(r.vehicle, &unused);

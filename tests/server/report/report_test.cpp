@@ -156,6 +156,27 @@ TEST_F(ReportTest, CsvErrorsAreOneLineNamingFileAndLine) {
   }
 }
 
+// A last line with no newline after it that does not read as a row is a record a crash cut
+// short (trajectory.csv is appended as a mission runs): left out and flagged, the rows before it
+// read. The same line with its newline, or a bad line before the last, is still an error; a
+// whole last row without a newline is a row.
+TEST_F(ReportTest, CsvLeavesOutALastLineCutShort) {
+  const std::string header = "t,vehicle,x,y,heading\n";
+  const std::string rows = "0,0,1,2,0.5\n0.1,0,1.5,2,0.5\n";
+  const Trajectory cut = ReadTrajectoryCsv(WriteText("cut.csv", header + rows + "0.2,0,1.7"));
+  EXPECT_TRUE(cut.cut_line);
+  ASSERT_EQ(cut.samples.size(), 2u);
+  EXPECT_EQ(cut.samples[1].position_m, Eigen::Vector2d(1.5, 2));
+  const Trajectory whole = ReadTrajectoryCsv(WriteText("whole.csv", header + rows + "0.2,0,1.7,2.1,0.4"));
+  EXPECT_FALSE(whole.cut_line);
+  ASSERT_EQ(whole.samples.size(), 3u);
+  EXPECT_EQ(whole.samples[2].position_m, Eigen::Vector2d(1.7, 2.1));
+  EXPECT_FALSE(ReadTrajectoryCsv(WriteText("clean.csv", header + rows)).cut_line);
+  const std::string file = Path("bad.csv");
+  EXPECT_EQ(ReadError(header + rows + "0.2,0,1.7\n"), file + ":4: 3 fields, the header has 5");
+  EXPECT_EQ(ReadError(header + "0,0,1\n" + "0.1,0,1.5,2,0.5"), file + ":2: 3 fields, the header has 5");
+}
+
 MissionMetrics SampleMetrics() {
   MissionMetrics m;
   m.controller = "ergodic";
