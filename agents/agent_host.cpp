@@ -15,6 +15,8 @@
 #include <unordered_map>
 #include <utility>
 
+#include <fmt/format.h>
+
 #include "agents/obstacle_filter.h"
 #include "agents/perception/gaze.h"
 #include "agents/physics_world.h"
@@ -400,7 +402,18 @@ void AgentHost::SetTour(VehicleId id, const std::vector<int>& valves, const Eige
     tour.ok = tour.ok && !tour.legs.back().empty();
     tour.length_m += PathLength(tour.legs.back());
   }
-  if (!tour.ok) throw std::invalid_argument("AgentHost::SetTour: a leg of the tour has no path on the A* grid");
+  if (!tour.ok) {
+    // Said in the scenario's terms: the usual cause is a clearance that grows the structures
+    // until they close the way between valves (a new user's astar.clearance_m: 5 on two_xt).
+    const std::size_t cut = static_cast<std::size_t>(
+        std::find_if(tour.legs.begin(), tour.legs.end(), [](const auto& leg) { return leg.empty(); }) - tour.legs.begin());
+    const std::vector<maps::Valve> all = impl_->scenario.AllValves();
+    throw std::invalid_argument(fmt::format(
+        "{}: no path on the A* grid from valve {} to valve {}: the structures grown by astar.clearance_m = {} m "
+        "close the way (the A* tours need every valve reachable; give a smaller clearance)",
+        impl_->scenario.name, all[static_cast<std::size_t>(valves[cut])].name,
+        all[static_cast<std::size_t>(valves[(cut + 1) % valves.size()])].name, impl_->scenario.astar.clearance_m));
+  }
   v.tour = std::make_unique<TourController>(std::move(tour), impl_->grid, v.speed_mps,
                                             impl_->scenario.astar.wait_per_lap_s, weights);
   v.tour_valves = valves;

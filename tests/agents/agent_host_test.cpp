@@ -311,5 +311,34 @@ TEST(AgentHost, TourVehicleGoesRoundVehiclesParkedInItsWay) {
   EXPECT_LT(arrived, 60.0);  // 18 s of way at 0.7 m/s, pinned seconds and detours (40 s measured)
 }
 
+// A tour the grid cannot fly is refused in the scenario's terms: two_xt with its A* clearance
+// raised to 5 m (the structures grown by it close the way) names the valves and the field, where
+// it had said only "a leg of the tour has no path on the A* grid". With the file's 0.3 m the same
+// tour is taken.
+TEST(AgentHost, ATourTheGridCannotFlyNamesTheClearance) {
+  maps::Scenario s = maps::LoadScenario(kTwoXt);
+  const int count = static_cast<int>(s.AllValves().size());
+  std::vector<int> all(static_cast<std::size_t>(count));
+  for (int i = 0; i < count; ++i) all[static_cast<std::size_t>(i)] = i;
+  {
+    const maps::World world(s);
+    AgentHost host(world, s, Guidance::kAstar);
+    host.AddVehicle(1, Rov("a", {0.6, 0.6}));
+    EXPECT_NO_THROW(host.SetTour(1, all, Eigen::VectorXd::Ones(count)));
+  }
+  s.astar.clearance_m = 5.0;
+  const maps::World world(s);
+  AgentHost host(world, s, Guidance::kAstar);
+  host.AddVehicle(1, Rov("a", {0.6, 0.6}));
+  try {
+    host.SetTour(1, all, Eigen::VectorXd::Ones(count));
+    ADD_FAILURE() << "a tour with no path was taken";
+  } catch (const std::invalid_argument& e) {
+    const std::string what = e.what();
+    EXPECT_EQ(what.rfind("two_xt: no path on the A* grid from valve P", 0), 0u) << what;
+    EXPECT_NE(what.find("astar.clearance_m = 5 m"), std::string::npos) << what;
+  }
+}
+
 }  // namespace
 }  // namespace sage::agents
