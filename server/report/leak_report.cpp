@@ -77,11 +77,12 @@ LeakPairing PairDetections(const std::vector<LeakRun>& runs, const std::string& 
     if (other != base.end()) matched.emplace_back(t, other->second);
   }
   std::vector<double> differences;
-  double sooner = 0.0;
+  double sooner = 0.0, tied = 0.0;
   for (const auto& [a, b] : matched) {
     if (std::isfinite(a) && std::isfinite(b)) {
       differences.push_back(a - b);
-      sooner += a < b ? 1.0 : (a == b ? 0.5 : 0.0);
+      sooner += a < b ? 1.0 : 0.0;
+      tied += a == b ? 1.0 : 0.0;
     } else if (std::isfinite(a)) {
       ++out.only_config;
     } else if (std::isfinite(b)) {
@@ -93,6 +94,7 @@ LeakPairing PairDetections(const std::vector<LeakRun>& runs, const std::string& 
   const double n = static_cast<double>(differences.size());
   out.mean_difference_s = lr::Mean(differences);
   out.sooner_share = sooner / n;
+  out.tied_share = tied / n;
   if (out.pairs >= LeakPairing::kLeastPairs) {
     double squares = 0.0;
     for (double d : differences) squares += (d - out.mean_difference_s) * (d - out.mean_difference_s);
@@ -130,6 +132,7 @@ std::string PairingText(const LeakPairing& p) {
   out += std::isfinite(p.mean_half_width_s) ? fmt::format(" ± {:.1f} s (95 %, {} pairs)", p.mean_half_width_s, p.pairs)
                                             : fmt::format(" ({} pairs: too few for an interval)", p.pairs);
   out += fmt::format(", sooner in {:.0f} %", 100.0 * p.sooner_share);
+  if (p.tied_share > 0.0) out += fmt::format(", as soon in {:.0f} %", 100.0 * p.tied_share);
   if (std::isfinite(p.p90_difference_s)) {
     out += fmt::format("; p90 {} ({} .. {})", signed_s(p.p90_difference_s), signed_s(p.p90_low_s), signed_s(p.p90_high_s));
   }
@@ -205,6 +208,7 @@ std::string LeakBenchJson(const std::vector<LeakSummary>& summaries, const std::
                                        {"mean_difference_s", lr::Number(p.mean_difference_s)},
                                        {"mean_half_width_95_s", lr::Number(p.mean_half_width_s)},
                                        {"sooner_share", lr::Number(p.sooner_share)},
+                                       {"tied_share", lr::Number(p.tied_share)},
                                        {"p90_difference_s", lr::Number(p.p90_difference_s)},
                                        {"p90_difference_95_s", {lr::Number(p.p90_low_s), lr::Number(p.p90_high_s)}}};
   }
@@ -276,7 +280,7 @@ std::string LeakBenchMarkdown(const std::vector<LeakSummary>& summaries, const s
       "re-arm radius counts no new visit); *false alarms*: alarms raised (posterior at fusion.alarm_probability) where no leak had started, "
       "and those that reached the confirmation probability; *leak by leak*: each leak's time to detection under the "
       "configuration minus under the baseline, over the leaks both detected (mean, its 95 % interval, the share "
-      "detected sooner), and the difference of the p90s with a 95 % interval from a paired bootstrap of the leaks "
+      "detected sooner and, if any, the share detected at the same scan), and the difference of the p90s with a 95 % interval from a paired bootstrap of the leaks "
       "(when both detected every leak): an interval that excludes 0 is a difference the runs show, not noise.\n";
   return out;
 }

@@ -55,7 +55,8 @@ struct LeakPairing {
   double mean_difference_s = kNaN;        ///< config - baseline, over the pairs
   /// Half the 95 % interval of that mean: 1.96 sd / sqrt(pairs); NaN below kLeastPairs pairs.
   double mean_half_width_s = kNaN;
-  double sooner_share = kNaN;             ///< share of the pairs detected sooner under config (ties count half)
+  double sooner_share = kNaN;             ///< share of the pairs detected sooner under config
+  double tied_share = kNaN;               ///< share of the pairs detected at the same time (the same scan)
   /// p90 of config minus p90 of baseline over all the leaks, and its 95 % interval from a paired
   /// bootstrap (kResamples resamples of the leaks, a fixed seed); NaN unless both detected every leak
   /// and there are kLeastPairs of them.

@@ -125,10 +125,23 @@ TEST(LeakReport, PairsEachLeakWithTheBaselinesSameLeak) {
   EXPECT_NEAR(q.mean_difference_s, 2.0, 1e-9);
   EXPECT_NEAR(q.mean_half_width_s, 0.0, 1e-9);
   EXPECT_DOUBLE_EQ(q.sooner_share, 0.0);
+  EXPECT_DOUBLE_EQ(q.tied_share, 0.0);
   EXPECT_NEAR(q.p90_difference_s, 2.0, 1e-9);
   EXPECT_NEAR(q.p90_low_s, 2.0, 1e-9);
   EXPECT_NEAR(q.p90_high_s, 2.0, 1e-9);
   EXPECT_EQ(PairingText(q), "+2.0 s ± 0.0 s (95 %, 100 pairs), sooner in 0 %; p90 +2.0 s (+2.0 s .. +2.0 s)");
+
+  // Ties are counted apart, not as half sooner: two of five sooner, one as soon, two later (a
+  // new user had read "sooner in 50 %" for this).
+  std::vector<LeakRun> five;
+  for (int k = 0; k < 5; ++k) {
+    five.push_back(Row("astar", k, 50.0, 55.0));
+    five.push_back(Row("bayes", k, 50.0, 55.0 + (k < 2 ? -1.0 : (k == 2 ? 0.0 : 1.5))));
+  }
+  const LeakPairing t = PairDetections(five, "bayes", "astar");
+  EXPECT_DOUBLE_EQ(t.sooner_share, 0.4);
+  EXPECT_DOUBLE_EQ(t.tied_share, 0.2);
+  EXPECT_NE(PairingText(t).find("sooner in 40 %, as soon in 20 %"), std::string::npos) << PairingText(t);
 
   // The bootstrap's interval holds the p90 difference of the leaks themselves and is not a point
   // when the leaks' changes differ.
