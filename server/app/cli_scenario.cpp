@@ -181,12 +181,27 @@ maps::Scenario LoadWithOverrides(const ScenarioOverrides& o) {
       if (e.kind == maps::FleetEvent::Kind::kJoin) e.vehicle.model = model;
   }
   scenario.Validate();  // the overrides obey the same rules as the file
+  if (o.steer && scenario.sensors.empty()) {
+    spdlog::warn("--steer = {}: {} has no sensors, so no Bayesian risk loop to steer on (it steers on the profile's "
+                 "risk either way)",
+                 *o.steer, scenario.name);
+  }
   if ((o.age_weighting_laps || o.risk_share) && scenario.fleet.assignment != maps::FleetAssignment::kRegions) {
     spdlog::warn("--age-weighting and --risk-share shape regions only; this mission's assignment is {} "
                  "(--assignment regions to use them)",
                  maps::ToString(scenario.fleet.assignment));
   }
   return scenario;
+}
+
+std::string ErgodicOnlyOverrides(const ScenarioOverrides& o) {
+  std::vector<std::string> given;
+  if (o.basis_order) given.emplace_back("--basis-order");
+  if (o.forgetting_time_s) given.emplace_back("--forgetting");
+  if (o.min_turn_radius_m) given.emplace_back("--turn-radius");
+  if (given.empty()) return "";
+  return fmt::format("{}: the ergodic controller's; -c astar flies tours without it (given, not used)",
+                     fmt::join(given, ", "));
 }
 
 void CheckFleetFitsField(const maps::Scenario& scenario, bool tours) {

@@ -52,6 +52,10 @@ struct ScenarioOverrides {
 /// and refuses them rather than ignore them. The network options are not among them.
 std::string FirstScenarioOverride(const ScenarioOverrides& o);
 
+/// The overrides given that shape only the ergodic controller (--basis-order, --forgetting,
+/// --turn-radius), as one line to warn an A* tour mission of; empty if none.
+std::string ErgodicOnlyOverrides(const ScenarioOverrides& o);
+
 /// What a mission of duration_s leaves out of `scenario` (its leaks, unless they are drawn anew
 /// for the shorter mission, its default profile's risk events and its fleet events after the end), as one
 /// line for the operator; empty if nothing.

@@ -129,6 +129,10 @@ int Launch(const LaunchCommand& c) {
     scenario = LoadWithOverrides(c.scenario);
     // Before the run directory is made: a refused mission leaves nothing behind.
     CheckFleetFitsField(scenario, ParseControllerKind(c.controller) == ControllerKind::kAstar);
+    if (const std::string unused = ErgodicOnlyOverrides(c.scenario);
+        ParseControllerKind(c.controller) == ControllerKind::kAstar && !unused.empty()) {
+      spdlog::warn("{}", unused);
+    }
     maps::CheckSeabedModel(scenario);  // a bad seabed map is refused here, naming the user's file, not by the server
     out_dir = c.out_dir.empty() ? (fs::path("runs") / (scenario.name + "_launch")).string() : c.out_dir;
     CheckRunDirectoryFree(out_dir);

@@ -117,6 +117,9 @@ int CmdRun(const RunCommand& c) {
   const maps::Scenario scenario = LoadWithOverrides(c.scenario);
   const ControllerKind kind = ParseControllerKind(c.controller);
   CheckFleetFitsField(scenario, kind == ControllerKind::kAstar);
+  if (const std::string unused = ErgodicOnlyOverrides(c.scenario); kind == ControllerKind::kAstar && !unused.empty()) {
+    spdlog::warn("{}", unused);
+  }
   const std::string profile = c.scenario.profile.empty() ? scenario.default_profile : c.scenario.profile;
   const fs::path dir = c.out_dir.empty() ? DefaultOutDir(scenario, profile, ToString(kind)) : c.out_dir;
   const auto start = std::chrono::steady_clock::now();

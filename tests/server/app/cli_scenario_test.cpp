@@ -357,3 +357,24 @@ TEST(ScenarioOverrides, TheProfileGivenIsTheEffectiveScenariosDefault) {
 
 }  // namespace
 }  // namespace sage::server
+
+namespace sage::server {
+namespace {
+
+// An A* tour mission warns of the options that shape only the ergodic controller (a new user's
+// `-c astar -K 5` had run without a word); none given, nothing to say.
+TEST(ScenarioOverrides, NamesTheErgodicOnlyOptionsGiven) {
+  ScenarioOverrides o;
+  EXPECT_EQ(ErgodicOnlyOverrides(o), "");
+  o.duration_s = 30.0;
+  o.guard = "off";
+  EXPECT_EQ(ErgodicOnlyOverrides(o), "");
+  o.basis_order = 5;
+  EXPECT_EQ(ErgodicOnlyOverrides(o), "--basis-order: the ergodic controller's; -c astar flies tours without it (given, not used)");
+  o.forgetting_time_s = 10.0;
+  o.min_turn_radius_m = 0.2;
+  EXPECT_EQ(ErgodicOnlyOverrides(o).rfind("--basis-order, --forgetting, --turn-radius: ", 0), 0u) << ErgodicOnlyOverrides(o);
+}
+
+}  // namespace
+}  // namespace sage::server
