@@ -181,6 +181,20 @@ int CmdEvaluate(const EvaluateCommand& c) {
                  c.trajectory_path);
   }
   const MissionMetrics metrics = EvaluateRecorded(trajectory, scenario, *profile, c.duration_s, c.trajectory_path);
+  // What the figures rest on, where it is not the record: a time past its last sample (no vehicle
+  // anywhere: every gap runs on to the end) and the profile's events after the end (left out).
+  const double last_s = trajectory.samples.back().time_s;
+  if (c.duration_s && *c.duration_s > last_s + 1.0 / scenario.control_rate_hz) {
+    spdlog::warn("--duration = {}: past the trajectory's last sample (t = {:.1f} s); no vehicle is counted after it, so "
+                 "every valve's gap runs on to {} s",
+                 *c.duration_s, last_s, *c.duration_s);
+  }
+  const auto after_end = std::count_if(profile->events.begin(), profile->events.end(),
+                                       [&](const maps::RiskEvent& e) { return e.time_s > metrics.duration_s; });
+  if (after_end > 0) {
+    spdlog::warn("{} risk event(s) of profile {} come after the evaluated end (t = {:.1f} s): left out", after_end,
+                 profile->name, metrics.duration_s);
+  }
   std::cout << FormatTable({metrics});
   if (!c.out_dir.empty()) {
     PrepareRunDirectory(c.out_dir);

@@ -6,6 +6,7 @@
 #include <filesystem>
 #include <fstream>
 #include <optional>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -374,6 +375,41 @@ TEST(ScenarioOverrides, NamesTheErgodicOnlyOptionsGiven) {
   o.forgetting_time_s = 10.0;
   o.min_turn_radius_m = 0.2;
   EXPECT_EQ(ErgodicOnlyOverrides(o).rfind("--basis-order, --forgetting, --turn-radius: ", 0), 0u) << ErgodicOnlyOverrides(o);
+}
+
+}  // namespace
+}  // namespace sage::server
+
+namespace sage::server {
+namespace {
+
+// sage evaluate says where its figures do not rest on the record: a --duration past the last
+// sample (every gap runs on to it), and the profile's events after the evaluated end.
+TEST(EvaluateWarnings, SaysWhatGoesBeyondTheRecord) {
+  const std::filesystem::path csv = std::filesystem::temp_directory_path() / "sage_evaluate_warnings_test.csv";
+  std::ofstream(csv) << "t,vehicle,x,y\n0,0,0.6,0.6\n0.1,0,0.65,0.6\n0.2,0,0.7,0.6\n";
+  const auto warnings = [&](const std::string& profile, std::optional<double> duration) {
+    EvaluateCommand c;
+    c.trajectory_path = csv.string();
+    c.scenario_path = std::string(SAGE_SOURCE_DIR) + "/scenarios/two_xt.yaml";
+    c.profile = profile;
+    c.duration_s = duration;
+    testing::internal::CaptureStdout();
+    EXPECT_EQ(CmdEvaluate(c), 0);
+    const std::string out = testing::internal::GetCapturedStdout();
+    std::string lines;
+    std::istringstream in(out);
+    for (std::string line; std::getline(in, line);)
+      if (line.find("[warning]") != std::string::npos) lines += line + "\n";
+    return lines;
+  };
+  EXPECT_EQ(warnings("", std::nullopt), "");
+  EXPECT_EQ(warnings("", 0.2), "");
+  EXPECT_NE(warnings("", 50.0).find("--duration = 50: past the trajectory's last sample (t = 0.2 s)"), std::string::npos);
+  EXPECT_NE(warnings("leak_injection", std::nullopt).find("1 risk event(s) of profile leak_injection come after"),
+            std::string::npos);
+  EXPECT_EQ(warnings("leak_injection", 200.0).find("risk event"), std::string::npos);  // 150 s: within
+  std::filesystem::remove(csv);
 }
 
 }  // namespace
