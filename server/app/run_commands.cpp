@@ -122,6 +122,9 @@ int CmdRun(const RunCommand& c) {
   }
   const std::string profile = c.scenario.profile.empty() ? scenario.default_profile : c.scenario.profile;
   const fs::path dir = c.out_dir.empty() ? DefaultOutDir(scenario, profile, ToString(kind)) : c.out_dir;
+  if (std::error_code ignored; fs::exists(dir / "trajectory.csv", ignored)) {
+    spdlog::warn("{}: replacing the run recorded there (give --out another directory to keep it)", dir.string());
+  }
   const auto start = std::chrono::steady_clock::now();
   const RunOutcome outcome = RunInto(scenario, kind, profile, dir, c.stop);
   std::cout << FormatTable({outcome.metrics});
