@@ -9,8 +9,10 @@
 #include <cstdio>
 #include <filesystem>
 #include <iostream>
+#include <memory>
 
 #include <fmt/format.h>
+#include <spdlog/sinks/stdout_color_sinks.h>
 #include <spdlog/spdlog.h>
 
 #include "server/mission.h"
@@ -105,6 +107,17 @@ RunOutcome RunInto(const maps::Scenario& scenario, ControllerKind kind, const st
   return outcome;
 }
 
+// What run, compare and evaluate say along the way goes to stderr, their table to stdout:
+// `sage run ... > table.txt` keeps the table alone (the log had gone into it).
+void LogToStderr() {
+  static const std::shared_ptr<spdlog::logger> logger = [] {
+    auto made = std::make_shared<spdlog::logger>("sage", std::make_shared<spdlog::sinks::stderr_color_sink_mt>());
+    made->set_pattern("%^[%l]%$ %v");
+    return made;
+  }();
+  spdlog::set_default_logger(logger);
+}
+
 void SayStopped(const std::string& what, const RunOutcome& outcome, double duration_s, const fs::path& dir) {
   spdlog::warn("{} stopped by a signal at t = {:.1f} s of {:.0f} s: {} holds the record to there (metrics.json: "
                "stopped_early)",
@@ -114,6 +127,7 @@ void SayStopped(const std::string& what, const RunOutcome& outcome, double durat
 }  // namespace
 
 int CmdRun(const RunCommand& c) {
+  LogToStderr();
   const maps::Scenario scenario = LoadWithOverrides(c.scenario);
   const ControllerKind kind = ParseControllerKind(c.controller);
   CheckFleetFitsField(scenario, kind == ControllerKind::kAstar);
@@ -140,6 +154,7 @@ int CmdRun(const RunCommand& c) {
 }
 
 int CmdCompare(const RunCommand& c) {
+  LogToStderr();
   maps::Scenario scenario = LoadWithOverrides(c.scenario);
   CheckFleetFitsField(scenario, /*tours=*/true);  // compare flies the A* tours too
   const std::string profile = c.scenario.profile.empty() ? scenario.default_profile : c.scenario.profile;
@@ -176,6 +191,7 @@ int CmdCompare(const RunCommand& c) {
 }
 
 int CmdEvaluate(const EvaluateCommand& c) {
+  LogToStderr();
   const maps::Scenario scenario = maps::LoadScenario(c.scenario_path);
   const maps::RiskProfile* profile = &scenario.ProfileOrThrow(c.profile);
   const Trajectory trajectory = ReadTrajectoryCsv(c.trajectory_path);

@@ -310,9 +310,12 @@ TEST(RunStop, AStoppedRunWritesItsWholeRecord) {
   std::atomic<bool> stop{true};  // as though Ctrl-C came during the first cycle
   c.stop = &stop;
   testing::internal::CaptureStdout();
+  testing::internal::CaptureStderr();
   EXPECT_EQ(CmdRun(c), 130);
-  const std::string out = testing::internal::GetCapturedStdout();
-  EXPECT_NE(out.find("stopped by a signal at t = 0.1 s of 3 s"), std::string::npos) << out;
+  const std::string table = testing::internal::GetCapturedStdout(), said = testing::internal::GetCapturedStderr();
+  EXPECT_NE(said.find("stopped by a signal at t = 0.1 s of 3 s"), std::string::npos) << said;
+  EXPECT_NE(table.find("longest gap"), std::string::npos) << table;  // the table: on stdout, alone
+  EXPECT_EQ(table.find("[warning]"), std::string::npos) << table;
   nlohmann::json m = ReadJson(dir / "metrics.json");
   EXPECT_TRUE(m.at("complete").get<bool>());
   EXPECT_TRUE(m.at("stopped_early").get<bool>());
@@ -323,10 +326,10 @@ TEST(RunStop, AStoppedRunWritesItsWholeRecord) {
   EXPECT_NEAR(maps::LoadScenario((dir / "scenario.yaml").string()).duration_s, 0.1, 1e-9);
 
   stop = false;
-  testing::internal::CaptureStdout();
+  testing::internal::CaptureStderr();
   EXPECT_EQ(CmdRun(c), 0);
   // Into the same directory again: said, not done in silence.
-  EXPECT_NE(testing::internal::GetCapturedStdout().find("replacing the run recorded there"), std::string::npos);
+  EXPECT_NE(testing::internal::GetCapturedStderr().find("replacing the run recorded there"), std::string::npos);
   m = ReadJson(dir / "metrics.json");
   EXPECT_FALSE(m.at("stopped_early").get<bool>());
   EXPECT_NEAR(m.at("duration_s").get<double>(), 3.0, 1e-9);
@@ -395,9 +398,9 @@ TEST(EvaluateWarnings, SaysWhatGoesBeyondTheRecord) {
     c.scenario_path = std::string(SAGE_SOURCE_DIR) + "/scenarios/two_xt.yaml";
     c.profile = profile;
     c.duration_s = duration;
-    testing::internal::CaptureStdout();
+    testing::internal::CaptureStderr();
     EXPECT_EQ(CmdEvaluate(c), 0);
-    const std::string out = testing::internal::GetCapturedStdout();
+    const std::string out = testing::internal::GetCapturedStderr();
     std::string lines;
     std::istringstream in(out);
     for (std::string line; std::getline(in, line);)
