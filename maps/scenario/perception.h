@@ -125,8 +125,9 @@ std::string LeakWhere(const LeakSpec& leak);
 /// Where random leaks are drawn.
 enum class LeakSites {
   /// At a valve, drawn in proportion to the default profile's risk: a leak is as likely as a
-  /// valve's risk. The default profile is the field's risk as known; a mission flown on another
-  /// profile (--profile) meets the same leaks.
+  /// valve's risk. The default profile is the field's risk as known (a --profile given on the
+  /// command line becomes the effective scenario's default, and so draws the leaks); the leak
+  /// bench's fixed-profile configurations fly other profiles over the same leaks.
   kValves,
   kValvesEven,  ///< at a valve, every valve alike
   kSeabed,      ///< at a seabed point in open water, at least 1 m from every valve and clear of the structures

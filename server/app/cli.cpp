@@ -110,7 +110,7 @@ void AddScenarioOverrides(CLI::App& cmd, ScenarioOverrides& o, OverrideSet set, 
                  "mission), replacing the scenario's leaks: the vehicles' sensors can see them, the server is not told")
       ->check(MustBeIn(0, 1000, /*whole=*/true));
   cmd.add_option("--leak-sites", o.leak_sites,
-                 "Where random leaks are: valves (by the default profile's risk), valves-even, seabed (open water "
+                 "Where random leaks are: valves (by the risk of the profile flown: --profile, else the scenario's default), valves-even, seabed (open water "
                  "1 m from every valve), flowlines (along the scenario's flowlines, 1 m from every valve) or joints "
                  "(at the flowlines' vertices: tie-ins, flanges; the same clearances); default valves")
       ->check(CLI::IsMember({"valves", "valves-even", "seabed", "flowlines", "joints"}));
@@ -510,7 +510,7 @@ int RunCli(int argc, char** argv) {
       ->capture_default_str();
   bench_leaks
       ->add_option("--sites,--leak-sites", leaks_cmd.sites,
-                   "Where the leaks are: valves (by the default profile's risk), valves-even, seabed (open water 1 m "
+                   "Where the leaks are: valves (by the risk of the profile flown: --profile, else the scenario's default), valves-even, seabed (open water 1 m "
                    "from every valve), flowlines (along the scenario's flowlines, 1 m from every valve) or joints (at "
                    "the flowlines' vertices, the same clearances)")
       ->check(CLI::IsMember({"valves", "valves-even", "seabed", "flowlines", "joints"}))
