@@ -41,7 +41,11 @@ std::string RiskRefusedLine(const std::string& reason) { return "the mission did
 std::string CommandRefusedLine(const std::string& reason) { return "the mission refused: " + reason; }
 
 std::string HostStartedLine(int pid, int count, int first_id, const std::string& log_path) {
-  return fmt::format("started agent host pid {} with {} vehicle(s): rov{}..rov{}, ids {}..{} (log: {})", pid, count,
+  if (count == 1) {
+    return fmt::format("started agent host pid {} with 1 vehicle: rov{}, id {} (log: {})", pid, first_id + 1, first_id,
+                       log_path);
+  }
+  return fmt::format("started agent host pid {} with {} vehicles: rov{}..rov{}, ids {}..{} (log: {})", pid, count,
                      first_id + 1, first_id + count, first_id, first_id + count - 1, log_path);
 }
 

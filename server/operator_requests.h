@@ -25,7 +25,8 @@ std::string RiskAppliedLine(const std::string& valve, double weight, double time
 std::string RiskRefusedLine(const std::string& reason);
 /// "the mission refused: <reason>" (a vehicle's removal or new ids refused)
 std::string CommandRefusedLine(const std::string& reason);
-/// "started agent host pid 4242 with 2 vehicle(s): rov9..rov10, ids 8..9 (log: DIR/agents-add-8.log)"
+/// "started agent host pid 4242 with 2 vehicles: rov9..rov10, ids 8..9 (log: DIR/agents-add-8.log)"; one: "with 1
+/// vehicle: rov3, id 2 (log: ...)"
 std::string HostStartedLine(int pid, int count, int first_id, const std::string& log_path);
 /// "vehicle 3 left the mission (told to at t = 12.0 s)"
 std::string VehicleLeftLine(int id, double told_at_s);

@@ -394,7 +394,7 @@ int RunCli(int argc, char** argv) {
   risk->require_subcommand(1);
   CLI::App* risk_set = risk->add_subcommand("set", "Set a valve's raw risk weight; vehicles re-allocate on the next cycle");
   risk_set->add_option("valve", op.valve, "Valve name, e.g. P1")->required();
-  risk_set->add_option("weight", op.weight, "Raw weight >= 0 (weights are normalised over all valves)")->required();
+  risk_set->add_option("weight", op.weight, "Raw weight in [0, 1e12] (weights are normalised over all valves)")->required();
   risk_set->add_option("--source", op.source, "Who says so (logged by the server)")->capture_default_str();
   AddMissionDir(*risk_set, op);
 

@@ -10,6 +10,7 @@
 #include <limits>
 #include <string>
 
+#include <fmt/format.h>
 #include <spdlog/spdlog.h>
 
 #include "maps/scenario/seabed_example.h"
@@ -29,6 +30,10 @@ maps::FieldOptions WithCountsSizedToEachOther(maps::FieldOptions options, bool x
                                               bool vehicles_given) {
   const maps::FieldOptions defaults;
   const double per_xt = static_cast<double>(defaults.valves) / defaults.xts;
+  if (valves_given && !xts_given && options.valves < 2) {
+    // Said of the count given: the default --xts it would otherwise be held to was not the user's.
+    throw maps::ScenarioError(fmt::format("--valves = {}: must be >= 2 (an XT carries 2 to 5 valves)", options.valves));
+  }
   if (xts_given && !valves_given && options.xts >= 1) {
     const long long xts = options.xts;
     const long long valves = std::clamp(std::llround(per_xt * static_cast<double>(xts)), 2 * xts, 5 * xts);

@@ -130,7 +130,7 @@ struct OperatorCommand {
 /// sage security init
 struct SecurityInitCommand {
   std::string dir;
-  double validity_days = 365.0;  ///< certificates' and permissions' validity
+  int validity_days = 365;  ///< certificates' and permissions' validity (whole days)
 };
 
 }  // namespace sage::server

@@ -21,7 +21,7 @@ namespace fs = std::filesystem;
 int CmdSecurityInit(const SecurityInitCommand& c) {
   proto::SecurityDirectorySummary summary;
   try {
-    summary = proto::InitSecurityDirectory(c.dir, {.validity_days = c.validity_days, .keep_ca_key = true});
+    summary = proto::InitSecurityDirectory(c.dir, {.validity_days = static_cast<double>(c.validity_days), .keep_ca_key = true});
   } catch (const proto::SecurityError& e) {
     throw maps::ScenarioError(e.what());
   }

@@ -97,6 +97,18 @@ TEST(FieldGenerateCounts, ACountLeftOutIsSizedToTheOneGiven) {
     ASSERT_GE(5 * sized.xts, valves) << valves;  // 2 to 5 valves per XT
     ASSERT_LE(2 * sized.xts, valves) << valves;
   }
+  // Too few valves given alone are refused in their own terms, not as "2 x --xts = 56" of a
+  // default --xts the user never gave.
+  for (const int valves : {-3, 0, 1}) {
+    maps::FieldOptions few;
+    few.valves = valves;
+    try {
+      WithCountsSizedToEachOther(few, false, true, false);
+      ADD_FAILURE() << "--valves " << valves << " taken";
+    } catch (const maps::ScenarioError& e) {
+      EXPECT_EQ(std::string(e.what()), "--valves = " + std::to_string(valves) + ": must be >= 2 (an XT carries 2 to 5 valves)");
+    }
+  }
   // The default field is the default's own size either way.
   maps::FieldOptions o;
   EXPECT_EQ(WithCountsSizedToEachOther(o, true, false, false).valves, defaults.valves);
