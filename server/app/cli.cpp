@@ -596,6 +596,13 @@ int RunCli(int argc, char** argv) {
     // The mission as mission.json says, on this machine's network as the options say.
     const auto mission = [&] {
       MissionFile m = FindMission(op.mission_dir);
+      // A mission whose record is complete has ended: said at once, naming it (a command had
+      // waited 3-6 s for an answer and said only that no mission listened on its domain).
+      if (const RecordSummary record = ReadRecordSummary(m.run_dir); record.complete) {
+        throw std::runtime_error(fmt::format("the mission in {} has ended (its record is complete, to t = {:.1f} s): none "
+                                             "to take this; start one with sage launch",
+                                             m.run_dir, record.recorded_until_s));
+      }
       m.network = op.network.Applied(m.network);
       return m;
     };

@@ -86,6 +86,21 @@ void CheckRunDirectoryFree(const std::string& dir) {
 
 void PointLatestAt(const std::string& dir) {
   std::error_code ignored;
+  // A mission still running that runs/latest pointed at loses it here: its operators are told
+  // how to reach it (a new user's `sage stop`, as the first launch had said, stopped this one).
+  const fs::path before = fs::read_symlink("runs/latest", ignored);
+  if (!before.empty() && !fs::equivalent(before, fs::absolute(dir), ignored)) {
+    try {
+      const MissionFile other = ReadMissionFile(before.string());
+      if (IsRunningLauncher(other.launcher_pid)) {
+        spdlog::warn("launch: runs/latest pointed at {} (launcher pid {}, still running) and now points here: give "
+                     "that mission's operator commands --mission {}",
+                     before.string(), other.launcher_pid, before.string());
+      }
+    } catch (const std::exception&) {
+      // No readable mission there: nothing running to lose.
+    }
+  }
   fs::create_directories("runs", ignored);
   fs::remove("runs/latest", ignored);
   fs::create_directory_symlink(fs::absolute(dir), "runs/latest", ignored);
@@ -136,6 +151,9 @@ int Launch(const LaunchCommand& c) {
     maps::CheckSeabedModel(scenario);  // a bad seabed map is refused here, naming the user's file, not by the server
     out_dir = c.out_dir.empty() ? (fs::path("runs") / (scenario.name + "_launch")).string() : c.out_dir;
     CheckRunDirectoryFree(out_dir);
+    if (std::error_code ignored; fs::exists(fs::path(out_dir) / "trajectory.csv", ignored)) {
+      spdlog::warn("launch: {}: replacing the mission recorded there (give --out another directory to keep it)", out_dir);
+    }
     PrepareRunDirectory(out_dir);
     // A run directory used before keeps no agent-host logs of the earlier mission to mislead.
     for (const fs::directory_entry& entry : fs::directory_iterator(out_dir)) {

@@ -418,3 +418,40 @@ TEST(EvaluateWarnings, SaysWhatGoesBeyondTheRecord) {
 
 }  // namespace
 }  // namespace sage::server
+
+namespace sage::server {
+namespace {
+
+// An operator command for a mission whose record is complete says at once that it has ended,
+// naming its directory (it had waited 3-6 s for an answer and named only the DDS domain), with
+// status 1 (no mission to take it), for each command.
+TEST(OperatorDoor, AnEndedMissionIsSaidAtOnce) {
+  const std::filesystem::path dir = std::filesystem::temp_directory_path() / "sage_ended_mission_test";
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir);
+  MissionFile m;
+  m.domain_id = 7;
+  m.run_dir = dir.string();
+  m.scenario_path = (dir / "scenario.yaml").string();
+  WriteMissionFile(dir.string(), m);
+  std::ofstream(dir / "trajectory.csv") << "t,vehicle,x,y\n0,0,1,1\n12.5,0,1.5,1\n";
+  std::ofstream(dir / "metrics.json") << R"({"complete": true, "duration_s": 12.5})";
+  for (const std::vector<std::string>& command :
+       std::vector<std::vector<std::string>>{{"stop"}, {"risk", "set", "P1", "2"}, {"vehicle", "remove", "0"}, {"vehicle", "add"}}) {
+    std::vector<std::string> args = {"sage"};
+    args.insert(args.end(), command.begin(), command.end());
+    args.insert(args.end(), {"--mission", dir.string()});
+    std::vector<char*> argv;
+    for (std::string& a : args) argv.push_back(a.data());
+    testing::internal::CaptureStderr();
+    EXPECT_EQ(RunCli(static_cast<int>(argv.size()), argv.data()), 1) << command.front();
+    const std::string err = testing::internal::GetCapturedStderr();
+    EXPECT_NE(err.find("the mission in " + dir.string() + " has ended (its record is complete, to t = 12.5 s)"),
+              std::string::npos)
+        << err;
+  }
+  std::filesystem::remove_all(dir);
+}
+
+}  // namespace
+}  // namespace sage::server
