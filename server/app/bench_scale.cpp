@@ -342,7 +342,7 @@ int CmdBenchScale(const BenchScaleCommand& c) {
   const fs::path out(c.out_dir);
   PrepareRunDirectory(out.string());
   PrepareRunDirectory((out / "fields").string());
-  PrepareRunDirectory((out / "runs").string());
+  if (c.transport != "inproc") PrepareRunDirectory((out / "runs").string());  // the launches' run directories
 
   std::string vehicles_text;
   for (int n : counts) vehicles_text += (vehicles_text.empty() ? "" : ",") + std::to_string(n);
@@ -405,10 +405,13 @@ int CmdBenchScale(const BenchScaleCommand& c) {
           spdlog::info("{}: {}", label, RowSummary(row));
           rows.push_back(row);
           const std::string preamble = fmt::format(
-              "Command: `{}`. Machine: {}. Fields in {}/fields (weak scaling: N XTs, 3.5 N valves, N BlueROV2s), DDS "
-              "run directories and launcher logs in {}/runs. In-process runs are forked from the benchmark process, "
-              "whose resident memory at the fork ({:.0f} MB at most) is part of their peak RSS.",
-              command, machine, c.out_dir, c.out_dir, parent_rss_mb);
+              "Command: `{}`. Machine: {}. Fields in {}/fields (weak scaling: N XTs, 3.5 N valves, N BlueROV2s){}.{}",
+              command, machine, c.out_dir,
+              c.transport != "inproc" ? fmt::format(", DDS run directories and launcher logs in {}/runs", c.out_dir) : "",
+              c.transport != "dds" ? fmt::format(" In-process runs are forked from the benchmark process, whose resident "
+                                                 "memory at the fork ({:.0f} MB at most) is part of their peak RSS.",
+                                                 parent_rss_mb)
+                                   : "");
           WriteScaleReport(out.string(), rows, preamble);
         }
       }

@@ -434,6 +434,12 @@ std::string ScaleSvg(const std::vector<ScaleRow>& all_rows) {
   double lx = kLeft;
   for (const char* transport : {"inproc", "dds"}) {
     for (const auto& [controller, colour] : kColour) {
+      // Only the lines drawn (an in-process bench's legend had listed "over DDS" lines it has not).
+      const std::string& name = controller;  // a structured binding is not captured (clang)
+      const bool drawn = std::any_of(rows.begin(), rows.end(), [&](const ScaleRow& r) {
+        return r.transport == transport && r.controller == name;
+      });
+      if (!drawn) continue;
       const bool dashed = std::string(transport) == "dds";
       put("<line x1=\"{:.1f}\" y1=\"{:.1f}\" x2=\"{:.1f}\" y2=\"{:.1f}\" stroke=\"{}\" stroke-width=\"2\"{}/>\n", lx,
           legend_y - 4.0, lx + 28.0, legend_y - 4.0, colour, dashed ? " stroke-dasharray=\"6 4\"" : "");

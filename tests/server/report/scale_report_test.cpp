@@ -205,6 +205,16 @@ TEST(ScaleSvg, LinePerControllerAndTransport) {
   EXPECT_EQ(count("real time</text>"), 1u);
   for (const char* label : {">1<", ">10<", ">100<", ">1,000<", ">10,000<"}) EXPECT_GT(count(label), 0u) << label;
   EXPECT_EQ(svg.find("nan"), std::string::npos);
+  EXPECT_EQ(count("over DDS</text>"), 2u);
+  EXPECT_EQ(count("in-process</text>"), 2u);
+  // An in-process bench's legend names only its own lines.
+  std::vector<ScaleRow> inproc;
+  for (const ScaleRow& r : rows)
+    if (r.transport == "inproc") inproc.push_back(r);
+  const std::string only = ScaleSvg(inproc);
+  EXPECT_EQ(only.find("over DDS</text>"), std::string::npos);
+  EXPECT_NE(only.find("ergodic, in-process</text>"), std::string::npos);
+  EXPECT_NE(only.find("A* tours, in-process</text>"), std::string::npos);
 }
 
 // ReadMetricsSummary reads back what MetricsJson writes; a file without the fleet figures is a
