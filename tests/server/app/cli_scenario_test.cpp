@@ -159,11 +159,6 @@ TEST(CheckFleetFitsField, RefusesRegionsAndToursForAFleetFarSmallerThanItsField)
   EXPECT_NO_THROW(CheckFleetFitsField(maps::LoadScenario(kFleetField), true));  // 20 valves: planned at once
 }
 
-}  // namespace
-}  // namespace sage::server
-
-namespace sage::server {
-namespace {
 
 // `sage launch --resume` flies the run's own scenario: an override given with it is named and
 // refused (a resumed --duration 100 had run to the run's 60 s with exit 0); the network options
@@ -222,11 +217,6 @@ TEST(PortOption, OffersOffOnlyWhereAllowed) {
   EXPECT_EQ(message("65536", true), "--http = 65536: must be a port in 0..65535 (0: any free one) or off");
 }
 
-}  // namespace
-}  // namespace sage::server
-
-namespace sage::server {
-namespace {
 
 // A number option out of its range is told in the project's words (CLI11 had said "Value 5 not
 // in range 0.000000 to 4.000000"), and the command refuses it with status 2.
@@ -247,11 +237,6 @@ TEST(RangeProblem, SaysWhatIsAllowed) {
   EXPECT_EQ(RunCli(5, argv), 2);
 }
 
-}  // namespace
-}  // namespace sage::server
-
-namespace sage::server {
-namespace {
 
 // `sage launch --resume` goes on with the controller and time scale of the mission's own
 // mission.json: a -c or --time-scale given with it is refused by name (both had been taken and
@@ -285,11 +270,6 @@ TEST(ScenarioOverrides, ResumeRefusesAControllerOrTimeScale) {
   EXPECT_FALSE(std::filesystem::exists(dir));
 }
 
-}  // namespace
-}  // namespace sage::server
-
-namespace sage::server {
-namespace {
 
 nlohmann::json ReadJson(const std::filesystem::path& path) {
   std::ifstream in(path);
@@ -336,11 +316,6 @@ TEST(RunStop, AStoppedRunWritesItsWholeRecord) {
   std::filesystem::remove_all(dir);
 }
 
-}  // namespace
-}  // namespace sage::server
-
-namespace sage::server {
-namespace {
 
 // --profile becomes the effective scenario's default profile, so the run directory's
 // scenario.yaml flies (and `sage evaluate` scores) the profile the run flew: it had kept the
@@ -360,11 +335,6 @@ TEST(ScenarioOverrides, TheProfileGivenIsTheEffectiveScenariosDefault) {
   std::filesystem::remove(file);
 }
 
-}  // namespace
-}  // namespace sage::server
-
-namespace sage::server {
-namespace {
 
 // An A* tour mission warns of the options that shape only the ergodic controller (a new user's
 // `-c astar -K 5` had run without a word); none given, nothing to say.
@@ -381,11 +351,6 @@ TEST(ScenarioOverrides, NamesTheErgodicOnlyOptionsGiven) {
   EXPECT_EQ(ErgodicOnlyOverrides(o).rfind("--basis-order, --forgetting, --turn-radius: ", 0), 0u) << ErgodicOnlyOverrides(o);
 }
 
-}  // namespace
-}  // namespace sage::server
-
-namespace sage::server {
-namespace {
 
 // sage evaluate says where its figures do not rest on the record: a --duration past the last
 // sample (every gap runs on to it), and the profile's events after the evaluated end.
@@ -416,11 +381,6 @@ TEST(EvaluateWarnings, SaysWhatGoesBeyondTheRecord) {
   std::filesystem::remove(csv);
 }
 
-}  // namespace
-}  // namespace sage::server
-
-namespace sage::server {
-namespace {
 
 // An operator command for a mission whose record is complete says at once that it has ended,
 // naming its directory (it had waited 3-6 s for an answer and named only the DDS domain), with
