@@ -178,12 +178,22 @@ Scenario WithVehicleCount(const Scenario& scenario, int count) {
           return v.model == MotionModel::kBlueRov2 ? kMinAreaPerBlueRov2_m2 : kMinAreaPerPointVehicle_m2;
         };
         double used_m2 = 0.0;
+        std::size_t joins = 0;
         for (const VehicleSpec& v : s.vehicles) used_m2 += area_of(v);
-        for (const FleetEvent& e : s.fleet_events) used_m2 += e.kind == FleetEvent::Kind::kJoin ? area_of(e.vehicle) : 0.0;
+        for (const FleetEvent& e : s.fleet_events) {
+          if (e.kind != FleetEvent::Kind::kJoin) continue;
+          used_m2 += area_of(e.vehicle);
+          ++joins;
+        }
         const double free_m2 = s.workspace.width_m * s.workspace.height_m * (1.0 + 1e-12) - used_m2;
         const std::size_t by_area = free_m2 > 0.0 ? static_cast<std::size_t>(std::floor(free_m2 / area_of(first))) : 0;
+        // The joins are named: a running mission's limit (sage vehicle add) counts them in its fleet.
+        const std::string besides = joins == 0 ? std::string()
+                                               : " at the start, besides the " + std::to_string(joins) +
+                                                     (joins == 1 ? " that joins later" : " that join later");
         throw ScenarioError(option + ": the workspace has room for at most " +
-                            std::to_string(s.vehicles.size() + std::min(dense_room, by_area)) + " vehicles (starts " +
+                            std::to_string(s.vehicles.size() + std::min(dense_room, by_area)) + " vehicles" + besides +
+                            " (starts " +
                             FormatNumber(dense_separation) + " m apart and " + FormatNumber(kStartFootprintMargin_m) +
                             " m from structures, " + FormatNumber(area_of(first)) + " m^2 of workspace each)");
       }

@@ -784,6 +784,17 @@ TEST(Scenario, WithVehicleCountSaysHowManyFit) {
   ASSERT_GT(fit, field.vehicles.size());
   EXPECT_EQ(WithVehicleCount(field, static_cast<int>(fit)).vehicles.size(), fit);
   EXPECT_THROW(WithVehicleCount(field, static_cast<int>(fit) + 1), ScenarioError);
+  // fleet_field's vehicle joining at 200 s is in the area's count, and said so (a running
+  // mission's `sage vehicle add` limit, which counts it in the fleet, had read one more).
+  EXPECT_NE(message.find("vehicles at the start, besides the 1 that joins later"), std::string::npos) << message;
+  Scenario no_joins = field;
+  std::erase_if(no_joins.fleet_events, [](const FleetEvent& e) { return e.kind == FleetEvent::Kind::kJoin; });
+  try {
+    WithVehicleCount(no_joins, 100000);
+    ADD_FAILURE() << "100,000 vehicles taken";
+  } catch (const ScenarioError& e) {
+    EXPECT_EQ(std::string(e.what()).find("besides"), std::string::npos) << e.what();
+  }
 }
 
 // A server and an agent host compare VehicleFingerprint before the host joins: it ignores what
