@@ -4,6 +4,8 @@
 #include <mutex>
 #include <utility>
 
+#include "proto/dds_log.h"
+
 namespace sage::proto {
 
 namespace {
@@ -33,6 +35,7 @@ DomainRegistry& Registry() {
 }
 
 std::shared_ptr<Entity> AcquireDomain(uint32_t domain_id, const std::string& config_xml) {
+  RouteDdsLog();  // before Cyclone's first word: its warnings in the mission's words, not raw on a terminal
   DomainRegistry& registry = Registry();
   std::lock_guard lock(registry.mutex);
   DomainRegistry::Slot& slot = registry.slots[domain_id];
