@@ -6,14 +6,12 @@
 #include <dds/dds.h>
 #include <gtest/gtest.h>
 
+#include "tests/support/text.h"
+
 namespace sage::proto {
 namespace {
 
-std::size_t Count(const std::string& text, const std::string& what) {
-  std::size_t n = 0;
-  for (std::size_t at = text.find(what); at != std::string::npos; at = text.find(what, at + 1)) ++n;
-  return n;
-}
+using sage::testing::Occurrences;
 
 // The refusal a launch's terminal had shown raw becomes one line that says what it means; its
 // kind is the same whichever participant it names. Another message keeps its words; numbers
@@ -38,19 +36,19 @@ TEST(DdsLog, TellsCyclonesLinesInTheMissionsWords) {
 TEST(DdsLog, CyclonesLogGoesThroughItOnceAKind) {
   RouteDdsLog();
   RouteDdsLog();  // idempotent
-  testing::internal::CaptureStderr();
+  ::testing::internal::CaptureStderr();
   dds_log(DDS_LC_WARNING, __FILE__, __LINE__, "test", "Remote secure participant %x:%x:%x:%x not allowed\n", 0xab7fdb26u, 1u,
           2u, 0x1c1u);
   dds_log(DDS_LC_WARNING, __FILE__, __LINE__, "test", "Remote secure participant %x:%x:%x:%x not allowed\n", 0x1234u, 5u, 6u,
           0x1c1u);
   dds_log(DDS_LC_WARNING, __FILE__, __LINE__, "test", "sage dds_log test: a lease of %d ms ran out\n", 250);
   dds_log(DDS_LC_WARNING, __FILE__, __LINE__, "test", "sage dds_log test: a lease of %d ms ran out\n", 500);
-  const std::string err = testing::internal::GetCapturedStderr();
-  EXPECT_EQ(Count(err, "sage: dds: a secured participant on this DDS domain was refused"), 1u) << err;
-  EXPECT_EQ(Count(err, "sage: dds: sage dds_log test: a lease of 250 ms ran out"), 1u) << err;
-  EXPECT_EQ(Count(err, "a lease of 500 ms"), 0u) << err;
-  EXPECT_EQ(Count(err, "Remote secure participant"), 0u) << err;
-  EXPECT_EQ(Count(err, "\n"), 2u) << err;
+  const std::string err = ::testing::internal::GetCapturedStderr();
+  EXPECT_EQ(Occurrences(err, "sage: dds: a secured participant on this DDS domain was refused"), 1u) << err;
+  EXPECT_EQ(Occurrences(err, "sage: dds: sage dds_log test: a lease of 250 ms ran out"), 1u) << err;
+  EXPECT_EQ(Occurrences(err, "a lease of 500 ms"), 0u) << err;
+  EXPECT_EQ(Occurrences(err, "Remote secure participant"), 0u) << err;
+  EXPECT_EQ(Occurrences(err, "\n"), 2u) << err;
 }
 
 }  // namespace

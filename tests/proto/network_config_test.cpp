@@ -11,15 +11,12 @@
 #include "proto/dds_endpoints.h"
 #include "proto/messages.h"
 #include "proto/qos.h"
+#include "tests/support/text.h"
 
 namespace sage::proto {
 namespace {
 
-std::size_t Count(const std::string& text, const std::string& what) {
-  std::size_t n = 0;
-  for (std::size_t at = text.find(what); at != std::string::npos; at = text.find(what, at + 1)) ++n;
-  return n;
-}
+using sage::testing::Occurrences;
 
 TEST(NetworkConfig, DefaultIsThisMachineAlone) {
   EXPECT_EQ(CycloneConfigXml(NetworkConfig{}, 8), LocalhostConfigXml(8));
@@ -50,7 +47,7 @@ TEST(NetworkConfig, MulticastOnAnInterfaceFollowsItsFlag) {
   const std::string xml = CycloneConfigXml(network, 8);
   EXPECT_NE(xml.find("<AllowMulticast>true</AllowMulticast>"), std::string::npos);
   EXPECT_NE(xml.find("<Peers><Peer address=\"10.20.30.2\"/></Peers>"), std::string::npos) << xml;
-  EXPECT_EQ(Count(xml, "<Peer "), 1u) << "with multicast this machine needs no peer entry";
+  EXPECT_EQ(Occurrences(xml, "<Peer "), 1u) << "with multicast this machine needs no peer entry";
 }
 
 TEST(NetworkConfig, RefusesAnInterfaceThisMachineHasNot) {
@@ -72,7 +69,7 @@ TEST(NetworkConfig, PeersAreEscaped) {
   NetworkConfig network;
   network.peers = {"a\"/><Peer address=\"evil"};
   const std::string xml = CycloneConfigXml(network, 8);
-  EXPECT_EQ(Count(xml, "<Peer "), 2u) << xml;
+  EXPECT_EQ(Occurrences(xml, "<Peer "), 2u) << xml;
   EXPECT_NE(xml.find("&quot;"), std::string::npos);
 }
 
