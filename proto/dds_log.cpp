@@ -21,8 +21,7 @@ std::string_view Trimmed(std::string_view text) {
 std::string KindOf(std::string_view text) {
   std::string kind;
   bool in_number = false;
-  for (std::size_t i = 0; i < text.size(); ++i) {
-    const char c = text[i];
+  for (const char c : text) {
     const bool hex = std::isxdigit(static_cast<unsigned char>(c)) != 0;
     // A word's own letters a-f stay: only digits start a number, which then takes hex letters,
     // ':' and '.' along.
@@ -56,18 +55,16 @@ std::string DdsLogLine(std::string_view text, std::string* kind) {
   text = Trimmed(text);
   if (kind != nullptr) kind->clear();
   if (text.empty()) return "";
-  std::string line;
   if (text.find("Remote secure participant") != std::string_view::npos && text.find("not allowed") != std::string_view::npos) {
     // Cyclone refused a secured participant that none of this process's participants accepts:
     // one of the mission's processes closing its participant while the others still announce, or
     // another mission's or tool's credentials on this domain. Nothing of the mission is lost.
-    line = "sage: dds: a secured participant on this DDS domain was refused (one this process's credentials do not "
+    if (kind != nullptr) *kind = "secure participant refused";
+    return "sage: dds: a secured participant on this DDS domain was refused (one this process's credentials do not "
            "accept: a process of the mission closing, or another mission's or tool's); nothing of the mission is lost";
-  } else {
-    line = "sage: dds: " + std::string(text);
   }
-  if (kind != nullptr) *kind = line.find("was refused") != std::string::npos ? "secure participant refused" : KindOf(text);
-  return line;
+  if (kind != nullptr) *kind = KindOf(text);
+  return "sage: dds: " + std::string(text);
 }
 
 void RouteDdsLog() {
