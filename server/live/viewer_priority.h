@@ -11,6 +11,9 @@
 
 namespace sage::live {
 
+/// The name of the view's frame thread (the one that writes each frame's JSON), as `top -H` shows it.
+inline constexpr const char* kPublisherThreadName = "sage-view";
+
 /// Nice value of the view's threads: about a tenth of the CPU share of a nice-0 thread under load.
 inline constexpr int kViewerNice = 10;
 

@@ -5,10 +5,21 @@
 // view nobody watches leaves its frames' JSON to the first reader; once the mission has ended
 // every request is answered so.
 #include "server/live/live_view.h"
+#include "server/live/viewer_priority.h"
+
+#include <sched.h>
 
 #include <atomic>
 #include <chrono>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <optional>
+#include <sstream>
+#include <string>
 #include <thread>
+#include <utility>
+#include <vector>
 
 #include <gtest/gtest.h>
 #include <httplib.h>
@@ -270,6 +281,33 @@ TEST(ViewServer, AfterTheMissionEveryRequestIsAnsweredSo) {
 }
 
 // A port in use is one line naming the option, not a crash.
+// The thread that writes the frames runs below the mission: SCHED_BATCH at the viewer's nice
+// value (it had been raised back to nice 5 after its starter set 10). Read from /proc, as top
+// shows it; fields after the command's closing parenthesis: the 17th is nice, the 39th the policy.
+TEST(ViewServer, TheFrameThreadRunsAtTheViewersPriority) {
+  LiveView live(Scene(), Options());
+  std::optional<std::pair<long, long>> nice_policy;
+  for (int attempt = 0; attempt < 100 && !nice_policy; ++attempt) {
+    for (const auto& task : std::filesystem::directory_iterator("/proc/self/task")) {
+      std::ifstream comm(task.path() / "comm");
+      std::string name;
+      std::getline(comm, name);
+      if (name != kPublisherThreadName) continue;
+      std::ifstream stat_file(task.path() / "stat");
+      std::string stat((std::istreambuf_iterator<char>(stat_file)), std::istreambuf_iterator<char>());
+      std::istringstream rest(stat.substr(stat.rfind(')') + 2));
+      std::vector<std::string> fields{std::istream_iterator<std::string>(rest), std::istream_iterator<std::string>()};
+      ASSERT_GE(fields.size(), 39u) << stat;
+      const long nice = std::stol(fields[16]), policy = std::stol(fields[38]);
+      if (nice == kViewerNice || attempt == 99) nice_policy = std::make_pair(nice, policy);
+    }
+    if (!nice_policy) std::this_thread::sleep_for(10ms);  // the thread lowers itself as it starts
+  }
+  ASSERT_TRUE(nice_policy.has_value()) << "no thread named " << kPublisherThreadName;
+  EXPECT_EQ(nice_policy->first, kViewerNice);
+  EXPECT_EQ(nice_policy->second, SCHED_BATCH);
+}
+
 TEST(ViewServer, APortInUseIsABadInput) {
   LiveView first(Scene(), Options());
   LiveViewOptions same = Options();
