@@ -47,6 +47,7 @@ std::shared_ptr<Entity> AcquireDomain(uint32_t domain_id, const std::string& con
     return existing;
   }
   const std::string operation = "dds_create_domain(" + std::to_string(domain_id) + ")";
+  const ParticipantStartup starting;  // the domain's network starts here: peers may be heard already
   Entity created(CheckDds(dds_create_domain(domain_id, config_xml.c_str()), operation));
   // The deleter takes the registry lock so that a Participant created on this domain id while
   // the last one is being destroyed waits for the deletion instead of failing.
@@ -90,6 +91,7 @@ void Entity::Reset() noexcept {
 Participant::Participant(uint32_t domain_id, const std::string& config_xml)
     : domain_id_(domain_id), domain_(AcquireDomain(domain_id, config_xml)) {
   const std::string operation = "dds_create_participant(" + std::to_string(domain_id) + ")";
+  const ParticipantStartup starting;  // a peer heard before this participant is set up may be refused for a moment
   participant_ = Entity(CheckDds(dds_create_participant(domain_id, nullptr, nullptr), operation));
 }
 

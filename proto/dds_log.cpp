@@ -1,5 +1,6 @@
 #include "proto/dds_log.h"
 
+#include <atomic>
 #include <cctype>
 #include <cstdio>
 #include <mutex>
@@ -33,6 +34,9 @@ std::string KindOf(std::string_view text) {
   return kind;
 }
 
+std::atomic<int> g_starting{0};  // participants of this process being made (ParticipantStartup)
+constexpr const char* kRefusedKind = "secure participant refused";
+
 std::mutex g_told_mutex;
 std::set<std::string>* g_told = nullptr;  // kinds told in this process (never freed: Cyclone may log at exit)
 
@@ -42,6 +46,7 @@ extern "C" void TellDdsLog(void*, const dds_log_data_t* data) {
   std::string kind;
   const std::string line = DdsLogLine(std::string_view(data->message, data->size), &kind);
   if (line.empty()) return;
+  if (kind == kRefusedKind && g_starting.load() > 0) return;  // the startup race: not told, nor marked told
   {
     std::lock_guard lock(g_told_mutex);
     if (!g_told->insert(kind).second) return;
@@ -59,13 +64,16 @@ std::string DdsLogLine(std::string_view text, std::string* kind) {
     // Cyclone refused a secured participant that none of this process's participants accepts:
     // one of the mission's processes closing its participant while the others still announce, or
     // another mission's or tool's credentials on this domain. Nothing of the mission is lost.
-    if (kind != nullptr) *kind = "secure participant refused";
+    if (kind != nullptr) *kind = kRefusedKind;
     return "sage: dds: a secured participant on this DDS domain was refused (one this process's credentials do not "
            "accept: a process of the mission closing, or another mission's or tool's); nothing of the mission is lost";
   }
   if (kind != nullptr) *kind = KindOf(text);
   return "sage: dds: " + std::string(text);
 }
+
+ParticipantStartup::ParticipantStartup() { ++g_starting; }
+ParticipantStartup::~ParticipantStartup() { --g_starting; }
 
 void RouteDdsLog() {
   static std::once_flag once;

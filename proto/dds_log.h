@@ -14,6 +14,19 @@ namespace sage::proto {
 /// ports or times it names.
 std::string DdsLogLine(std::string_view text, std::string* kind);
 
+/// While one lives (this process making a participant), Cyclone's refusals of secured
+/// participants are not told: a launch's server, made at the same moment as its agent hosts, had
+/// refused a host's participant it heard while its own was still being set up, and accepted it a
+/// moment later (the mission ran whole), yet "a secured participant ... was refused" had reached
+/// the terminal in launches begun within seconds of another. A refusal after it is told as before.
+class ParticipantStartup {
+ public:
+  ParticipantStartup();
+  ~ParticipantStartup();
+  ParticipantStartup(const ParticipantStartup&) = delete;
+  ParticipantStartup& operator=(const ParticipantStartup&) = delete;
+};
+
 /// Routes Cyclone's log (its info, warnings and errors; traces stay off) through DdsLogLine to
 /// stderr, each kind once a process. Called before the first participant; idempotent.
 void RouteDdsLog();
