@@ -118,6 +118,7 @@ std::string WhatWasKept(const std::string& dir) {
 }  // namespace
 
 int Launch(const LaunchCommand& c) {
+  LogToStderr();  // the launcher's and, relayed, the server's log lines; the table alone on stdout
   // The live view's ports, checked before anything starts.
   CheckPortFree("--http", PortOption("--http", c.http).value_or(0));
   CheckPortFree("--foxglove", PortOption("--foxglove", c.foxglove).value_or(0));

@@ -13,10 +13,12 @@
 #include <filesystem>
 #include <fstream>
 #include <iterator>
+#include <memory>
 #include <stdexcept>
 #include <thread>
 
 #include <fmt/format.h>
+#include <spdlog/sinks/stdout_color_sinks.h>
 #include <spdlog/spdlog.h>
 
 namespace sage::server {
@@ -28,6 +30,22 @@ namespace {
 std::string SelfExe() { return fs::read_symlink("/proc/self/exe").string(); }
 
 }  // namespace
+
+void LogToStderr() {
+  static const std::shared_ptr<spdlog::logger> logger = [] {
+    auto made = std::make_shared<spdlog::logger>("sage", std::make_shared<spdlog::sinks::stderr_color_sink_mt>());
+    made->set_pattern("%^[%l]%$ %v");
+    return made;
+  }();
+  spdlog::set_default_logger(logger);
+}
+
+bool IsLogLine(std::string_view line) {
+  for (const std::string_view level : {"[trace] ", "[debug] ", "[info] ", "[warning] ", "[error] ", "[critical] "}) {
+    if (line.starts_with(level)) return true;
+  }
+  return false;
+}
 
 // fork + exec of this same `sage` binary; stdout/stderr go to `log_path` unless it is empty.
 // With `stdout_pipe` the child's stdout goes into a pipe whose non-blocking read end is
@@ -166,8 +184,9 @@ void TerminalRelay::EndProgress() {
 void TerminalRelay::Print(const std::string& line) {
   if (tty_ && !progress_.empty()) std::fputs("\r\033[K", stderr);
   std::fflush(stderr);
-  std::fputs(line.c_str(), stdout);
-  std::fflush(stdout);
+  std::FILE* to = IsLogLine(line) ? stderr : stdout;
+  std::fputs(line.c_str(), to);
+  std::fflush(to);
 }
 
 }  // namespace sage::server

@@ -5,6 +5,7 @@
 #include <sys/types.h>
 
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "maps/scenario/scenario.h"
@@ -30,9 +31,18 @@ int ExitCode(int wait_status);
 /// True if `pid` runs a `sage launch` (another launcher holding a run directory).
 bool IsRunningLauncher(int pid);
 
+/// What a command says along the way goes to stderr, its result to stdout (`sage run ... >
+/// table.txt`, `sage launch ... > table.txt` keep the table alone): from now on the default
+/// logger writes "[level] message" lines to stderr.
+void LogToStderr();
+/// Whether a line a child printed is one of its log lines ("[info] ...", "[warning] ...": the
+/// pattern every sage process logs with) rather than its result.
+bool IsLogLine(std::string_view line);
+
 // The launcher owns the terminal: the server's output comes through a pipe and is printed here
 // line by line, so on a terminal the redrawn progress line is cleared first and drawn again
-// after, and never ends up with a log line glued to it.
+// after, and never ends up with a log line glued to it. Its log lines go to stderr, the rest
+// (the final table) to stdout.
 class TerminalRelay {
  public:
   TerminalRelay(int fd, bool tty) : fd_(fd), tty_(tty) {}

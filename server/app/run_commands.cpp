@@ -12,9 +12,9 @@
 #include <memory>
 
 #include <fmt/format.h>
-#include <spdlog/sinks/stdout_color_sinks.h>
 #include <spdlog/spdlog.h>
 
+#include "server/app/processes.h"
 #include "server/mission.h"
 #include "server/report/report.h"
 #include "server/report/run_directory.h"
@@ -105,17 +105,6 @@ RunOutcome RunInto(const maps::Scenario& scenario, ControllerKind kind, const st
   run.Finish(mission.core(), mission.world(), outcome.end_s, outcome.stopped);
   outcome.metrics = mission.core().Metrics(outcome.end_s);
   return outcome;
-}
-
-// What run, compare and evaluate say along the way goes to stderr, their table to stdout:
-// `sage run ... > table.txt` keeps the table alone (the log had gone into it).
-void LogToStderr() {
-  static const std::shared_ptr<spdlog::logger> logger = [] {
-    auto made = std::make_shared<spdlog::logger>("sage", std::make_shared<spdlog::sinks::stderr_color_sink_mt>());
-    made->set_pattern("%^[%l]%$ %v");
-    return made;
-  }();
-  spdlog::set_default_logger(logger);
 }
 
 void SayStopped(const std::string& what, const RunOutcome& outcome, double duration_s, const fs::path& dir) {

@@ -1,0 +1,51 @@
+// The launcher's terminal: the server's lines come through a pipe, its log lines ("[info] ...")
+// go on to stderr and everything else (the final table) to stdout, so `sage launch ... >
+// table.txt` keeps the table alone, as `sage run` does.
+#include "server/app/processes.h"
+
+#include <unistd.h>
+
+#include <string>
+
+#include <gtest/gtest.h>
+
+namespace sage::server {
+namespace {
+
+TEST(LogLines, AreTheLevelsOfTheSagePattern) {
+  EXPECT_TRUE(IsLogLine("[info] server: rov1 (id 0) joined at t = 0.0 s\n"));
+  EXPECT_TRUE(IsLogLine("[warning] --duration = 5: left out\n"));
+  EXPECT_TRUE(IsLogLine("[error] x"));
+  EXPECT_FALSE(IsLogLine("P1             0.034 |      0       ---        4.6 s\n"));
+  EXPECT_FALSE(IsLogLine("[P1] a valve's name in brackets\n"));
+  EXPECT_FALSE(IsLogLine("info] no opening bracket\n"));
+  EXPECT_FALSE(IsLogLine(""));
+}
+
+TEST(TerminalRelay, LogLinesGoToStderrAndTheTableToStdout) {
+  int fds[2];
+  ASSERT_EQ(pipe(fds), 0);
+  const std::string child =
+      "[info] server: rov1 (id 0) joined at t = 0.0 s\n"
+      "valve     weight | visits\n"
+      "[warning] server: no vehicle is alive at t = 9.0 s\n"
+      "P1         0.034 |      3\n"
+      "the last line, unterminated";
+  ASSERT_EQ(write(fds[1], child.data(), child.size()), static_cast<ssize_t>(child.size()));
+  close(fds[1]);
+  testing::internal::CaptureStdout();
+  testing::internal::CaptureStderr();
+  {
+    TerminalRelay relay(fds[0], /*tty=*/false);  // owns the read end
+    relay.Relay(/*to_eof=*/true);
+  }
+  const std::string out = testing::internal::GetCapturedStdout();
+  const std::string err = testing::internal::GetCapturedStderr();
+  EXPECT_EQ(out, "valve     weight | visits\nP1         0.034 |      3\nthe last line, unterminated\n");
+  EXPECT_EQ(err,
+            "[info] server: rov1 (id 0) joined at t = 0.0 s\n"
+            "[warning] server: no vehicle is alive at t = 9.0 s\n");
+}
+
+}  // namespace
+}  // namespace sage::server
