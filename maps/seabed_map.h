@@ -28,10 +28,8 @@ struct SeabedColumns;
 inline constexpr double kOperatingDepthMin_m = 0.5;
 inline constexpr double kOperatingDepthMax_m = 1.5;
 
-/// How close (m) a vehicle's centre comes to a structure: a BlueROV2 Heavy's half diagonal
-/// (0.37 m) and a little water. The obstacle filter keeps vehicles this far out, and the risk
-/// field puts no coverage inside it.
-inline constexpr double kVehicleClearance_m = 0.4;
+// kVehicleClearance_m (how close a vehicle's centre comes to a structure) is in scenario.h: a
+// scenario's starts keep it too.
 
 /// Columns (grid cells) a seabed model may have: every process of a mission builds it, and 4
 /// million (a 200 m square at 0.1 m, 1 km at 0.5 m) took 6.8 s of CPU and 615 MB there

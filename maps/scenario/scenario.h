@@ -78,6 +78,19 @@ inline constexpr double kMaxOctoMapVoxels = 32767.0;
 /// Largest start jitter (m): a vehicle's start stays near the start_m the scenario names.
 inline constexpr double kMaxStartJitter_m = 0.5;
 
+/// How close (m) a vehicle's centre comes to a structure: a BlueROV2 Heavy's half diagonal
+/// (0.37 m) and a little water. The obstacle filter keeps vehicles this far out, and the risk
+/// field puts no coverage inside it.
+inline constexpr double kVehicleClearance_m = 0.4;
+/// A BlueROV2 Heavy's hull diagonal (m; 0.457 x 0.575 m): BlueROV2s that start together start
+/// at least this far apart.
+inline constexpr double kBlueRov2Diagonal_m = 0.74;
+/// How far (m) a vehicle's start_m keeps from every structure's footprint: the start jitter may
+/// move it that far, and a BlueROV2's hull (hull = true) reaches kVehicleClearance_m beyond.
+inline constexpr double StartFootprintReach(double start_jitter_m, bool hull) {
+  return start_jitter_m + (hull ? kVehicleClearance_m : 0.0);
+}
+
 /// Longest name of a scenario, structure, valve, vehicle or profile (characters).
 inline constexpr std::size_t kMaxNameLength = 64;
 

@@ -37,10 +37,19 @@ std::uint64_t Fnv1a(const std::string& text) {
   return hash;
 }
 
+// What an added start keeps from each side of every footprint: kStartFootprintMargin_m, and at
+// least what a scenario's own starts keep (StartFootprintReach: the start jitter and the hull), a
+// millimetre more so that no rounding in Validate's distance finds it a hair short.
+double StartFootprintMargin(const Scenario& s) {
+  const bool hull = s.vehicles.empty() || s.vehicles.front().model == MotionModel::kBlueRov2;
+  return std::max(kStartFootprintMargin_m, StartFootprintReach(s.start_jitter_m, hull) + 1e-3);
+}
+
 bool IsFreeStart(const Scenario& s, const std::vector<Eigen::Vector2d>& taken, const Eigen::Vector2d& p,
                  double separation_m) {
+  const double margin = StartFootprintMargin(s);
   for (const ChristmasTree& tree : s.structures) {
-    const Eigen::Vector2d half = tree.size_m / 2 + Eigen::Vector2d::Constant(kStartFootprintMargin_m);
+    const Eigen::Vector2d half = tree.size_m / 2 + Eigen::Vector2d::Constant(margin);
     if (((p - tree.center_m).array().abs() < half.array()).all()) return false;
   }
   for (const Eigen::Vector2d& other : taken) {
@@ -142,9 +151,10 @@ Scenario WithVehicleCount(const Scenario& scenario, int count) {
       // Each lattice point is checked against the structures and the starts near it, not all of
       // them: the 10,000-XT field's 1.25 million points against 10,000 of each had taken 187 s to
       // refuse 99,999 vehicles. The same points are free as with every one checked.
+      const double footprint_margin = StartFootprintMargin(s);
       double reach_m = separation;
       for (const ChristmasTree& tree : s.structures) {
-        reach_m = std::max(reach_m, (tree.size_m / 2 + Eigen::Vector2d::Constant(kStartFootprintMargin_m)).norm());
+        reach_m = std::max(reach_m, (tree.size_m / 2 + Eigen::Vector2d::Constant(footprint_margin)).norm());
       }
       detail::Buckets near_structures(reach_m), near_starts(separation);  // separation >= either spacing
       for (std::size_t i = 0; i < s.structures.size(); ++i) near_structures.Add(s.structures[i].center_m, static_cast<int>(i));
@@ -157,7 +167,7 @@ Scenario WithVehicleCount(const Scenario& scenario, int count) {
             const Eigen::Vector2d p(x, y);
             const bool on_structure = near_structures.Any(p, [&](int i) {
               const ChristmasTree& tree = s.structures[static_cast<std::size_t>(i)];
-              const Eigen::Vector2d half = tree.size_m / 2 + Eigen::Vector2d::Constant(kStartFootprintMargin_m);
+              const Eigen::Vector2d half = tree.size_m / 2 + Eigen::Vector2d::Constant(footprint_margin);
               return ((p - tree.center_m).cwiseAbs() - half).maxCoeff() < 0.0;
             });
             const bool free = !on_structure && !near_starts.Any(p, [&](int i) {
@@ -194,8 +204,8 @@ Scenario WithVehicleCount(const Scenario& scenario, int count) {
         throw ScenarioError(option + ": the workspace has room for at most " +
                             std::to_string(s.vehicles.size() + std::min(dense_room, by_area)) + " vehicles" + besides +
                             " (starts " +
-                            FormatNumber(dense_separation) + " m apart and " + FormatNumber(kStartFootprintMargin_m) +
-                            " m from structures, " + FormatNumber(area_of(first)) + " m^2 of workspace each)");
+                            FormatNumber(dense_separation) + " m apart and " +
+                            FormatNumber(std::round(StartFootprintMargin(s) * 100.0) / 100.0) + " m from structures, " + FormatNumber(area_of(first)) + " m^2 of workspace each)");
       }
     }
     for (std::size_t k = 0; s.vehicles.size() < wanted; ++k) {
@@ -208,7 +218,7 @@ Scenario WithVehicleCount(const Scenario& scenario, int count) {
       if (!start) {
         throw ScenarioError(option + ": no free start for rov" + std::to_string(number) + " in the workspace (" +
                             FormatNumber(separation) + " m from other vehicles, " +
-                            FormatNumber(kStartFootprintMargin_m) + " m from structures)");
+                            FormatNumber(std::round(StartFootprintMargin(s) * 100.0) / 100.0) + " m from structures)");
       }
       make_vehicle(*start);
     }

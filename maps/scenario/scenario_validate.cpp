@@ -4,7 +4,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <iomanip>
 #include <limits>
+#include <sstream>
 #include <vector>
 
 #include "maps/scenario/scenario_detail.h"
@@ -318,9 +320,17 @@ void Scenario::Validate() const {
   if (const double cells = std::ceil(workspace.width_m / astar.grid_resolution_m) *
                            std::ceil(workspace.height_m / astar.grid_resolution_m);
       cells > kMaxGridCells) {
+    // The coarsest grid that fits, rounded up to two significant digits; the default named, as a
+    // file that leaves the key out never wrote the value this complains of (a 100 km workspace).
+    const double fits_m = std::sqrt(workspace.width_m * workspace.height_m / kMaxGridCells);
+    const double step = std::pow(10.0, std::floor(std::log10(fits_m)) - 1.0);
+    const int decimals = std::max(0, -static_cast<int>(std::floor(std::log10(step))));
+    std::ostringstream fits;
+    fits << std::fixed << std::setprecision(decimals) << std::ceil(fits_m / step * (1.0 + 1e-12)) * step;
     c.Fail("astar.grid_resolution_m", FormatNumber(astar.grid_resolution_m),
-           "gives " + FormatNumber(std::round(cells / 1e6)) + " million cells over the workspace; at most " +
-               FormatNumber(kMaxGridCells / 1e6) + " million (use a coarser grid)");
+           "gives " + std::to_string(std::llround(cells / 1e6)) + " million cells over the workspace; at most " +
+               FormatNumber(kMaxGridCells / 1e6) + " million (a grid of " + fits.str() + " m or coarser fits; " +
+               FormatNumber(AstarSettings{}.grid_resolution_m) + " m is the default when the file leaves the key out)");
   }
   // The seabed OctoMap is voxelised at the grid resolution and its keys span +-2^15 voxels: a
   // wider workspace cannot be mapped (it overflowed the keys and crashed).
@@ -352,6 +362,27 @@ void Scenario::Validate() const {
         !InsideBox(tree.center_m + tree.size_m / 2, Eigen::Vector2d::Zero(), workspace_max)) {
       c.Fail(path + ".center_m", FormatVector(tree.center_m),
              "footprint of size " + FormatVector(tree.size_m) + " must lie inside the workspace " + workspace_text);
+    }
+  }
+  // No two footprints overlap (two XTs in one place had flown without a word). By their left
+  // edges, so each looks only at those that start before it ends along x.
+  {
+    std::vector<std::size_t> by_left;
+    for (std::size_t i = 0; i < structures.size(); ++i) by_left.push_back(i);
+    const auto left = [&](std::size_t i) { return structures[i].center_m.x() - structures[i].size_m.x() / 2; };
+    std::sort(by_left.begin(), by_left.end(),
+              [&](std::size_t a, std::size_t b) { return left(a) < left(b) || (left(a) == left(b) && a < b); });
+    for (std::size_t a = 0; a < by_left.size(); ++a) {
+      const ChristmasTree& first = structures[by_left[a]];
+      const double right = first.center_m.x() + first.size_m.x() / 2;
+      for (std::size_t b = a + 1; b < by_left.size() && left(by_left[b]) < right; ++b) {
+        const ChristmasTree& other = structures[by_left[b]];
+        if (std::abs(other.center_m.y() - first.center_m.y()) >= (other.size_m.y() + first.size_m.y()) / 2) continue;
+        const std::size_t later = std::max(by_left[a], by_left[b]);
+        const ChristmasTree& named = structures[std::min(by_left[a], by_left[b])];
+        c.Fail("structures[" + std::to_string(later) + "].center_m", FormatVector(structures[later].center_m),
+               "the footprint of " + structures[later].name + " overlaps that of " + named.name);
+      }
     }
   }
   // Checked after all footprints are known: a valve may sit inside another XT's footprint. The
@@ -411,10 +442,40 @@ void Scenario::Validate() const {
     return "(valves: " + list + ")";
   };
 
+  // The footprint nearest to p within reach_m (Euclidean distance to its box), if any.
+  const auto nearest_footprint = [&](const Eigen::Vector2d& p, double reach_m) {
+    std::pair<const ChristmasTree*, double> nearest{nullptr, reach_m};
+    if (!p.allFinite()) return nearest;
+    auto it = std::lower_bound(by_x.begin(), by_x.end(), p.x() - widest_half_m - reach_m,
+                               [&](std::size_t i, double x) { return centre_x(i) < x; });
+    for (; it != by_x.end() && centre_x(*it) <= p.x() + widest_half_m + reach_m; ++it) {
+      const ChristmasTree& tree = structures[*it];
+      const double d = ((p - tree.center_m).cwiseAbs() - tree.size_m / 2).cwiseMax(0.0).norm();
+      if (d < nearest.second) nearest = {&tree, d};
+    }
+    return nearest;
+  };
   // A vehicle of `vehicles:` or one joining later; names are unique across both.
   const auto check_vehicle = [&](const std::string& path, const VehicleSpec& vehicle) {
     c.UniqueName(vehicle_names, path + ".name", vehicle.name);
     check_in_open_water(path + ".start_m", vehicle.start_m);
+    // The start jitter may move it up to start_jitter_m, and a BlueROV2's hull reaches
+    // kVehicleClearance_m from its centre: closer than that to a footprint, it could start inside
+    // the XT (the physics then shoves it out), as on blocked seabed (seabed_obstacles.cpp).
+    const bool hull = vehicle.model == MotionModel::kBlueRov2;
+    const double reach = StartFootprintReach(start_jitter_m, hull);
+    const auto mm = [](double v) { return FormatNumber(std::round(v * 1000.0) / 1000.0); };  // 0.6, not 0.6000000000000001
+    if (!inside_structure(vehicle.start_m)) {
+      // (A hair of tolerance: a start exactly that far, as written to the mm, is clear.)
+      if (const auto [tree, d] = nearest_footprint(vehicle.start_m, reach - 1e-9); tree != nullptr) {
+        c.Fail(path + ".start_m", FormatVector(vehicle.start_m),
+               vehicle.name + " starts " + mm(d) + " m from the footprint of " + tree->name + "; it must start at least " +
+                   mm(reach) + " m from it (start_jitter_m " +
+                   FormatNumber(start_jitter_m) +
+                   (hull ? " and the BlueROV2's hull " + FormatNumber(kVehicleClearance_m) + " m" : "") +
+                   ")");
+      }
+    }
     c.Finite(path + ".start_heading_rad", vehicle.start_heading_rad);
     if (vehicle.model != MotionModel::kSingleIntegrator && vehicle.model != MotionModel::kBlueRov2) {
       c.Fail(path + ".model", std::to_string(static_cast<int>(vehicle.model)), "must be single_integrator or bluerov2");
@@ -427,6 +488,31 @@ void Scenario::Validate() const {
   };
   if (vehicles.empty()) c.Fail("vehicles", "must list at least one vehicle");
   for (std::size_t i = 0; i < vehicles.size(); ++i) check_vehicle("vehicles[" + std::to_string(i) + "]", vehicles[i]);
+  // BlueROV2s that start together must not start in each other's hull (two at one start_m had
+  // been flown, 0.2 m apart after the jitter, hulls overlapping). By x, so a start looks only at
+  // those within a hull's diagonal along x.
+  {
+    std::vector<std::size_t> rovs;
+    for (std::size_t i = 0; i < vehicles.size(); ++i) {
+      if (vehicles[i].model == MotionModel::kBlueRov2 && vehicles[i].start_m.allFinite()) rovs.push_back(i);
+    }
+    std::sort(rovs.begin(), rovs.end(), [&](std::size_t a, std::size_t b) {
+      const double xa = vehicles[a].start_m.x(), xb = vehicles[b].start_m.x();
+      return xa < xb || (xa == xb && a < b);
+    });
+    for (std::size_t a = 0; a < rovs.size(); ++a) {
+      for (std::size_t b = a + 1;
+           b < rovs.size() && vehicles[rovs[b]].start_m.x() - vehicles[rovs[a]].start_m.x() < kBlueRov2Diagonal_m; ++b) {
+        const VehicleSpec& first = vehicles[std::min(rovs[a], rovs[b])];
+        const VehicleSpec& second = vehicles[std::max(rovs[a], rovs[b])];
+        const double d = (first.start_m - second.start_m).norm();
+        if (d >= kBlueRov2Diagonal_m - 1e-9) continue;
+        c.Fail("vehicles[" + std::to_string(std::max(rovs[a], rovs[b])) + "].start_m", FormatVector(second.start_m),
+               second.name + " starts " + FormatNumber(std::round(d * 1000.0) / 1000.0) + " m from " + first.name +
+                   "; BlueROV2s must start at least " + FormatNumber(kBlueRov2Diagonal_m) + " m apart (a hull's diagonal)");
+      }
+    }
+  }
 
   if (fleet.assignment != FleetAssignment::kShared && fleet.assignment != FleetAssignment::kPartition &&
       fleet.assignment != FleetAssignment::kRegions) {

@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cctype>
+#include <charconv>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -10,6 +11,9 @@
 #include <memory>
 #include <mutex>
 #include <string>
+#include <string_view>
+#include <system_error>
+#include <utility>
 #include <vector>
 
 #include <fmt/format.h>
@@ -81,8 +85,58 @@ class GdalMessages {
   std::string last_;
 };
 
+// GDAL's XYZ driver reads a field that is not a number as 0 (a new user's "3.0,1.5,abc" among
+// depths near -100 m had become a pillar, reported only as a valve "on blocked seabed" far off;
+// at a corner it passed unseen). Every data line is checked here first, the line named: numbers
+// only (nan is a number here, and is refused with its node's position later), x y z at least;
+// the first line may be a header of names.
+void CheckXyzNumbers(const std::string& path, const MapErrors& errors) {
+  std::ifstream in(path);
+  if (!in) return;  // GDAL's open says why
+  std::string line;
+  std::size_t number = 0;
+  bool first = true;
+  std::vector<std::string_view> fields;
+  while (std::getline(in, line)) {
+    ++number;
+    fields.clear();
+    std::string_view rest(line);
+    while (!rest.empty()) {
+      const std::size_t start = rest.find_first_not_of(" \t,;\r");
+      if (start == std::string_view::npos) break;
+      rest.remove_prefix(start);
+      const std::size_t end = std::min(rest.find_first_of(" \t,;\r"), rest.size());
+      fields.push_back(rest.substr(0, end));
+      rest.remove_prefix(end);
+    }
+    if (fields.empty()) continue;
+    std::string_view bad;
+    for (std::string_view f : fields) {
+      std::string_view digits = f.starts_with('+') ? f.substr(1) : f;
+      double value = 0.0;
+      const auto [end, error] = std::from_chars(digits.data(), digits.data() + digits.size(), value);
+      if (error != std::errc() || end != digits.data() + digits.size()) {
+        bad = f;
+        break;
+      }
+    }
+    const bool header = std::exchange(first, false) && !bad.empty();
+    if (header) continue;
+    if (!bad.empty()) {
+      errors.Fail(fmt::format("line {}: '{}' is not a number (a gridded XYZ file holds x y z numbers on every line after "
+                              "an optional header)",
+                              number, bad.substr(0, 40)));
+    }
+    if (fields.size() < 3) {
+      errors.Fail(fmt::format("line {}: {} field{}; a gridded XYZ file holds x y z on every line", number, fields.size(),
+                              fields.size() == 1 ? "" : "s"));
+    }
+  }
+}
+
 HeightGrid ReadRaster(const Scenario& s, const SeabedSettings& seabed, SeabedMapFormat format, double r,
                       const MapErrors& errors) {
+  if (format == SeabedMapFormat::kXyz) CheckXyzNumbers(seabed.map, errors);
   static std::once_flag registered;
   std::call_once(registered, [] { GDALAllRegister(); });
   GdalMessages messages;

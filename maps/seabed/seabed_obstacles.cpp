@@ -82,7 +82,7 @@ void CheckOnOpenSeabed(const Scenario& scenario, const OccupancyGrid& terrain) {
   const auto check_start = [&](const std::string& field, const VehicleSpec& vehicle) {
     if (StartIsClear(terrain, vehicle.start_m, scenario.start_jitter_m)) return;
     throw ScenarioError(fmt::format("{}: {}.start_m = {}: {} starts within {} m (start jitter and hull) of blocked seabed",
-                                    file, field, point(vehicle.start_m), vehicle.name, reach));
+                                    file, field, point(vehicle.start_m), vehicle.name, std::round(reach * 1000.0) / 1000.0));
   };
   for (std::size_t i = 0; i < scenario.vehicles.size(); ++i) check_start(fmt::format("vehicles[{}]", i), scenario.vehicles[i]);
   for (std::size_t i = 0; i < scenario.fleet_events.size(); ++i) {

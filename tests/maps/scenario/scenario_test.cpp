@@ -271,12 +271,25 @@ profiles: {only: {weights: {V: 1}}}
 // took 20 GB). The base's 35 m^2 hold its two BlueROV2s and two point vehicles (2.2 m^2) and
 // 32 more BlueROV2s, not 33.
 TEST(Scenario, FleetMustFitTheWorkspace) {
+  // BlueROV2s on a 0.75 m lattice: apart by more than a hull's diagonal, and clear of XT-A and of
+  // base's own starts by what Validate asks, so that only the area can refuse them.
   const auto with_extra = [](int extra) {
     std::string more;
-    for (int k = 0; k < extra; ++k) {
-      more += "  - {name: x" + std::to_string(k) + ", start_m: [" + std::to_string(0.2 + 0.2 * (k % 30)) + ", " +
-              std::to_string(0.3 + 0.5 * (k / 30)) + "], model: bluerov2, transit_speed_mps: 0.5}\n";
+    int k = 0;
+    for (int j = 0; j < 7 && k < extra; ++j) {
+      for (int i = 0; i < 9 && k < extra; ++i) {
+        const Eigen::Vector2d p(0.25 + 0.75 * i, 0.25 + 0.75 * j);
+        if (((p - Eigen::Vector2d(2.0, 2.9)).cwiseAbs() - Eigen::Vector2d(0.4, 0.4)).cwiseMax(0.0).norm() < 0.6) continue;
+        bool near_base = false;
+        for (const Eigen::Vector2d& start : {Eigen::Vector2d(0.5, 0.5), Eigen::Vector2d(6.5, 0.5), Eigen::Vector2d(6.5, 4.5)}) {
+          near_base = near_base || (p - start).norm() < 0.74;
+        }
+        if (near_base) continue;
+        more += "  - {name: x" + std::to_string(k++) + ", start_m: [" + std::to_string(p.x()) + ", " + std::to_string(p.y()) +
+                "], model: bluerov2, transit_speed_mps: 0.5}\n";
+      }
     }
+    EXPECT_EQ(k, extra) << "the lattice holds fewer";
     return Replace(kBase, "vehicles:\n", "vehicles:\n" + more);
   };
   EXPECT_NO_THROW(ParseScenario(with_extra(32), "base.yaml"));
@@ -522,10 +535,26 @@ TEST(Scenario, BadInputsGiveOneLineNamingFieldAndValue) {
       {"[[0.09, 0.02], [0.02, 0.06]]", "[[0.09, 0.02], [0.03, 0.06]]", {"covariance_m2 = [[0.09, 0.02], [0.03, 0.06]]", "symmetric"}},
       {"name: P2", "name: P1", {"structures[0].valves[1].name = P1", "duplicate", "structures[0].valves[0].name"}},
       {"center_m: [2.0, 2.9]", "center_m: 2.0", {"structures[0].center_m = 2.0", "list of 2 numbers"}},
+      // Two XTs in one place.
+      {"structures:\n", "structures:\n  - {name: XT-0, center_m: [2.3, 3.0], size_m: [0.8, 0.8], valves: [{name: Q1, position_m: [4.0, 4.0]}]}\n",
+       {"base.yaml: structures[1].center_m = [2, 2.9]: the footprint of XT-A overlaps that of XT-0"}},
       {"center_m: [2.0, 2.9]", "center_m: [2.0, x]", {"structures[0].center_m[1] = x", "must be a number"}},
       {"model: bluerov2", "model: torpedo", {"vehicles[0].model = torpedo", "single_integrator or bluerov2"}},
       {"name: rov2", "name: rov1", {"vehicles[1].name = rov1", "duplicate"}},
       {"start_m: [0.5, 0.5]", "start_m: [0.5, 9]", {"vehicles[0].start_m = [0.5, 9]", "workspace"}},
+      // A start the jitter (0.2 m) and a BlueROV2's hull (0.4 m) could put inside an XT; a point
+      // vehicle has no hull, the jitter alone (a new user's rov1 0.01 m off a face had started
+      // inside the XT and been shoved out by the physics).
+      {"start_m: [0.5, 0.5], model: bluerov2", "start_m: [2.0, 2.4], model: bluerov2",
+       {"base.yaml: vehicles[0].start_m = [2, 2.4]: rov1 starts 0.1 m from the footprint of XT-A; it must start at least "
+        "0.6 m from it (start_jitter_m 0.2 and the BlueROV2's hull 0.4 m)"}},
+      {"start_m: [6.5, 0.5], model: single_integrator", "start_m: [2.0, 2.35], model: single_integrator",
+       {"vehicles[1].start_m = [2, 2.35]: rov2 starts 0.15 m from the footprint of XT-A; it must start at least 0.2 m "
+        "from it (start_jitter_m 0.2)"}},
+      // Two BlueROV2s in each other's hull at the start.
+      {"rov3, start_m: [6.5, 4.5], transit_speed_mps: 0.7", "rov3, start_m: [0.9, 0.5], model: bluerov2, transit_speed_mps: 0.7",
+       {"base.yaml: vehicles[2].start_m = [0.9, 0.5]: rov3 starts 0.4 m from rov1; BlueROV2s must start at least 0.74 m "
+        "apart (a hull's diagonal)"}},
       {"default_profile: leak", "default_profile: calm", {"default_profile = calm", "equal, leak"}},
       {"  leak:\n", "  equal:\n", {"profiles.equal", "duplicate key"}},
       {"vehicles:", "vehicle:", {"vehicle", "unknown key"}},
@@ -701,7 +730,8 @@ TEST(Scenario, WithVehicleCountKeepsFirstVehicles) {
 
 // --vehicles N above the file's count adds rov<k> (skipping names in use, joiners' included) with
 // the first vehicle's model and speed, heading 0, near y = 0.5 m, inside the workspace 0.5 m in,
-// 0.5 m clear of every footprint and 1 m from every other start; the result validates.
+// 0.5 m clear of every footprint (and the start jitter and hull's reach) and 1 m from every other
+// start; the result validates.
 TEST(Scenario, WithVehicleCountAddsVehiclesAlongTheSouthEdge) {
   for (const auto& [path, count] : std::vector<std::pair<std::string, int>>{
            {kTwoXtPath, 2}, {kTwoXtPath, 5}, {kFleetFieldPath, 12}, {kFleetLargePath, 32}}) {
@@ -736,6 +766,10 @@ TEST(Scenario, WithVehicleCountAddsVehiclesAlongTheSouthEdge) {
       EXPECT_LE(p.y(), 2.0) << added.name;  // still along the south edge
       for (const ChristmasTree& tree : s.structures) {
         EXPECT_GE(((p - tree.center_m).cwiseAbs() - tree.size_m / 2).maxCoeff(), 0.5 - 1e-9)
+            << added.name << " " << tree.name;
+        // And as far as a scenario's own starts must keep (Validate): the jitter and the hull.
+        EXPECT_GE(((p - tree.center_m).cwiseAbs() - tree.size_m / 2).cwiseMax(0.0).norm(),
+                  StartFootprintReach(s.start_jitter_m, added.model == MotionModel::kBlueRov2))
             << added.name << " " << tree.name;
       }
       for (std::size_t j = 0; j < starts.size(); ++j) {

@@ -107,7 +107,29 @@ TEST(SeabedFile, BadRastersAreRefusedInOneLine) {
   testing::WriteXyz(good, dir.File("whole.xyz"));
   EXPECT_NO_THROW(SeabedMap(OnMap(dir.File("whole.xyz")), 0.1));
   std::ofstream(dir.File("words.csv")) << "x,y,z\nsome,words,here\n";
-  ExpectRefused(OnMap(dir.File("words.csv")), "cannot be read as a gridded XYZ file");
+  ExpectRefused(OnMap(dir.File("words.csv")), "line 2: 'some' is not a number");
+  // A height that is not a number, which GDAL's driver reads as 0 (a new user's "abc" among
+  // depths of -100 m had loaded), is refused with its line; so is a line short of x y z. The
+  // header line of names stays allowed (whole.xyz has one; it reads without it too).
+  std::ifstream whole_in(dir.File("whole.xyz"));
+  std::vector<std::string> lines;
+  for (std::string line; std::getline(whole_in, line);) lines.push_back(line);
+  ASSERT_GT(lines.size(), 10u);
+  const auto write_with = [&](const std::string& name, std::size_t at, const std::string& replaced) {
+    std::ofstream out(dir.File(name));
+    for (std::size_t k = 0; k < lines.size(); ++k) out << (k == at ? replaced : lines[k]) << "\n";
+  };
+  const std::string fifth = lines[4].substr(0, lines[4].find_last_of(" ,\t") + 1);
+  write_with("word.xyz", 4, fifth + "abc");
+  ExpectRefused(OnMap(dir.File("word.xyz")), "line 5: 'abc' is not a number");
+  write_with("short.xyz", 6, fifth);
+  ExpectRefused(OnMap(dir.File("short.xyz")), "line 7: 2 fields; a gridded XYZ file holds x y z on every line");
+  ASSERT_EQ(lines[0], "x y z");
+  {
+    std::ofstream out(dir.File("bare.xyz"));
+    for (std::size_t k = 1; k < lines.size(); ++k) out << lines[k] << "\n";
+  }
+  EXPECT_NO_THROW(SeabedMap(OnMap(dir.File("bare.xyz")), 0.1));
 }
 
 // A band's scale and offset are applied (heights stored as value * scale + offset), before the
