@@ -112,7 +112,7 @@ Scenario WithDuration(const Scenario& scenario, double duration_s) {
   s.duration_s = duration_s;
   for (RiskProfile& p : s.profiles) std::erase_if(p.events, [&](const auto& e) { return e.time_s > duration_s; });
   std::erase_if(s.fleet_events, [&](const auto& e) { return e.time_s > duration_s; });
-  std::erase_if(s.leaks, [&](const auto& leak) { return leak.start_s > duration_s; });
+  std::erase_if(s.leaks, [&](const auto& leak) { return leak.start_s >= duration_s; });  // one at the end could only be missed
   return s;
 }
 

@@ -164,6 +164,15 @@ void ValidatePerception(const Scenario& s, const std::string& file) {
       if (!p.allFinite() || !(p.array() >= 0.0).all() || !(p.array() <= workspace.array()).all()) {
         fail(path + ".at.point_m", shown, "must be inside the workspace");
       }
+      for (std::size_t b = 0; b < s.boulders.size(); ++b) {
+        const Boulder& boulder = s.boulders[b];
+        if ((p - boulder.center_m).norm() < boulder.diameter_m / 2) {
+          fail(path + ".at.point_m", shown,
+               "lies under boulders[" + std::to_string(b) + "] (centre " + FormatNumber(boulder.center_m.x()) + ", " +
+                   FormatNumber(boulder.center_m.y()) + ", " + FormatNumber(boulder.diameter_m) +
+                   " m across; no sensor could see it)");
+        }
+      }
       for (const ChristmasTree& tree : s.structures) {
         const Eigen::Vector2d half = tree.size_m / 2;
         if (((p - tree.center_m).array().abs() < half.array()).all()) {
@@ -171,8 +180,9 @@ void ValidatePerception(const Scenario& s, const std::string& file) {
         }
       }
     }
-    in_range(path + ".start_s", leak.start_s, 0.0, s.duration_s, false, false,
-             "must be in [0, duration_s = " + FormatNumber(s.duration_s) + "]");
+    // A leak that starts as the mission ends could only be missed: before the end, or left out.
+    in_range(path + ".start_s", leak.start_s, 0.0, s.duration_s, false, true,
+             "must be in [0, duration_s = " + FormatNumber(s.duration_s) + ")");
     in_range(path + ".strength", leak.strength, 0.0, 1e6, true, false, "must be in (0, 1e6] (1 = nominal)");
   }
 
@@ -216,7 +226,16 @@ Scenario WithRandomLeaks(const Scenario& scenario, int count, LeakSites sites) {
   const std::vector<Valve> valves = scenario.AllValves();
   Eigen::VectorXd weights = scenario.ProfileWeights(scenario.ProfileOrThrow(""));
   if (sites == LeakSites::kValvesEven) weights.setOnes();
-  const double total = weights.sum();
+  double total = weights.sum();
+  if (sites == LeakSites::kValves || sites == LeakSites::kValvesEven) {
+    const auto weighed = static_cast<int>((weights.array() > 0.0).count());
+    if (count > weighed) {
+      const std::string which =
+          sites == LeakSites::kValves ? " valves of nonzero risk in profile " + scenario.ProfileOrThrow("").name : " valves";
+      throw ScenarioError("--random-leaks = " + std::to_string(count) + ": at most one leak a valve, and " + scenario.name +
+                          " has " + std::to_string(weighed) + which);
+    }
+  }
   const Eigen::Vector2d workspace(scenario.workspace.width_m, scenario.workspace.height_m);
   const auto open_seabed = [&](const Eigen::Vector2d& p) {
     if (!(p.array() >= kSeabedLeakClearance_m).all() || !(p.array() <= workspace.array() - kSeabedLeakClearance_m).all()) {
@@ -225,6 +244,10 @@ Scenario WithRandomLeaks(const Scenario& scenario, int count, LeakSites sites) {
     for (const ChristmasTree& tree : scenario.structures) {
       const Eigen::Vector2d half = tree.size_m / 2 + Eigen::Vector2d::Constant(kSeabedLeakClearance_m);
       if (((p - tree.center_m).array().abs() < half.array()).all()) return false;
+    }
+    // Nor on a boulder: open water, as the help says (a new user's boulder had held 1-2 of 50 draws).
+    for (const Boulder& boulder : scenario.boulders) {
+      if ((p - boulder.center_m).norm() < boulder.diameter_m / 2 + kSeabedLeakClearance_m) return false;
     }
     for (const Valve& valve : valves)
       if ((p - valve.position_m).norm() < kRandomSeabedFromValves_m) return false;
@@ -279,10 +302,17 @@ Scenario WithRandomLeaks(const Scenario& scenario, int count, LeakSites sites) {
                             FormatNumber(kSeabedLeakClearance_m) + " m from the structures and edges");
       }
     } else if (sites != LeakSites::kSeabed) {
+      // Without replacement: two leaks at one valve would be found by the same detections and
+      // counted twice (a new user's 3 leaks had held two at V33, 1 s apart). The valve drawn
+      // weighs nothing for the next draw.
       double pick = uniform() * total;
       std::size_t i = 0;
-      while (i + 1 < valves.size() && pick >= weights[static_cast<Eigen::Index>(i)]) pick -= weights[static_cast<Eigen::Index>(i++)];
+      const auto w = [&](std::size_t k) -> double& { return weights[static_cast<Eigen::Index>(k)]; };
+      while (i + 1 < valves.size() && (pick >= w(i) || w(i) <= 0.0)) pick -= w(i++);
+      while (i > 0 && w(i) <= 0.0) --i;  // rounding ran past the last valve left
       leak.valve = valves[i].name;
+      total -= w(i);
+      w(i) = 0.0;
     } else {
       bool found = false;
       for (int attempt = 0; attempt < 100000 && !found; ++attempt) {
