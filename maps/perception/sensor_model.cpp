@@ -12,7 +12,7 @@ SensorModel::SensorModel(const SensorSpec& spec, const OccupancyGrid& obstacles,
   if (!(control_rate_hz > 0.0) || !(spec.rate_hz > 0.0) || !(spec.range_m > 0.0) || !(spec.fov_deg > 0.0)) {
     throw std::invalid_argument("SensorModel: sensor " + spec.name + " needs positive rates, range and field of view");
   }
-  every_ = std::max(1, static_cast<int>(std::lround(control_rate_hz / spec.rate_hz)));
+  every_ = ScanEveryCycles(control_rate_hz, spec.rate_hz);
   period_s_ = every_ / control_rate_hz;
   half_fov_rad_ = 0.5 * std::min(spec.fov_deg, 360.0) * M_PI / 180.0;
   cos_half_fov_ = std::cos(half_fov_rad_);

@@ -53,6 +53,14 @@ struct SensorSpec {
   double rate_hz = 2.0;             ///< scans a second, in (0, control_rate_hz]; scans fall on whole cycles
 };
 
+/// Control cycles between a sensor's scans: scans fall on whole cycles, the nearest whole number
+/// to control_rate_hz / rate_hz and at least 1 (7 Hz under 10 Hz control scans every cycle, at
+/// 10 Hz). Both rates > 0.
+inline int ScanEveryCycles(double control_rate_hz, double rate_hz) {
+  const double cycles = control_rate_hz / rate_hz;
+  return cycles < 1.5 ? 1 : static_cast<int>(cycles + 0.5);
+}
+
 /// A leak the mission hides from its server: the vehicles' sensors see it from start_s on.
 struct LeakSpec {
   /// Where, one of three: a valve (`at: {valve: P3}`, its position); a point along a flowline's

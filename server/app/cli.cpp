@@ -8,6 +8,7 @@
 #include <cmath>
 #include <cstdint>
 #include <iostream>
+#include <regex>
 #include <string>
 #include <system_error>
 
@@ -223,6 +224,15 @@ bool ReportUnknownCommand(const CLI::App& app, int argc, char** argv, std::strin
   for (const CLI::App* sub : subs) commands += (commands.empty() ? "" : ", ") + sub->get_name();
   std::cerr << "sage: error: " << path << " needs a command (commands: " << commands << "; see " << path << " --help)\n";
   return true;
+}
+
+// CLI11's words for an option given more often than it takes, in the project's ("--duration: At
+// Most 1 required but received 2" had read as if a second value were wanted).
+std::string InOurWords(const std::string& message) {
+  static const std::regex repeated(R"(^(\S+): At Most 1 required but received ([0-9]+)$)");
+  std::smatch m;
+  if (std::regex_match(message, m, repeated)) return m[1].str() + ": given " + m[2].str() + " times; give it once";
+  return message;
 }
 
 }  // namespace
@@ -542,7 +552,7 @@ int RunCli(int argc, char** argv) {
     // Bad arguments: one line, like every other input error.
     std::string path;
     if (ReportUnknownCommand(app, argc, argv, path)) return 2;
-    std::cerr << "sage: error: " << (path == "sage" ? "" : path.substr(5) + ": ") << e.what() << " (see " << path
+    std::cerr << "sage: error: " << (path == "sage" ? "" : path.substr(5) + ": ") << InOurWords(e.what()) << " (see " << path
               << " --help)\n";
     return 2;
   }

@@ -92,7 +92,7 @@ std::string LeftOutByDuration(const maps::Scenario& scenario, double duration_s,
   std::vector<std::string> dropped;
   if (!leaks_drawn_anew) {
     for (const maps::LeakSpec& leak : scenario.leaks) {
-      if (leak.start_s > duration_s) dropped.push_back(fmt::format("the leak at {} from {} s", maps::LeakWhere(leak), leak.start_s));
+      if (leak.start_s >= duration_s) dropped.push_back(fmt::format("the leak at {} from {} s", maps::LeakWhere(leak), leak.start_s));
     }
   }
   // The mission flies its default profile (a --profile given has become it): only that one's events.
@@ -105,6 +105,30 @@ std::string LeftOutByDuration(const maps::Scenario& scenario, double duration_s,
   if (fleet_events > 0) dropped.push_back(fmt::format("{} fleet event(s)", fleet_events));
   if (dropped.empty()) return "";
   return fmt::format("--duration = {}: left out, as they come after the mission's end: {}", duration_s, fmt::join(dropped, ", "));
+}
+
+void WarnOfLossySettings(const maps::Scenario& scenario) {
+  const maps::ChristmasTree* smallest = nullptr;
+  for (const maps::ChristmasTree& tree : scenario.structures) {
+    if (smallest == nullptr || tree.size_m.minCoeff() < smallest->size_m.minCoeff()) smallest = &tree;
+  }
+  if (smallest != nullptr && scenario.astar.grid_resolution_m > smallest->size_m.minCoeff() / 2) {
+    spdlog::warn("astar.grid_resolution_m = {}: coarser than half the smallest structure ({}, {} x {} m): the seabed map "
+                 "and the A* grid, in cells of {} m, cannot resolve the structures (a vehicle may find no way past them, "
+                 "a tour no path)",
+                 scenario.astar.grid_resolution_m, smallest->name, smallest->size_m.x(), smallest->size_m.y(),
+                 scenario.astar.grid_resolution_m);
+  }
+  for (std::size_t i = 0; i < scenario.sensors.size(); ++i) {
+    const maps::SensorSpec& sensor = scenario.sensors[i];
+    const int every = maps::ScanEveryCycles(scenario.control_rate_hz, sensor.rate_hz);
+    const double flown_hz = scenario.control_rate_hz / every;
+    if (std::abs(flown_hz - sensor.rate_hz) <= 1e-9 * sensor.rate_hz) continue;
+    spdlog::warn("sensors[{}] ({}): rate_hz = {}: scans fall on whole control cycles (control_rate_hz = {}): it scans "
+                 "every {} cycle{}, at {:.4g} Hz (a rate of {} Hz / k scans as asked)",
+                 i, sensor.name, sensor.rate_hz, scenario.control_rate_hz, every, every == 1 ? "" : "s", flown_hz,
+                 scenario.control_rate_hz);
+  }
 }
 
 maps::Scenario LoadWithOverrides(const ScenarioOverrides& o) {

@@ -56,6 +56,12 @@ std::string FirstScenarioOverride(const ScenarioOverrides& o);
 /// --turn-radius), as one line to warn an A* tour mission of; empty if none.
 std::string ErgodicOnlyOverrides(const ScenarioOverrides& o);
 
+/// Warns of settings the mission cannot keep as written: a sensor whose rate_hz is not a whole
+/// number of control cycles a scan (it scans at the nearest whole number's rate,
+/// maps::ScanEveryCycles), and an A* grid (also the seabed map's voxels) too coarse to resolve
+/// the smallest structure.
+void WarnOfLossySettings(const maps::Scenario& scenario);
+
 /// What a mission of duration_s leaves out of `scenario` (its leaks, unless they are drawn anew
 /// for the shorter mission, its default profile's risk events and its fleet events after the end), as one
 /// line for the operator; empty if nothing.

@@ -54,6 +54,11 @@ maps::FieldOptions WithCountsSizedToEachOther(maps::FieldOptions options, bool x
 int CmdFieldGenerate(const maps::FieldOptions& options, const std::string& out_path) {
   const auto start = std::chrono::steady_clock::now();
   const maps::Scenario field = maps::GenerateField(options);
+  // Replaced, as a run directory is (it had gone without a word; field seabed refuses instead,
+  // as its map and scenario are a pair).
+  if (std::error_code ec; std::filesystem::exists(out_path, ec)) {
+    spdlog::warn("{}: replacing the file there (give --out another path to keep it)", out_path);
+  }
   try {
     WriteScenarioTo(out_path, field);
   } catch (const std::runtime_error& e) {

@@ -147,6 +147,7 @@ int Launch(const LaunchCommand& c) {
     scenario = LoadWithOverrides(c.scenario);
     // Before the run directory is made: a refused mission leaves nothing behind.
     CheckFleetFitsField(scenario, ParseControllerKind(c.controller) == ControllerKind::kAstar);
+    WarnOfLossySettings(scenario);
     if (const std::string unused = ErgodicOnlyOverrides(c.scenario);
         ParseControllerKind(c.controller) == ControllerKind::kAstar && !unused.empty()) {
       spdlog::warn("{}", unused);

@@ -9,6 +9,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <iostream>
+#include <map>
 #include <memory>
 
 #include <fmt/format.h>
@@ -107,6 +108,10 @@ RunOutcome RunInto(const maps::Scenario& scenario, ControllerKind kind, const st
   return outcome;
 }
 
+// How far outside the workspace a recorded position may lie before the record looks foreign (m):
+// a real vehicle's log strays past the box's edges by its navigation error.
+constexpr double kForeignRecordMargin_m = 1.0;
+
 void SayStopped(const std::string& what, const RunOutcome& outcome, double duration_s, const fs::path& dir) {
   spdlog::warn("{} stopped by a signal at t = {:.1f} s of {:.0f} s: {} holds the record to there (metrics.json: "
                "stopped_early)",
@@ -120,6 +125,7 @@ int CmdRun(const RunCommand& c) {
   const maps::Scenario scenario = LoadWithOverrides(c.scenario);
   const ControllerKind kind = ParseControllerKind(c.controller);
   CheckFleetFitsField(scenario, kind == ControllerKind::kAstar);
+  WarnOfLossySettings(scenario);
   if (const std::string unused = ErgodicOnlyOverrides(c.scenario); kind == ControllerKind::kAstar && !unused.empty()) {
     spdlog::warn("{}", unused);
   }
@@ -146,6 +152,7 @@ int CmdCompare(const RunCommand& c) {
   LogToStderr();
   maps::Scenario scenario = LoadWithOverrides(c.scenario);
   CheckFleetFitsField(scenario, /*tours=*/true);  // compare flies the A* tours too
+  WarnOfLossySettings(scenario);
   const std::string profile = c.scenario.profile.empty() ? scenario.default_profile : c.scenario.profile;
   const fs::path dir = c.out_dir.empty() ? DefaultOutDir(scenario, profile, "compare") : c.out_dir;
   PrepareRunDirectory(dir.string());
@@ -179,6 +186,61 @@ int CmdCompare(const RunCommand& c) {
   return 0;
 }
 
+namespace {
+
+// A record that does not look like a mission on this scenario's field, said before its table (a
+// 12 x 9 m record scored against two_xt had printed "time at boundary 96.4 %" and nothing else, a
+// 500 m jump in 1 s went unremarked), and leaks the scenario hides, which a record cannot score.
+void WarnOfAForeignRecord(const Trajectory& trajectory, const maps::Scenario& scenario, const std::string& record,
+                          const std::string& scenario_path) {
+  const Eigen::Vector2d size(scenario.workspace.width_m, scenario.workspace.height_m);
+  std::size_t outside = 0;
+  for (const TrajectorySample& s : trajectory.samples) {
+    outside += (s.position_m.array() < -kForeignRecordMargin_m).any() ||
+                       (s.position_m.array() > size.array() + kForeignRecordMargin_m).any()
+                   ? 1
+                   : 0;
+  }
+  if (!trajectory.samples.empty() && outside > 0.01 * static_cast<double>(trajectory.samples.size())) {
+    spdlog::warn("{}: {} of its {} samples ({:.1f} %) lie more than {} m outside the workspace of {} ({} x {} m): a "
+                 "record of another field?",
+                 record, outside, trajectory.samples.size(),
+                 100.0 * static_cast<double>(outside) / static_cast<double>(trajectory.samples.size()),
+                 kForeignRecordMargin_m, scenario_path, size.x(), size.y());
+  }
+  // Faster than any vehicle of the scenario could fly, three times over (and 2 m/s at least).
+  double fastest_mps = 0.0;
+  for (const maps::VehicleSpec& v : scenario.vehicles) fastest_mps = std::max(fastest_mps, v.transit_speed_mps);
+  const double limit_mps = std::max(2.0, 3.0 * fastest_mps);
+  std::map<int, const TrajectorySample*> last;
+  std::size_t jumps = 0;
+  const TrajectorySample* worst = nullptr;
+  double worst_mps = 0.0, worst_m = 0.0, worst_dt = 0.0;
+  for (const TrajectorySample& s : trajectory.samples) {
+    const TrajectorySample*& before = last[s.vehicle];
+    if (before != nullptr && s.time_s > before->time_s) {
+      const double dt = s.time_s - before->time_s, d = (s.position_m - before->position_m).norm();
+      if (d / dt > limit_mps) {
+        ++jumps;
+        if (d / dt > worst_mps) worst = &s, worst_mps = d / dt, worst_m = d, worst_dt = dt;
+      }
+    }
+    before = &s;
+  }
+  if (jumps > 0) {
+    spdlog::warn("{}: {} step(s) faster than {:.3g} m/s (3 x the scenario's fastest vehicle); the fastest {:.3g} m in "
+                 "{:.3g} s, vehicle {} at t = {:.1f} s: positions of another field, or a broken log?",
+                 record, jumps, limit_mps, worst_m, worst_dt, worst->vehicle, worst->time_s);
+  }
+  if (!scenario.leaks.empty()) {
+    spdlog::info("{} hides {} leak(s): a recorded trajectory holds no detections, so their times are not evaluated "
+                 "(sage run or sage launch flies and scores them)",
+                 scenario_path, scenario.leaks.size());
+  }
+}
+
+}  // namespace
+
 int CmdEvaluate(const EvaluateCommand& c) {
   LogToStderr();
   const maps::Scenario scenario = maps::LoadScenario(c.scenario_path);
@@ -203,6 +265,7 @@ int CmdEvaluate(const EvaluateCommand& c) {
     spdlog::warn("{} risk event(s) of profile {} come after the evaluated end (t = {:.1f} s): left out", after_end,
                  profile->name, metrics.duration_s);
   }
+  WarnOfAForeignRecord(trajectory, scenario, c.trajectory_path, c.scenario_path);
   std::cout << FormatTable({metrics});
   if (!c.out_dir.empty()) {
     PrepareRunDirectory(c.out_dir);

@@ -187,7 +187,12 @@ std::string BuildTable(const std::vector<MissionMetrics>& runs, const std::vecto
     }
   }
 
-  Block lead{"", {{"Valve", {}, true}}, {"corr(visits, weight)", "ergodic metric", "time at boundary"}};
+  // What a fleet is judged by (metrics.json has them too) under the paper's three: a user had
+  // found them only in the JSON.
+  Block lead{"",
+             {{"Valve", {}, true}},
+             {"corr(visits, weight)", "ergodic metric", "time at boundary", "unvisited valves", "risk-weighted interval",
+              "exp. detection delay"}};
   for (const std::size_t i : listed) lead.columns[0].cells.push_back(first.valves[i].name);
   if (same_weights) {
     lead.columns.push_back({"Weight", {}});
@@ -218,7 +223,10 @@ std::string BuildTable(const std::vector<MissionMetrics>& runs, const std::vecto
         std::isfinite(run.ergodic_metric) ? fmt::format("{:.2e}", run.ergodic_metric) : "---",
         vehicle_time > 0.0
             ? fmt::format("{:.1f} %", 100.0 * (run.time_outside_s + run.time_pinned_s) / vehicle_time)
-            : "---"};
+            : "---",
+        fmt::format("{} of {}", run.unvisited_valves, run.valves.size()),
+        run.duration_s > 0.0 ? Seconds(run.risk_weighted_interval_s) : "---",
+        run.duration_s > 0.0 ? Seconds(run.expected_detection_delay_s) : "---"};
     blocks.push_back(std::move(block));
   }
   std::string table = RenderTable(blocks, rows, gap);

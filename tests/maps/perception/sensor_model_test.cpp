@@ -115,6 +115,17 @@ TEST(SensorModel, ScansFallOnWholeCycles) {
   EXPECT_NEAR(m.scan_period_s(), 0.3, 1e-12);
   EXPECT_NEAR(m.false_alarms_per_scan(), 0.02 * 0.3, 1e-15);
   EXPECT_NEAR(m.clutter_density(), 0.02 * 0.3 / m.view_area_m2(), 1e-15);
+  // The nearest whole number of cycles, at least one: 7 Hz is every cycle (10 Hz), 4 Hz every 3rd
+  // (2.5 cycles rounds up), 4.5 Hz every 2nd, 0.1 Hz every 100th; the model and the CLI's warning
+  // share it.
+  EXPECT_EQ(ScanEveryCycles(10.0, 7.0), 1);
+  EXPECT_EQ(ScanEveryCycles(10.0, 4.0), 3);
+  EXPECT_EQ(ScanEveryCycles(10.0, 4.5), 2);
+  EXPECT_EQ(ScanEveryCycles(10.0, 10.0), 1);
+  EXPECT_EQ(ScanEveryCycles(10.0, 0.1), 100);
+  SensorSpec seven = Camera();
+  seven.rate_hz = 7.0;
+  EXPECT_EQ(SensorModel(seven, grid, 10.0).scan_every_cycles(), ScanEveryCycles(10.0, 7.0));
 }
 
 // The detection position density is a probability density: it integrates to 1 (midpoint rule

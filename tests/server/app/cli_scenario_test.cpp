@@ -121,6 +121,11 @@ TEST(ScenarioOverrides, AShorterMissionSaysWhatItLeavesOut) {
   EXPECT_EQ(LeftOutByDuration(file, 60.0, true),  // --random-leaks draws the shorter mission's own
             "--duration = 60: left out, as they come after the mission's end: 1 risk event(s) of profile leak_injection");
   EXPECT_EQ(LeftOutByDuration(file, 200.0, false), "");
+  // A leak that starts as the shorter mission ends could only be missed: left out too.
+  EXPECT_EQ(LeftOutByDuration(file, 120.0, false),
+            "--duration = 120: left out, as they come after the mission's end: the leak at P3 from 120 s, 1 risk event(s) "
+            "of profile leak_injection");
+  EXPECT_TRUE(maps::WithDuration(file, 120.0).leaks.empty());
   // fleet_field: a join at 200 s and a loss at 400 s.
   EXPECT_EQ(LeftOutByDuration(maps::LoadScenario(kFleetField), 300.0, false),
             "--duration = 300: left out, as they come after the mission's end: 1 fleet event(s)");
@@ -235,6 +240,15 @@ TEST(RangeProblem, SaysWhatIsAllowed) {
               flag = "--weight-exponent", value = "5";
   char* argv[] = {sage.data(), run.data(), file.data(), flag.data(), value.data()};
   EXPECT_EQ(RunCli(5, argv), 2);
+  // An option given twice is said so (CLI11's "At Most 1 required but received 2" had read as
+  // if a second value were wanted).
+  std::string duration = "--duration", d1 = "30", d2 = "60";
+  char* twice[] = {sage.data(), run.data(), file.data(), duration.data(), d1.data(), duration.data(), d2.data()};
+  testing::internal::CaptureStderr();
+  EXPECT_EQ(RunCli(7, twice), 2);
+  const std::string err = testing::internal::GetCapturedStderr();
+  EXPECT_NE(err.find("sage: error: run: --duration: given 2 times; give it once (see sage run --help)"), std::string::npos)
+      << err;
 }
 
 
@@ -378,6 +392,14 @@ TEST(EvaluateWarnings, SaysWhatGoesBeyondTheRecord) {
   EXPECT_NE(warnings("leak_injection", std::nullopt).find("1 risk event(s) of profile leak_injection come after"),
             std::string::npos);
   EXPECT_EQ(warnings("leak_injection", 200.0).find("risk event"), std::string::npos);  // 150 s: within
+  // A record that is not of this field: most of its samples far outside two_xt's 5.6 x 4.3 m, and
+  // a 500 m step in 1 s. Neither had been remarked; a record on the field (above) says neither.
+  std::ofstream(csv) << "t,vehicle,x,y\n0,0,0.6,0.6\n1,0,11,8\n2,0,11.5,8\n3,0,511.5,8\n";
+  const std::string foreign = warnings("", std::nullopt);
+  EXPECT_NE(foreign.find("3 of its 4 samples (75.0 %) lie more than 1 m outside the workspace"), std::string::npos)
+      << foreign;
+  EXPECT_NE(foreign.find("2 step(s) faster than 2.4 m/s"), std::string::npos) << foreign;
+  EXPECT_NE(foreign.find("the fastest 500 m in 1 s, vehicle 0 at t = 3.0 s"), std::string::npos) << foreign;
   std::filesystem::remove(csv);
 }
 

@@ -289,7 +289,15 @@ MissionMetrics AstarRun() {
 TEST(FormatTable, PaperLayout) {
   MissionMetrics ergodic = SampleMetrics();
   ergodic.visit_weight_correlation = 0.93;
+  // What a fleet is judged by, under the paper's three lines.
+  ergodic.unvisited_valves = 1;
+  ergodic.risk_weighted_interval_s = 12.34;
+  ergodic.expected_detection_delay_s = 4.56;
   const std::string table = FormatTable({AstarRun(), ergodic});
+  for (const char* needle : {"unvisited valves", "risk-weighted interval", "exp. detection delay", "12.3 s", "4.6 s"}) {
+    EXPECT_NE(table.find(needle), std::string::npos) << needle << " missing from\n" << table;
+  }
+  EXPECT_NE(table.find(fmt::format("1 of {}", ergodic.valves.size())), std::string::npos) << table;
   for (const char* needle : {"Valve", "Weight", "astar", "ergodic", "visits", "interval", "P1", "P3", "0.55",
                              "8.1 s", "6.5 s", "---", "+0.93", "undefined", "1.25e-03", "longest gap"}) {
     EXPECT_NE(table.find(needle), std::string::npos) << needle << " missing from\n" << table;
