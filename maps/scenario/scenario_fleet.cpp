@@ -205,7 +205,8 @@ Scenario WithVehicleCount(const Scenario& scenario, int count) {
                             std::to_string(s.vehicles.size() + std::min(dense_room, by_area)) + " vehicles" + besides +
                             " (starts " +
                             FormatNumber(dense_separation) + " m apart and " +
-                            FormatNumber(std::round(StartFootprintMargin(s) * 100.0) / 100.0) + " m from structures, " + FormatNumber(area_of(first)) + " m^2 of workspace each)");
+                            FormatNumber(std::round(StartFootprintMargin(s) * 100.0) / 100.0) + " m from structures, " +
+                            FormatNumber(area_of(first)) + " m^2 of workspace each)");
       }
     }
     for (std::size_t k = 0; s.vehicles.size() < wanted; ++k) {
