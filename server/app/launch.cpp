@@ -128,8 +128,18 @@ int Launch(const LaunchCommand& c) {
   MissionFile mission;
   std::vector<ResumedVehicle> to_resume;
   double record_until_s = -1.0;  // a resumed mission's record: where its server goes on from
+  std::optional<RunDirectoryLock> lock;  // held while this launch runs the directory's mission
+  const auto take_lock = [&](const std::string& option, const std::string& dir) {
+    lock = RunDirectoryLock::TryTake(dir);
+    if (!lock) {
+      throw maps::ScenarioError(fmt::format("{} = {}: another sage launch is starting or running a mission there (it "
+                                            "holds {}/.launch.lock); wait for it, or choose another directory",
+                                            option, dir, dir));
+    }
+  };
   if (resume) {
     out_dir = c.resume_dir;
+    if (std::error_code ec; fs::is_directory(out_dir, ec)) take_lock("--resume", out_dir);  // else: said below
     const MissionFile previous = ReadMissionFile(out_dir);
     if (IsRunningLauncher(previous.launcher_pid)) {
       throw maps::ScenarioError(fmt::format("--resume = {}: the mission is still running (launcher pid {})", out_dir,
@@ -154,6 +164,10 @@ int Launch(const LaunchCommand& c) {
     }
     maps::CheckSeabedModel(scenario);  // a bad seabed map is refused here, naming the user's file, not by the server
     out_dir = c.out_dir.empty() ? (fs::path("runs") / (scenario.name + "_launch")).string() : c.out_dir;
+    if (std::error_code ec; !fs::create_directories(out_dir, ec) && ec) {
+      throw maps::ScenarioError(fmt::format("--out = {}: cannot make the directory: {}", out_dir, ec.message()));
+    }
+    take_lock("--out", out_dir);
     CheckRunDirectoryFree(out_dir);
     if (std::error_code ignored; fs::exists(fs::path(out_dir) / "trajectory.csv", ignored)) {
       spdlog::warn("launch: {}: replacing the mission recorded there (give --out another directory to keep it)", out_dir);

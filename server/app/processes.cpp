@@ -2,6 +2,7 @@
 
 #include <fcntl.h>
 #include <signal.h>
+#include <sys/file.h>
 #include <sys/prctl.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -30,6 +31,21 @@ namespace {
 std::string SelfExe() { return fs::read_symlink("/proc/self/exe").string(); }
 
 }  // namespace
+
+std::optional<RunDirectoryLock> RunDirectoryLock::TryTake(const std::string& dir) {
+  const std::string path = (fs::path(dir) / ".launch.lock").string();
+  const int fd = open(path.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
+  if (fd < 0) throw std::runtime_error(fmt::format("cannot open {}: {}", path, std::strerror(errno)));
+  if (flock(fd, LOCK_EX | LOCK_NB) != 0) {
+    close(fd);
+    return std::nullopt;
+  }
+  return RunDirectoryLock(fd);
+}
+
+RunDirectoryLock::~RunDirectoryLock() {
+  if (fd_ >= 0) close(fd_);  // and with it the lock
+}
 
 void LogToStderr() {
   static const std::shared_ptr<spdlog::logger> logger = [] {

@@ -4,8 +4,10 @@
 // relayed above a live progress line).
 #include <sys/types.h>
 
+#include <optional>
 #include <string>
 #include <string_view>
+#include <utility>
 #include <vector>
 
 #include "maps/scenario/scenario.h"
@@ -30,6 +32,28 @@ std::string DescribeExit(int wait_status);
 int ExitCode(int wait_status);
 /// True if `pid` runs a `sage launch` (another launcher holding a run directory).
 bool IsRunningLauncher(int pid);
+
+/// An exclusive lock on a run directory (flock on DIR/.launch.lock, not inherited by the
+/// processes it starts), held by the launch that runs its mission for as long as it lives; the
+/// kernel lets it go however the launcher ends. Two `sage launch --resume DIR` at once had both
+/// resumed the mission, each on its own domain, into one record.
+class RunDirectoryLock {
+ public:
+  /// The lock, or nullopt if another process holds it (dir must exist). Throws
+  /// std::runtime_error if the lock file cannot be made.
+  static std::optional<RunDirectoryLock> TryTake(const std::string& dir);
+  RunDirectoryLock(RunDirectoryLock&& other) noexcept : fd_(std::exchange(other.fd_, -1)) {}
+  RunDirectoryLock& operator=(RunDirectoryLock&& other) noexcept {
+    std::swap(fd_, other.fd_);  // the other's destructor lets go of what this held
+    return *this;
+  }
+  RunDirectoryLock(const RunDirectoryLock&) = delete;
+  ~RunDirectoryLock();
+
+ private:
+  explicit RunDirectoryLock(int fd) : fd_(fd) {}
+  int fd_;
+};
 
 /// What a command says along the way goes to stderr, its result to stdout (`sage run ... >
 /// table.txt`, `sage launch ... > table.txt` keep the table alone): from now on the default

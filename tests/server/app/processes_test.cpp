@@ -3,9 +3,14 @@
 // table.txt` keeps the table alone, as `sage run` does.
 #include "server/app/processes.h"
 
+#include "server/app/cli.h"
+
 #include <unistd.h>
 
+#include <filesystem>
+#include <optional>
 #include <string>
+#include <vector>
 
 #include <gtest/gtest.h>
 
@@ -45,6 +50,31 @@ TEST(TerminalRelay, LogLinesGoToStderrAndTheTableToStdout) {
   EXPECT_EQ(err,
             "[info] server: rov1 (id 0) joined at t = 0.0 s\n"
             "[warning] server: no vehicle is alive at t = 9.0 s\n");
+}
+
+// A run directory is held by one launch at a time: a second lock is refused while the first
+// lives and given once it is gone; `sage launch --resume DIR` refuses a directory another launch
+// holds, before anything starts (two resumes at once had both flown into one record).
+TEST(RunDirectoryLock, OneLaunchAtATime) {
+  const std::filesystem::path dir = std::filesystem::temp_directory_path() / "sage_run_lock_test";
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir);
+  {
+    std::optional<RunDirectoryLock> held = RunDirectoryLock::TryTake(dir.string());
+    ASSERT_TRUE(held.has_value());
+    EXPECT_FALSE(RunDirectoryLock::TryTake(dir.string()).has_value());
+    std::vector<std::string> args = {"sage", "launch", "--resume", dir.string()};
+    std::vector<char*> argv;
+    for (std::string& a : args) argv.push_back(a.data());
+    testing::internal::CaptureStderr();
+    EXPECT_EQ(RunCli(static_cast<int>(argv.size()), argv.data()), 2);
+    const std::string err = testing::internal::GetCapturedStderr();
+    EXPECT_NE(err.find("--resume = " + dir.string() + ": another sage launch is starting or running a mission there"),
+              std::string::npos)
+        << err;
+  }
+  EXPECT_TRUE(RunDirectoryLock::TryTake(dir.string()).has_value());  // the first is gone
+  std::filesystem::remove_all(dir);
 }
 
 }  // namespace
