@@ -23,6 +23,7 @@
 #include "server/app/launch.h"
 #include "server/app/operators.h"
 #include "server/app/options.h"
+#include "server/app/processes.h"
 #include "server/app/run_commands.h"
 #include "server/app/security_command.h"
 #include "server/app/view_command.h"
@@ -612,6 +613,16 @@ int RunCli(int argc, char** argv) {
         throw std::runtime_error(fmt::format("the mission in {} has ended (its record is complete, to t = {:.1f} s): none "
                                              "to take this; start one with sage launch",
                                              m.run_dir, record.recorded_until_s));
+      } else if (record.exists && m.launcher_pid > 0 && !IsRunningLauncher(m.launcher_pid)) {
+        // Launched, unfinished, and its launcher gone: its server died (a command had waited 3 s
+        // and said only "no mission is listening on DDS domain 153"). A server started by hand
+        // names no launcher and is asked as before.
+        throw std::runtime_error(fmt::format(
+            "the mission in {} is not running: its server is gone and no sage launch runs it (its record stops at t = "
+            "{:.1f} s{}); resume it with sage launch --resume {}",
+            m.run_dir, record.recorded_until_s,
+            record.has_checkpoint ? fmt::format(", checkpoint at t = {:.1f} s", record.checkpoint_s) : std::string(),
+            m.run_dir));
       }
       m.network = op.network.Applied(m.network);
       return m;

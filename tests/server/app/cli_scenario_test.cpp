@@ -1,5 +1,8 @@
 #include "server/app/cli_scenario.h"
 
+#include <sys/wait.h>
+#include <unistd.h>
+
 #include <algorithm>
 #include <atomic>
 #include <cmath>
@@ -432,6 +435,26 @@ TEST(OperatorDoor, AnEndedMissionIsSaidAtOnce) {
               std::string::npos)
         << err;
   }
+  // Launched, unfinished, its launcher gone (a server that died): said at once, with the resume
+  // (it had waited 3 s and said only that no mission listened on its domain).
+  const pid_t gone = fork();
+  if (gone == 0) _exit(0);
+  ASSERT_GT(gone, 0);
+  waitpid(gone, nullptr, 0);
+  m.launcher_pid = gone;
+  WriteMissionFile(dir.string(), m);
+  std::ofstream(dir / "metrics.json") << R"({"complete": false, "duration_s": 12.5})";
+  std::vector<std::string> args = {"sage", "stop", "--mission", dir.string()};
+  std::vector<char*> argv;
+  for (std::string& a : args) argv.push_back(a.data());
+  testing::internal::CaptureStderr();
+  EXPECT_EQ(RunCli(static_cast<int>(argv.size()), argv.data()), 1);
+  const std::string err = testing::internal::GetCapturedStderr();
+  EXPECT_NE(err.find("the mission in " + dir.string() + " is not running: its server is gone and no sage launch runs it " +
+                     "(its record stops at t = 12.5 s"),
+            std::string::npos)
+      << err;
+  EXPECT_NE(err.find("resume it with sage launch --resume " + dir.string()), std::string::npos) << err;
   std::filesystem::remove_all(dir);
 }
 
