@@ -47,6 +47,15 @@ std::string MustBePositive(const std::string& text) {
   }
 }
 
+// Who says a risk changes, as the server's log and risk_events.csv name them: a name, not empty
+// nor a line of its own (an empty one had been logged as "set to 4 by  at t = 3.6 s").
+std::string MustBeASourceName(const std::string& text) {
+  const bool printable =
+      std::all_of(text.begin(), text.end(), [](char c) { return static_cast<unsigned char>(c) >= 0x20 && c != 0x7f; });
+  if (!text.empty() && text.size() <= 64 && printable) return {};
+  return "must be 1 to 64 characters, none a control character (who says so, e.g. 'leak detector 3')";
+}
+
 // A mission clock every agent host follows (proto::PlausibleClock refuses any other).
 std::string MustBeTimeScale(const std::string& text) {
   try {
@@ -406,7 +415,9 @@ int RunCli(int argc, char** argv) {
   CLI::App* risk_set = risk->add_subcommand("set", "Set a valve's raw risk weight; vehicles re-allocate on the next cycle");
   risk_set->add_option("valve", op.valve, "Valve name, e.g. P1")->required();
   risk_set->add_option("weight", op.weight, "Raw weight in [0, 1e12] (weights are normalised over all valves)")->required();
-  risk_set->add_option("--source", op.source, "Who says so (logged by the server)")->capture_default_str();
+  risk_set->add_option("--source", op.source, "Who says so (logged by the server; 1 to 64 characters)")
+      ->capture_default_str()
+      ->check(MustBeASourceName);
   AddMissionDir(*risk_set, op);
 
   CLI::App* stop = app.add_subcommand("stop", "End the running mission now; its server writes the run directory");

@@ -252,6 +252,15 @@ TEST(RangeProblem, SaysWhatIsAllowed) {
   const std::string err = testing::internal::GetCapturedStderr();
   EXPECT_NE(err.find("sage: error: run: --duration: given 2 times; give it once (see sage run --help)"), std::string::npos)
       << err;
+  // A risk change's source is a name: not empty, no line of its own (refused before any mission is looked for).
+  for (std::string source : {std::string(""), std::string("ops\ndesk")}) {
+    std::string risk = "risk", set = "set", valve = "P1", weight = "2", flag_source = "--source";
+    char* with_source[] = {sage.data(), risk.data(), set.data(), valve.data(), weight.data(), flag_source.data(), source.data()};
+    testing::internal::CaptureStderr();
+    EXPECT_EQ(RunCli(7, with_source), 2) << source;
+    const std::string said = testing::internal::GetCapturedStderr();
+    EXPECT_NE(said.find("risk set: --source: must be 1 to 64 characters"), std::string::npos) << said;
+  }
 }
 
 
