@@ -326,8 +326,13 @@ int RunServerNode(const maps::Scenario& scenario, const ServerNodeOptions& optio
   const auto wall_start = SteadyClock::now() + std::chrono::duration_cast<SteadyClock::duration>(
                                                    std::chrono::duration<double>(lead_s));
   publish_status(first_cycle, static_cast<double>(first_cycle) / rate, false);
-  spdlog::info("server: mission '{}' on DDS domain {}, {:.0f} s at {}x real time, {} coverage{}", scenario.name,
-               options.domain_id, scenario.duration_s, options.time_scale, ToString(scenario.fleet.assignment),
+  // What the fleet flies: A* tours, or ergodic control with its way of sharing the field (an A*
+  // mission had been announced as "shared coverage").
+  const std::string flown = options.controller == ControllerKind::kAstar
+                                ? std::string("A* tours")
+                                : fmt::format("ergodic, {} coverage", ToString(scenario.fleet.assignment));
+  spdlog::info("server: mission '{}' on DDS domain {}, {:.0f} s at {}x real time, {}{}", scenario.name, options.domain_id,
+               scenario.duration_s, options.time_scale, flown,
                options.resume ? fmt::format(", resumed at t = {:.1f} s", core.time_s()) : std::string());
 
   // Liveliness losses seen while this server itself was stalled wait two leases for the
