@@ -22,9 +22,13 @@
 #include "server/app/options.h"
 #include "server/app/run_commands.h"
 #include "server/report/mission_file.h"
+#include "tests/server/app/run_sage.h"
 
 namespace sage::server {
 namespace {
+
+using cli_test::RunSage;
+using cli_test::SageRun;
 
 const std::string kFleetField = std::string(SAGE_SOURCE_DIR) + "/scenarios/fleet_field.yaml";
 
@@ -239,27 +243,20 @@ TEST(RangeProblem, SaysWhatIsAllowed) {
   EXPECT_EQ(RangeProblem("1000", 0, 1000, true), "");
   EXPECT_EQ(RangeProblem("1001", 0, 1000, true), "must be a whole number in 0..1000");
   EXPECT_EQ(RangeProblem("2.5", 0, 1000, true), "must be a whole number in 0..1000");
-  std::string sage = "sage", run = "run", file = std::string(SAGE_SOURCE_DIR) + "/scenarios/two_xt.yaml",
-              flag = "--weight-exponent", value = "5";
-  char* argv[] = {sage.data(), run.data(), file.data(), flag.data(), value.data()};
-  EXPECT_EQ(RunCli(5, argv), 2);
+  const std::string file = std::string(SAGE_SOURCE_DIR) + "/scenarios/two_xt.yaml";
+  EXPECT_EQ(RunSage({"run", file, "--weight-exponent", "5"}).status, 2);
   // An option given twice is said so (CLI11's "At Most 1 required but received 2" had read as
   // if a second value were wanted).
-  std::string duration = "--duration", d1 = "30", d2 = "60";
-  char* twice[] = {sage.data(), run.data(), file.data(), duration.data(), d1.data(), duration.data(), d2.data()};
-  testing::internal::CaptureStderr();
-  EXPECT_EQ(RunCli(7, twice), 2);
-  const std::string err = testing::internal::GetCapturedStderr();
-  EXPECT_NE(err.find("sage: error: run: --duration: given 2 times; give it once (see sage run --help)"), std::string::npos)
-      << err;
+  const SageRun twice = RunSage({"run", file, "--duration", "30", "--duration", "60"});
+  EXPECT_EQ(twice.status, 2);
+  EXPECT_NE(twice.err.find("sage: error: run: --duration: given 2 times; give it once (see sage run --help)"),
+            std::string::npos)
+      << twice.err;
   // A risk change's source is a name: not empty, no line of its own (refused before any mission is looked for).
-  for (std::string source : {std::string(""), std::string("ops\ndesk")}) {
-    std::string risk = "risk", set = "set", valve = "P1", weight = "2", flag_source = "--source";
-    char* with_source[] = {sage.data(), risk.data(), set.data(), valve.data(), weight.data(), flag_source.data(), source.data()};
-    testing::internal::CaptureStderr();
-    EXPECT_EQ(RunCli(7, with_source), 2) << source;
-    const std::string said = testing::internal::GetCapturedStderr();
-    EXPECT_NE(said.find("risk set: --source: must be 1 to 64 characters"), std::string::npos) << said;
+  for (const std::string& source : {std::string(""), std::string("ops\ndesk")}) {
+    const SageRun said = RunSage({"risk", "set", "P1", "2", "--source", source});
+    EXPECT_EQ(said.status, 2) << source;
+    EXPECT_NE(said.err.find("risk set: --source: must be 1 to 64 characters"), std::string::npos) << said.err;
   }
 }
 
@@ -272,13 +269,10 @@ TEST(ScenarioOverrides, ResumeRefusesAControllerOrTimeScale) {
   const std::string dir = (std::filesystem::temp_directory_path() / "sage_resume_options_test").string();
   std::filesystem::remove_all(dir);
   const auto launch = [&](std::vector<std::string> extra) {
-    std::vector<std::string> args = {"sage", "launch", "--resume", dir};
+    std::vector<std::string> args = {"launch", "--resume", dir};
     args.insert(args.end(), extra.begin(), extra.end());
-    std::vector<char*> argv;
-    for (std::string& a : args) argv.push_back(a.data());
-    testing::internal::CaptureStderr();
-    const int status = RunCli(static_cast<int>(argv.size()), argv.data());
-    return std::make_pair(status, testing::internal::GetCapturedStderr());
+    const SageRun run = RunSage(args);
+    return std::make_pair(run.status, run.err);
   };
   for (const auto& [extra, name] : std::vector<std::pair<std::vector<std::string>, std::string>>{
            {{"-c", "astar"}, "--controller"},
@@ -432,17 +426,13 @@ TEST(OperatorDoor, AnEndedMissionIsSaidAtOnce) {
   std::ofstream(dir / "metrics.json") << R"({"complete": true, "duration_s": 12.5})";
   for (const std::vector<std::string>& command :
        std::vector<std::vector<std::string>>{{"stop"}, {"risk", "set", "P1", "2"}, {"vehicle", "remove", "0"}, {"vehicle", "add"}}) {
-    std::vector<std::string> args = {"sage"};
-    args.insert(args.end(), command.begin(), command.end());
+    std::vector<std::string> args = command;
     args.insert(args.end(), {"--mission", dir.string()});
-    std::vector<char*> argv;
-    for (std::string& a : args) argv.push_back(a.data());
-    testing::internal::CaptureStderr();
-    EXPECT_EQ(RunCli(static_cast<int>(argv.size()), argv.data()), 1) << command.front();
-    const std::string err = testing::internal::GetCapturedStderr();
-    EXPECT_NE(err.find("the mission in " + dir.string() + " has ended (its record is complete, to t = 12.5 s)"),
+    const SageRun run = RunSage(args);
+    EXPECT_EQ(run.status, 1) << command.front();
+    EXPECT_NE(run.err.find("the mission in " + dir.string() + " has ended (its record is complete, to t = 12.5 s)"),
               std::string::npos)
-        << err;
+        << run.err;
   }
   // Launched, unfinished, its launcher gone (a server that died): said at once, with the resume
   // (it had waited 3 s and said only that no mission listened on its domain).
@@ -453,12 +443,9 @@ TEST(OperatorDoor, AnEndedMissionIsSaidAtOnce) {
   m.launcher_pid = gone;
   WriteMissionFile(dir.string(), m);
   std::ofstream(dir / "metrics.json") << R"({"complete": false, "duration_s": 12.5})";
-  std::vector<std::string> args = {"sage", "stop", "--mission", dir.string()};
-  std::vector<char*> argv;
-  for (std::string& a : args) argv.push_back(a.data());
-  testing::internal::CaptureStderr();
-  EXPECT_EQ(RunCli(static_cast<int>(argv.size()), argv.data()), 1);
-  const std::string err = testing::internal::GetCapturedStderr();
+  const SageRun stopped = RunSage({"stop", "--mission", dir.string()});
+  EXPECT_EQ(stopped.status, 1);
+  const std::string& err = stopped.err;
   EXPECT_NE(err.find("the mission in " + dir.string() + " is not running: its server is gone and no sage launch runs it " +
                      "(its record stops at t = 12.5 s"),
             std::string::npos)

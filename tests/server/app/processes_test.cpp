@@ -1,9 +1,8 @@
 // The launcher's terminal: the server's lines come through a pipe, its log lines ("[info] ...")
 // go on to stderr and everything else (the final table) to stdout, so `sage launch ... >
-// table.txt` keeps the table alone, as `sage run` does.
+// table.txt` keeps the table alone, as `sage run` does. And the lock a launch holds on its run
+// directory.
 #include "server/app/processes.h"
-
-#include "server/app/cli.h"
 
 #include <unistd.h>
 
@@ -13,6 +12,8 @@
 #include <vector>
 
 #include <gtest/gtest.h>
+
+#include "tests/server/app/run_sage.h"
 
 namespace sage::server {
 namespace {
@@ -63,15 +64,11 @@ TEST(RunDirectoryLock, OneLaunchAtATime) {
     std::optional<RunDirectoryLock> held = RunDirectoryLock::TryTake(dir.string());
     ASSERT_TRUE(held.has_value());
     EXPECT_FALSE(RunDirectoryLock::TryTake(dir.string()).has_value());
-    std::vector<std::string> args = {"sage", "launch", "--resume", dir.string()};
-    std::vector<char*> argv;
-    for (std::string& a : args) argv.push_back(a.data());
-    testing::internal::CaptureStderr();
-    EXPECT_EQ(RunCli(static_cast<int>(argv.size()), argv.data()), 2);
-    const std::string err = testing::internal::GetCapturedStderr();
-    EXPECT_NE(err.find("--resume = " + dir.string() + ": another sage launch is starting or running a mission there"),
+    const cli_test::SageRun run = cli_test::RunSage({"launch", "--resume", dir.string()});
+    EXPECT_EQ(run.status, 2);
+    EXPECT_NE(run.err.find("--resume = " + dir.string() + ": another sage launch is starting or running a mission there"),
               std::string::npos)
-        << err;
+        << run.err;
   }
   EXPECT_TRUE(RunDirectoryLock::TryTake(dir.string()).has_value());  // the first is gone
   std::filesystem::remove_all(dir);
