@@ -9,8 +9,10 @@
 #include <charconv>
 #include <csignal>
 #include <cstring>
+#include <chrono>
 #include <filesystem>
 #include <string>
+#include <thread>
 
 #include <fmt/format.h>
 
@@ -100,6 +102,20 @@ int CmdServer(const ServerCommand& c) {
   options.cycle_priority = c.cycle_priority;
   options.show_progress = !c.quiet;
   options.stop = stop;
+  if (c.launched) {
+    // sage launch is this server's parent; once it dies the server is another's child. A dying
+    // launcher closes its end of the server's stdout before the kernel hands its children on, so a
+    // stop by SIGPIPE (or the death signal) may come a moment before: waited for, briefly. Ctrl-C
+    // reaches the launcher too, which lives on to end the mission.
+    options.launcher_gone = [launcher = getppid()] {
+      const auto until = std::chrono::steady_clock::now() + std::chrono::milliseconds(500);
+      while (getppid() == launcher) {
+        if (StopSignal() == SIGINT || std::chrono::steady_clock::now() >= until) return false;
+        std::this_thread::sleep_for(std::chrono::milliseconds(5));
+      }
+      return true;
+    };
+  }
   options.on_started = [&] {
     const std::string security_dir =
         c.security_dir.empty() ? std::string() : fs::absolute(c.security_dir).lexically_normal().string();

@@ -601,6 +601,18 @@ int RunServerNode(const maps::Scenario& scenario, const ServerNodeOptions& optio
     }
   }
   const bool stopped_early = cycle <= cycles_total;
+  if (stopped_early && options.stop && options.stop->load() && options.launcher_gone && options.launcher_gone()) {
+    // Its launcher died (its agent hosts went with it): the mission keeps its record as of this
+    // cycle and stays resumable; a status of "finished" would end hosts started apart from it.
+    run.Checkpoint(core);
+    if (live) live->Close("the mission's launcher has gone; the mission can be resumed");
+    // On stderr itself: the launcher relayed the server's log from its stdout, and is gone.
+    fmt::print(stderr,
+               "sage: sage launch ended without stopping the mission; its record is kept, unfinished, to t = {:.1f} "
+               "s: resume it with sage launch --resume {}\n",
+               core.time_s(), options.out_dir);
+    return 1;
+  }
   const double end_time = std::max(1.0 / rate, std::min(scenario.duration_s, core.time_s()));
   // The real-time factor is the mission loop's; writing the final set is timed on its own.
   const double wall_s = std::chrono::duration<double>(SteadyClock::now() - wall_start).count();

@@ -38,6 +38,11 @@ struct ServerNodeOptions {
   int cycle_priority = kDefaultCyclePriority;
   bool show_progress = true;       ///< a progress line on stderr
   const std::atomic<bool>* stop = nullptr;  ///< set (e.g. by SIGINT) to end the mission early
+  /// Asked when `stop` ended the mission early: whether the mission's launcher is gone (sage
+  /// launch killed, even by SIGKILL: its processes get SIGTERM as it dies). The mission is then
+  /// left as a crash would leave it, resumable (the checkpoint of the last cycle, metrics.json
+  /// "complete": false), not ended: nobody asked.
+  std::function<bool()> launcher_gone;
   /// Called once the server knows it is the mission's only server (no other on its domain),
   /// before the mission starts: where the sage command writes the files other tools join by.
   std::function<void()> on_started;

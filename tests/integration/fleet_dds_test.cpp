@@ -1022,6 +1022,44 @@ TEST_F(FleetDds, KilledServerResumesFromItsCheckpoint) {
   }
 }
 
+// 7b. The launcher itself is killed (SIGKILL: it can say nothing): its server and agent hosts go
+// with it, and the server leaves the mission as a crash would, resumable — metrics marked
+// incomplete, a checkpoint of its last cycle, the resume command on its stderr — not stopped as
+// if an operator had asked (it had written the final set, and nothing could resume it).
+TEST_F(FleetDds, KilledLauncherLeavesTheMissionResumable) {
+  const int domain_id = FreeDomainForLaunch();
+  const fs::path out = run_dir_ / "out";
+  ChildProcess& launch = StartLaunch(
+      "launch", {Scenario("two_xt.yaml"), "--vehicles", "2", "--duration", "400", "--time-scale", Num(kTimeScale)},
+      out, domain_id);
+  const auto server_pid = WaitForLog(launch, R"(server pid ([0-9]+))", kStartupTimeout);
+  ASSERT_TRUE(server_pid.has_value()) << "the launcher never said which process is the server";
+  MissionWatcher watcher(domain_id, OperatorIdentityOf(out));
+  ASSERT_TRUE(WaitForFleet(watcher, 2, 25.0)) << "the mission never had its two vehicles";
+  const double t_kill = watcher.MissionTimeNow();
+  launch.Signal(SIGKILL);  // the launcher alone, not its process group
+  ASSERT_EQ(launch.WaitExit(5s), std::optional<int>(128 + SIGKILL));
+  const pid_t server = std::stoi((*server_pid)[1]);
+  const auto deadline = SteadyClock::now() + 15s;
+  while (::kill(server, 0) == 0 && SteadyClock::now() < deadline) std::this_thread::sleep_for(50ms);
+  ASSERT_NE(::kill(server, 0), 0) << "the server outlived its launcher by 15 s";
+
+  const std::string said = launch.LogText();  // the server's stderr is the launcher's
+  const auto told = std::regex_search(said, std::regex(R"(sage launch ended without stopping the mission; its record is )"
+                                                       R"(kept, unfinished, to t = [0-9.]+ s: resume it with sage )"
+                                                       R"(launch --resume )"));
+  EXPECT_TRUE(told) << said;
+  const Json partial = ReadJson(out / "metrics.json");
+  EXPECT_FALSE(partial.at("complete").get<bool>());
+  EXPECT_FALSE(partial.at("stopped_early").get<bool>()) << "nobody stopped the mission";
+  EXPECT_NEAR(partial.at("duration_s").get<double>(), t_kill, 3.0 * kTimeScale);
+  ASSERT_TRUE(fs::exists(out / "checkpoint.bin"));
+  // An operator's command is told the mission can be resumed (it had been told it had ended).
+  ChildProcess& stop = Start("stop", {"stop", "--mission", out.string()});
+  EXPECT_EQ(stop.WaitExit(15s), std::optional<int>(1)) << stop.LogText();
+  EXPECT_NE(stop.LogText().find("resume it with sage launch --resume"), std::string::npos) << stop.LogText();
+}
+
 // 8. A server restarted by hand over a live fleet: the agent host follows the new server at once
 // (its states carry the new server's clock and are steered on its word within a second of wall
 // time), no vehicle is lost, and the mission ends on the resumed server's clock.
