@@ -7,6 +7,7 @@
 #include <charconv>
 #include <cmath>
 #include <cstdint>
+#include <cstdlib>
 #include <iostream>
 #include <regex>
 #include <string>
@@ -14,6 +15,7 @@
 
 #include <CLI/CLI.hpp>
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 #include <spdlog/spdlog.h>
 
 #include "server/app/bench_leaks.h"
@@ -618,22 +620,34 @@ int RunCli(int argc, char** argv) {
     // The mission as mission.json says, on this machine's network as the options say.
     const auto mission = [&] {
       MissionFile m = FindMission(op.mission_dir);
+      // Found through runs/latest and not running: a mission that does run there is named (a later
+      // launch that ended first leaves runs/latest on its own record).
+      const auto running_elsewhere = [&] {
+        if (!op.mission_dir.empty() || std::getenv("SAGE_MISSION") != nullptr) return std::string();
+        const std::vector<std::string> running = RunningMissions();
+        if (running.empty()) return std::string();
+        return fmt::format("; {} running in {}: give --mission {}",
+                           running.size() == 1 ? "a mission is" : fmt::format("{} missions are", running.size()),
+                           fmt::join(running, ", "), running.front());
+      };
       // A mission whose record is complete has ended: said at once, naming it (a command had
       // waited 3-6 s for an answer and said only that no mission listened on its domain).
       if (const RecordSummary record = ReadRecordSummary(m.run_dir); record.complete) {
-        throw std::runtime_error(fmt::format("the mission in {} has ended (its record is complete, to t = {:.1f} s): none "
-                                             "to take this; start one with sage launch",
-                                             m.run_dir, record.recorded_until_s));
+        const std::string elsewhere = running_elsewhere();
+        throw std::runtime_error(fmt::format("the mission in {} has ended (its record is complete, to t = {:.1f} s){}",
+                                             m.run_dir, record.recorded_until_s,
+                                             elsewhere.empty() ? ": none to take this; start one with sage launch"
+                                                               : elsewhere));
       } else if (record.exists && m.launcher_pid > 0 && !IsRunningLauncher(m.launcher_pid)) {
         // Launched, unfinished, and its launcher gone: its server died (a command had waited 3 s
         // and said only "no mission is listening on DDS domain 153"). A server started by hand
         // names no launcher and is asked as before.
         throw std::runtime_error(fmt::format(
             "the mission in {} is not running: its server is gone and no sage launch runs it (its record stops at t = "
-            "{:.1f} s{}); resume it with sage launch --resume {}",
+            "{:.1f} s{}); resume it with sage launch --resume {}{}",
             m.run_dir, record.recorded_until_s,
             record.has_checkpoint ? fmt::format(", checkpoint at t = {:.1f} s", record.checkpoint_s) : std::string(),
-            m.run_dir));
+            m.run_dir, running_elsewhere()));
       }
       m.network = op.network.Applied(m.network);
       return m;

@@ -1,6 +1,8 @@
 #include "server/app/operators.h"
 
+#include <algorithm>
 #include <cstdio>
+#include <functional>
 #include <cstdlib>
 #include <filesystem>
 #include <optional>
@@ -101,6 +103,25 @@ MissionFile FindMission(const std::string& dir) {
   return ReadMissionFile(where);
 }
 
+std::vector<std::string> RunningMissions(const std::string& runs_dir) {
+  std::vector<std::pair<fs::file_time_type, std::string>> running;
+  std::error_code ec;
+  for (fs::directory_iterator it(runs_dir, ec), end; !ec && it != end; it.increment(ec)) {
+    const fs::path file = it->path() / "mission.json";
+    if (it->is_symlink(ec) || !fs::is_regular_file(file, ec)) continue;  // runs/latest is a link to one of them
+    try {
+      const MissionFile m = ReadMissionFile(it->path().string());
+      if (IsRunningLauncher(m.launcher_pid)) running.emplace_back(fs::last_write_time(file, ec), it->path().string());
+    } catch (const std::exception&) {
+      // Not a mission one can reach: not one to point an operator at.
+    }
+  }
+  std::sort(running.begin(), running.end(), std::greater<>());
+  std::vector<std::string> dirs;
+  for (auto& [when, dir] : running) dirs.push_back(std::move(dir));
+  return dirs;
+}
+
 std::string StartAddedHost(const MissionFile& mission, int first_id, int count) {
   const std::string log = (fs::path(mission.run_dir) / fmt::format("agents-add-{}.log", first_id)).string();
   std::vector<std::string> args = {"agents", mission.scenario_path, "--add", std::to_string(count), "--first-id",
@@ -166,7 +187,7 @@ int RemoveVehicle(const MissionFile& mission, int id, bool insecure) {
     return 1;
   }
   // The server records the leave when the state is disposed, a cycle or two after its order.
-  std::printf("%s\n", VehicleLeftLine(id, answer->mission_time_s).c_str());
+  std::printf("%s (mission in %s)\n", VehicleLeftLine(id, answer->mission_time_s).c_str(), mission.run_dir.c_str());
   return 0;
 }
 
@@ -210,7 +231,8 @@ int SetRisk(const MissionFile& mission, const std::string& valve, double weight,
     std::fprintf(stderr, "sage: error: %s\n", RiskRefusedLine(answer->reason).c_str());
     return 2;
   }
-  std::printf("%s\n", RiskAppliedLine(valve, weight, answer->mission_time_s, answer->new_share).c_str());
+  std::printf("%s (mission in %s)\n", RiskAppliedLine(valve, weight, answer->mission_time_s, answer->new_share).c_str(),
+              mission.run_dir.c_str());
   return 0;
 }
 

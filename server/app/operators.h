@@ -3,6 +3,7 @@
 // (default $SAGE_MISSION, else runs/latest): each asks the mission's server over DDS and says
 // what the mission did — applied, or refused and why.
 #include <string>
+#include <vector>
 
 #include "server/app/options.h"
 #include "server/report/mission_file.h"
@@ -11,6 +12,10 @@ namespace sage::server {
 
 /// Reads DIR/mission.json (DIR empty: $SAGE_MISSION, else runs/latest).
 MissionFile FindMission(const std::string& dir);
+/// The run directories under `runs_dir` (one level down) whose mission a sage launch runs now,
+/// the most recently launched first: where an operator's command may have meant to go when the
+/// mission runs/latest names has ended (a launch made later that ended first keeps it).
+std::vector<std::string> RunningMissions(const std::string& runs_dir = "runs");
 
 // Each command joins the mission's domain with the mission's operator identity when it is secured
 // (mission.json's security_dir); `insecure` joins with plain DDS instead, which a secured

@@ -1,5 +1,6 @@
 #include "server/app/cli_scenario.h"
 
+#include <signal.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -19,6 +20,7 @@
 #include "maps/scenario/field_generator.h"
 #include "server/app/cli.h"
 #include "server/app/fleet_commands.h"
+#include "server/app/operators.h"
 #include "server/app/options.h"
 #include "server/app/run_commands.h"
 #include "server/report/mission_file.h"
@@ -452,6 +454,52 @@ TEST(OperatorDoor, AnEndedMissionIsSaidAtOnce) {
       << err;
   EXPECT_NE(err.find("resume it with sage launch --resume " + dir.string()), std::string::npos) << err;
   std::filesystem::remove_all(dir);
+}
+
+// runs/latest names a mission that has ended (a later launch that ended first) while another
+// launch runs: an operator's command that named none is told which mission runs and how to reach
+// it (it had been told only that the mission had ended: start one with sage launch).
+TEST(OperatorDoor, AnEndedLatestNamesTheMissionThatRuns) {
+  namespace fs = std::filesystem;
+  const fs::path root = fs::temp_directory_path() / "sage_latest_ended_test";
+  fs::remove_all(root);
+  fs::create_directories(root / "runs" / "ended");
+  fs::create_directories(root / "runs" / "live");
+  // A process a launcher's check takes for a running sage launch (its command line says launch).
+  const pid_t launcher = fork();
+  if (launcher == 0) {
+    execl("/bin/sh", "sh", "-c", "while :; do sleep 1; done; : sage launch", static_cast<char*>(nullptr));
+    _exit(127);
+  }
+  ASSERT_GT(launcher, 0);
+  for (const auto& [name, pid] : {std::pair{"ended", 0}, std::pair{"live", static_cast<int>(launcher)}}) {
+    MissionFile m;
+    m.domain_id = 7;
+    m.run_dir = (root / "runs" / name).string();
+    m.scenario_path = (root / "runs" / name / "scenario.yaml").string();
+    m.launcher_pid = pid;
+    WriteMissionFile(m.run_dir, m);
+  }
+  std::ofstream(root / "runs" / "ended" / "trajectory.csv") << "t,vehicle,x,y\n0,0,1,1\n8,0,1.5,1\n";
+  std::ofstream(root / "runs" / "ended" / "metrics.json") << R"({"complete": true, "duration_s": 8})";
+  fs::create_directory_symlink(root / "runs" / "ended", root / "runs" / "latest");
+  const fs::path cwd = fs::current_path();
+  fs::current_path(root);
+  EXPECT_EQ(RunningMissions(), std::vector<std::string>{"runs/live"});
+  const SageRun told = RunSage({"risk", "set", "P1", "2"});
+  const SageRun named = RunSage({"stop", "--mission", (root / "runs" / "ended").string()});
+  fs::current_path(cwd);
+  kill(launcher, SIGKILL);
+  waitpid(launcher, nullptr, 0);
+  EXPECT_EQ(told.status, 1);
+  EXPECT_NE(told.err.find("has ended (its record is complete, to t = 8.0 s); a mission is running in runs/live: give "
+                          "--mission runs/live"),
+            std::string::npos)
+      << told.err;
+  // A mission named on the command line is the one meant: no other is offered.
+  EXPECT_EQ(named.status, 1);
+  EXPECT_EQ(named.err.find("running in"), std::string::npos) << named.err;
+  fs::remove_all(root);
 }
 
 }  // namespace
