@@ -4,6 +4,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <filesystem>
@@ -116,6 +117,12 @@ std::string WhatWasKept(const std::string& dir) {
 }
 
 }  // namespace
+
+// The resumed vehicles whose hosts flew on through the outage (and still fly).
+static std::size_t CarriedOn(const std::vector<ResumedVehicle>& to_resume, const std::set<int>& live) {
+  return static_cast<std::size_t>(
+      std::count_if(to_resume.begin(), to_resume.end(), [&](const ResumedVehicle& v) { return live.count(v.id) != 0; }));
+}
 
 int Launch(const LaunchCommand& c) {
   LogToStderr();  // the launcher's and, relayed, the server's log lines; the table alone on stdout
@@ -403,12 +410,18 @@ int Launch(const LaunchCommand& c) {
     terminal.Log(fmt::format("launch: resumed mission '{}' from its record at t = {:.1f} s: {} vehicle(s) carried on, {} "
                              "restarted where the record last saw them",
                              scenario.name, record_until_s >= 0.0 ? record_until_s : resumed_at,
-                             to_resume.size() - restart.size(), restart.size()));
+                             CarriedOn(to_resume, live), to_resume.size() - CarriedOn(to_resume, live)));
   }
-  terminal.Log(fmt::format("launch: mission '{}' on DDS domain {}: server pid {}, {} agent host(s) for {} vehicles; run dir "
-                           "{}",
+  // A resumed mission's vehicles that carried on fly in hosts of their own (a vehicle add's): not
+  // this launch's (it had said "1 agent host(s) for 5 vehicles" with four of them in its one host).
+  const std::size_t carried_on = CarriedOn(to_resume, live);
+  terminal.Log(fmt::format("launch: mission '{}' on DDS domain {}: server pid {}, {} agent host(s) for {} vehicles{}; run "
+                           "dir {}",
                            scenario.name, domain, server, hosts.size(),
-                           resume ? to_resume.size() : scenario.vehicles.size(), out_dir));
+                           resume ? to_resume.size() - carried_on : scenario.vehicles.size(),
+                           carried_on > 0 ? fmt::format(" ({} more flying on in the hosts they had)", carried_on)
+                                          : std::string(),
+                           out_dir));
   terminal.Log(secured ? fmt::format("launch: DDS Security on: every process authenticates with its role's identity and "
                                      "all mission traffic is encrypted (identities in {}); --insecure turns it off",
                                      mission.security_dir)
