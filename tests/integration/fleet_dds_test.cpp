@@ -373,6 +373,26 @@ class FleetDds : public ::testing::Test {
         kStartupTimeout);
   }
 
+  // A launched mission once its launcher has said which process is its server and `fleet`
+  // vehicles fly (t >= 25 s): the server's pid and a watcher of the mission; else why not.
+  struct LaunchedFleet {
+    pid_t server = 0;
+    std::unique_ptr<MissionWatcher> watcher;
+    std::string failure;
+  };
+  static LaunchedFleet WaitForLaunchedFleet(ChildProcess& launch, int domain_id, const fs::path& out, std::uint32_t fleet) {
+    LaunchedFleet launched;
+    const auto server_pid = WaitForLog(launch, R"(server pid ([0-9]+))", kStartupTimeout);
+    if (!server_pid) {
+      launched.failure = "the launcher never said which process is the server";
+      return launched;
+    }
+    launched.server = std::stoi((*server_pid)[1]);
+    launched.watcher = std::make_unique<MissionWatcher>(domain_id, OperatorIdentityOf(out));
+    if (!WaitForFleet(*launched.watcher, fleet, 25.0)) launched.failure = fmt::format("the mission never had its {} vehicles", fleet);
+    return launched;
+  }
+
   void Report(const std::string& key, double value, const std::string& unit) {
     RecordProperty(key, fmt::format("{:.3f}", value));
     std::cout << "[ MEASURED ] " << key << " = " << fmt::format("{:.3f}", value) << " " << unit << std::endl;
@@ -958,12 +978,10 @@ TEST_F(FleetDds, KilledServerResumesFromItsCheckpoint) {
   ChildProcess& launch = StartLaunch("launch", {Scenario("fleet_field.yaml"), "--vehicles", "3", "--duration",
                                                 Num(duration), "--time-scale", Num(kTimeScale)},
                                      out, domain_id);
-  const auto server_pid = WaitForLog(launch, R"(server pid ([0-9]+))", kStartupTimeout);
-  ASSERT_TRUE(server_pid.has_value()) << "the launcher never said which process is the server";
-  MissionWatcher watcher(domain_id, OperatorIdentityOf(out));
-  ASSERT_TRUE(WaitForFleet(watcher, 3, 25.0)) << "the mission never had its three vehicles";
-  const double t_kill = watcher.MissionTimeNow();
-  ::kill(std::stoi((*server_pid)[1]), SIGKILL);
+  const LaunchedFleet launched = WaitForLaunchedFleet(launch, domain_id, out, 3);
+  ASSERT_TRUE(launched.failure.empty()) << launched.failure;
+  const double t_kill = launched.watcher->MissionTimeNow();
+  ::kill(launched.server, SIGKILL);
 
   const std::optional<int> launch_exit = launch.WaitExit(15s);
   ASSERT_TRUE(launch_exit.has_value()) << "the launcher did not notice the dead server";
@@ -1032,14 +1050,12 @@ TEST_F(FleetDds, KilledLauncherLeavesTheMissionResumable) {
   ChildProcess& launch = StartLaunch(
       "launch", {Scenario("two_xt.yaml"), "--vehicles", "2", "--duration", "400", "--time-scale", Num(kTimeScale)},
       out, domain_id);
-  const auto server_pid = WaitForLog(launch, R"(server pid ([0-9]+))", kStartupTimeout);
-  ASSERT_TRUE(server_pid.has_value()) << "the launcher never said which process is the server";
-  MissionWatcher watcher(domain_id, OperatorIdentityOf(out));
-  ASSERT_TRUE(WaitForFleet(watcher, 2, 25.0)) << "the mission never had its two vehicles";
-  const double t_kill = watcher.MissionTimeNow();
+  const LaunchedFleet launched = WaitForLaunchedFleet(launch, domain_id, out, 2);
+  ASSERT_TRUE(launched.failure.empty()) << launched.failure;
+  const double t_kill = launched.watcher->MissionTimeNow();
   launch.Signal(SIGKILL);  // the launcher alone, not its process group
   ASSERT_EQ(launch.WaitExit(5s), std::optional<int>(128 + SIGKILL));
-  const pid_t server = std::stoi((*server_pid)[1]);
+  const pid_t server = launched.server;
   const auto deadline = SteadyClock::now() + 15s;
   while (::kill(server, 0) == 0 && SteadyClock::now() < deadline) std::this_thread::sleep_for(50ms);
   ASSERT_NE(::kill(server, 0), 0) << "the server outlived its launcher by 15 s";
