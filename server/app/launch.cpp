@@ -454,6 +454,7 @@ int Launch(const LaunchCommand& c) {
   int server_wait_status = 0;
   bool server_exited = false;
   double last_print = -1e9, mission_time = resumed_at;
+  bool fleet_heard = false;  // a vehicle alive in some status: until then the fleet is joining
   std::uint32_t vehicles_alive = 1;
   auto fleet_gone_since = std::chrono::steady_clock::time_point::max();
   auto send_stop = [&] {
@@ -526,9 +527,12 @@ int Launch(const LaunchCommand& c) {
         last_print = t;
         // No metric before the first vehicle's coverage: "---", as in the run table.
         const std::string metric = std::isfinite(s.ergodic_metric) ? fmt::format("{:.2e}", s.ergodic_metric) : "---";
-        terminal.Progress(fmt::format("t = {:5.0f} / {:.0f} s  vehicles {} (lost {})  ergodic metric {}  server cycle "
-                                      "{:.2f} ms",
-                                      t, s.duration_s, s.vehicles_alive, s.vehicles_lost, metric, s.cycle_time_ms));
+        // Before the first vehicle is heard the fleet is joining ("vehicles 0" read as a fleet lost).
+        fleet_heard = fleet_heard || s.vehicles_alive > 0 || s.vehicles_lost > 0;
+        const std::string fleet = fleet_heard ? fmt::format("vehicles {} (lost {})", s.vehicles_alive, s.vehicles_lost)
+                                              : std::string("vehicles joining");
+        terminal.Progress(fmt::format("t = {:5.0f} / {:.0f} s  {}  ergodic metric {}  server cycle {:.2f} ms", t,
+                                      s.duration_s, fleet, metric, s.cycle_time_ms));
       }
     });
     bool any_host = false;
