@@ -7,9 +7,9 @@
 
 #include <cerrno>
 #include <charconv>
+#include <chrono>
 #include <csignal>
 #include <cstring>
-#include <chrono>
 #include <filesystem>
 #include <string>
 #include <thread>
