@@ -84,6 +84,7 @@ int CmdBenchLeaks(const BenchLeaksCommand& c) {
   const std::string profile = c.scenario.profile.empty() ? scenario.default_profile : c.scenario.profile;
   const std::vector<Config> configs = ParseConfigs(c.configs, scenario, profile);
   const fs::path dir = c.out_dir.empty() ? fs::path("runs") / ("bench_leaks_" + scenario.name) : fs::path(c.out_dir);
+  CheckOutDirectory(dir.string());
   PrepareRunDirectory(dir.string());
 
   std::vector<std::string> names, descriptions;

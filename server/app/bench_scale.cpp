@@ -340,6 +340,7 @@ int CmdBenchScale(const BenchScaleCommand& c) {
   if (c.transport != "dds") transports.push_back("inproc");
   if (c.transport != "inproc") transports.push_back("dds");
   const fs::path out(c.out_dir);
+  CheckOutDirectory(out.string());
   PrepareRunDirectory(out.string());
   PrepareRunDirectory((out / "fields").string());
   if (c.transport != "inproc") PrepareRunDirectory((out / "runs").string());  // the launches' run directories

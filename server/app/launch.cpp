@@ -171,6 +171,7 @@ int Launch(const LaunchCommand& c) {
     }
     maps::CheckSeabedModel(scenario);  // a bad seabed map is refused here, naming the user's file, not by the server
     out_dir = c.out_dir.empty() ? (fs::path("runs") / (scenario.name + "_launch")).string() : c.out_dir;
+    CheckOutDirectory(out_dir);
     if (std::error_code ec; !fs::create_directories(out_dir, ec) && ec) {
       throw maps::ScenarioError(fmt::format("--out = {}: cannot make the directory: {}", out_dir, ec.message()));
     }

@@ -15,6 +15,7 @@
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
 
+#include "maps/seabed/seabed_obstacles.h"
 #include "server/app/processes.h"
 #include "server/mission.h"
 #include "server/report/report.h"
@@ -130,7 +131,11 @@ int CmdRun(const RunCommand& c) {
     spdlog::warn("{}", unused);
   }
   const std::string profile = c.scenario.profile.empty() ? scenario.default_profile : c.scenario.profile;
+  // A bad seabed map is refused before the run directory is touched (an earlier run there had been
+  // cut to a stub by the refused mission's record).
+  maps::CheckSeabedModel(scenario);
   const fs::path dir = c.out_dir.empty() ? DefaultOutDir(scenario, profile, ToString(kind)) : c.out_dir;
+  CheckOutDirectory(dir.string());
   if (std::error_code ignored; fs::exists(dir / "trajectory.csv", ignored)) {
     spdlog::warn("{}: replacing the run recorded there (give --out another directory to keep it)", dir.string());
   }
@@ -154,7 +159,9 @@ int CmdCompare(const RunCommand& c) {
   CheckFleetFitsField(scenario, /*tours=*/true);  // compare flies the A* tours too
   WarnOfLossySettings(scenario);
   const std::string profile = c.scenario.profile.empty() ? scenario.default_profile : c.scenario.profile;
+  maps::CheckSeabedModel(scenario);  // before the run directories are touched, as run
   const fs::path dir = c.out_dir.empty() ? DefaultOutDir(scenario, profile, "compare") : c.out_dir;
+  CheckOutDirectory(dir.string());
   PrepareRunDirectory(dir.string());
   const RunOutcome first = RunInto(scenario, ControllerKind::kErgodic, profile, dir / "ergodic", c.stop);
   const MissionMetrics& ergodic = first.metrics;
@@ -268,6 +275,7 @@ int CmdEvaluate(const EvaluateCommand& c) {
   WarnOfAForeignRecord(trajectory, scenario, c.trajectory_path, c.scenario_path);
   std::cout << FormatTable({metrics});
   if (!c.out_dir.empty()) {
+    CheckOutDirectory(c.out_dir);
     PrepareRunDirectory(c.out_dir);
     WriteMetricsJson((fs::path(c.out_dir) / "metrics.json").string(), metrics);
     // The profile's risk changes are marked at their valves, with the share they gave.

@@ -35,6 +35,30 @@ void PrepareRunDirectory(const std::string& dir) {
   std::fclose(file);
   std::filesystem::remove(probe, error);
 }
+
+void CheckOutDirectory(const std::string& dir, const std::string& flag) {
+  namespace fs = std::filesystem;
+  std::error_code error;
+  if (!fs::is_directory(dir, error)) return;  // made for the run (or refused as not a directory)
+  const auto holds = [&](const fs::path& inner) { return fs::exists(fs::path(dir) / inner, error); };
+  for (const fs::path& mark : {fs::path("metrics.json"), fs::path("trajectory.csv"), fs::path("mission.json"),
+                               fs::path("ergodic") / "metrics.json", fs::path("astar") / "metrics.json", fs::path("scale.json"),
+                               fs::path("leaks.json")}) {
+    if (holds(mark)) return;  // an earlier run's: replaced, as its command says
+  }
+  std::vector<std::string> others;
+  for (fs::directory_iterator it(dir, error), end; !error && it != end; it.increment(error)) {
+    const std::string name = it->path().filename().string();
+    if (name != ".launch.lock" && name != ".sage_write_probe") others.push_back(name);
+  }
+  if (others.empty()) return;
+  std::sort(others.begin(), others.end());
+  throw maps::ScenarioError(fmt::format(
+      "{} = {}: holds files that are not a run's ({}{}); a run writes scenario.yaml, metrics.json, plot.svg, ... "
+      "there over files of those names: give a new or empty directory, or an earlier run's",
+      flag, dir, others.front(), others.size() > 1 ? fmt::format(" and {} more", others.size() - 1) : std::string()));
+}
+
 namespace {
 
 using detail::WriteAtomically;

@@ -22,6 +22,14 @@ namespace sage::server {
 /// before a mission runs rather than after it. Throws maps::ScenarioError with one line:
 /// "--out = DIR: cannot write there: REASON".
 void PrepareRunDirectory(const std::string& dir);
+/// Refuses an --out that holds other files than an earlier run's: a run writes scenario.yaml,
+/// metrics.json, plot.svg, ... there, over whatever has those names (a user's own scenario, run
+/// with `-o .` from its folder, had been replaced by the run's copy). A directory that is absent
+/// or empty may take a run, and so may an earlier run's (metrics.json, trajectory.csv or
+/// mission.json in it; a comparison's ergodic/ and astar/; a bench's scale.json or leaks.json),
+/// which the run replaces. Throws
+/// maps::ScenarioError with one line naming `flag`, the directory and one of its files.
+void CheckOutDirectory(const std::string& dir, const std::string& flag = "--out");
 
 /// Table 1 layout: Valve | Weight | for each run: visits, interval; then corr and metric rows;
 /// then, for runs with leak sensors or hidden leaks, FormatLeaks.

@@ -456,6 +456,43 @@ TEST(OperatorDoor, AnEndedMissionIsSaidAtOnce) {
   std::filesystem::remove_all(dir);
 }
 
+// A scenario whose seabed map is refused leaves --out as it was: an earlier run there keeps its
+// record (it had been cut to a stub holding the refused scenario), and no directory is made.
+TEST(OutDirectory, ARefusedSeabedTouchesNoRunDirectory) {
+  namespace fs = std::filesystem;
+  const fs::path root = fs::temp_directory_path() / "sage_refused_seabed_test";
+  fs::remove_all(root);
+  fs::create_directories(root / "earlier");
+  const std::string source = std::string(SAGE_SOURCE_DIR) + "/scenarios/";
+  fs::copy_file(source + "manifold_slope.xyz", root / "manifold_slope.xyz");
+  std::ifstream in(source + "manifold_slope.yaml");
+  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const std::string origin = "origin_m: [431182, 6478282]";
+  ASSERT_NE(text.find(origin), std::string::npos);
+  text.replace(text.find(origin), origin.size(), "origin_m: [431182, 6478200]");  // the map no longer covers it
+  std::ofstream(root / "shifted.yaml") << text;
+  std::ofstream(root / "earlier" / "metrics.json") << R"({"complete": true})";
+  std::ofstream(root / "earlier" / "trajectory.csv") << "t,vehicle,x,y\n0,0,1,1\n";
+  const std::string scenario = (root / "shifted.yaml").string();
+  for (const std::string& command : {"run", "compare"}) {
+    const SageRun refused = RunSage({command, scenario, "--duration", "5", "-o", (root / "earlier").string()});
+    EXPECT_EQ(refused.status, 2) << command;
+    EXPECT_NE(refused.err.find("the map must cover the workspace"), std::string::npos) << refused.err;
+    EXPECT_EQ(refused.err.find("replacing"), std::string::npos) << refused.err;
+    const SageRun fresh = RunSage({command, scenario, "--duration", "5", "-o", (root / "new").string()});
+    EXPECT_EQ(fresh.status, 2) << command;
+    EXPECT_FALSE(fs::exists(root / "new")) << command << " made the run directory of a refused mission";
+  }
+  std::vector<std::string> kept;
+  for (const auto& entry : fs::directory_iterator(root / "earlier")) kept.push_back(entry.path().filename().string());
+  std::sort(kept.begin(), kept.end());
+  EXPECT_EQ(kept, (std::vector<std::string>{"metrics.json", "trajectory.csv"}));
+  std::ifstream metrics(root / "earlier" / "metrics.json");
+  EXPECT_EQ(std::string((std::istreambuf_iterator<char>(metrics)), std::istreambuf_iterator<char>()),
+            R"({"complete": true})");
+  fs::remove_all(root);
+}
+
 // runs/latest names a mission that has ended (a later launch that ended first) while another
 // launch runs: an operator's command that named none is told which mission runs and how to reach
 // it (it had been told only that the mission had ended: start one with sage launch).

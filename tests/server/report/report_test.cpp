@@ -276,6 +276,36 @@ TEST_F(ReportTest, RunDirectoryIsPreparedOrRefusedUpFront) {
   }
 }
 
+// An --out of the user's own files is refused before anything is written (a scenario run with
+// `-o .` from its folder had been replaced by the run's copy); a new, empty or earlier run's
+// directory takes the run.
+TEST_F(ReportTest, OutDirectoryOfOtherFilesIsRefused) {
+  EXPECT_NO_THROW(CheckOutDirectory(Path("absent/run")));
+  fs::create_directories(Path("empty"));
+  EXPECT_NO_THROW(CheckOutDirectory(Path("empty")));
+  fs::create_directories(Path("earlier"));
+  WriteText("earlier/scenario.yaml", "name: x\n");
+  WriteText("earlier/metrics.json", "{}");
+  EXPECT_NO_THROW(CheckOutDirectory(Path("earlier")));
+  fs::create_directories(Path("compared/ergodic"));
+  WriteText("compared/ergodic/metrics.json", "{}");
+  EXPECT_NO_THROW(CheckOutDirectory(Path("compared")));
+  fs::create_directories(Path("field"));
+  WriteText("field/scenario.yaml", "name: mine\n");
+  WriteText("field/bathymetry.xyz", "0 0 -100\n");
+  try {
+    CheckOutDirectory(Path("field"), "-o");
+    FAIL() << "no error";
+  } catch (const maps::ScenarioError& e) {
+    EXPECT_EQ(std::string(e.what()).rfind("-o = " + Path("field") + ": holds files that are not a run's (bathymetry.xyz "
+                                          "and 1 more); ",
+                                          0),
+              0u)
+        << e.what();
+  }
+  EXPECT_EQ(ReadText(Path("field/scenario.yaml")), "name: mine\n") << "the user's file was touched";
+}
+
 MissionMetrics AstarRun() {
   MissionMetrics m = SampleMetrics();
   m.controller = "astar";
