@@ -229,7 +229,7 @@ void CheckOptions(const FieldOptions& o) {
     fail("--area-per-xt", FormatNumber(o.area_per_xt_m2), "must be in [50, 10000] m^2 (XT clusters need room)");
   }
   // The loader's rule: a field written under a name it refuses could not be run.
-  if (const std::string problem = o.name.empty() ? std::string() : detail::NameProblem(o.name); !problem.empty()) {
+  if (const std::string problem = o.name.empty() ? std::string() : detail::DirectoryNameProblem(o.name); !problem.empty()) {
     throw ScenarioError("--name = " + problem);
   }
 }

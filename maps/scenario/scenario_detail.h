@@ -19,6 +19,10 @@ namespace sage::maps::detail {
 /// CSV files: 1..kMaxNameLength characters of UTF-8, none a control character), with the name as
 /// it can be shown: "" if it is a good name. The loader and the field generator both ask it.
 std::string NameProblem(const std::string& name);
+/// NameProblem's rules, and those of a name that becomes a directory's (the scenario's: its runs go
+/// to runs/<name>_<profile>_<controller>): no / or \\, not "." or ".." (a shared scenario named
+/// ../../x had written its run two directories above runs/).
+std::string DirectoryNameProblem(const std::string& name);
 
 // Shortest text that reads back to the very same double (std::to_chars), so that emitting and
 // re-parsing is exact; YAML spellings for the non-finite values.

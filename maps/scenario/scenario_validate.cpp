@@ -29,6 +29,15 @@ std::string detail::NameProblem(const std::string& name) {
   return {};
 }
 
+std::string detail::DirectoryNameProblem(const std::string& name) {
+  if (std::string problem = NameProblem(name); !problem.empty()) return problem;
+  if (name.find_first_of("/\\") != std::string::npos) {
+    return name + ": must not hold / or \\ (the name is a directory's: runs/<name>_...)";
+  }
+  if (name == "." || name == "..") return name + ": must not be . or .. (the name is a directory's: runs/<name>_...)";
+  return {};
+}
+
 namespace {
 
 using detail::EventKey;
@@ -85,6 +94,11 @@ class Checker {
     if (!problem.empty()) throw ScenarioError(OneLine(file_ + ": " + field + " = " + problem));
   }
   // A valid name not used before by another entry of the same kind.
+  // The scenario's own name, which names its run directories too.
+  void DirectoryName(const std::string& field, const std::string& name) const {
+    const std::string problem = detail::DirectoryNameProblem(name);
+    if (!problem.empty()) throw ScenarioError(OneLine(file_ + ": " + field + " = " + problem));
+  }
   void UniqueName(std::map<std::string, std::string>& seen, const std::string& field, const std::string& name) const {
     Name(field, name);
     const auto [it, inserted] = seen.emplace(name, field);
@@ -278,7 +292,7 @@ std::string NetworkProblem(const NetworkSettings& network, const std::string& wh
 
 void Scenario::Validate() const {
   const Checker c(source_path.empty() ? "<scenario>" : source_path);
-  c.Name("name", name);
+  c.DirectoryName("name", name);
   c.Positive("workspace.width_m", workspace.width_m);
   c.Positive("workspace.height_m", workspace.height_m);
   const Eigen::Vector2d workspace_max(workspace.width_m, workspace.height_m);

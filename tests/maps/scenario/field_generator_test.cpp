@@ -346,6 +346,8 @@ TEST(FieldGenerator, BadOptionsAreOneLineErrors) {
   EXPECT_EQ(ErrorOf(o), "--name = a?b: must not hold control characters (newline, tab, escape: shown as ?)");
   o.name = "\xff";
   EXPECT_EQ(ErrorOf(o).rfind("--name = ", 0), 0u);
+  o.name = "a b/c";  // it would name nested run directories
+  EXPECT_EQ(ErrorOf(o), "--name = a b/c: must not hold / or \\ (the name is a directory's: runs/<name>_...)");
   o = FieldOptions{};
   o.xts = 2;
   o.valves = 6;

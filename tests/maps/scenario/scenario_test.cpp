@@ -564,6 +564,11 @@ TEST(Scenario, BadInputsGiveOneLineNamingFieldAndValue) {
       {"name: XT-A", "name: XT-AAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAA",
        {"base.yaml: structures[0].name = XT-AAAAAAAAAAAAAAAAA...: must be at most 64 characters"}},
       {"name: base", "name: \"base\\t1\"", {"base.yaml: name = base?1: must not hold control characters"}},
+      // The scenario's name names its run directories (runs/<name>_...): no path in it (a shared
+      // scenario named ../../escape had written its run two directories above runs/).
+      {"name: base", "name: ../../escape",
+       {"base.yaml: name = ../../escape: must not hold / or \\ (the name is a directory's: runs/<name>_...)"}},
+      {"name: base", "name: \"..\"", {"base.yaml: name = ..: must not be . or .."}},
       // Bounds on what a scenario costs (probes: physics_rate_hz 5e7 and grid_resolution_m 1e-6
       // hung for minutes, clearance_m 300000 took 16.8 GB).
       {"duration_s: 300", "duration_s: 1e9", {"base.yaml: duration_s = 1e+09: must be <= 604800 s (a week)"}},
