@@ -200,10 +200,15 @@ void RiskLoop::UpdateLayer(double time_s) {
 void RiskLoop::Score(const std::vector<agents::ScanReport>& fused, double time_s) {
   const double a2 = association_m_ * association_m_;
   for (const agents::ScanReport& s : fused) {
+    const maps::SensorModel& model = belief_.sensors()[static_cast<std::size_t>(s.sensor)];
     for (const Eigen::Vector2d& z : s.detections_m) {
       bool of_a_leak = false;
       for (std::size_t k = 0; k < truth_.size(); ++k) {
         if (s.time_s + 1e-9 < truth_[k].start_s || (z - truth_[k].position_m).squaredNorm() > a2) continue;
+        // Only a scan that had the leak in view could have seen it: a false alarm that fell near a
+        // leak out of every sensor's reach (5.2 m from the nearest vehicle, the sonar's range 5 m)
+        // had counted as its detection.
+        if (!model.InView(s.position_m, s.heading_rad, truth_[k].position_m)) continue;
         of_a_leak = true;
         ++leaks_[k].detections;
         if (std::isnan(leaks_[k].detected_s)) leaks_[k].detected_s = s.time_s;

@@ -146,6 +146,36 @@ TEST(RiskLoop, ADetectionRaisesTheLayerAtOnce) {
   EXPECT_EQ(m.scans, 3u);
 }
 
+// A detection is a leak's only from a scan that had the leak in view: a false alarm that falls
+// within the association radius of a leak out of the sensor's reach is a false detection (a new
+// user's leak had been "detected" by one, the nearest vehicle 5.2 m off with a 5 m sonar).
+TEST(RiskLoop, ADetectionCountsForALeakOnlyFromAScanThatSawIt) {
+  maps::Scenario s = maps::LoadScenario(kTwoXtLeaks);  // a leak at P3; a camera of 1.2 m
+  ASSERT_EQ(s.leaks.size(), 1u);
+  s.leaks[0].start_s = 0.3;
+  maps::World world(s);
+  MissionCore core(world, s, "", ControllerKind::kErgodic);
+  const Eigen::Vector2d p3(3.6, 0.9), far(3.6, 2.5), near(3.6, 1.6);  // P3 1.6 m and 0.7 m below, ahead
+  ASSERT_TRUE(core.OnState(State(0, 0, far, -M_PI / 2)));
+  core.Cycle(0);
+  ASSERT_TRUE(core.OnState(State(0, 4, far, -M_PI / 2)));
+  const Eigen::Vector2d clutter = p3 + Eigen::Vector2d(0.0, 0.45);  // 1.15 m off: in the camera's reach
+  ASSERT_TRUE(core.OnScan(Scan(0, 4, far, -M_PI / 2, {clutter})));
+  core.Cycle(4);
+  MissionMetrics m = core.Metrics(0.4);
+  ASSERT_EQ(m.leaks.size(), 1u);
+  EXPECT_TRUE(std::isnan(m.leaks[0].detected_s)) << "P3 was 1.6 m off, beyond the camera's 1.2 m";
+  EXPECT_EQ(m.leaks[0].detections, 0);
+  EXPECT_EQ(m.false_alarms.detections, 1);
+  ASSERT_TRUE(core.OnState(State(0, 6, near, -M_PI / 2)));
+  ASSERT_TRUE(core.OnScan(Scan(0, 6, near, -M_PI / 2, {clutter})));
+  core.Cycle(6);
+  m = core.Metrics(0.6);
+  EXPECT_DOUBLE_EQ(m.leaks[0].detected_s, 0.6) << "from 0.7 m, P3 in view: the leak's";
+  EXPECT_EQ(m.leaks[0].detections, 1);
+  EXPECT_EQ(m.false_alarms.detections, 1);
+}
+
 // Partition and regions get the layer's leaves too: the share or region holding P3 sees its
 // target denser there after a detection.
 TEST(RiskLoop, SharesAndRegionsSteerOnTheLayer) {
