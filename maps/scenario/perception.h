@@ -162,5 +162,10 @@ const char* ToString(Gaze gaze);
 /// Most sensors a vehicle may carry, most leaks a scenario may hide.
 inline constexpr std::size_t kMaxSensors = 8;
 inline constexpr std::size_t kMaxLeaks = 1000;
+/// Two leaks closer than this (m; the least association radius) are one site, whose detections
+/// the scoring could not tell apart: a scenario's are refused, random ones are drawn apart (a new
+/// user's three random joint leaks had all fallen on one joint, one "confirmed" before it was
+/// "detected" by the other's evidence).
+inline constexpr double kLeakSiteSeparation_m = 0.5;
 
 }  // namespace sage::maps

@@ -186,6 +186,22 @@ void ValidatePerception(const Scenario& s, const std::string& file) {
     in_range(path + ".strength", leak.strength, 0.0, 1e6, true, false, "must be in (0, 1e6] (1 = nominal)");
   }
 
+  // One leak a site: a valve twice, or two leaks off valves closer than the separation.
+  std::vector<Eigen::Vector2d> sites;
+  for (const LeakSpec& leak : s.leaks) sites.push_back(LeakPosition(s, leak));
+  for (std::size_t i = 0; i < s.leaks.size(); ++i) {
+    for (std::size_t j = 0; j < i; ++j) {
+      const bool both_valves = !s.leaks[i].valve.empty() && !s.leaks[j].valve.empty();
+      const double apart = (sites[i] - sites[j]).norm();
+      if (both_valves ? s.leaks[i].valve != s.leaks[j].valve : apart >= kLeakSiteSeparation_m) continue;
+      const std::string shown = FormatNumber(std::round(apart * 100.0) / 100.0);  // to the centimetre
+      fail("leaks[" + std::to_string(i) + "].at", LeakWhere(s.leaks[i]),
+           "the site of leaks[" + std::to_string(j) + "] (" + LeakWhere(s.leaks[j]) + ", " + shown +
+               " m off): one leak a site, at least " + FormatNumber(kLeakSiteSeparation_m) +
+               " m apart (their detections could not be told apart)");
+    }
+  }
+
   const FusionSettings& f = s.fusion;
   in_range("fusion.prior_probability", f.prior_probability, 0.0, 0.5, true, true, "must be in (0, 0.5)");
   if (!(f.relax_time_s > 0.0)) fail("fusion.relax_time_s", FormatNumber(f.relax_time_s), "must be > 0 (.inf: never)");
@@ -285,17 +301,41 @@ Scenario WithRandomLeaks(const Scenario& scenario, int count, LeakSites sites) {
                           FormatNumber(kRandomSeabedFromValves_m) + " m from every valve and " +
                           FormatNumber(kSeabedLeakClearance_m) + " m from the structures and edges");
     }
+    if (count > static_cast<int>(joints.size())) {
+      throw ScenarioError("--random-leaks = " + std::to_string(count) + ": at most one leak a joint, and " +
+                          scenario.name + " has " + std::to_string(joints.size()) + " joints where one could be");
+    }
   }
+  // A site drawn is taken: later draws keep kLeakSiteSeparation_m from it.
+  std::vector<Eigen::Vector2d> taken;
+  const auto no_room = [&](const std::string& where) {
+    return ScenarioError("--random-leaks = " + std::to_string(count) + ": " + scenario.name + " has room for " +
+                         std::to_string(taken.size()) + " leaks at least " + FormatNumber(kLeakSiteSeparation_m) +
+                         " m apart " + where + " (one leak a site)");
+  };
+  const auto apart = [&](const Eigen::Vector2d& p) {
+    return std::all_of(taken.begin(), taken.end(),
+                       [&](const Eigen::Vector2d& q) { return (p - q).norm() >= kLeakSiteSeparation_m; });
+  };
   for (int n = 0; n < count; ++n) {
     LeakSpec leak;
     leak.start_s = scenario.duration_s * (0.1 + 0.8 * uniform());
     if (sites == LeakSites::kJoints) {
-      const FlowlineJoint& joint = joints[std::min(joints.size() - 1, static_cast<std::size_t>(uniform() * joints.size()))];
+      if (joints.empty()) throw no_room("at its flowline joints");
+      const std::size_t at = std::min(joints.size() - 1, static_cast<std::size_t>(uniform() * joints.size()));
+      const FlowlineJoint joint = joints[at];
       leak.flowline = joint.flowline->name;
       leak.s_m = joint.s_m;
+      // Drawn without replacement, and no later joint within the separation of this one.
+      std::erase_if(joints, [&](const FlowlineJoint& j) {
+        return (j.point_m - joint.point_m).norm() < kLeakSiteSeparation_m;
+      });
     } else if (sites == LeakSites::kFlowlines) {
       bool found = false;
-      for (int attempt = 0; attempt < 100000 && !found; ++attempt) found = flowline_site(leak);
+      for (int attempt = 0; attempt < 100000 && !found; ++attempt) {
+        found = flowline_site(leak) && apart(LeakPosition(scenario, leak));
+      }
+      if (!found && !taken.empty()) throw no_room("along its flowlines");
       if (!found) {
         throw ScenarioError("--random-leaks: " + scenario.name + " has no flowline point " +
                             FormatNumber(kRandomSeabedFromValves_m) + " m from every valve and " +
@@ -319,14 +359,16 @@ Scenario WithRandomLeaks(const Scenario& scenario, int count, LeakSites sites) {
         leak.point_m = Eigen::Vector2d(uniform() * workspace.x(), uniform() * workspace.y());
         // Rounded to the centimetre: the scenario file it goes into stays readable.
         leak.point_m = (leak.point_m * 100.0).array().round() / 100.0;
-        found = open_seabed(leak.point_m);
+        found = open_seabed(leak.point_m) && apart(leak.point_m);
       }
+      if (!found && !taken.empty()) throw no_room("on its open seabed");
       if (!found) {
         throw ScenarioError("--random-leaks: " + scenario.name + " has no open seabed " +
                             FormatNumber(kRandomSeabedFromValves_m) + " m from every valve and " +
                             FormatNumber(kSeabedLeakClearance_m) + " m from the structures and edges");
       }
     }
+    if (leak.valve.empty()) taken.push_back(LeakPosition(scenario, leak));
     out.leaks.push_back(leak);
   }
   std::stable_sort(out.leaks.begin(), out.leaks.end(),

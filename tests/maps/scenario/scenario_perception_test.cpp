@@ -102,6 +102,11 @@ TEST(ScenarioPerception, BadInputsNameFieldAndRule) {
        "x.yaml: leaks[0].at.point_m = [1.6, 4.1]: lies under boulders[0] (centre 1.5, 4, 1.2 m across; no sensor could see it)"},
       {"leaks: [{at: {valve: P1}, start_s: 1, strength: 0}]", "x.yaml: leaks[0].strength = 0: must be in (0, 1e6]"},
       {"leaks: [{at: {valve: P1}}]", "x.yaml: leaks[0].start_s: missing (required)"},
+      // One leak a site (their detections could not be told apart).
+      {"leaks: [{at: {valve: P1}, start_s: 1}, {at: {valve: P1}, start_s: 200}]",
+       "x.yaml: leaks[1].at = P1: the site of leaks[0] (P1, 0 m off): one leak a site, at least 0.5 m apart"},
+      {"leaks: [{at: {point_m: [1, 1]}, start_s: 1}, {at: {point_m: [1.3, 1]}, start_s: 2}]",
+       "x.yaml: leaks[1].at = seabed (1.3, 1): the site of leaks[0] (seabed (1, 1), 0.3 m off)"},
       {"gaze: sideways", "x.yaml: gaze = sideways: must be travel (look ahead) or valves"},
       {"gaze: valves", "x.yaml: gaze = valves: needs sensors"},
       {"fusion: {prior_probability: 0.7}", "x.yaml: fusion.prior_probability = 0.7: must be in (0, 0.5)"},
@@ -170,14 +175,27 @@ TEST(ScenarioPerception, RandomLeaksByTheSeed) {
   EXPECT_NEAR(static_cast<double>(p1) / seeds, 0.75, 4.0 * std::sqrt(0.75 * 0.25 / seeds));
   EXPECT_NEAR(static_cast<double>(even) / seeds, 0.5, 4.0 * std::sqrt(0.25 / seeds));
   s.boulders.push_back({Eigen::Vector2d(1.5, 4.0), 1.2, 0.8});
-  const Scenario seabed = WithRandomLeaks(s, 200, LeakSites::kSeabed);
-  for (const LeakSpec& leak : seabed.leaks) {
-    EXPECT_TRUE(leak.valve.empty());
-    for (const Eigen::Vector2d& v : s.ValvePositions()) EXPECT_GE((leak.point_m - v).norm(), 1.0);
-    EXPECT_FALSE(((leak.point_m - Eigen::Vector2d(3, 2.5)).array().abs() < 0.75).all()) << "near the XT";
-    EXPECT_GE((leak.point_m - Eigen::Vector2d(1.5, 4.0)).norm(), 0.6) << "on the boulder";
+  for (int seed = 0; seed < 40; ++seed) {
+    s.seed = static_cast<std::uint64_t>(seed);
+    const Scenario seabed = WithRandomLeaks(s, 5, LeakSites::kSeabed);
+    for (std::size_t i = 0; i < seabed.leaks.size(); ++i) {
+      const LeakSpec& leak = seabed.leaks[i];
+      EXPECT_TRUE(leak.valve.empty());
+      for (const Eigen::Vector2d& v : s.ValvePositions()) EXPECT_GE((leak.point_m - v).norm(), 1.0);
+      EXPECT_FALSE(((leak.point_m - Eigen::Vector2d(3, 2.5)).array().abs() < 0.75).all()) << "near the XT";
+      EXPECT_GE((leak.point_m - Eigen::Vector2d(1.5, 4.0)).norm(), 0.6) << "on the boulder";
+      // One leak a site: each at least kLeakSiteSeparation_m from the others.
+      for (std::size_t j = 0; j < i; ++j) EXPECT_GE((leak.point_m - seabed.leaks[j].point_m).norm(), 0.5);
+    }
+    EXPECT_NO_THROW(seabed.Validate());
   }
-  EXPECT_NO_THROW(seabed.Validate());
+  // More than the open seabed holds 0.5 m apart is refused in one line.
+  try {
+    WithRandomLeaks(s, 400, LeakSites::kSeabed);
+    ADD_FAILURE() << "400 leaks 0.5 m apart on a 6 x 5 m field";
+  } catch (const ScenarioError& e) {
+    EXPECT_NE(std::string(e.what()).find("--random-leaks = 400: x has room for "), std::string::npos) << e.what();
+  }
   EXPECT_THROW(WithRandomLeaks(s, -1, LeakSites::kValves), ScenarioError);
   EXPECT_THROW(ParseLeakSites("sky", "--leak-sites"), ScenarioError);
 }
@@ -293,13 +311,15 @@ flowlines:
     }
     return best;
   };
-  const Scenario a = WithRandomLeaks(s, 200, LeakSites::kFlowlines);
-  EXPECT_EQ(EmitScenario(a), EmitScenario(WithRandomLeaks(s, 200, LeakSites::kFlowlines)));
-  EXPECT_NO_THROW(a.Validate());
+  const Scenario a = WithRandomLeaks(s, 6, LeakSites::kFlowlines);
+  EXPECT_EQ(EmitScenario(a), EmitScenario(WithRandomLeaks(s, 6, LeakSites::kFlowlines)));
+  EXPECT_NO_THROW(a.Validate());  // which refuses two leaks within 0.5 m of each other
+  // The first leak of each seed is drawn from the whole eligible length (the later ones keep
+  // clear of those before).
   int on_f1 = 0, total = 0;
-  for (std::uint64_t seed = 1; seed <= 10; ++seed) {
+  for (std::uint64_t seed = 1; seed <= 2000; ++seed) {
     s.seed = seed;
-    for (const LeakSpec& leak : WithRandomLeaks(s, 200, LeakSites::kFlowlines).leaks) {
+    for (const LeakSpec& leak : WithRandomLeaks(s, 1, LeakSites::kFlowlines).leaks) {
       ASSERT_FALSE(leak.flowline.empty());
       EXPECT_TRUE(leak.valve.empty());
       const Flowline& line = s.flowlines[leak.flowline == "F1" ? 0 : 1];
@@ -340,17 +360,32 @@ flowlines:
   }
   ASSERT_GE(eligible.size(), 3u);
   ASSERT_LT(eligible.size(), 5u) << "a vertex near a valve or an edge is left out";
-  const Scenario a = WithRandomLeaks(s, 300, LeakSites::kJoints);
-  EXPECT_EQ(EmitScenario(a), EmitScenario(WithRandomLeaks(s, 300, LeakSites::kJoints)));
-  EXPECT_NO_THROW(a.Validate());
-  std::vector<int> hits(eligible.size(), 0);
-  for (const LeakSpec& leak : a.leaks) {
-    ASSERT_FALSE(leak.flowline.empty());
+  const auto joint_of = [&](const LeakSpec& leak) {
     const Eigen::Vector2d p = LeakPosition(s, leak);
     std::size_t k = 0;
     while (k < eligible.size() && (eligible[k] - p).norm() > 1e-9) ++k;
-    ASSERT_LT(k, eligible.size()) << LeakWhere(leak) << " is no eligible joint";
-    ++hits[k];
+    return k;
+  };
+  // As many leaks as joints: each joint once (a new user's three had all fallen on one); one more
+  // is refused.
+  const Scenario a = WithRandomLeaks(s, static_cast<int>(eligible.size()), LeakSites::kJoints);
+  EXPECT_EQ(EmitScenario(a), EmitScenario(WithRandomLeaks(s, static_cast<int>(eligible.size()), LeakSites::kJoints)));
+  EXPECT_NO_THROW(a.Validate());
+  std::vector<int> once(eligible.size(), 0);
+  for (const LeakSpec& leak : a.leaks) {
+    ASSERT_FALSE(leak.flowline.empty());
+    ASSERT_LT(joint_of(leak), eligible.size()) << LeakWhere(leak) << " is no eligible joint";
+    ++once[joint_of(leak)];
+  }
+  EXPECT_EQ(once, std::vector<int>(eligible.size(), 1));
+  EXPECT_THROW(WithRandomLeaks(s, static_cast<int>(eligible.size()) + 1, LeakSites::kJoints), ScenarioError);
+  // One leak a seed: every eligible joint alike.
+  std::vector<int> hits(eligible.size(), 0);
+  for (int seed = 0; seed < 300; ++seed) {
+    s.seed = static_cast<std::uint64_t>(seed);
+    const LeakSpec leak = WithRandomLeaks(s, 1, LeakSites::kJoints).leaks.at(0);
+    ASSERT_LT(joint_of(leak), eligible.size()) << LeakWhere(leak) << " is no eligible joint";
+    ++hits[joint_of(leak)];
   }
   const double share = 1.0 / static_cast<double>(eligible.size()), n = 300.0;
   for (const int h : hits) EXPECT_NEAR(h / n, share, 4.0 * std::sqrt(share * (1 - share) / n));
