@@ -9,6 +9,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <optional>
 #include <sstream>
 #include <string>
@@ -490,6 +491,41 @@ TEST(OutDirectory, ARefusedSeabedTouchesNoRunDirectory) {
   std::ifstream metrics(root / "earlier" / "metrics.json");
   EXPECT_EQ(std::string((std::istreambuf_iterator<char>(metrics)), std::istreambuf_iterator<char>()),
             R"({"complete": true})");
+  fs::remove_all(root);
+}
+
+// What a mission's settings would silently lose is said before it flies: hidden leaks with no
+// sensor to see them (the table had read "detected never" as a fleet that missed them), fusion
+// settings with no sensors, a sensor rate off the control cycles.
+TEST(LossySettings, AreWarnedOfBeforeTheMission) {
+  namespace fs = std::filesystem;
+  const fs::path root = fs::temp_directory_path() / "sage_lossy_settings_test";
+  fs::remove_all(root);
+  fs::create_directories(root);
+  std::ifstream in(std::string(SAGE_SOURCE_DIR) + "/scenarios/two_xt.yaml");
+  const std::string base((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const std::map<std::string, std::pair<std::string, std::string>> cases = {
+      {"leaks", {"leaks: [{at: {valve: P3}, start_s: 1}]\n",
+                 "leaks: 1 hidden leak(s) and no sensors: the vehicles cannot detect them"}},
+      {"fusion", {"fusion: {relax_time_s: 30}\n", "fusion: the settings weigh the sensors' scans, and the vehicles carry "
+                                                  "no sensors: they change nothing"}},
+      {"rate", {"sensors: [{name: camera, rate_hz: 7}]\n",
+                "sensors[0] (camera): rate_hz = 7: scans fall on whole control cycles (control_rate_hz = 10): it scans "
+                "every cycle, at 10 Hz"}},
+      {"none", {"", ""}},
+  };
+  for (const auto& [name, c] : cases) {
+    const auto& [section, warning] = c;
+    const fs::path file = root / (name + ".yaml");
+    std::ofstream(file) << base << section;
+    const SageRun run = RunSage({"run", file.string(), "--duration", "2", "-o", (root / ("run_" + name)).string()});
+    EXPECT_EQ(run.status, 0) << name << ": " << run.err;
+    if (warning.empty()) {
+      EXPECT_EQ(run.err.find("[warning]"), std::string::npos) << run.err;
+    } else {
+      EXPECT_NE(run.err.find("[warning] " + warning), std::string::npos) << name << ": " << run.err;
+    }
+  }
   fs::remove_all(root);
 }
 
