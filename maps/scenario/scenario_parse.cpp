@@ -31,15 +31,17 @@ using detail::OneLine;
 using Keys = std::initializer_list<std::string_view>;
 
 // A node as the user wrote it, on one line and short enough to quote in a message.
+constexpr std::size_t kShownChars = 60;
 std::string Show(const YAML::Node& node) {
   if (!node.IsDefined() || node.IsNull()) return "null";
-  if (node.IsScalar()) return node.Scalar().empty() ? "\"\"" : OneLine(node.Scalar());
+  if (node.IsScalar() && node.Scalar().empty()) return "\"\"";
+  // A scalar is cut too: a data file given as the scenario had been quoted whole (2 kB of XYZ).
+  if (node.IsScalar()) return PrintableUtf8(OneLine(node.Scalar()), kShownChars);
   YAML::Emitter out;
   out.SetSeqFormat(YAML::Flow);
   out.SetMapFormat(YAML::Flow);
   out << node;
-  std::string text = OneLine(out.c_str());
-  return text.size() > 60 ? text.substr(0, 57) + "..." : text;
+  return PrintableUtf8(OneLine(out.c_str()), kShownChars);
 }
 
 // Turns YAML nodes into typed values; every failure names file, field path and value.

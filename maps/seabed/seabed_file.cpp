@@ -24,6 +24,7 @@
 #include <octomap/OcTreeStamped.h>
 
 #include "maps/quiet_stderr.h"
+#include "maps/scenario/printable_text.h"
 
 namespace sage::maps {
 namespace {
@@ -125,7 +126,7 @@ void CheckXyzNumbers(const std::string& path, const MapErrors& errors) {
     if (!bad.empty()) {
       errors.Fail(fmt::format("line {}: '{}' is not a number (a gridded XYZ file holds x y z numbers on every line after "
                               "an optional header)",
-                              number, bad.substr(0, 40)));
+                              number, PrintableUtf8(bad, 40)));  // a binary file's bytes shown as ?
     }
     if (fields.size() < 3) {
       errors.Fail(fmt::format("line {}: {} field{}; a gridded XYZ file holds x y z on every line", number, fields.size(),

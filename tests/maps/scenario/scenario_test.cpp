@@ -650,6 +650,16 @@ TEST(Scenario, SyntaxErrorAndMissingFile) {
   }
   EXPECT_THROW(ParseScenario("", "empty.yaml"), ScenarioError);
   EXPECT_THROW(ParseScenario("- just\n- a list\n", "list.yaml"), ScenarioError);
+  // A data file given as the scenario is quoted in 60 characters, not whole (an XYZ map's 2 kB).
+  std::string xyz = "easting northing depth\n";
+  for (int k = 0; k < 100; ++k) xyz += "431180.25 6478323.75 117.091\n";
+  try {
+    ParseScenario(xyz, "map.xyz");
+    ADD_FAILURE() << "no error";
+  } catch (const ScenarioError& e) {
+    EXPECT_EQ(std::string(e.what()), "map.xyz: scenario = easting northing depth 431180.25 6478323.75 117.091 "
+                                     "431180.2...: must be a YAML map of sections (workspace, structures, ...)");
+  }
 }
 
 // Validate() on a scenario built in code gives the same style of message.

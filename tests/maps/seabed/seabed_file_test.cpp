@@ -122,6 +122,10 @@ TEST(SeabedFile, BadRastersAreRefusedInOneLine) {
   const std::string fifth = lines[4].substr(0, lines[4].find_last_of(" ,\t") + 1);
   write_with("word.xyz", 4, fifth + "abc");
   ExpectRefused(OnMap(dir.File("word.xyz")), "line 5: 'abc' is not a number");
+  // A binary file's bytes are shown as printable text (they had come out raw: escapes and bytes
+  // that are not UTF-8, which a script reading the error as text choked on).
+  write_with("bytes.xyz", 4, fifth + "\x1b[31m\xcd\xc3x");
+  ExpectRefused(OnMap(dir.File("bytes.xyz")), "line 5: '?[31m??x' is not a number");
   write_with("short.xyz", 6, fifth);
   ExpectRefused(OnMap(dir.File("short.xyz")), "line 7: 2 fields; a gridded XYZ file holds x y z on every line");
   ASSERT_EQ(lines[0], "x y z");
