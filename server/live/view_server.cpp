@@ -105,15 +105,34 @@ std::string ViewServer::Url() const { return fmt::format("http://127.0.0.1:{}/#t
 bool ViewServer::Authorised(const std::string& token) const { return server::SameToken(token, options_.token); }
 
 void ViewServer::Routes() {
+  // Every /api/ request carries the token, whatever its path (an unknown path had answered 404
+  // without one: which paths exist was for anyone to probe); a refusal changes nothing and says why
+  // in one line.
+  const auto refused = [this](const httplib::Request& req, httplib::Response& res) {
+    const std::string token =
+        req.has_header(kTokenHeader) ? req.get_header_value(kTokenHeader) : req.get_param_value("token");
+    if (Authorised(token)) return false;
+    ++refused_;
+    SecurityHeaders(res);
+    res.status = 403;
+    res.set_content(AnswerJson(false, token.empty() ? "refused: no token (it is in the address sage launch or "
+                                                      "sage view printed, after #token=)"
+                                                    : "refused: wrong token"),
+                    kJson);
+    return true;
+  };
   // Only this machine's names for this server: a page elsewhere whose name was rebound to
   // 127.0.0.1 sends its own name.
-  http_->set_pre_routing_handler([this](const httplib::Request& req, httplib::Response& res) {
+  http_->set_pre_routing_handler([this, refused](const httplib::Request& req, httplib::Response& res) {
     const std::string host = req.get_header_value("Host");
     const std::string port = std::to_string(port_);
-    if (host == "127.0.0.1:" + port || host == "localhost:" + port) return httplib::Server::HandlerResponse::Unhandled;
-    res.status = 403;
-    res.set_content(AnswerJson(false, "refused: this server answers only requests to 127.0.0.1:" + port), kJson);
-    return httplib::Server::HandlerResponse::Handled;
+    if (host != "127.0.0.1:" + port && host != "localhost:" + port) {
+      res.status = 403;
+      res.set_content(AnswerJson(false, "refused: this server answers only requests to 127.0.0.1:" + port), kJson);
+      return httplib::Server::HandlerResponse::Handled;
+    }
+    if (req.path.starts_with("/api/") && refused(req, res)) return httplib::Server::HandlerResponse::Handled;
+    return httplib::Server::HandlerResponse::Unhandled;
   });
   for (const WebAsset& asset : WebAssets()) {
     http_->Get(std::string(asset.path), [asset](const httplib::Request&, httplib::Response& res) {
@@ -121,21 +140,11 @@ void ViewServer::Routes() {
       res.set_content(asset.body.data(), asset.body.size(), std::string(asset.content_type).c_str());
     });
   }
-  // Every /api/ request carries the token; a refusal changes nothing and says why in one line.
-  const auto guarded = [this](auto handler) {
-    return [this, handler](const httplib::Request& req, httplib::Response& res) {
+  // The API's handlers (the token was checked before routing, and is again here).
+  const auto guarded = [refused](auto handler) {
+    return [refused, handler](const httplib::Request& req, httplib::Response& res) {
       SecurityHeaders(res);
-      const std::string token =
-          req.has_header(kTokenHeader) ? req.get_header_value(kTokenHeader) : req.get_param_value("token");
-      if (!Authorised(token)) {
-        ++refused_;
-        res.status = 403;
-        res.set_content(AnswerJson(false, token.empty() ? "refused: no token (it is in the address sage launch or "
-                                                          "sage view printed, after #token=)"
-                                                        : "refused: wrong token"),
-                        kJson);
-        return;
-      }
+      if (refused(req, res)) return;
       handler(req, res);
     };
   };

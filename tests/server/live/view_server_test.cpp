@@ -117,6 +117,19 @@ TEST(ViewServer, WithoutTheTokenNothingReachesTheMission) {
     EXPECT_EQ(data->status, 403) << path;
     EXPECT_EQ(data->body.find("\"mission\""), std::string::npos) << path;
   }
+  // Nor does a path the API does not have tell itself from one it has (they had answered 404 and
+  // 400 without a token, a map of the API for anyone to probe).
+  for (const char* path : {"/api/state", "/api/risk", "/api/nonexistent"}) {
+    auto get = client.Get(path);
+    ASSERT_TRUE(get) << path;
+    EXPECT_EQ(get->status, 403) << path;
+    auto post = client.Post(path, body, kForm);
+    ASSERT_TRUE(post) << path;
+    EXPECT_EQ(post->status, 403) << path;
+  }
+  auto known = client.Get("/api/nonexistent", {{"X-Sage-Token", std::string(kToken)}});
+  ASSERT_TRUE(known);
+  EXPECT_EQ(known->status, 404) << "with the token, an unknown path is not found";
   std::this_thread::sleep_for(50ms);
   EXPECT_EQ(loop.taken(), 0);
   // The page itself (no mission data in it) needs no token.
