@@ -10,6 +10,7 @@
 #include "server/report/plots/nice_scale.h"
 #include "server/report/plots/render.h"
 #include "server/report/plots/svg_writer.h"
+#include "server/report/plots/weight_text.h"
 
 namespace sage::server::plots {
 namespace {
@@ -125,7 +126,7 @@ std::string RevisitChartSvg(const MissionPlotInput& input) {
   for (const ValveMetrics* v : rows) {
     max_weight = std::max(max_weight, v->weight);
     longest = std::max({longest, v->max_gap_s, std::isfinite(v->mean_interval_s) ? v->mean_interval_s : 0.0});
-    widest_name = std::max(widest_name, TextWidth(fmt::format("{} {:.2f}", v->name, v->weight), kFont));
+    widest_name = std::max(widest_name, TextWidth(v->name + " " + WeightText(v->weight), kFont));
   }
   if (!(longest > 0.0)) longest = m.duration_s > 0.0 ? m.duration_s : 1.0;
   // The axis ends at a tick: the longest bar ends inside it, and its length reads off the ticks.
@@ -161,7 +162,7 @@ std::string RevisitChartSvg(const MissionPlotInput& input) {
       svg.Put("<line x1=\"{0:.1f}\" y1=\"{1:.1f}\" x2=\"{0:.1f}\" y2=\"{2:.1f}\" stroke=\"black\" stroke-width=\"2.5\"/>\n", x, y + 0.5,
               y + kRow - 0.5);
     }
-    svg.Text(x0 - 8.0, y + kRow - 4.5, fmt::format("{} {:.2f}", v.name, v.weight), kFont, "end", fmt::format("id=\"valve-{}\"", r));
+    svg.Text(x0 - 8.0, y + kRow - 4.5, v.name + " " + WeightText(v.weight), kFont, "end", fmt::format("id=\"valve-{}\"", r));
     svg.Text(x1 + 8.0, y + kRow - 4.5, std::to_string(v.visits), kFont, "start", "fill=\"#444\"");
   }
   svg.Put("<rect x=\"{:.1f}\" y=\"{:.1f}\" width=\"{:.1f}\" height=\"{:.1f}\" fill=\"none\" stroke=\"#222\"/>\n", x0, y0, x1 - x0,

@@ -23,6 +23,7 @@
 #include "server/report/plots/mission_plots.h"
 #include "server/report/plots/plot_record.h"
 #include "server/report/plots/render.h"
+#include "server/report/plots/weight_text.h"
 #include "server/report/report.h"
 #include "server/roster.h"
 
@@ -291,15 +292,22 @@ TEST(FieldPlot, PngsDecodeWithTheXtsInTheirColour) {
   }
 }
 
-// revisits.svg: valves sorted by longest gap, each with the run table's weight.
+// revisits.svg: valves sorted by longest gap, each with the run table's weight as the table prints
+// it (a light valve's 0.0028 had read 0.00 on every label of a 350-valve field).
 TEST(FieldPlot, RevisitChartSortedByLongestGap) {
-  const std::string svg = RevisitChartSvg(FleetField().Input());
+  MissionMetrics metrics = FleetField().metrics;
+  metrics.valves.front().weight = 0.0028;
+  MissionPlotInput input = FleetField().Input();
+  input.metrics = &metrics;
+  const std::string svg = RevisitChartSvg(input);
+  EXPECT_NE(svg.find(" 0.0028<"), std::string::npos);
+  EXPECT_NE(FormatTable({metrics}).find(" 0.0028 "), std::string::npos) << "the table prints it so too";
   std::vector<const ValveMetrics*> sorted;
-  for (const ValveMetrics& v : FleetField().metrics.valves) sorted.push_back(&v);
+  for (const ValveMetrics& v : metrics.valves) sorted.push_back(&v);
   std::stable_sort(sorted.begin(), sorted.end(), [](auto* a, auto* b) { return a->max_gap_s > b->max_gap_s; });
   std::size_t at = 0;
   for (std::size_t r = 0; r < sorted.size(); ++r) {
-    const std::string text = fmt::format(">{} {:.2f}<", sorted[r]->name, sorted[r]->weight);
+    const std::string text = fmt::format(">{} {}<", sorted[r]->name, WeightText(sorted[r]->weight));
     const std::size_t found = svg.find(fmt::format("id=\"valve-{}\"", r));
     ASSERT_NE(found, std::string::npos) << r;
     EXPECT_EQ(svg.find(text, found), svg.find('>', found)) << text;
