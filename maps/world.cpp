@@ -11,11 +11,14 @@ World::World(const Scenario& scenario, WorldUse use)
       astar_grid_(obstacles_.Inflated(scenario.astar.clearance_m)),
       blocked_(obstacles_.Inflated(kVehicleClearance_m)),
       basis_(scenario.workspace.width_m, scenario.workspace.height_m, scenario.ergodic.basis_order) {
-  if (use == WorldUse::kMission) risk_.emplace(RiskField::ForValves(scenario, basis_, blocked_));
   if (seabed_->has_model()) {
     const OccupancyGrid terrain = TerrainObstacles(obstacles_, scenario.structures);
     CheckOnOpenSeabed(scenario, terrain);
     terrain_blocks_ = MergeIntoRectangles(terrain);
+  }
+  if (use == WorldUse::kMission) {
+    CheckValvesReachable(scenario, blocked_);  // the server's (and an in-process mission's) door
+    risk_.emplace(RiskField::ForValves(scenario, basis_, blocked_));
   }
   if (use == WorldUse::kVehicles) seabed_.reset();  // the maps are made; the tree is the server's
 }

@@ -33,7 +33,8 @@ class World {
   /// Builds everything from a validated scenario (kVehicles: the OctoMap is dropped once the maps
   /// are made from it, and no risk field is made). The seabed is voxelised at the A* grid
   /// resolution. With a seabed model the map is read and checked, and a valve or a start on
-  /// blocked seabed is refused (ScenarioError, one line).
+  /// blocked seabed is refused (ScenarioError, one line); a mission's world also refuses a valve
+  /// no vehicle can reach (CheckValvesReachable).
   explicit World(const Scenario& scenario, WorldUse use = WorldUse::kMission);
   World(const World&) = delete;
   World& operator=(const World&) = delete;

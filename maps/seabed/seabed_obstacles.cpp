@@ -92,6 +92,55 @@ void CheckOnOpenSeabed(const Scenario& scenario, const OccupancyGrid& terrain) {
   }
 }
 
+void CheckValvesReachable(const Scenario& scenario, const OccupancyGrid& blocked) {
+  const int cols = blocked.cols(), rows = blocked.rows();
+  const double r = blocked.resolution_m();
+  const auto index = [&](int i, int j) { return static_cast<std::size_t>(j) * static_cast<std::size_t>(cols) + i; };
+  // The free cells whose centre lies within `radius` of p.
+  const auto free_near = [&](const Eigen::Vector2d& p, double radius, auto&& visit) {
+    const Eigen::Vector2i lo = blocked.CellOf(p - Eigen::Vector2d::Constant(radius));
+    const Eigen::Vector2i hi = blocked.CellOf(p + Eigen::Vector2d::Constant(radius));
+    for (int j = lo.y(); j <= hi.y(); ++j) {
+      for (int i = lo.x(); i <= hi.x(); ++i) {
+        if (!blocked.Occupied(i, j) && (blocked.CenterOf({i, j}) - p).norm() <= radius) visit(i, j);
+      }
+    }
+  };
+  // Flood from every start over free cells side by side.
+  std::vector<char> reached(static_cast<std::size_t>(cols) * static_cast<std::size_t>(rows), 0);
+  std::vector<Eigen::Vector2i> frontier;
+  const auto seed = [&](int i, int j) {
+    if (reached[index(i, j)]) return;
+    reached[index(i, j)] = 1;
+    frontier.emplace_back(i, j);
+  };
+  for (const VehicleSpec& v : scenario.vehicles) free_near(v.start_m, 0.5, seed);
+  for (const FleetEvent& e : scenario.fleet_events)
+    if (e.kind == FleetEvent::Kind::kJoin) free_near(e.vehicle.start_m, 0.5, seed);
+  if (frontier.empty()) return;  // no start in open water: said by the starts' own checks
+  while (!frontier.empty()) {
+    const Eigen::Vector2i c = frontier.back();
+    frontier.pop_back();
+    for (const Eigen::Vector2i d : {Eigen::Vector2i(1, 0), Eigen::Vector2i(-1, 0), Eigen::Vector2i(0, 1), Eigen::Vector2i(0, -1)}) {
+      const Eigen::Vector2i n = c + d;
+      if (blocked.InBounds(n.x(), n.y()) && !blocked.Occupied(n.x(), n.y())) seed(n.x(), n.y());
+    }
+  }
+  const std::string file = scenario.source_path.empty() ? "<scenario>" : scenario.source_path;
+  for (std::size_t i = 0; i < scenario.structures.size(); ++i) {
+    for (std::size_t j = 0; j < scenario.structures[i].valves.size(); ++j) {
+      const Valve& valve = scenario.structures[i].valves[j];
+      bool reachable = false;
+      free_near(valve.position_m, scenario.visit_radius_m + r, [&](int a, int b) { reachable = reachable || reached[index(a, b)]; });
+      if (reachable) continue;
+      throw ScenarioError(fmt::format(
+          "{}: structures[{}].valves[{}].position_m = [{}, {}]: no vehicle can reach {}: no way from any start to within "
+          "its visit radius ({} m) keeps a hull ({} m) off the structures, boulders and blocked seabed",
+          file, i, j, valve.position_m.x(), valve.position_m.y(), valve.name, scenario.visit_radius_m, kVehicleClearance_m));
+    }
+  }
+}
+
 bool StartIsClear(const OccupancyGrid& terrain, const Eigen::Vector2d& start, double jitter_m) {
   const double reach = jitter_m + kVehicleClearance_m, r = terrain.resolution_m();
   const Eigen::Vector2i lo = terrain.CellOf(start - Eigen::Vector2d::Constant(reach + r));

@@ -34,6 +34,13 @@ std::vector<CellRectangle> MergeIntoRectangles(const OccupancyGrid& grid);
 /// begin inside the rock).
 void CheckOnOpenSeabed(const Scenario& scenario, const OccupancyGrid& terrain);
 
+/// Throws ScenarioError (one line) naming a valve that no vehicle can reach: no free cell of
+/// `blocked` (the obstacles grown by a hull, World::blocked()) within its visit radius (and a
+/// cell) is joined, by free cells side by side, to a free cell within 0.5 m of a start (the
+/// fleet's and the joins'). A boulder that sealed a corner had left a tour's vehicle shuttling
+/// toward its valve for a whole mission, with no word.
+void CheckValvesReachable(const Scenario& scenario, const OccupancyGrid& blocked);
+
 /// True if a vehicle may start at `start`: no blocked cell's centre of `terrain` within its start
 /// jitter plus kVehicleClearance_m (CheckOnOpenSeabed's rule for starts).
 bool StartIsClear(const OccupancyGrid& terrain, const Eigen::Vector2d& start, double jitter_m);

@@ -364,6 +364,35 @@ TEST(SeabedObstacles, WorldRefusesAValveOnBlockedSeabed) {
   EXPECT_THROW(World{s}, ScenarioError);
 }
 
+// A valve no hull can come within its visit radius of, from any start, is refused at the world's
+// door, naming it (a boulder sealing a corner had left a tour's vehicle shuttling toward its valve
+// a whole mission, with no word); moved where a vehicle can reach it, the world builds.
+TEST(SeabedObstacles, WorldRefusesAValveNoVehicleCanReach) {
+  Scenario s = SmallScenario(8.0, 6.0, 0.1, {3.0, 3.0}, {6.5, 0.8});
+  Boulder rock;
+  rock.center_m = {6.9, 4.9};
+  rock.diameter_m = 2.0;
+  rock.height_m = 1.4;
+  s.boulders = {rock};
+  // The corner beyond the boulder: 1.48 m from its centre, on open seabed, but the boulder grown
+  // by a hull (1.4 m) and the workspace's edges close every way to it.
+  s.structures[0].valves[0].position_m = {7.95, 5.95};
+  try {
+    const World refused(s);
+    FAIL() << "a valve no vehicle can reach was accepted";
+  } catch (const ScenarioError& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("structures[0].valves[0].position_m = [7.95, 5.95]: no vehicle can reach P1"), std::string::npos)
+        << what;
+    EXPECT_EQ(what.find('\n'), std::string::npos);
+  }
+  s.structures[0].valves[0].position_m = {5.2, 2.2};  // open water south-west of the boulder
+  EXPECT_NO_THROW(World{s});
+  // A vehicles-only world (an agent host's) leaves the check to the server's.
+  s.structures[0].valves[0].position_m = {7.95, 5.95};
+  EXPECT_NO_THROW(World(s, WorldUse::kVehicles));
+}
+
 // Vehicles added along the south edge (--vehicles, sage vehicle add) that land on a boulder move
 // to the nearest clear start; the rest stay; the world then builds, and the same input moves the
 // same way.
