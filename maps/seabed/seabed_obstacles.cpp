@@ -206,10 +206,21 @@ int MoveStartsOffBlockedSeabed(Scenario& scenario, std::size_t first) {
   return moved;
 }
 
-void CheckSeabedModel(const Scenario& scenario) {
-  if (!scenario.HasSeabedModel()) return;
+void CheckMissionMaps(const Scenario& scenario) {
+  if (!scenario.HasSeabedModel()) {
+    // The flat seabed's obstacles are the footprints, each the cells whose centre it holds (as
+    // the seabed map voxelises them), without building the OctoMap.
+    OccupancyGrid footprints(scenario.workspace.width_m, scenario.workspace.height_m, scenario.astar.grid_resolution_m);
+    for (const ChristmasTree& tree : scenario.structures) {
+      footprints.FillBox(tree.center_m - tree.size_m / 2, tree.center_m + tree.size_m / 2);
+    }
+    CheckValvesReachable(scenario, footprints.Inflated(kVehicleClearance_m));
+    return;
+  }
   const SeabedMap seabed(scenario, scenario.astar.grid_resolution_m);
-  CheckOnOpenSeabed(scenario, TerrainObstacles(seabed.OperatingSlice(), scenario.structures));
+  const OccupancyGrid slice = seabed.OperatingSlice();
+  CheckOnOpenSeabed(scenario, TerrainObstacles(slice, scenario.structures));
+  CheckValvesReachable(scenario, slice.Inflated(kVehicleClearance_m));
 }
 
 }  // namespace sage::maps

@@ -53,9 +53,10 @@ bool StartIsClear(const OccupancyGrid& terrain, const Eigen::Vector2d& start, do
 /// seabed map otherwise). Throws ScenarioError if a start has nowhere to go.
 int MoveStartsOffBlockedSeabed(Scenario& scenario, std::size_t first);
 
-/// Everything World's construction refuses about a seabed model, without the rest of the world:
-/// the map read and checked, the model voxelised, no valve or start on blocked seabed. For a
-/// launcher to refuse a bad map before it starts any process; nothing to do on a flat seabed.
-void CheckSeabedModel(const Scenario& scenario);
+/// Everything a mission's World refuses about its maps, without the rest of the world: a seabed
+/// model's map read and checked, the model voxelised, no valve or start on blocked seabed; on any
+/// seabed, every valve within reach (CheckValvesReachable). For a command to refuse them before
+/// it starts a process or touches a run directory.
+void CheckMissionMaps(const Scenario& scenario);
 
 }  // namespace sage::maps

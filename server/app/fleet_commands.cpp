@@ -86,6 +86,7 @@ int CmdServer(const ServerCommand& c) {
   const std::atomic<bool>* stop = StopOnSignals();
   const maps::Scenario scenario = LoadWithOverrides(c.scenario);
   CheckFleetFitsField(scenario, ParseControllerKind(c.controller) == ControllerKind::kAstar);
+  if (!c.launched) maps::CheckMissionMaps(scenario);  // before the run directory (a launch checked already)
   ServerNodeOptions options;
   options.domain_id = c.domain;
   options.security = MissionIdentity(c.security_dir, proto::SecurityRole::kServer, c.domain);

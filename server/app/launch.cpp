@@ -169,7 +169,7 @@ int Launch(const LaunchCommand& c) {
         ParseControllerKind(c.controller) == ControllerKind::kAstar && !unused.empty()) {
       spdlog::warn("{}", unused);
     }
-    maps::CheckSeabedModel(scenario);  // a bad seabed map is refused here, naming the user's file, not by the server
+    maps::CheckMissionMaps(scenario);  // a bad map or an unreachable valve is refused here, not by the server
     out_dir = c.out_dir.empty() ? (fs::path("runs") / (scenario.name + "_launch")).string() : c.out_dir;
     CheckOutDirectory(out_dir);
     if (std::error_code ec; !fs::create_directories(out_dir, ec) && ec) {

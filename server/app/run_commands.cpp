@@ -131,9 +131,9 @@ int CmdRun(const RunCommand& c) {
     spdlog::warn("{}", unused);
   }
   const std::string profile = c.scenario.profile.empty() ? scenario.default_profile : c.scenario.profile;
-  // A bad seabed map is refused before the run directory is touched (an earlier run there had been
-  // cut to a stub by the refused mission's record).
-  maps::CheckSeabedModel(scenario);
+  // A bad seabed map or an unreachable valve is refused before the run directory is touched (an
+  // earlier run there had been cut to a stub by the refused mission's record).
+  maps::CheckMissionMaps(scenario);
   const fs::path dir = c.out_dir.empty() ? DefaultOutDir(scenario, profile, ToString(kind)) : c.out_dir;
   CheckOutDirectory(dir.string());
   if (std::error_code ignored; fs::exists(dir / "trajectory.csv", ignored)) {
@@ -159,7 +159,7 @@ int CmdCompare(const RunCommand& c) {
   CheckFleetFitsField(scenario, /*tours=*/true);  // compare flies the A* tours too
   WarnOfLossySettings(scenario);
   const std::string profile = c.scenario.profile.empty() ? scenario.default_profile : c.scenario.profile;
-  maps::CheckSeabedModel(scenario);  // before the run directories are touched, as run
+  maps::CheckMissionMaps(scenario);  // before the run directories are touched, as run
   const fs::path dir = c.out_dir.empty() ? DefaultOutDir(scenario, profile, "compare") : c.out_dir;
   CheckOutDirectory(dir.string());
   PrepareRunDirectory(dir.string());

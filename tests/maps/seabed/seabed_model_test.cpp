@@ -386,8 +386,19 @@ TEST(SeabedObstacles, WorldRefusesAValveNoVehicleCanReach) {
         << what;
     EXPECT_EQ(what.find('\n'), std::string::npos);
   }
+  // The commands' check before any process or run directory says the same.
+  try {
+    CheckMissionMaps(s);
+    FAIL() << "CheckMissionMaps accepted it";
+  } catch (const ScenarioError& e) {
+    EXPECT_NE(std::string(e.what()).find("no vehicle can reach P1"), std::string::npos) << e.what();
+  }
   s.structures[0].valves[0].position_m = {5.2, 2.2};  // open water south-west of the boulder
   EXPECT_NO_THROW(World{s});
+  EXPECT_NO_THROW(CheckMissionMaps(s));
+  for (const char* name : {"two_xt.yaml", "fleet_field.yaml", "fleet_large.yaml", "manifold_slope.yaml"}) {
+    EXPECT_NO_THROW(CheckMissionMaps(LoadScenario(std::string(SAGE_SOURCE_DIR) + "/scenarios/" + name))) << name;
+  }
   // A vehicles-only world (an agent host's) leaves the check to the server's.
   s.structures[0].valves[0].position_m = {7.95, 5.95};
   EXPECT_NO_THROW(World(s, WorldUse::kVehicles));
