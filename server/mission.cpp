@@ -162,13 +162,16 @@ MissionResult Mission::Run(const std::function<void(double)>& progress) {
   return result;
 }
 
-double CalibratedAstarWait(maps::Scenario scenario, const std::string& profile, const MissionMetrics& ergodic) {
+double CalibratedAstarWait(maps::Scenario scenario, const std::string& profile, const MissionMetrics& ergodic,
+                           const std::function<void(int mission, double wait_s)>& on_try) {
   std::size_t dominant = 0;
   for (std::size_t i = 1; i < ergodic.valves.size(); ++i)
     if (ergodic.valves[i].weight > ergodic.valves[dominant].weight) dominant = i;
   const double target = ergodic.valves[dominant].time_near_s;
   // Time near the valve grows with the wait (longer stops, fewer laps, but the stop dominates).
+  int tries = 0;
   auto shortfall = [&](double wait) {
+    if (on_try) on_try(++tries, wait);
     scenario.astar.wait_per_lap_s = wait;
     MissionOptions options{profile, ControllerKind::kAstar};
     options.keep_trajectory = false;

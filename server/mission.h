@@ -89,7 +89,10 @@ class Mission {
 
 /// The SAGE paper's protocol for a fair baseline: the A* wait per lap (s) that makes A* spend as
 /// long near the dominant valve (highest time-averaged weight) as the given ergodic run did, to
-/// 0.05 s. Zero if A* already lingers longer without waiting.
-double CalibratedAstarWait(maps::Scenario scenario, const std::string& profile, const MissionMetrics& ergodic);
+/// 0.05 s. Zero if A* already lingers longer without waiting. on_try, if given, is told each A*
+/// mission's wait before it flies (a bisection of ten or more: a long scenario's took 27 s, in
+/// which `sage compare` had said nothing).
+double CalibratedAstarWait(maps::Scenario scenario, const std::string& profile, const MissionMetrics& ergodic,
+                           const std::function<void(int mission, double wait_s)>& on_try = {});
 
 }  // namespace sage::server

@@ -171,7 +171,13 @@ int CmdCompare(const RunCommand& c) {
     return 130;
   }
   if (c.calibrate_wait) {
-    scenario.astar.wait_per_lap_s = CalibratedAstarWait(scenario, profile, ergodic);
+    const bool tty = isatty(fileno(stderr)) != 0;
+    scenario.astar.wait_per_lap_s = CalibratedAstarWait(scenario, profile, ergodic, [&](int mission, double wait_s) {
+      // One line a try off a terminal, redrawn on one (as the missions' progress).
+      std::fprintf(stderr, tty ? "\rcalibrating A*'s wait per lap: mission %d, wait %.2f s   " : "calibrating A*'s wait per "
+                   "lap: mission %d, wait %.2f s\n", mission, wait_s);
+    });
+    if (tty) std::fprintf(stderr, "\n");
     spdlog::info("A* wait per lap set to {:.2f} s so that A* spends as long near the dominant valve as ergodic "
                  "control (the paper's protocol; --calibrate-wait off keeps the scenario's)",
                  scenario.astar.wait_per_lap_s);
