@@ -179,6 +179,11 @@ Trajectory ParseTrajectoryCsv(std::istream& in, const std::string& path) {
       }
       TrajectorySample& s = row.sample;
       s.time_s = number("t");
+      // Mission time starts at 0 (a log at t = -5 had been scored as a mission of 1 s).
+      if (s.time_s < 0.0) {
+        throw ScenarioError(fmt::format("{}:{}: column 't' = '{}': must be >= 0 (mission seconds from the start)", path,
+                                        line_number, Shown(fields[column("t")])));
+      }
       s.position_m = {number("x"), number("y")};
       s.heading_rad = number("heading");
       s.velocity_mps = {number("vx"), number("vy")};

@@ -136,6 +136,9 @@ TEST_F(ReportTest, CsvErrorsAreOneLineNamingFileAndLine) {
   EXPECT_EQ(ReadError(header + "0,0,1\n"), file + ":2: 3 fields, the header has 4");
   EXPECT_EQ(ReadError(header + "0,0,1,2,3\n"), file + ":2: 5 fields, the header has 4");
   EXPECT_EQ(ReadError(header + "inf,0,1,2\n"), file + ":2: column 't' = 'inf': not finite");
+  // Mission time starts at 0 (a log from t = -5 had been scored as a 1 s mission).
+  EXPECT_EQ(ReadError(header + "-5,0,1,2\n0,0,1,2\n"),
+            file + ":2: column 't' = '-5': must be >= 0 (mission seconds from the start)");
   EXPECT_EQ(ReadError(header + "0,0,nan,2\n"), file + ":2: column 'x' = 'nan': not finite");
   EXPECT_EQ(ReadError(header + "0,0,1e999,2\n"), file + ":2: column 'x' = '1e999': not finite");
   EXPECT_EQ(ReadError(header + "0,-1,1,2\n"), file + ":2: column 'vehicle' = '-1': must be an id in 0..65535 or a name");
