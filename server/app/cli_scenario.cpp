@@ -233,6 +233,7 @@ std::string ErgodicOnlyOverrides(const ScenarioOverrides& o) {
   if (o.basis_order) given.emplace_back("--basis-order");
   if (o.forgetting_time_s) given.emplace_back("--forgetting");
   if (o.min_turn_radius_m) given.emplace_back("--turn-radius");
+  if (o.steer) given.emplace_back("--steer");  // tours never steer on the posterior (an operator re-plans them)
   if (given.empty()) return "";
   return fmt::format("{}: the ergodic controller's; -c astar flies tours without it (given, not used)",
                      fmt::join(given, ", "));

@@ -372,6 +372,9 @@ TEST(ScenarioOverrides, NamesTheErgodicOnlyOptionsGiven) {
   o.forgetting_time_s = 10.0;
   o.min_turn_radius_m = 0.2;
   EXPECT_EQ(ErgodicOnlyOverrides(o).rfind("--basis-order, --forgetting, --turn-radius: ", 0), 0u) << ErgodicOnlyOverrides(o);
+  o = ScenarioOverrides{};
+  o.steer = "posterior";  // a tour moves for no detection
+  EXPECT_EQ(ErgodicOnlyOverrides(o), "--steer: the ergodic controller's; -c astar flies tours without it (given, not used)");
 }
 
 
