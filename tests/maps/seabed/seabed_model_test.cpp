@@ -335,30 +335,44 @@ TEST(SeabedObstacles, RectanglesCoverTheBlockedCellsExactly) {
   EXPECT_EQ(MergeIntoRectangles(block).size(), 1u);
 }
 
-// A world on a seabed model refuses a valve on blocked seabed, naming it; Box2D gets the terrain
-// (not the XT) as rectangles.
-TEST(SeabedObstacles, WorldRefusesAValveOnBlockedSeabed) {
+// An 8 x 6 m field with its XT at (3, 3), a start at (6.5, 0.8) and a boulder 2 m across (1.4 m
+// tall) at `centre`.
+Scenario WithBoulder(const Eigen::Vector2d& centre) {
   Scenario s = SmallScenario(8.0, 6.0, 0.1, {3.0, 3.0}, {6.5, 0.8});
   Boulder rock;
-  rock.center_m = {6.0, 4.0};
+  rock.center_m = centre;
   rock.diameter_m = 2.0;
   rock.height_m = 1.4;
   s.boulders = {rock};
+  return s;
+}
+
+// `refuse` throws a ScenarioError of one line holding `expected`.
+template <typename F>
+void ExpectRefusedInOneLine(F refuse, const std::string& expected) {
+  try {
+    refuse();
+    ADD_FAILURE() << "accepted; expected: " << expected;
+  } catch (const ScenarioError& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find(expected), std::string::npos) << what;
+    EXPECT_EQ(what.find('\n'), std::string::npos) << what;
+  }
+}
+
+// A world on a seabed model refuses a valve on blocked seabed, naming it; Box2D gets the terrain
+// (not the XT) as rectangles.
+TEST(SeabedObstacles, WorldRefusesAValveOnBlockedSeabed) {
+  Scenario s = WithBoulder({6.0, 4.0});
+  const Boulder& rock = s.boulders.front();
   const World world(s);
   ASSERT_FALSE(world.terrain_blocks().empty());
   for (const CellRectangle& box : world.terrain_blocks()) {
     EXPECT_LT(((box.min_m + box.max_m) / 2 - rock.center_m).norm(), 1.0) << "only the boulder is terrain";
   }
   s.structures[0].valves[0].position_m = {6.1, 4.2};
-  try {
-    const World refused(s);
-    FAIL() << "a valve on a boulder was accepted";
-  } catch (const ScenarioError& e) {
-    const std::string what = e.what();
-    EXPECT_NE(what.find("structures[0].valves[0].position_m = [6.1, 4.2]: P1 lies on blocked seabed"), std::string::npos)
-        << what;
-    EXPECT_EQ(what.find('\n'), std::string::npos);
-  }
+  ExpectRefusedInOneLine([&] { const World refused(s); },
+                         "structures[0].valves[0].position_m = [6.1, 4.2]: P1 lies on blocked seabed");
   s.structures[0].valves[0].position_m = {3.0, 4.3};
   s.vehicles[0].start_m = {6.0, 2.6};  // 1.4 m from the boulder's centre: inside its radius + jitter + hull
   EXPECT_THROW(World{s}, ScenarioError);
@@ -368,31 +382,14 @@ TEST(SeabedObstacles, WorldRefusesAValveOnBlockedSeabed) {
 // door, naming it (a boulder sealing a corner had left a tour's vehicle shuttling toward its valve
 // a whole mission, with no word); moved where a vehicle can reach it, the world builds.
 TEST(SeabedObstacles, WorldRefusesAValveNoVehicleCanReach) {
-  Scenario s = SmallScenario(8.0, 6.0, 0.1, {3.0, 3.0}, {6.5, 0.8});
-  Boulder rock;
-  rock.center_m = {6.9, 4.9};
-  rock.diameter_m = 2.0;
-  rock.height_m = 1.4;
-  s.boulders = {rock};
+  Scenario s = WithBoulder({6.9, 4.9});
   // The corner beyond the boulder: 1.48 m from its centre, on open seabed, but the boulder grown
   // by a hull (1.4 m) and the workspace's edges close every way to it.
   s.structures[0].valves[0].position_m = {7.95, 5.95};
-  try {
-    const World refused(s);
-    FAIL() << "a valve no vehicle can reach was accepted";
-  } catch (const ScenarioError& e) {
-    const std::string what = e.what();
-    EXPECT_NE(what.find("structures[0].valves[0].position_m = [7.95, 5.95]: no vehicle can reach P1"), std::string::npos)
-        << what;
-    EXPECT_EQ(what.find('\n'), std::string::npos);
-  }
+  const std::string unreachable = "structures[0].valves[0].position_m = [7.95, 5.95]: no vehicle can reach P1";
+  ExpectRefusedInOneLine([&] { const World refused(s); }, unreachable);
   // The commands' check before any process or run directory says the same.
-  try {
-    CheckMissionMaps(s);
-    FAIL() << "CheckMissionMaps accepted it";
-  } catch (const ScenarioError& e) {
-    EXPECT_NE(std::string(e.what()).find("no vehicle can reach P1"), std::string::npos) << e.what();
-  }
+  ExpectRefusedInOneLine([&] { CheckMissionMaps(s); }, unreachable);
   s.structures[0].valves[0].position_m = {5.2, 2.2};  // open water south-west of the boulder
   EXPECT_NO_THROW(World{s});
   EXPECT_NO_THROW(CheckMissionMaps(s));
