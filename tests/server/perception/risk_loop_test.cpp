@@ -129,7 +129,9 @@ TEST(RiskLoop, ADetectionRaisesTheLayerAtOnce) {
   ASSERT_TRUE(core.OnScan(Scan(0, 4, at, -M_PI / 2, {p3})));
   const CycleOutput hit = core.Cycle(4);
   EXPECT_GT(core.risk_layer().nonzero_leaves(), 0);
-  EXPECT_GT(core.risk_layer().excess_mass(), 0.5);
+  // One detection: leak_mass (1) times the chance of a leak at its likeliest leaf.
+  EXPECT_GT(core.risk_layer().excess_mass(), 0.3);
+  EXPECT_LE(core.risk_layer().excess_mass(), s.fusion.leak_mass);
   EXPECT_GT(DensityOf(world.basis(), hit.snapshot.phi, p3), 2.0 * before);
   EXPECT_EQ(hit.snapshot.phi, core.risk_layer().coefficients());
   // After a look that saw nothing there, one detection is not yet an alarm; a second one is (one
@@ -174,6 +176,41 @@ TEST(RiskLoop, ADetectionCountsForALeakOnlyFromAScanThatSawIt) {
   EXPECT_DOUBLE_EQ(m.leaks[0].detected_s, 0.6) << "from 0.7 m, P3 in view: the leak's";
   EXPECT_EQ(m.leaks[0].detections, 1);
   EXPECT_EQ(m.false_alarms.detections, 1);
+}
+
+// One suspected leak weighs one leak's mass: a sonar-like sensor (0.3 m of position noise) raises
+// tens of leaves around each detection, and their sum of chances had put many times leak_mass on
+// one leak (a new user's shared fleet collapsed onto two). Two leaks far apart weigh two.
+TEST(RiskLoop, ASuspectedLeakWeighsOneLeaksMass) {
+  maps::Scenario s = maps::LoadScenario(kTwoXtLeaks);
+  s.sensors[0].position_sigma_m = 0.3;
+  s.sensors[0].range_m = 3.0;
+  s.leaks.clear();
+  maps::World world(s);
+  MissionCore core(world, s, "", ControllerKind::kErgodic);
+  const Eigen::Vector2d at(1.0, 1.6), near(1.0, 0.8);  // open water west of the XTs, 0.8 m ahead
+  ASSERT_TRUE(core.OnState(State(0, 0, at, -M_PI / 2)));
+  core.Cycle(0);
+  for (std::int64_t cycle = 2; cycle <= 8; cycle += 2) {
+    ASSERT_TRUE(core.OnState(State(0, cycle, at, -M_PI / 2)));
+    ASSERT_TRUE(core.OnScan(Scan(0, cycle, at, -M_PI / 2, {near})));
+    core.Cycle(cycle);
+  }
+  const double leak_mass = s.fusion.leak_mass;
+  const double one = core.risk_layer().excess_mass();
+  EXPECT_GT(core.risk_layer().nonzero_leaves(), 20) << "the blob is spread over many leaves";
+  EXPECT_GT(one, 0.5 * leak_mass);
+  EXPECT_LE(one, leak_mass * (1.0 + 1e-6)) << "four detections of one leak weigh at most one leak";
+  // A second suspected leak 2.8 m off, the vehicle turned about: its own mass besides.
+  const Eigen::Vector2d far(1.0, 3.6);
+  for (std::int64_t cycle = 10; cycle <= 16; cycle += 2) {
+    ASSERT_TRUE(core.OnState(State(0, cycle, at, M_PI / 2)));
+    ASSERT_TRUE(core.OnScan(Scan(0, cycle, at, M_PI / 2, {far})));
+    core.Cycle(cycle);
+  }
+  const double two = core.risk_layer().excess_mass();
+  EXPECT_GT(two, one + 0.4 * leak_mass);
+  EXPECT_LE(two, 2.0 * leak_mass * (1.0 + 1e-6));
 }
 
 // Partition and regions get the layer's leaves too: the share or region holding P3 sees its
