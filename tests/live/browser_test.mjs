@@ -48,7 +48,12 @@ async function main() {
       const text = await page.textContent("#vehicle-count");
       return Number(text) === VEHICLES ? text : null;
     }, 30000);
-    const record = vehiclesInRecord(runDir);
+    // The record is flushed a second or more after the page has shown the vehicles (a loaded
+    // machine had read trajectory.csv with its header alone).
+    const record = await waitFor("trajectory.csv to hold the mission's vehicles", async () => {
+      const n = vehiclesInRecord(runDir);
+      return n === VEHICLES ? n : null;
+    }, 30000);
     check(Number(shown) === VEHICLES && record === VEHICLES,
           `the page shows ${shown} vehicles alive; the mission flies ${VEHICLES} (trajectory.csv: ${record})`);
     const view = await page.evaluate(() => ({ ...window.sageView }));

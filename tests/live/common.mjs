@@ -101,9 +101,11 @@ export function readJson(file) {
   return JSON.parse(fs.readFileSync(file, "utf8"));
 }
 
-// The vehicles trajectory.csv names in its rows at the latest time written.
+// The vehicles trajectory.csv names in its rows at the latest time written; 0 before its first
+// rows are flushed (at least a second of wall time after they are flown).
 export function vehiclesInRecord(runDir) {
   const lines = fs.readFileSync(path.join(runDir, "trajectory.csv"), "utf8").trim().split("\n").slice(1);
+  if (lines.length === 0) return 0;
   const last = lines[lines.length - 1].split(",")[0];
   const names = new Set();
   for (let i = lines.length - 1; i >= 0; i--) {
