@@ -17,6 +17,7 @@
 
 #include <fmt/format.h>
 
+#include "agents/final_approach.h"
 #include "agents/obstacle_filter.h"
 #include "agents/perception/gaze.h"
 #include "agents/physics_world.h"
@@ -160,6 +161,7 @@ struct AgentHost::Impl {
   PhysicsWorld world;
   std::vector<Eigen::Vector2d> valves;  // the scenario's valve positions (A* tours)
   ValveGaze gaze;                       // where the sensors look (`gaze: valves`)
+  FinalApproach approach;               // an ergodic vehicle's last metre to a valve (ergodic.final_approach_m)
   std::vector<Vehicle> vehicles;
   std::unordered_map<VehicleId, std::size_t> position_of;  // id -> index into vehicles (a host runs hundreds)
   std::vector<Eigen::Vector2d> others;  // vehicles of other hosts
@@ -183,7 +185,8 @@ struct AgentHost::Impl {
         clearance(w.clearance()),
         grid(w.astar_grid()),
         world(s.workspace, s.structures, {}, host_detail::PhysicsShards(s), w.terrain_blocks()),
-        gaze(w, s) {
+        gaze(w, s),
+        approach(s.ValvePositions(), w.clearance(), s.ergodic.final_approach_m) {
     control_dt = 1.0 / s.control_rate_hz;
     physics_substeps = std::max(1, static_cast<int>(std::lround(s.physics_rate_hz / s.control_rate_hz)));
     valves = s.ValvePositions();
@@ -275,7 +278,7 @@ struct AgentHost::Impl {
   // SMC on the field's basis, or on the vehicle's region's: there the controller sees positions
   // relative to the box, and a vehicle outside it first flies a grid path to the box's centre.
   Eigen::Vector2d ErgodicCommand(Vehicle& v, const VehicleState& state, double time_s) {
-    if (!v.region) return Controller(v).Command(state, time_s);
+    if (!v.region) return Approach(Controller(v), state.position_m, Controller(v).Command(state, time_s), {}, 1.0 / workspace_area());
     constexpr double kInside_m = 0.3;  // within this of the box counts as in it
     // In its box the filter keeps it there; on the way the workspace's edges are the bounds (the
     // box's would push it straight at the box, through whatever stands between).
@@ -316,7 +319,29 @@ struct AgentHost::Impl {
     }
     VehicleState local = state;
     local.position_m -= v.region->origin_m;
-    return v.ergodic->Command(local, time_s);
+    return Approach(*v.ergodic, state.position_m, v.ergodic->Command(local, time_s), &*v.region,
+                    1.0 / v.region->size_m.prod());
+  }
+
+  double workspace_area() const { return scenario.workspace.width_m * scenario.workspace.height_m; }
+
+  // The law's command, its last metre to a valve straightened (agents/final_approach.h). A valve
+  // its target wants is one where the target's density is above its mean over the controller's
+  // box (the target's mass sits at its valves; a valve of another share in a region's box has
+  // next to none), in a region's box, and that the law still owes coverage (the target's density
+  // there above the coverage's): without that, two valves a metre apart, each ahead of the
+  // vehicle as it turned at the other, held a fleet_large vehicle 350 s while its third valve,
+  // boosted by the guard, waited.
+  Eigen::Vector2d Approach(const ErgodicController& law, const Eigen::Vector2d& position_m, const Eigen::Vector2d& command,
+                           const maps::RegionBox* region, double mean_density) const {
+    if (!approach.active()) return command;
+    thread_local std::vector<int> candidates;
+    const Eigen::Vector2d origin = region != nullptr ? region->origin_m : Eigen::Vector2d::Zero();
+    return approach.Apply(position_m, command, [&](int, const Eigen::Vector2d& valve_m) {
+      if (region != nullptr && !region->Contains(valve_m)) return false;
+      const ErgodicController::Densities d = law.DensitiesAt(valve_m - origin);
+      return d.target > mean_density && d.target > d.covered;
+    }, candidates);
   }
 
   // The free point of the box, of its centre and the centres of its quarters, farthest from x.

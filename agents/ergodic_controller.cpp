@@ -81,6 +81,21 @@ double ErgodicController::TargetDensity(const Eigen::Vector2d& x_m) const {
   return target_.dot(f);
 }
 
+ErgodicController::Densities ErgodicController::DensitiesAt(const Eigen::Vector2d& x_m) const {
+  if (target_.size() != basis_.size()) return {};
+  thread_local Eigen::VectorXd f;
+  basis_.Evaluate(x_m, f);
+  Densities d;
+  d.target = target_.dot(f);
+  const double total_time = coverage_.time_s() + fleet_time_s_;
+  if (total_time > 0.0) {
+    d.covered = coverage_.sums().dot(f);
+    if (!fleet_zero_) d.covered += fleet_sums_.dot(f);
+    d.covered /= total_time;
+  }
+  return d;
+}
+
 SAGE_AVX2_CLONES Eigen::Vector2d ErgodicController::DeficitGradient(const maps::SpectralBasis::Trigonometry& t) const {
   // With b_k = Lambda_k / h_k (c_k - phi_k) and grad F_k = -(1/h_k) (kx_k1 sin_x[k1] cos_y[k2],
   // ky_k2 cos_x[k1] sin_y[k2]) (kx, ky: the wave numbers kappa),

@@ -58,6 +58,14 @@ class ErgodicController final : public VehicleController {
   /// The target's density sum_k phi_k F_k(x) at x (1/m^2; the controller's frame: a region
   /// vehicle's box), 0 before any target.
   double TargetDensity(const Eigen::Vector2d& x_m) const;
+  /// The target's density at x (as TargetDensity) and the coverage's, sum_k c_k F_k(x) (own plus
+  /// the fleet's, time-averaged as the law reads it; 0 before any): where the first exceeds the
+  /// second the law still owes x coverage. 1/m^2, the controller's frame.
+  struct Densities {
+    double target = 0.0;
+    double covered = 0.0;
+  };
+  Densities DensitiesAt(const Eigen::Vector2d& x_m) const;
   /// Ergodic metric of CoverageError().
   double Metric() const;
   const CoverageAccumulator& coverage() const { return coverage_; }

@@ -82,6 +82,8 @@ inline constexpr double kMaxStartJitter_m = 0.5;
 /// (0.37 m) and a little water. The obstacle filter keeps vehicles this far out, and the risk
 /// field puts no coverage inside it.
 inline constexpr double kVehicleClearance_m = 0.4;
+/// A final approach longer than this is a leg of a tour, not the end of a pass (m).
+inline constexpr double kMaxFinalApproach_m = 5.0;
 /// A BlueROV2 Heavy's hull diagonal (m; 0.457 x 0.575 m): BlueROV2s that start together start
 /// at least this far apart.
 inline constexpr double kBlueRov2Diagonal_m = 0.74;
@@ -142,6 +144,10 @@ struct ErgodicSettings {
   /// instead of w. 1 = the paper (time at a valve in proportion to its risk); 0.5 = search
   /// theory's square-root law, which minimises the expected time a leak goes unnoticed.
   double weight_exponent = 1.0;
+  /// Within this distance (m) of a valve its target wants, ahead and in sight, a vehicle flies
+  /// straight to it (agents/final_approach.h): the law's passes that would miss the visit radius
+  /// become inspections. 0 = the paper's law, untouched; at most kMaxFinalApproach_m.
+  double final_approach_m = 0.0;
 };
 
 /// The "no starving valve" guard (the paper's named limitation): a floor on each valve's

@@ -50,6 +50,7 @@ std::string EmitScenario(const Scenario& s) {
   number("forgetting_time_s", s.ergodic.forgetting_time_s);
   number("min_turn_radius_m", s.ergodic.min_turn_radius_m);
   number("weight_exponent", s.ergodic.weight_exponent);
+  if (s.ergodic.final_approach_m > 0.0) number("final_approach_m", s.ergodic.final_approach_m);
   out << YAML::EndMap;
   key("guard") << YAML::Flow << YAML::BeginMap;
   key("enabled") << s.guard.enabled;

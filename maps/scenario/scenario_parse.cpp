@@ -428,13 +428,14 @@ Scenario ReadScenario(const Reader& r, const YAML::Node& root, const std::string
   });
   r.OptionalNumber(root, "start_jitter_m", "", s.start_jitter_m);
   r.Optional(root, "ergodic", "", [&](const YAML::Node& n, const std::string& p) {
-    r.ExpectMap(n, p, {"basis_order", "forgetting_time_s", "min_turn_radius_m", "weight_exponent"});
+    r.ExpectMap(n, p, {"basis_order", "forgetting_time_s", "min_turn_radius_m", "weight_exponent", "final_approach_m"});
     r.Optional(n, "basis_order", p, [&](const YAML::Node& v, const std::string& q) {
       s.ergodic.basis_order = r.WholeNumber<int>(v, q, "must be a whole number");
     });
     r.OptionalNumber(n, "forgetting_time_s", p, s.ergodic.forgetting_time_s);
     r.OptionalNumber(n, "min_turn_radius_m", p, s.ergodic.min_turn_radius_m);
     r.OptionalNumber(n, "weight_exponent", p, s.ergodic.weight_exponent);
+    r.OptionalNumber(n, "final_approach_m", p, s.ergodic.final_approach_m);
   });
   r.Optional(root, "guard", "", [&](const YAML::Node& n, const std::string& p) {
     r.ExpectMap(n, p, {"enabled", "weight_floor", "revisit_bound_s"});

@@ -326,6 +326,10 @@ void Scenario::Validate() const {
   c.Positive("ergodic.forgetting_time_s", ergodic.forgetting_time_s, /*infinity_ok=*/true);
   c.NonNegative("ergodic.min_turn_radius_m", ergodic.min_turn_radius_m);
   c.NonNegative("ergodic.weight_exponent", ergodic.weight_exponent);
+  if (!(ergodic.final_approach_m >= 0.0 && ergodic.final_approach_m <= kMaxFinalApproach_m)) {
+    c.Fail("ergodic.final_approach_m", FormatNumber(ergodic.final_approach_m),
+           "must be in [0, " + FormatNumber(kMaxFinalApproach_m) + "] m (0 = off, the paper's law)");
+  }
   c.Positive("astar.grid_resolution_m", astar.grid_resolution_m);
   if (astar.grid_resolution_m < kMinGridResolution_m) {
     c.Fail("astar.grid_resolution_m", FormatNumber(astar.grid_resolution_m),

@@ -143,6 +143,10 @@ void AddScenarioOverrides(CLI::App& cmd, ScenarioOverrides& o, OverrideSet set, 
   cmd.add_option("--turn-radius", o.min_turn_radius_m,
                  "Tightest turn of the SMC direction in metres: the vehicle loops back through a hot valve instead of "
                  "hovering on it (default: the scenario's; 0 = turn at once, the paper's law)");
+  cmd.add_option("--final-approach", o.final_approach_m,
+                 "Within this many metres of a valve its target wants, ahead and in sight, an ergodic vehicle flies "
+                 "straight to it, so that a pass near it inspects it (default: the scenario's; generated fields 1.5; "
+                 "0 = the paper's law)");
   cmd.add_option("--model", o.model,
                  "Motion model of every vehicle: bluerov2 (Box2D dynamics) or single_integrator (the paper's "
                  "constant-speed point); default: as in the scenario")

@@ -49,6 +49,10 @@ void CheckOverrides(const ScenarioOverrides& o) {
     throw maps::ScenarioError(fmt::format("--turn-radius = {}: must be a finite number >= 0 (0 = turn at once)",
                                           *o.min_turn_radius_m));
   }
+  if (o.final_approach_m && !(*o.final_approach_m >= 0.0 && *o.final_approach_m <= maps::kMaxFinalApproach_m)) {
+    throw maps::ScenarioError(fmt::format("--final-approach = {}: must be in [0, {}] m (0 = off, the paper's law)",
+                                          *o.final_approach_m, maps::kMaxFinalApproach_m));
+  }
 }
 
 }  // namespace
@@ -72,6 +76,7 @@ std::string FirstScenarioOverride(const ScenarioOverrides& o) {
       {"--forgetting", o.forgetting_time_s.has_value()},
       {"--basis-order", o.basis_order.has_value()},
       {"--turn-radius", o.min_turn_radius_m.has_value()},
+      {"--final-approach", o.final_approach_m.has_value()},
       {"--model", o.model.has_value()},
       {"--vehicles", o.vehicles.has_value()},
       {"--assignment", o.assignment.has_value()},
@@ -188,6 +193,7 @@ maps::Scenario LoadWithOverrides(const ScenarioOverrides& o) {
   if (o.forgetting_time_s) scenario.ergodic.forgetting_time_s = *o.forgetting_time_s;
   if (o.basis_order) scenario.ergodic.basis_order = *o.basis_order;
   if (o.min_turn_radius_m) scenario.ergodic.min_turn_radius_m = *o.min_turn_radius_m;
+  if (o.final_approach_m) scenario.ergodic.final_approach_m = *o.final_approach_m;
   if (o.steer) {
     if (*o.steer != "posterior" && *o.steer != "prior") {
       throw maps::ScenarioError("--steer = " + *o.steer + ": must be posterior (the Bayesian loop) or prior");
@@ -233,6 +239,7 @@ std::string ErgodicOnlyOverrides(const ScenarioOverrides& o) {
   if (o.basis_order) given.emplace_back("--basis-order");
   if (o.forgetting_time_s) given.emplace_back("--forgetting");
   if (o.min_turn_radius_m) given.emplace_back("--turn-radius");
+  if (o.final_approach_m) given.emplace_back("--final-approach");
   if (o.steer) given.emplace_back("--steer");  // tours never steer on the posterior (an operator re-plans them)
   if (given.empty()) return "";
   return fmt::format("{}: the ergodic controller's; -c astar flies tours without it (given, not used)",

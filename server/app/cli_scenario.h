@@ -33,6 +33,7 @@ struct ScenarioOverrides {
   std::optional<double> forgetting_time_s;
   std::optional<int> basis_order;
   std::optional<double> min_turn_radius_m;
+  std::optional<double> final_approach_m;
   std::optional<std::string> model;       // overrides every vehicle's motion model
   std::optional<int> vehicles;            // fleet size
   std::optional<std::string> assignment;  // shared | partition

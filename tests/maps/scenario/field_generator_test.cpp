@@ -282,6 +282,7 @@ TEST(FieldGenerator, SettingsSuitTheField) {
     EXPECT_EQ(s.ergodic.basis_order, std::clamp(1 + static_cast<int>(std::ceil(longest / 1.25)), 20, 64));
     EXPECT_EQ(s.ergodic.forgetting_time_s, 60.0);
     EXPECT_EQ(s.ergodic.min_turn_radius_m, 0.3);
+    EXPECT_EQ(s.ergodic.final_approach_m, 1.5);
     EXPECT_TRUE(s.guard.enabled);
     EXPECT_EQ(s.duration_s, 600.0);
     // The OctoMap at the A* grid resolution spans the field (OcTreeKey: +-2^15 voxels).

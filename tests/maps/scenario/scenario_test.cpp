@@ -87,6 +87,7 @@ void ExpectSameScenario(const Scenario& a, const Scenario& b) {
   EXPECT_EQ(a.ergodic.basis_order, b.ergodic.basis_order);
   EXPECT_EQ(a.ergodic.forgetting_time_s, b.ergodic.forgetting_time_s);
   EXPECT_EQ(a.ergodic.min_turn_radius_m, b.ergodic.min_turn_radius_m);
+  EXPECT_EQ(a.ergodic.final_approach_m, b.ergodic.final_approach_m);
   EXPECT_EQ(a.guard.enabled, b.guard.enabled);
   EXPECT_EQ(a.guard.weight_floor, b.guard.weight_floor);
   EXPECT_EQ(a.guard.revisit_bound_s, b.guard.revisit_bound_s);
@@ -185,8 +186,10 @@ TEST(Scenario, VehicleIdsAndEventCycles) {
 }
 
 TEST(Scenario, EmitParseRoundTripIsExact) {
+  Scenario approaching = ParseScenario(kBase, "base.yaml");
+  approaching.ergodic.final_approach_m = 1.25;  // written only when on
   for (const Scenario& s : {LoadScenario(kTwoXtPath), ParseScenario(kBase, "base.yaml"), LoadScenario(kFleetFieldPath),
-                            LoadScenario(kFleetLargePath)}) {
+                            LoadScenario(kFleetLargePath), approaching}) {
     SCOPED_TRACE(s.name);
     const std::string text = EmitScenario(s);
     const Scenario again = ParseScenario(text, s.source_path);
@@ -211,6 +214,7 @@ profiles: {only: {weights: {V: 1}}}
   EXPECT_EQ(s.duration_s, defaults.duration_s);
   EXPECT_EQ(s.ergodic.basis_order, defaults.ergodic.basis_order);
   EXPECT_EQ(s.ergodic.min_turn_radius_m, 0.0);  // the paper's law unless asked for
+  EXPECT_EQ(s.ergodic.final_approach_m, 0.0);   // likewise
   EXPECT_EQ(s.astar.clearance_m, defaults.astar.clearance_m);
   EXPECT_EQ(s.structures[0].size_m, ChristmasTree().size_m);
   EXPECT_EQ(s.structures[0].valves[0].covariance_m2, Valve().covariance_m2);
@@ -512,6 +516,9 @@ TEST(Scenario, BadInputsGiveOneLineNamingFieldAndValue) {
       {"forgetting_time_s: .inf", "forgetting_time_s: -5", {"ergodic.forgetting_time_s = -5", "> 0"}},
       {"forgetting_time_s: .inf", "forgetting_time_s: .inf, min_turn_radius_m: -0.1",
        {"ergodic.min_turn_radius_m = -0.1", ">= 0"}},
+      {"forgetting_time_s: .inf", "forgetting_time_s: .inf, final_approach_m: 6",
+       {"base.yaml: ergodic.final_approach_m = 6: must be in [0, 5] m (0 = off, the paper's law)"}},
+      {"forgetting_time_s: .inf", "forgetting_time_s: .inf, final_approach_m: -1", {"ergodic.final_approach_m = -1", "[0, 5]"}},
       {"weight_floor: 0.05", "weight_floor: 0.5", {"guard.weight_floor = 0.5", "1/M = 0.5"}},
       {"enabled: true", "enabled: maybe", {"guard.enabled = maybe", "true or false"}},
       {"duration_s: 300", "duration_s: 300\nseed: -3", {"seed = -3", "whole number >= 0"}},

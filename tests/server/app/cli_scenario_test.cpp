@@ -59,6 +59,7 @@ TEST(ScenarioOverrides, EachLandsInItsField) {
   o.forgetting_time_s = 30.0;
   o.basis_order = 24;
   o.min_turn_radius_m = 0.4;
+  o.final_approach_m = 1.2;
   o.model = "single_integrator";
   o.assignment = "partition";
   o.age_weighting_laps = 2.5;
@@ -71,6 +72,7 @@ TEST(ScenarioOverrides, EachLandsInItsField) {
   EXPECT_EQ(s.ergodic.forgetting_time_s, 30.0);
   EXPECT_EQ(s.ergodic.basis_order, 24);
   EXPECT_EQ(s.ergodic.min_turn_radius_m, 0.4);
+  EXPECT_EQ(s.ergodic.final_approach_m, 1.2);
   EXPECT_EQ(s.fleet.assignment, maps::FleetAssignment::kPartition);
   EXPECT_EQ(s.fleet.age_weighting_laps, 2.5);
   EXPECT_EQ(s.fleet.risk_share, 0.0);
@@ -96,6 +98,7 @@ TEST(ScenarioOverrides, BadValuesNameTheOption) {
       {[](ScenarioOverrides& o) { o.basis_order = 65; }, "--basis-order = 65: must be in 1..64"},
       {[](ScenarioOverrides& o) { o.forgetting_time_s = 0.0; }, "--forgetting = 0: must be > 0"},
       {[](ScenarioOverrides& o) { o.min_turn_radius_m = -0.1; }, "--turn-radius = -0.1: must be a finite number >= 0"},
+      {[](ScenarioOverrides& o) { o.final_approach_m = 7.5; }, "--final-approach = 7.5: must be in [0, 5] m"},
       {[](ScenarioOverrides& o) { o.age_weighting_laps = std::nan(""); }, "--age-weighting = nan: must be in [0, 100]"},
       {[](ScenarioOverrides& o) { o.risk_share = 11.0; }, "--risk-share = 11: must be in [0, 10]"},
       // Checked on load, so `sage launch -p nope` fails before it starts any process.
