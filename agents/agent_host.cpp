@@ -128,6 +128,29 @@ class WorkerPool {
 
 }  // namespace host_detail
 
+namespace host_detail {
+
+// How much coverage an ergodic vehicle's law owes a valve, for the final approach
+// (agents/final_approach.h): the target's density there less the coverage's; nothing (0) for a
+// valve outside a region's box, or where the target's density is not above its mean over the
+// controller's box (the target's mass sits at its valves; a valve of another share in a region's
+// box has next to none). Without the coverage's share, two valves a metre apart, each ahead of the
+// vehicle as it turned at the other, held a fleet_large vehicle 346 s while its third valve waited.
+struct OwedBy {
+  const ErgodicController& law;
+  const maps::RegionBox* region;  // null: the field's controller
+  double mean_density;            // 1 / the box's (or the workspace's) area
+
+  double operator()(int, const Eigen::Vector2d& valve_m) const {
+    if (region != nullptr && !region->Contains(valve_m)) return 0.0;
+    const Eigen::Vector2d origin = region != nullptr ? region->origin_m : Eigen::Vector2d::Zero();
+    const ErgodicController::Densities d = law.DensitiesAt(valve_m - origin);
+    return d.target > mean_density ? std::max(0.0, d.target - d.covered) : 0.0;
+  }
+};
+
+}  // namespace host_detail
+
 struct AgentHost::Impl {
   struct Vehicle {
     VehicleId id = 0;
@@ -148,6 +171,7 @@ struct AgentHost::Impl {
     bool escaping = false;  // pinned in its box: flying a grid path out of it (transit)
     Eigen::Vector2d anchor_m = Eigen::Vector2d::Zero();  // where it was at anchor_time_s
     double anchor_time_s = std::numeric_limits<double>::quiet_NaN();
+    double farthest_from_anchor_m = 0.0;  // since anchor_time_s
     std::unique_ptr<ObstacleFilter> keep_clear;  // BlueROV2s: structures and edges (SMC), neighbours
     Eigen::Vector2d command = Eigen::Vector2d::Zero();
     double heading = std::numeric_limits<double>::quiet_NaN();  // the gaze's; NaN: face the travel
@@ -278,7 +302,11 @@ struct AgentHost::Impl {
   // SMC on the field's basis, or on the vehicle's region's: there the controller sees positions
   // relative to the box, and a vehicle outside it first flies a grid path to the box's centre.
   Eigen::Vector2d ErgodicCommand(Vehicle& v, const VehicleState& state, double time_s) {
-    if (!v.region) return Approach(Controller(v), state.position_m, Controller(v).Command(state, time_s), {}, 1.0 / workspace_area());
+    if (!v.region) {
+      const Eigen::Vector2d law = Controller(v).Command(state, time_s);
+      thread_local std::vector<int> candidates;
+      return approach.Apply(state.position_m, law, host_detail::OwedBy{*v.ergodic, nullptr, 1.0 / workspace_area()}, candidates);
+    }
     constexpr double kInside_m = 0.3;  // within this of the box counts as in it
     // In its box the filter keeps it there; on the way the workspace's edges are the bounds (the
     // box's would push it straight at the box, through whatever stands between).
@@ -304,10 +332,15 @@ struct AgentHost::Impl {
     // deficit's gradient pushing it on against it): fly a grid path round the vehicles nearby to
     // the free point of the box farthest from here, then steer on again.
     constexpr double kPinnedAfter_s = 4.0, kPinnedWithin_m = 0.3;
+    // Pinned means held within the distance all the while, not back there a few seconds later: a
+    // vehicle flying a 4 s loop between two valves was judged pinned at every lap and sent off
+    // to the far side of its box, and the loop held it (fleet_large, a third valve unseen 460 s).
+    v.farthest_from_anchor_m = std::max(v.farthest_from_anchor_m, (state.position_m - v.anchor_m).norm());
     if (std::isnan(v.anchor_time_s) || time_s - v.anchor_time_s >= kPinnedAfter_s) {
-      const bool pinned = !std::isnan(v.anchor_time_s) && (state.position_m - v.anchor_m).norm() < kPinnedWithin_m;
+      const bool pinned = !std::isnan(v.anchor_time_s) && v.farthest_from_anchor_m < kPinnedWithin_m;
       v.anchor_m = state.position_m;
       v.anchor_time_s = time_s;
+      v.farthest_from_anchor_m = 0.0;
       if (pinned) {
         v.escaping = true;
         if (v.keep_clear) v.keep_clear->SetBounds(Eigen::Vector2d::Zero(), field);
@@ -319,30 +352,14 @@ struct AgentHost::Impl {
     }
     VehicleState local = state;
     local.position_m -= v.region->origin_m;
-    return Approach(*v.ergodic, state.position_m, v.ergodic->Command(local, time_s), &*v.region,
-                    1.0 / v.region->size_m.prod());
+    const Eigen::Vector2d law = v.ergodic->Command(local, time_s);
+    thread_local std::vector<int> candidates;
+    return approach.Apply(state.position_m, law, host_detail::OwedBy{*v.ergodic, &*v.region, 1.0 / v.region->size_m.prod()},
+                          candidates);
   }
 
   double workspace_area() const { return scenario.workspace.width_m * scenario.workspace.height_m; }
 
-  // The law's command, its last metre to a valve straightened (agents/final_approach.h). A valve
-  // its target wants is one where the target's density is above its mean over the controller's
-  // box (the target's mass sits at its valves; a valve of another share in a region's box has
-  // next to none), in a region's box, and that the law still owes coverage (the target's density
-  // there above the coverage's): without that, two valves a metre apart, each ahead of the
-  // vehicle as it turned at the other, held a fleet_large vehicle 350 s while its third valve,
-  // boosted by the guard, waited.
-  Eigen::Vector2d Approach(const ErgodicController& law, const Eigen::Vector2d& position_m, const Eigen::Vector2d& command,
-                           const maps::RegionBox* region, double mean_density) const {
-    if (!approach.active()) return command;
-    thread_local std::vector<int> candidates;
-    const Eigen::Vector2d origin = region != nullptr ? region->origin_m : Eigen::Vector2d::Zero();
-    return approach.Apply(position_m, command, [&](int, const Eigen::Vector2d& valve_m) {
-      if (region != nullptr && !region->Contains(valve_m)) return false;
-      const ErgodicController::Densities d = law.DensitiesAt(valve_m - origin);
-      return d.target > mean_density && d.target > d.covered;
-    }, candidates);
-  }
 
   // The free point of the box, of its centre and the centres of its quarters, farthest from x.
   Eigen::Vector2d EscapePoint(const maps::RegionBox& box, const Eigen::Vector2d& x_m) const {

@@ -7,11 +7,10 @@
 // missed one in fourteen.
 //
 // Within radius_m of a valve that lies ahead of its command (within kHalfAngle_deg of it), that
-// its target wants (the caller says) and that it can reach in a straight line (no structure
-// between), the vehicle heads for the valve at the law's speed; once there, or past it, the law
-// steers alone again. The law's own coverage integral is untouched: the target, the deficit and
-// where the vehicle goes next are the law's; only the last metre of a pass is straightened.
-// radius 0 is the paper's law, untouched.
+// its law still owes coverage (the caller says) and that it can reach in a straight line (no
+// structure between), the vehicle heads for the valve at the law's speed; once there, or past it,
+// the law steers alone again. The law's target, coverage and next move are its own; only the last
+// metre of a pass is straightened. radius 0 is the paper's law, untouched.
 #include <vector>
 
 #include <Eigen/Core>
@@ -32,19 +31,24 @@ class FinalApproach {
   bool active() const { return radius_m_ > 0.0; }
   double radius_m() const { return radius_m_; }
 
-  /// The command to fly instead of `command` (the law's velocity) at `position_m`: toward the
-  /// nearest valve ahead, within reach and in sight, for which wanted(valve index, position)
-  /// holds, at the command's speed; `command` itself if there is none. `scratch` is the
-  /// caller's (one per thread), not a vector allocated a vehicle a cycle.
-  template <class Wanted>
-  Eigen::Vector2d Apply(const Eigen::Vector2d& position_m, const Eigen::Vector2d& command, Wanted&& wanted,
+  /// The command to fly instead of `command` (the law's velocity) at `position_m`: at the
+  /// command's speed straight to the valve the law is heading for, if it is in sight; else
+  /// `command` itself. That valve is the nearest of those ahead of `command` (within
+  /// kHalfAngle_deg of it), within radius_m() and farther than kArrived_m, that the law still
+  /// owes coverage: owed(valve index, position) > 0 (the target's density there above the
+  /// coverage's); ties to the lower index. (The one owed most instead, tried on five generated
+  /// fields: the risk-weighted interval 0.78-1.16x the tours' against 0.69-0.84x, one field's
+  /// longest gap 12.8x.) `scratch` is the caller's (one per thread), not a vector allocated a
+  /// vehicle a cycle.
+  template <class Owed>
+  Eigen::Vector2d Apply(const Eigen::Vector2d& position_m, const Eigen::Vector2d& command, Owed&& owed,
                         std::vector<int>& scratch) const {
     if (!active() || !(command.squaredNorm() > 0.0)) return command;
-    Candidates(position_m, command, scratch);
+    Candidates(position_m, command, scratch);  // nearest first
     for (const int k : scratch) {
-      if (!wanted(k, valves_[static_cast<std::size_t>(k)])) continue;
-      if (!InSight(position_m, valves_[static_cast<std::size_t>(k)])) continue;
-      return (valves_[static_cast<std::size_t>(k)] - position_m).normalized() * command.norm();
+      const Eigen::Vector2d& valve = valves_[static_cast<std::size_t>(k)];
+      if (!(owed(k, valve) > 0.0)) continue;
+      return InSight(position_m, valve) ? (valve - position_m).normalized() * command.norm() : command;
     }
     return command;
   }

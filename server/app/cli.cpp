@@ -153,7 +153,7 @@ void AddScenarioOverrides(CLI::App& cmd, ScenarioOverrides& o, OverrideSet set, 
       ->check(CLI::IsMember({"bluerov2", "single_integrator"}));
   if (!mission) {
     cmd.footer("An agent host must run the server's scenario with the same --vehicles, --seed, --start-jitter, -K, "
-               "--forgetting, --turn-radius, --model and --controller (sage launch sees to it).");
+               "--forgetting, --turn-radius, --final-approach, --model and --controller (sage launch sees to it).");
   }
 }
 

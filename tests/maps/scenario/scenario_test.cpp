@@ -869,13 +869,14 @@ TEST(Scenario, VehicleFingerprintSeesWhatShapesTheVehiclesOnly) {
   server_only.fleet.assignment = FleetAssignment::kPartition;
   EXPECT_EQ(VehicleFingerprint(server_only), fingerprint);
 
-  std::vector<Scenario> vehicle_side(6, base);
+  std::vector<Scenario> vehicle_side(7, base);
   vehicle_side[0].ergodic.basis_order = 24;
   vehicle_side[1].seed = 2;
   vehicle_side[2].ergodic.min_turn_radius_m = 0.4;
   vehicle_side[3] = WithVehicleCount(base, 3);
   vehicle_side[4].structures[0].center_m.x() += 0.1;
   vehicle_side[5].vehicles[0].model = MotionModel::kSingleIntegrator;
+  vehicle_side[6].ergodic.final_approach_m = 1.5;  // the hosts steer it
   for (std::size_t i = 0; i < vehicle_side.size(); ++i) {
     EXPECT_NE(VehicleFingerprint(vehicle_side[i]), fingerprint) << "change " << i;
   }
