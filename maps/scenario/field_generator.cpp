@@ -382,9 +382,9 @@ Scenario GenerateField(const FieldOptions& o) {
   const double longest = std::max(field.width_m, field.height_m), valves = o.valves, vehicles = o.vehicles;
   // Coverage forgotten after a minute, so a lost vehicle's valves are taken over soon; a 0.3 m
   // turning radius flies through a hot valve and loops back; the last 1.5 m to a valve the law
-  // sends a vehicle by is flown straight (agents/final_approach.h: on eleven generated fields the
-  // regions' risk-weighted revisit interval went from 0.88-1.25x the tours' to 0.70-0.85x; 1 m
-  // and 2 m did less, 2 m lengthening some longest gaps; README, fleet results).
+  // sends a vehicle by is flown straight (agents/final_approach.h: on seventeen generated fields
+  // the regions' risk-weighted revisit interval went from 0.88-1.25x the tours' to 0.72-0.87x;
+  // 1 m and 2 m did less, 2 m lengthening some longest gaps; README, fleet results).
   s.ergodic = {std::clamp(1 + static_cast<int>(std::ceil(longest / kBasisHalfWave_m)), kMinBasisOrder, kMaxBasisOrder),
                60.0, 0.3};
   s.ergodic.final_approach_m = 1.5;

@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <atomic>
+#include <chrono>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -13,6 +14,7 @@
 #include <optional>
 #include <sstream>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include <gtest/gtest.h>
@@ -551,6 +553,15 @@ TEST(OperatorDoor, AnEndedLatestNamesTheMissionThatRuns) {
     _exit(127);
   }
   ASSERT_GT(launcher, 0);
+  // Until the child has exec'd, its command line is this test's (it failed 2 runs in 6 when asked
+  // at once): wait for the shell's, up to 5 s.
+  const std::string cmdline_path = "/proc/" + std::to_string(launcher) + "/cmdline";
+  for (int i = 0; i < 500; ++i) {
+    std::ifstream in(cmdline_path, std::ios::binary);
+    const std::string cmdline((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    if (cmdline.find("sage launch") != std::string::npos) break;
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
   for (const auto& [name, pid] : {std::pair{"ended", 0}, std::pair{"live", static_cast<int>(launcher)}}) {
     MissionFile m;
     m.domain_id = 7;
