@@ -126,10 +126,6 @@ class WorkerPool {
   bool stop_ = false;
 };
 
-}  // namespace host_detail
-
-namespace host_detail {
-
 // How much coverage an ergodic vehicle's law owes a valve, for the final approach
 // (agents/final_approach.h): the target's density there less the coverage's; nothing (0) for a
 // valve outside a region's box, or where the target's density is not above its mean over the
@@ -359,7 +355,6 @@ struct AgentHost::Impl {
   }
 
   double workspace_area() const { return scenario.workspace.width_m * scenario.workspace.height_m; }
-
 
   // The free point of the box, of its centre and the centres of its quarters, farthest from x.
   Eigen::Vector2d EscapePoint(const maps::RegionBox& box, const Eigen::Vector2d& x_m) const {
