@@ -407,7 +407,9 @@ int RunCli(int argc, char** argv) {
   vehicle->require_subcommand(1);
   CLI::App* vehicle_add = vehicle->add_subcommand("add", "Vehicles with ids the server issues join the running mission "
                                                          "(a new agent host process)");
-  vehicle_add->add_option("--count,-c", op.add_count, "How many vehicles (1..10000)")->capture_default_str();
+  // `sage vehicle add 2` as well as `-c 2`: a new user's first try had been refused ("The following
+  // argument was not expected: 2").
+  vehicle_add->add_option("count,--count,-c", op.add_count, "How many vehicles (1..10000)")->capture_default_str();
   AddMissionDir(*vehicle_add, op);
   CLI::App* vehicle_remove = vehicle->add_subcommand("remove", "Take a vehicle out of the running mission cleanly");
   vehicle_remove->add_option("id", op.remove_id,

@@ -436,7 +436,8 @@ TEST(OperatorDoor, AnEndedMissionIsSaidAtOnce) {
   std::ofstream(dir / "trajectory.csv") << "t,vehicle,x,y\n0,0,1,1\n12.5,0,1.5,1\n";
   std::ofstream(dir / "metrics.json") << R"({"complete": true, "duration_s": 12.5})";
   for (const std::vector<std::string>& command :
-       std::vector<std::vector<std::string>>{{"stop"}, {"risk", "set", "P1", "2"}, {"vehicle", "remove", "0"}, {"vehicle", "add"}}) {
+       std::vector<std::vector<std::string>>{{"stop"}, {"risk", "set", "P1", "2"}, {"vehicle", "remove", "0"}, {"vehicle", "add"},
+                                                {"vehicle", "add", "2"}}) {
     std::vector<std::string> args = command;
     args.insert(args.end(), {"--mission", dir.string()});
     const SageRun run = RunSage(args);
