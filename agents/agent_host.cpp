@@ -179,7 +179,7 @@ struct AgentHost::Impl {
   const maps::DistanceField& clearance;  // distance to the nearest structure, for the obstacle filter
   const maps::OccupancyGrid& grid;       // obstacles inflated by the A* clearance
   PhysicsWorld world;
-  std::vector<Eigen::Vector2d> valves;  // the scenario's valve positions (A* tours)
+  std::vector<Eigen::Vector2d> valves;  // the scenario's valve positions (A* tours, the final approach)
   ValveGaze gaze;                       // where the sensors look (`gaze: valves`)
   FinalApproach approach;               // an ergodic vehicle's last metre to a valve (ergodic.final_approach_m)
   std::vector<Vehicle> vehicles;
@@ -205,11 +205,11 @@ struct AgentHost::Impl {
         clearance(w.clearance()),
         grid(w.astar_grid()),
         world(s.workspace, s.structures, {}, host_detail::PhysicsShards(s), w.terrain_blocks()),
+        valves(s.ValvePositions()),
         gaze(w, s),
-        approach(s.ValvePositions(), w.clearance(), s.ergodic.final_approach_m) {
+        approach(valves, w.clearance(), s.ergodic.final_approach_m) {
     control_dt = 1.0 / s.control_rate_hz;
     physics_substeps = std::max(1, static_cast<int>(std::lround(s.physics_rate_hz / s.control_rate_hz)));
-    valves = s.ValvePositions();
   }
 
   // Vehicles (this host's and the others') within the filter's reach of vehicle i: this host's
