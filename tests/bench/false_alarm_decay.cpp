@@ -7,6 +7,7 @@
 // vehicle time near the valve over a --window s window against the same without the alarm. The
 // valve is back when every later window is within 20 % of the one without. Prints Markdown and
 // writes it to the file given (default false_alarm_decay.md).
+// Every seed flies --after s past its own alarm, so each second of the table is a mean over the same seeds.
 // Run: build/bin/sage_bench_false_alarm [OUT.md] [--scenario S] [--valve P4] [--at 100] [--seeds 40]
 #include <algorithm>
 #include <cmath>
@@ -70,22 +71,63 @@ int main(int argc, char** argv) {
   std::string valve_name = "P4";
   double at_s = 100.0, window_s = 30.0, near_m = 0.5, after_s = 200.0;
   int seeds = 40;
-  app.add_option("out", out_path, "Markdown file to write");
-  app.add_option("--scenario", scenario_path, "Scenario with sensors (its leaks are dropped)");
-  app.add_option("--valve", valve_name, "The clean valve the false alarm is at");
-  app.add_option("--at", at_s, "The false alarm comes at the first scan after this time with the valve in view (s)");
-  app.add_option("--after", after_s, "Mission time flown after --at (s)");
-  app.add_option("--window", window_s, "Window of the share of vehicle time near the valve (s)");
-  app.add_option("--near", near_m, "A vehicle within this of the valve is near it (m)");
-  app.add_option("--seeds", seeds, "Seeds 1..N, each flown with and without the false alarm");
-  CLI11_PARSE(app, argc, argv);
+  app.add_option("out", out_path, "Markdown file to write (its folder must exist)")->capture_default_str();
+  app.add_option("--scenario", scenario_path, "Scenario with sensors (its leaks are dropped)")->capture_default_str();
+  app.add_option("--valve", valve_name, "The clean valve the false alarm is at")->capture_default_str();
+  app.add_option("--at", at_s, "The false alarm comes at the first scan after this time with the valve in view (s)")
+      ->check(CLI::Range(0.0, 1.0e5))
+      ->capture_default_str();
+  app.add_option("--after", after_s, "Time flown after the false alarm, every seed (s)")
+      ->check(CLI::Range(1.0, 1.0e5))
+      ->capture_default_str();
+  app.add_option("--window", window_s, "Window of the share of vehicle time near the valve (s), 1 .. --after")
+      ->check(CLI::Range(1.0, 1.0e5))
+      ->capture_default_str();
+  app.add_option("--near", near_m, "A vehicle within this of the valve is near it (m)")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
+  app.add_option("--seeds", seeds, "Seeds 1..N, each flown with and without the false alarm")
+      ->check(CLI::Range(1, 100000))
+      ->capture_default_str();
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e) == 0 ? 0 : 2;  // --help: 0; bad input: 2, as sage's
+  }
+  if (window_s > after_s) {
+    std::cerr << "sage_bench_false_alarm: --window = " << window_s << " s: at most --after (" << after_s << " s)\n";
+    return 2;
+  }
+  // The report is written at the end of a long run: a folder that is not there is said now.
+  if (!std::ofstream(out_path, std::ios::app)) {
+    std::cerr << "sage_bench_false_alarm: cannot write " << out_path << " (does its folder exist?)\n";
+    return 2;
+  }
 
-  maps::Scenario base = maps::LoadScenario(scenario_path);
+  maps::Scenario base;
+  try {
+    base = maps::LoadScenario(scenario_path);
+  } catch (const std::exception& e) {
+    std::cerr << "sage_bench_false_alarm: " << e.what() << "\n";
+    return 2;
+  }
   base.leaks.clear();
-  base = maps::WithDuration(base, at_s + after_s);
+  // Every seed flies --after s past its own alarm, which comes at the first scan with the valve in
+  // view after --at: the mission runs long enough for an alarm up to kLateAlarm_s late (a seed later
+  // than that is left out and counted), so no second of the table is averaged over fewer seeds.
+  constexpr double kLateAlarm_s = 120.0;
+  base = maps::WithDuration(base, at_s + kLateAlarm_s + after_s);
   const int valve = base.ValveIndex(valve_name);
-  if (valve < 0 || base.sensors.empty()) {
-    std::cerr << "need a valve of the scenario and sensors\n";
+  if (valve < 0) {
+    std::string names;
+    for (const maps::Valve& v : base.AllValves()) names += (names.empty() ? "" : ", ") + v.name;
+    std::cerr << "sage_bench_false_alarm: --valve = " << valve_name << ": no such valve in " << scenario_path
+              << " (its valves: " << names << ")\n";
+    return 2;
+  }
+  if (base.sensors.empty()) {
+    std::cerr << "sage_bench_false_alarm: " << scenario_path << " has no sensors: a false detection needs a camera's scan "
+              << "(see scenarios/two_xt_leaks.yaml)\n";
     return 2;
   }
   const Eigen::Vector2d at = base.ValvePositions()[static_cast<std::size_t>(valve)];
@@ -97,7 +139,7 @@ int main(int argc, char** argv) {
   std::vector<double> near_alarm(seconds, 0.0), near_clean(seconds, 0.0);  // vehicle-seconds near the valve
   std::vector<double> posterior(seconds, 0.0);
   std::vector<double> flown(seconds, 0.0);  // seed-seconds flown: a late alarm leaves the last seconds to fewer seeds
-  int injected = 0;
+  int injected = 0, left_out = 0;
   double lag_sum = 0.0;
   for (int seed = 1; seed <= seeds; ++seed) {
     maps::Scenario s = base;
@@ -105,7 +147,10 @@ int main(int argc, char** argv) {
     auto alarm = std::make_unique<Run>(s), clean = std::make_unique<Run>(s);
     const maps::SensorModel camera(s.sensors[0], alarm->world.obstacles(), rate);
     std::int64_t injected_at = -1;
+    const auto latest = static_cast<std::int64_t>(std::llround((at_s + kLateAlarm_s) * rate));
     for (std::int64_t k = 0; k <= cycles; ++k) {
+      if (injected_at < 0 && k > latest) break;  // too late: left out (counted below)
+      if (injected_at >= 0 && k >= injected_at + static_cast<std::int64_t>(seconds) * static_cast<std::int64_t>(rate)) break;
       const double t = static_cast<double>(k) / rate;
       const std::vector<agents::StateReport> sa = alarm->Step(k, [&](agents::AgentMission::CycleOutput& out) {
         if (injected_at >= 0 || t < at_s) return;
@@ -131,10 +176,13 @@ int main(int argc, char** argv) {
     if (injected_at >= 0) {
       ++injected;
       lag_sum += static_cast<double>(injected_at) / rate - at_s;
+    } else {
+      ++left_out;
     }
   }
   if (injected == 0) {
-    std::cerr << "the valve was never in view after --at\n";
+    std::cerr << "sage_bench_false_alarm: " << valve_name << " was never in vehicle 0's camera view within " << kLateAlarm_s
+              << " s after --at = " << at_s << " s in " << seeds << " seed(s)\n";
     return 1;
   }
   // Means over the seeds that flew each second; windows of vehicle time near the valve from each second.
@@ -168,16 +216,24 @@ int main(int argc, char** argv) {
   const std::string text = fmt::format(
       "# A false alarm at a clean valve, and how it decays\n\n`sage_bench_false_alarm --scenario {} --valve {} --at {} "
       "--after {} --window {} --near {} --seeds {}`: {} seeds flown twice in lockstep, no leak hidden; one false "
-      "detection at {} added to vehicle 0's first camera scan with {} in view after {} s (on average {:.1f} s later). "
+      "detection at {} added to vehicle 0's first camera scan with {} in view after {} s (on average {:.1f} s later{}), "
+      "each seed flown {} s past its alarm. "
       "Target share: the valve's weight and the layer's excess within 1 m of it over the field's risk, mean over seeds. "
       "Time near: vehicle-seconds within {} m of the valve in the next {} s, mean over seeds.\n\n{}\n"
       "Target share back within 20 % of the one without the alarm (every later second): {}.\n"
       "Time near the valve back within 20 % of the one without (every later {} s window): {}.\n",
       scenario_path, valve_name, at_s, after_s, window_s, near_m, seeds, injected, valve_name, valve_name, at_s,
-      lag_sum / injected, near_m, w, table,
+      lag_sum / injected,
+      left_out > 0 ? fmt::format("; {} seed(s) with no such scan within {} s left out", left_out, kLateAlarm_s) : std::string(),
+      after_s, near_m, w, table,
       target_back_s >= 0 ? fmt::format("from {} s after the alarm", target_back_s) : std::string("not within the mission"), w,
       back_s >= 0 ? fmt::format("from {} s after the alarm", back_s) : std::string("not within the mission"));
   std::cout << text;
-  std::ofstream(out_path) << text;
+  std::ofstream file(out_path);
+  file << text;
+  if (!file) {
+    std::cerr << "sage_bench_false_alarm: could not write " << out_path << "\n";
+    return 1;
+  }
   return 0;
 }
