@@ -84,6 +84,9 @@ inline constexpr double kMaxStartJitter_m = 0.5;
 inline constexpr double kVehicleClearance_m = 0.4;
 /// A final approach longer than this is a leg of a tour, not the end of a pass (m).
 inline constexpr double kMaxFinalApproach_m = 5.0;
+/// Largest target-shaping exponent alpha (ergodic and astar weight_exponent, --weight-exponent):
+/// w^4 already gives a valve of twice the risk 16 times the share.
+inline constexpr double kMaxWeightExponent = 4.0;
 /// A BlueROV2 Heavy's hull diagonal (m; 0.457 x 0.575 m): BlueROV2s that start together start
 /// at least this far apart.
 inline constexpr double kBlueRov2Diagonal_m = 0.74;

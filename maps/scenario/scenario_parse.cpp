@@ -396,7 +396,7 @@ void ReadPerception(const Reader& r, const YAML::Node& root, Scenario& s) {
     const std::string text = r.Text(n, p);
     if (text == "travel") s.gaze = Gaze::kTravel;
     else if (text == "valves") s.gaze = Gaze::kValves;
-    else r.Fail(p, n, "must be travel (look ahead) or valves (look at the nearest valve in reach)");
+    else r.Fail(p, n, "must be travel (look ahead) or valves (turn to the valve in reach where a look is worth most)");
   });
   r.Optional(root, "fusion", "", [&](const YAML::Node& n, const std::string& p) { ReadFusion(r, n, p, s.fusion); });
 }

@@ -138,7 +138,15 @@ void ValidatePerception(const Scenario& s, const std::string& file) {
     const LeakSpec& leak = s.leaks[i];
     const std::string path = "leaks[" + std::to_string(i) + "]";
     if (!leak.valve.empty()) {
-      if (s.ValveIndex(leak.valve) < 0) fail(path + ".at.valve", leak.valve, "no such valve");
+      if (s.ValveIndex(leak.valve) < 0) {
+        // Name the valves a user may have meant (names are case-sensitive), the first dozen of a large field.
+        constexpr std::size_t kNamed = 12;
+        const std::vector<Valve> valves = s.AllValves();
+        std::string names;
+        for (std::size_t k = 0; k < std::min(kNamed, valves.size()); ++k) names += (k == 0 ? "" : ", ") + valves[k].name;
+        if (valves.size() > kNamed) names += ", ... (" + std::to_string(valves.size()) + " in all)";
+        fail(path + ".at.valve", leak.valve, "no such valve (names are case-sensitive; the scenario's: " + names + ")");
+      }
     } else if (!leak.flowline.empty()) {
       const auto line = std::find_if(s.flowlines.begin(), s.flowlines.end(),
                                      [&](const Flowline& f) { return f.name == leak.flowline; });

@@ -74,7 +74,7 @@ class Checker {
   // Infinity is accepted only where it means "never" (forgetting time, revisit bound).
   void Positive(const std::string& field, double v, bool infinity_ok = false) const {
     if (!(infinity_ok && v == std::numeric_limits<double>::infinity())) Finite(field, v);
-    if (!(v > 0)) Fail(field, FormatNumber(v), "must be > 0");
+    if (!(v > 0)) Fail(field, FormatNumber(v), infinity_ok ? "must be > 0, or .inf for never" : "must be > 0");
   }
   void AtMost(const std::string& field, double v, double most, const std::string& unit) const {
     if (v > most) Fail(field, FormatNumber(v), "must be <= " + FormatNumber(most) + " " + unit);
@@ -326,6 +326,7 @@ void Scenario::Validate() const {
   c.Positive("ergodic.forgetting_time_s", ergodic.forgetting_time_s, /*infinity_ok=*/true);
   c.NonNegative("ergodic.min_turn_radius_m", ergodic.min_turn_radius_m);
   c.NonNegative("ergodic.weight_exponent", ergodic.weight_exponent);
+  c.AtMost("ergodic.weight_exponent", ergodic.weight_exponent, kMaxWeightExponent, "(1 = by risk, 0.5 = the square-root law)");
   if (!(ergodic.final_approach_m >= 0.0 && ergodic.final_approach_m <= kMaxFinalApproach_m)) {
     c.Fail("ergodic.final_approach_m", FormatNumber(ergodic.final_approach_m),
            "must be in [0, " + FormatNumber(kMaxFinalApproach_m) + "] m (0 = off, the paper's law)");
@@ -362,6 +363,7 @@ void Scenario::Validate() const {
   c.AtMost("astar.clearance_m", astar.clearance_m, kMaxClearance_m, "m");
   c.NonNegative("astar.wait_per_lap_s", astar.wait_per_lap_s);
   c.NonNegative("astar.weight_exponent", astar.weight_exponent);
+  c.AtMost("astar.weight_exponent", astar.weight_exponent, kMaxWeightExponent, "(1 = by risk, 0.5 = the square-root law)");
   c.NonNegative("astar.replan_delay_s", astar.replan_delay_s);
 
   if (structures.empty()) c.Fail("structures", "must list at least one structure");

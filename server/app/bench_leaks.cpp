@@ -24,6 +24,15 @@
 namespace sage::server {
 namespace {
 
+// What one leak site of --sites is called in the plot's title ("1 valve leak each").
+std::string SiteNoun(const std::string& sites) {
+  if (sites.rfind("valves", 0) == 0) return "valve";
+  if (sites == "joints") return "joint";
+  if (sites == "flowlines") return "flowline";
+  return "seabed";
+}
+
+
 namespace fs = std::filesystem;
 
 // What one configuration flies.
@@ -80,7 +89,20 @@ int CmdBenchLeaks(const BenchLeaksCommand& c) {
                               "sensors: section, as scenarios/two_xt_leaks.yaml does)");
   }
   const maps::LeakSites sites = maps::ParseLeakSites(c.sites, "--sites");
-  maps::WithRandomLeaks(scenario, c.leaks, sites);  // a field with no such sites is refused before anything is written
+  // A field with no such sites is refused before anything is written, in the bench's own words
+  // (the draw speaks of sage run's --random-leaks; here it is --leaks and --sites).
+  try {
+    maps::WithRandomLeaks(scenario, c.leaks, sites);
+  } catch (const maps::ScenarioError& e) {
+    std::string what = e.what();
+    const std::string run_option = "--random-leaks";
+    if (what.rfind(run_option + " = ", 0) == 0) {
+      what = "--leaks" + what.substr(run_option.size());
+    } else if (what.rfind(run_option + ":", 0) == 0) {
+      what = "--sites = " + c.sites + what.substr(run_option.size());
+    }
+    throw maps::ScenarioError(what);
+  }
   const std::string profile = c.scenario.profile.empty() ? scenario.default_profile : c.scenario.profile;
   const std::vector<Config> configs = ParseConfigs(c.configs, scenario, profile);
   const fs::path dir = c.out_dir.empty() ? fs::path("runs") / ("bench_leaks_" + scenario.name) : fs::path(c.out_dir);
@@ -93,7 +115,8 @@ int CmdBenchLeaks(const BenchLeaksCommand& c) {
     descriptions.push_back(config.description);
   }
   const std::string baseline = std::find(names.begin(), names.end(), "astar") != names.end() ? "astar" : "";
-  const std::string title = fmt::format("{}: {} run(s), {} {} leak(s) each", scenario.name, c.runs, c.leaks, c.sites);
+  const std::string title = fmt::format("{}: {} run{}, {} {} leak{} each", scenario.name, c.runs, c.runs == 1 ? "" : "s",
+                                        c.leaks, SiteNoun(c.sites), c.leaks == 1 ? "" : "s");
   const auto started = std::chrono::steady_clock::now();
   const std::string load_before = LoadAverage();
 

@@ -102,7 +102,7 @@ void AddScenarioOverrides(CLI::App& cmd, ScenarioOverrides& o, OverrideSet set, 
     cmd.add_option("--weight-exponent", o.weight_exponent,
                    "Target shaping alpha: vehicles aim for visit rates by w^alpha (1 = by risk, the paper; 0.5 = the "
                    "square-root law, least expected time a leak goes unnoticed); sets ergodic and A* alike")
-        ->check(MustBeIn(0.0, 4.0));
+        ->check(MustBeIn(0.0, maps::kMaxWeightExponent));
     cmd.add_option("--age-weighting", o.age_weighting_laps,
                    "Regions: a valve weighs w (1 + age / (L lap)) in its region's target, age the time since its last "
                    "visit (L laps of its region's tour; default: the scenario's, 1; 0 = the weights alone)")
@@ -116,7 +116,7 @@ void AddScenarioOverrides(CLI::App& cmd, ScenarioOverrides& o, OverrideSet set, 
                    "reproduces the paper)")
         ->check(CLI::IsMember({"on", "off"}));
   }
-  cmd.add_option("--seed", o.seed, "Seed of the start-pose jitter; the same seed gives the same mission")
+  cmd.add_option("--seed", o.seed, "Seed of the mission: the start-pose jitter, the leaks --random-leaks draws and the sensors' noise; the same seed gives the same mission")
       ->check(MustBeWholeNumber);
   cmd.add_option("--random-leaks", o.random_leaks,
                  "Hide N random leaks from the server, drawn from the seed (onsets uniform in [0.1, 0.9] of the "

@@ -297,7 +297,7 @@ std::string FormatLeaks(const std::vector<MissionMetrics>& runs) {
                          after(leak.detected_s, leak.start_s), after(leak.confirmed_s, leak.start_s), leak.detections,
                          leak.detections == 1 ? "" : "s");
       if (std::isfinite(leak.visits_per_min_after_detection)) {
-        out += fmt::format("; then {:.1f} visits/min", leak.visits_per_min_after_detection);
+        out += fmt::format("; then {:.1f} visits/min to it", leak.visits_per_min_after_detection);
       }
       out += "\n";
     }

@@ -81,7 +81,7 @@ TEST(ScenarioPerception, BadInputsNameFieldAndRule) {
       {"sensors: [{name: c, kind: lidar}]", "x.yaml: sensors[0].kind = lidar: must be camera or sonar"},
       {"sensors: [{name: c}, {name: c}]", "x.yaml: sensors[1].name = c: duplicate name (also sensors[0])"},
       {"sensors: [{name: c, colour: red}]", "x.yaml: sensors[0].colour: unknown key"},
-      {"leaks: [{at: {valve: P9}, start_s: 1}]", "x.yaml: leaks[0].at.valve = P9: no such valve"},
+      {"leaks: [{at: {valve: P9}, start_s: 1}]", "x.yaml: leaks[0].at.valve = P9: no such valve (names are case-sensitive; the scenario's: P1, P2"},
       {"leaks: [{at: {point_m: [3, 2.5]}, start_s: 1}]", "lies inside the footprint of XT"},
       {"leaks: [{at: {point_m: [9, 1]}, start_s: 1}]", "x.yaml: leaks[0].at.point_m = [9, 1]: must be inside the workspace"},
       {"leaks: [{at: {valve: P1, point_m: [1, 1]}, start_s: 1}]", "must give exactly one of valve, point_m"},

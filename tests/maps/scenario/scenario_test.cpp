@@ -519,6 +519,8 @@ TEST(Scenario, BadInputsGiveOneLineNamingFieldAndValue) {
       {"forgetting_time_s: .inf", "forgetting_time_s: .inf, final_approach_m: 6",
        {"base.yaml: ergodic.final_approach_m = 6: must be in [0, 5] m (0 = off, the paper's law)"}},
       {"forgetting_time_s: .inf", "forgetting_time_s: .inf, final_approach_m: -1", {"ergodic.final_approach_m = -1", "[0, 5]"}},
+      {"forgetting_time_s: .inf", "forgetting_time_s: .inf, weight_exponent: 50", {"ergodic.weight_exponent = 50", "must be <= 4"}},
+      {"forgetting_time_s: .inf", "forgetting_time_s: 0", {"ergodic.forgetting_time_s = 0", "or .inf for never"}},
       {"weight_floor: 0.05", "weight_floor: 0.5", {"guard.weight_floor = 0.5", "1/M = 0.5"}},
       {"enabled: true", "enabled: maybe", {"guard.enabled = maybe", "true or false"}},
       {"duration_s: 300", "duration_s: 300\nseed: -3", {"seed = -3", "whole number >= 0"}},

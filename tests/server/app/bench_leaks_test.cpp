@@ -89,9 +89,20 @@ TEST(BenchLeaks, EveryConfigurationMeetsTheSameLeaks) {
     ADD_FAILURE() << "flowline leaks benched on a field without flowlines";
   } catch (const maps::ScenarioError& e) {
     EXPECT_NE(std::string(e.what()).find("has no flowlines"), std::string::npos) << e.what();
+    // In the bench's own words: its options are --leaks and --sites (sage run's --random-leaks is not one).
+    EXPECT_EQ(std::string(e.what()).rfind("--sites = flowlines: ", 0), 0u) << e.what();
   }
   EXPECT_FALSE(fs::exists(dir));
   c.sites = "valves";
+  c.leaks = 6;  // five valves
+  try {
+    CmdBenchLeaks(c);
+    ADD_FAILURE() << "six valve leaks benched on five valves";
+  } catch (const maps::ScenarioError& e) {
+    EXPECT_EQ(std::string(e.what()).rfind("--leaks = 6: at most one leak a valve", 0), 0u) << e.what();
+  }
+  EXPECT_FALSE(fs::exists(dir));
+  c.leaks = 1;
   c.scenario.scenario_path = kTwoXtLeaks;
   c.configs = "bayes,tours";
   EXPECT_THROW(CmdBenchLeaks(c), maps::ScenarioError);
