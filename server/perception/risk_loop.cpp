@@ -310,6 +310,7 @@ void RiskLoop::Score(const std::vector<agents::ScanReport>& fused, double time_s
 
 void RiskLoop::Fill(MissionMetrics& metrics, double end_s) const {
   metrics.sensing = sensing();
+  metrics.steered_on_posterior = steers();
   metrics.scans = scans_;
   metrics.leaks.clear();
   for (std::size_t k = 0; k < truth_.size(); ++k) {

@@ -290,7 +290,15 @@ std::string FormatLeaks(const std::vector<MissionMetrics>& runs) {
   };
   for (const MissionMetrics& run : runs) {
     if (!run.sensing && run.leaks.empty()) continue;
-    out += fmt::format("leaks ({}{}):{}\n", run.controller, run.profile.empty() ? "" : ", " + run.profile,
+    // Under --steer prior the scans are fused and scored but steer nothing: said, as the profile
+    // alone is then what the vehicles flew on.
+    std::string steered;
+    if (run.sensing && run.controller == "astar") {
+      steered = ", the tours blind to the scans";
+    } else if (run.sensing) {
+      steered = run.steered_on_posterior ? ", steered on the posterior" : ", scored only: steered on the profile";
+    }
+    out += fmt::format("leaks ({}{}{}):{}\n", run.controller, run.profile.empty() ? "" : ", " + run.profile, steered,
                        run.leaks.empty() ? " none hidden" : "");
     for (const LeakMetrics& leak : run.leaks) {
       out += fmt::format("  {:<22} from {:6.1f} s: detected {}, confirmed {}, {} detection{}", leak.where, leak.start_s,
@@ -387,6 +395,7 @@ std::string MetricsJson(const MissionMetrics& metrics, const RunInfo* info) {
                             {"max_time_to_clear_s", number(fa.max_time_to_clear_s)},
                             {"detections", fa.detections}};
     json["scans"] = metrics.scans;
+    json["steer"] = metrics.steered_on_posterior ? "posterior" : "prior";
   }
   if (info != nullptr) {
     json["complete"] = info->complete;

@@ -266,6 +266,11 @@ TEST(RiskLoop, ScoringAloneFliesTheMissionAsWithoutSensors) {
   }
   EXPECT_TRUE(a.metrics.sensing);
   EXPECT_FALSE(b.metrics.sensing);
+  // Said in the run's table and metrics.json: scored only (a new user could not tell --steer prior's
+  // run from the loop's).
+  EXPECT_FALSE(a.metrics.steered_on_posterior);
+  EXPECT_NE(FormatLeaks({a.metrics}).find("scored only: steered on the profile"), std::string::npos)
+      << FormatLeaks({a.metrics});
   ASSERT_EQ(b.metrics.leaks.size(), 1u);
   EXPECT_TRUE(std::isnan(b.metrics.leaks[0].detected_s)) << "without sensors nothing is seen";
   // The same seed: the same scans, the same findings.
@@ -356,6 +361,10 @@ TEST(RiskLoop, AFlowlineLeakIsFoundWhereTheLineIs) {
   EXPECT_EQ(Mission(s, MissionOptions{}).Run().metrics.leaks[0].detected_s, m.leaks[0].detected_s);
   const nlohmann::json j = nlohmann::json::parse(MetricsJson(m));
   EXPECT_EQ(j["leaks"][0]["where"], "FL-1 at 4.4 m");
+  // The loop steered (fleet_field_leaks' fusion.steer: posterior), and the record says so.
+  EXPECT_TRUE(m.steered_on_posterior);
+  EXPECT_EQ(j["steer"], "posterior");
+  EXPECT_NE(FormatLeaks({m}).find("steered on the posterior"), std::string::npos) << FormatLeaks({m});
 }
 
 
