@@ -258,6 +258,14 @@ std::string BuildTable(const std::vector<MissionMetrics>& runs, const std::vecto
     table += fmt::format("({} of {} valves listed: the longest gaps; every valve is in metrics.json, \"valves\")\n",
                          rows, first.valves.size());
   }
+  // Under the Bayesian loop the weights above are the profile's, the prior: what the vehicles
+  // steered on moved with every scan (a leaking valve with a tenth of the risk drew the most visits,
+  // and a new user read the table's weight and correlation as what they flew by).
+  if (std::any_of(runs.begin(), runs.end(), [](const MissionMetrics& m) { return m.steered_on_posterior; })) {
+    table += "(weight: the profile's risk, the prior; the ergodic vehicles steered on the\n"
+             " posterior, which the scans move: a detection raises its valve at once;\n"
+             " see leaks below and risk.ot)\n";
+  }
   return table;
 }
 

@@ -271,6 +271,7 @@ TEST(RiskLoop, ScoringAloneFliesTheMissionAsWithoutSensors) {
   EXPECT_FALSE(a.metrics.steered_on_posterior);
   EXPECT_NE(FormatLeaks({a.metrics}).find("scored only: steered on the profile"), std::string::npos)
       << FormatLeaks({a.metrics});
+  EXPECT_EQ(FormatTable({a.metrics}).find("steered on the posterior"), std::string::npos) << "its weights are what it flew by";
   ASSERT_EQ(b.metrics.leaks.size(), 1u);
   EXPECT_TRUE(std::isnan(b.metrics.leaks[0].detected_s)) << "without sensors nothing is seen";
   // The same seed: the same scans, the same findings.
@@ -365,6 +366,9 @@ TEST(RiskLoop, AFlowlineLeakIsFoundWhereTheLineIs) {
   EXPECT_TRUE(m.steered_on_posterior);
   EXPECT_EQ(j["steer"], "posterior");
   EXPECT_NE(FormatLeaks({m}).find("steered on the posterior"), std::string::npos) << FormatLeaks({m});
+  EXPECT_NE(FormatTable({m}).find("(weight: the profile's risk, the prior; the ergodic vehicles steered on the\n posterior"),
+            std::string::npos)
+      << FormatTable({m});
 }
 
 
