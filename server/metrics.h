@@ -206,7 +206,7 @@ struct MissionMetrics {
 
   // Leak sensing (server/perception): empty / all zero when the scenario has no sensors.
   bool sensing = false;               ///< the vehicles carried leak sensors
-  bool steered_on_posterior = false;  ///< the vehicles steered on the fused belief (fusion.steer: posterior), not the profile alone
+  bool steered_on_posterior = false;  ///< ergodic vehicles steered on the fused belief (fusion.steer: posterior), not the profile alone
   std::vector<LeakMetrics> leaks;
   FalseAlarmMetrics false_alarms;
   std::uint64_t scans = 0;            ///< scans fused

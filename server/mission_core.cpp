@@ -783,6 +783,8 @@ MissionMetrics MissionCore::Metrics(double end_s) const {
   metrics.events = fleet_.responses();
   FillEventResponses(metrics_.visits(), metrics);
   loop_.Fill(metrics, std::max(end_s, 1.0 / scenario_.control_rate_hz));
+  // The A* tours fly the profile's weights whatever the belief says.
+  metrics.steered_on_posterior = metrics.steered_on_posterior && controller_ == ControllerKind::kErgodic;
   return metrics;
 }
 

@@ -32,7 +32,6 @@ std::string SiteNoun(const std::string& sites) {
   return "seabed";
 }
 
-
 namespace fs = std::filesystem;
 
 // What one configuration flies.

@@ -369,6 +369,14 @@ TEST(RiskLoop, AFlowlineLeakIsFoundWhereTheLineIs) {
   EXPECT_NE(FormatTable({m}).find("(weight: the profile's risk, the prior; the ergodic vehicles steered on the\n posterior"),
             std::string::npos)
       << FormatTable({m});
+  // The tours fly the profile whatever the belief says: not "steered on the posterior".
+  MissionOptions tours;
+  tours.controller = ControllerKind::kAstar;
+  const MissionMetrics t = Mission(maps::WithDuration(s, 30.0), tours).Run().metrics;
+  EXPECT_TRUE(t.sensing);
+  EXPECT_FALSE(t.steered_on_posterior);
+  EXPECT_EQ(FormatTable({t}).find("steered on the"), std::string::npos) << FormatTable({t});
+  EXPECT_NE(FormatLeaks({t}).find("the tours blind to the scans"), std::string::npos) << FormatLeaks({t});
 }
 
 
