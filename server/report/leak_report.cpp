@@ -14,6 +14,7 @@
 #include <nlohmann/json.hpp>
 
 #include "server/report/atomic_write.h"
+#include "server/report/plots/nice_scale.h"
 #include "server/report/plots/svg_writer.h"
 
 namespace sage::server {
@@ -293,15 +294,10 @@ std::string LeakBenchSvg(const std::vector<LeakSummary>& summaries, const std::v
   for (const LeakRun& r : runs) {
     if (std::isfinite(r.detected_s - r.start_s)) longest = std::max(longest, r.detected_s - r.start_s);
   }
-  // A round axis end: 1, 2 or 5 times a power of ten.
-  const double magnitude = std::pow(10.0, std::floor(std::log10(longest)));
-  double x_max = magnitude;
-  for (const double m : {1.0, 2.0, 5.0, 10.0}) {
-    if (m * magnitude >= longest) {
-      x_max = m * magnitude;
-      break;
-    }
-  }
+  // The time axis on the plots' nice steps (1, 2 or 5 times a power of ten), ending at the first
+  // step at or past the longest time (24.8 s: 25 s, where a round end of its own had been 50 s).
+  const double x_step = plots::LinearTicks(0.0, longest, 10).step;
+  const double x_max = x_step * std::ceil(longest / x_step - 1e-9);
   const auto px = [&](double t) { return kLeft + kW * t / x_max; };
   const auto py = [&](double f) { return kTop + kH * (1.0 - f); };
   fmt::memory_buffer out;
@@ -313,11 +309,16 @@ std::string LeakBenchSvg(const std::vector<LeakSummary>& summaries, const std::v
   put("<rect width=\"100%\" height=\"100%\" fill=\"white\"/>\n");
   put("<text x=\"{}\" y=\"28\" font-size=\"15\">{}</text>\n", kLeft, plots::XmlEscape(title));
   put("<text x=\"{}\" y=\"46\" font-size=\"12\">fraction of leaks detected by a time after their onset</text>\n", kLeft);
-  for (int k = 0; k <= 10; ++k) {
-    const double t = x_max * k / 10.0, f = k / 10.0;
+  const int x_ticks = static_cast<int>(std::lround(x_max / x_step));
+  for (int k = 0; k <= x_ticks; ++k) {
+    const double t = x_step * k;
     put("<line x1=\"{:.1f}\" y1=\"{:.1f}\" x2=\"{:.1f}\" y2=\"{:.1f}\" stroke=\"#e5e5e5\"/>\n", px(t), kTop, px(t), kTop + kH);
+    put("<text x=\"{:.1f}\" y=\"{:.1f}\" font-size=\"11\" text-anchor=\"middle\">{}</text>\n", px(t), kTop + kH + 16.0,
+        plots::TickLabel(t, x_step));
+  }
+  for (int k = 0; k <= 10; ++k) {
+    const double f = k / 10.0;
     put("<line x1=\"{:.1f}\" y1=\"{:.1f}\" x2=\"{:.1f}\" y2=\"{:.1f}\" stroke=\"#e5e5e5\"/>\n", kLeft, py(f), kLeft + kW, py(f));
-    put("<text x=\"{:.1f}\" y=\"{:.1f}\" font-size=\"11\" text-anchor=\"middle\">{:g}</text>\n", px(t), kTop + kH + 16.0, t);
     put("<text x=\"{:.1f}\" y=\"{:.1f}\" font-size=\"11\" text-anchor=\"end\">{:g}</text>\n", kLeft - 6.0, py(f) + 4.0, f);
   }
   put("<rect x=\"{}\" y=\"{}\" width=\"{}\" height=\"{}\" fill=\"none\" stroke=\"#999\"/>\n", kLeft, kTop, kW, kH);

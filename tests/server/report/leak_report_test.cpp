@@ -67,6 +67,16 @@ TEST(LeakReport, SummariesMatchAHandCount) {
   EXPECT_NE(svg.find("t &lt;&amp;&gt; title"), std::string::npos);
   EXPECT_EQ(svg.rfind("</svg>"), svg.size() - 7);
   EXPECT_NE(svg.find("A (9/10)"), std::string::npos);
+  // The time axis ends at the first nice step at or past the longest delay: 9 s here (steps of 1 s),
+  // 25 s for a longest 24.8 s (steps of 5 s; a round end of its own had drawn it to 50 s).
+  EXPECT_NE(svg.find(">9</text>"), std::string::npos) << svg;
+  EXPECT_EQ(svg.find(">10</text>"), std::string::npos) << svg;
+  std::vector<LeakRun> longer = runs;
+  longer.push_back(Row("b", 10, 50.0, 74.8));
+  const std::string svg25 = LeakBenchSvg(SummariseLeakRuns(longer, {"a", "b"}, {"A", "B"}), longer, "t");
+  EXPECT_NE(svg25.find(">25</text>"), std::string::npos) << svg25;
+  EXPECT_EQ(svg25.find(">30</text>"), std::string::npos) << svg25;
+  EXPECT_EQ(svg25.find(">50</text>"), std::string::npos) << svg25;
 
   const std::filesystem::path dir = std::filesystem::temp_directory_path() / "sage_leak_report_test";
   std::filesystem::create_directories(dir);
