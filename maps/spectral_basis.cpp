@@ -98,6 +98,9 @@ SpectralBasis::SpectralBasis(double width_m, double height_m, int order)
       inv_h_[i] = 1.0 / h_[i];
     }
   }
+  // 1 / h_k takes four values (k1 = 0 or not, k2 = 0 or not): the same doubles as the table's.
+  inv_h_corner_ = {inv_h_[0], order > 1 ? inv_h_[1] : 0.0, order > 1 ? inv_h_[order] : 0.0,
+                   order > 1 ? inv_h_[order + 1] : 0.0};
 }
 
 void SpectralBasis::EvaluateTrigonometry(const Eigen::Vector2d& x, Trigonometry& t) const {
@@ -110,9 +113,13 @@ void SpectralBasis::Evaluate(const Eigen::Vector2d& x, Eigen::VectorXd& f) const
   const auto& cx = t.cos_x;
   const auto& cy = t.cos_y;
   f.resize(size());
+  // 1 / h_k from its four values, not the K^2 table: a region's vehicle has a basis of its own, and
+  // at 10,000 vehicles reading its table for every look at a valve was a stream of cache misses.
   for (int k1 = 0; k1 < order_; ++k1) {
     const int row = k1 * order_;
-    for (int k2 = 0; k2 < order_; ++k2) f[row + k2] = cx[k1] * cy[k2] * inv_h_[row + k2];
+    const double first = InverseNormalizer(k1, 0), rest = order_ > 1 ? InverseNormalizer(k1, 1) : 0.0;
+    f[row] = cx[k1] * cy[0] * first;
+    for (int k2 = 1; k2 < order_; ++k2) f[row + k2] = cx[k1] * cy[k2] * rest;
   }
 }
 
@@ -147,8 +154,9 @@ Eigen::Vector2d SpectralBasis::GradientOfSum(const Eigen::Vector2d& x, const Eig
     const int row = k1 * order_;
     double row_cos = 0.0;
     double row_dsin = 0.0;
+    const double first = InverseNormalizer(k1, 0), rest = InverseNormalizer(k1, 1);
     for (int k2 = 0; k2 < order_; ++k2) {
-      const double b = a[row + k2] * inv_h_[row + k2];
+      const double b = a[row + k2] * (k2 == 0 ? first : rest);
       row_cos += b * cy[k2];
       row_dsin += b * kappa_y_[k2] * sy[k2];
     }

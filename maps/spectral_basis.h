@@ -41,6 +41,9 @@ class SpectralBasis {
   static const Eigen::VectorXd& SobolevWeights(int order);
   /// 1 / h_k (1/m), flat-indexed: F_k(x) = cos_x[k1] cos_y[k2] / h_k.
   const Eigen::VectorXd& inverse_normalizers() const { return inv_h_; }
+  /// 1 / h_k at (k1, k2) from its four values (k1 = 0 or not, k2 = 0 or not): the same double
+  /// as inverse_normalizers()[Index(k1, k2)], without reading the K^2 table.
+  double InverseNormalizer(int k1, int k2) const { return inv_h_corner_[(k1 != 0 ? 2 : 0) + (k2 != 0 ? 1 : 0)]; }
   /// The per-dimension factors of 1 / h_k (1/sqrt(m)), indexed by k1 and k2:
   /// 1 / h_k = inverse_normalizers_x()[k1] * inverse_normalizers_y()[k2] (to rounding), so F_k is
   /// the product of one normalised cosine per dimension.
@@ -78,6 +81,7 @@ class SpectralBasis {
   int order_;
   Eigen::VectorXd h_;
   Eigen::VectorXd inv_h_;
+  std::array<double, 4> inv_h_corner_{};  // 1 / h_k at (0, 0), (0, > 0), (> 0, 0), (> 0, > 0)
   const Eigen::VectorXd* lambda_;  // SobolevWeights(order_): shared by every basis of the order
   Eigen::VectorXd kappa_x_;
   Eigen::VectorXd kappa_y_;
