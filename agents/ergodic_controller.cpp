@@ -29,10 +29,6 @@ ErgodicController::ErgodicController(const maps::SpectralBasis& basis, double sp
       target_(Eigen::VectorXd::Zero(basis.size())),
       fleet_sums_(Eigen::VectorXd::Zero(basis.size())),
       lambda_(basis.weights().data()) {
-  const int order = basis.order();
-  const Eigen::VectorXd& inv_h = basis.inverse_normalizers();
-  inv_h_first_ = {inv_h[0], order > 1 ? inv_h[order] : 0.0};
-  inv_h_rest_ = {order > 1 ? inv_h[1] : 0.0, order > 1 ? inv_h[order + 1] : 0.0};
   if (!(speed_mps > 0.0)) throw std::invalid_argument("ErgodicController: speed must be > 0");
   if (!(min_turn_radius_m >= 0.0) || !std::isfinite(min_turn_radius_m)) {
     throw std::invalid_argument("ErgodicController: minimum turning radius must be finite and >= 0");
@@ -117,11 +113,10 @@ SAGE_AVX2_CLONES Eigen::Vector2d ErgodicController::DeficitGradient(const maps::
       const double dsin_x = kappa_x[k1] * t.sin_x[k1];
       const double cos_x = t.cos_x[k1];
       // Lambda_k / h_k as the product the basis' tables would hold: the same bits.
-      const std::size_t nonzero_k1 = k1 == 0 ? 0 : 1;
-      const double b0 = (lambda[row] * inv_h_first_[nonzero_k1]) * deficit(row);
+      const double b0 = (lambda[row] * basis_.InverseNormalizer(k1, 0)) * deficit(row);
       col_x[0] += dsin_x * b0;
       col_y[0] += cos_x * b0;
-      const double inv_h = inv_h_rest_[nonzero_k1];
+      const double inv_h = basis_.InverseNormalizer(k1, 1);
       for (int k2 = 1; k2 < order; ++k2) {
         const double b = (lambda[row + k2] * inv_h) * deficit(row + k2);
         col_x[k2] += dsin_x * b;

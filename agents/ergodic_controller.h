@@ -93,11 +93,9 @@ class ErgodicController final : public VehicleController {
   bool fleet_zero_ = true;
   // Lambda_k / h_k (1/m), fixed by the basis, formed where it is used from the order's one Lambda
   // table (SpectralBasis::SobolevWeights) and 1 / h_k, which takes four values: k1 = 0 or not
-  // times k2 = 0 or not. Per vehicle it had been a third K^2 array streamed every step (2.6 kB at
+  // times k2 = 0 or not (SpectralBasis::InverseNormalizer). Per vehicle it had been a third K^2 array streamed every step (2.6 kB at
   // K = 18, beside the coverage sums and the target).
   const double* lambda_;
-  std::array<double, 2> inv_h_first_{};  // 1 / h_k at k2 = 0, for k1 = 0 and k1 > 0
-  std::array<double, 2> inv_h_rest_{};   // 1 / h_k at k2 > 0, for k1 = 0 and k1 > 0
   Eigen::Vector2d last_direction_ = Eigen::Vector2d::UnitX();
   bool has_direction_ = false;  // false until the first command: a vehicle at rest may head anywhere
   double last_time_s_ = std::numeric_limits<double>::quiet_NaN();
