@@ -9,17 +9,7 @@ void CheckRiskRequest(const maps::Scenario& scenario, const std::string& valve, 
     throw maps::ScenarioError(fmt::format("weight = {}: must be a number in [0, 1e12] (weights are relative)", weight));
   }
   if (scenario.ValveIndex(valve) < 0) {
-    // The first valves by name, not all of them: a generated field has thousands.
-    constexpr int kNamed = 20;
-    std::string names;
-    int count = 0;
-    for (const maps::ChristmasTree& xt : scenario.structures) {
-      for (const maps::Valve& v : xt.valves) {
-        if (count++ < kNamed) names += (names.empty() ? "" : ", ") + v.name;
-      }
-    }
-    if (count > kNamed) names += fmt::format(", ... ({} in all)", count);
-    throw maps::ScenarioError("valve = " + valve + ": not in this mission (valves: " + names + ")");
+    throw maps::ScenarioError("valve = " + valve + ": not in this mission (valves: " + scenario.ValveNames() + ")");
   }
 }
 

@@ -149,8 +149,13 @@ enum class LeakSites {
 
 /// A copy whose leaks are `count` random ones (replacing the file's), drawn from the scenario's
 /// seed alone: onsets uniform in [0.1, 0.9] of the mission, strength 1, sites as asked. Throws
-/// ScenarioError if count is out of 0..1000 or no seabed point (flowline point) qualifies.
-Scenario WithRandomLeaks(const Scenario& scenario, int count, LeakSites sites);
+/// ScenarioError if count is out of 0..1000 or no seabed point (flowline point) qualifies; the
+/// message starts with the option that asked (`options`: sage run's, or a bench's own).
+struct LeakDrawOptions {
+  std::string count = "--random-leaks";
+  std::string sites = "--leak-sites";
+};
+Scenario WithRandomLeaks(const Scenario& scenario, int count, LeakSites sites, const LeakDrawOptions& options = {});
 /// Throws ScenarioError (`where` starts the message) unless text is "valves", "valves-even",
 /// "seabed", "flowlines" or "joints".
 LeakSites ParseLeakSites(const std::string& text, const std::string& where);

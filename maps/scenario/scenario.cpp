@@ -71,6 +71,18 @@ int Scenario::ValveIndex(const std::string& valve_name) const {
   return -1;
 }
 
+std::string Scenario::ValveNames(int max_named) const {
+  std::string names;
+  int count = 0;
+  for (const ChristmasTree& tree : structures) {
+    for (const Valve& valve : tree.valves) {
+      if (count++ < max_named) names += (names.empty() ? "" : ", ") + valve.name;
+    }
+  }
+  if (count > max_named) names += ", ... (" + std::to_string(count) + " in all)";
+  return names;
+}
+
 const RiskProfile* Scenario::FindProfile(const std::string& profile_name) const {
   for (const RiskProfile& profile : profiles) {
     if (profile.name == profile_name) return &profile;

@@ -332,6 +332,9 @@ struct Scenario {
   std::vector<Valve> AllValves() const;
   int ValveCount() const;  ///< AllValves().size() without the copy (checked on every assignment)
   int ValveIndex(const std::string& name) const;  ///< index into AllValves(); -1 if none
+  /// The valves' names for a refusal that lists them: "P1, P2, P3", or past max_named the first
+  /// max_named and the count ("V1, ..., V20, ... (35000 in all)": a generated field has thousands).
+  std::string ValveNames(int max_named = 20) const;
   std::vector<Eigen::Vector2d> ValvePositions() const;  ///< AllValves()' positions, same order
   /// A vehicle's mission id by name: its index among `vehicles`, or for a fleet_events join
   /// vehicles.size() plus the join's rank among the joins; -1 if no vehicle has the name.

@@ -235,9 +235,12 @@ void ValidatePerception(const Scenario& s, const std::string& file) {
 
 }  // namespace detail
 
-Scenario WithRandomLeaks(const Scenario& scenario, int count, LeakSites sites) {
+Scenario WithRandomLeaks(const Scenario& scenario, int count, LeakSites sites, const LeakDrawOptions& options) {
+  // Refusals start with the caller's option: the count's ("--random-leaks = 3: ...") or the sites'.
+  const std::string count_is = options.count + " = " + std::to_string(count);
+  const std::string sites_are = options.sites + " = " + ToString(sites);
   if (count < 0 || count > static_cast<int>(kMaxLeaks)) {
-    throw ScenarioError("--random-leaks = " + std::to_string(count) + ": must be in 0.." + std::to_string(kMaxLeaks));
+    throw ScenarioError(count_is + ": must be in 0.." + std::to_string(kMaxLeaks));
   }
   Scenario out = scenario;
   out.leaks.clear();
@@ -256,7 +259,7 @@ Scenario WithRandomLeaks(const Scenario& scenario, int count, LeakSites sites) {
     if (count > weighed) {
       const std::string which =
           sites == LeakSites::kValves ? " valves of nonzero risk in profile " + scenario.ProfileOrThrow("").name : " valves";
-      throw ScenarioError("--random-leaks = " + std::to_string(count) + ": at most one leak a valve, and " + scenario.name +
+      throw ScenarioError(count_is + ": at most one leak a valve, and " + scenario.name +
                           " has " + std::to_string(weighed) + which);
     }
   }
@@ -281,7 +284,7 @@ Scenario WithRandomLeaks(const Scenario& scenario, int count, LeakSites sites) {
   double flowline_length = 0.0;
   for (const Flowline& f : scenario.flowlines) flowline_length += f.Length_m();
   if (sites == LeakSites::kFlowlines && !(flowline_length > 0.0)) {
-    throw ScenarioError("--random-leaks: " + scenario.name + " has no flowlines to draw leaks along (give it a "
+    throw ScenarioError(sites_are + ": " + scenario.name + " has no flowlines to draw leaks along (give it a "
                         "flowlines: section, as scenarios/fleet_field_leaks.yaml has, or draw at valves or seabed)");
   }
   const auto flowline_site = [&](LeakSpec& leak) {
@@ -298,26 +301,26 @@ Scenario WithRandomLeaks(const Scenario& scenario, int count, LeakSites sites) {
   std::vector<FlowlineJoint> joints;
   if (sites == LeakSites::kJoints) {
     if (scenario.flowlines.empty()) {
-      throw ScenarioError("--random-leaks: " + scenario.name + " has no flowlines, so no joints to draw leaks at (give it a "
+      throw ScenarioError(sites_are + ": " + scenario.name + " has no flowlines, so no joints to draw leaks at (give it a "
                           "flowlines: section, as scenarios/fleet_field_leaks.yaml has, or draw at valves or seabed)");
     }
     for (const FlowlineJoint& joint : FlowlineJoints(scenario)) {
       if (open_seabed(joint.point_m)) joints.push_back(joint);
     }
     if (joints.empty()) {
-      throw ScenarioError("--random-leaks: " + scenario.name + " has no flowline joint " +
+      throw ScenarioError(sites_are + ": " + scenario.name + " has no flowline joint " +
                           FormatNumber(kRandomSeabedFromValves_m) + " m from every valve and " +
                           FormatNumber(kSeabedLeakClearance_m) + " m from the structures and edges");
     }
     if (count > static_cast<int>(joints.size())) {
-      throw ScenarioError("--random-leaks = " + std::to_string(count) + ": at most one leak a joint, and " +
+      throw ScenarioError(count_is + ": at most one leak a joint, and " +
                           scenario.name + " has " + std::to_string(joints.size()) + " joints where one could be");
     }
   }
   // A site drawn is taken: later draws keep kLeakSiteSeparation_m from it.
   std::vector<Eigen::Vector2d> taken;
   const auto no_room = [&](const std::string& where) {
-    return ScenarioError("--random-leaks = " + std::to_string(count) + ": " + scenario.name + " has room for " +
+    return ScenarioError(count_is + ": " + scenario.name + " has room for " +
                          std::to_string(taken.size()) + " leaks at least " + FormatNumber(kLeakSiteSeparation_m) +
                          " m apart " + where + " (one leak a site)");
   };
@@ -345,7 +348,7 @@ Scenario WithRandomLeaks(const Scenario& scenario, int count, LeakSites sites) {
       }
       if (!found && !taken.empty()) throw no_room("along its flowlines");
       if (!found) {
-        throw ScenarioError("--random-leaks: " + scenario.name + " has no flowline point " +
+        throw ScenarioError(sites_are + ": " + scenario.name + " has no flowline point " +
                             FormatNumber(kRandomSeabedFromValves_m) + " m from every valve and " +
                             FormatNumber(kSeabedLeakClearance_m) + " m from the structures and edges");
       }
@@ -371,7 +374,7 @@ Scenario WithRandomLeaks(const Scenario& scenario, int count, LeakSites sites) {
       }
       if (!found && !taken.empty()) throw no_room("on its open seabed");
       if (!found) {
-        throw ScenarioError("--random-leaks: " + scenario.name + " has no open seabed " +
+        throw ScenarioError(sites_are + ": " + scenario.name + " has no open seabed " +
                             FormatNumber(kRandomSeabedFromValves_m) + " m from every valve and " +
                             FormatNumber(kSeabedLeakClearance_m) + " m from the structures and edges");
       }

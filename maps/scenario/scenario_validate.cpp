@@ -456,11 +456,7 @@ void Scenario::Validate() const {
     }
   }
   if (valve_names.empty()) c.Fail("structures", "must hold at least one valve");
-  const auto valve_list = [&] {
-    std::string list;
-    for (const Valve& valve : AllValves()) list += (list.empty() ? "" : ", ") + valve.name;
-    return "(valves: " + list + ")";
-  };
+  const auto valve_list = [&] { return "(valves: " + ValveNames() + ")"; };
 
   // The footprint nearest to p within reach_m (Euclidean distance to its box), if any.
   const auto nearest_footprint = [&](const Eigen::Vector2d& p, double reach_m) {

@@ -88,20 +88,9 @@ int CmdBenchLeaks(const BenchLeaksCommand& c) {
                               "sensors: section, as scenarios/two_xt_leaks.yaml does)");
   }
   const maps::LeakSites sites = maps::ParseLeakSites(c.sites, "--sites");
-  // A field with no such sites is refused before anything is written, in the bench's own words
-  // (the draw speaks of sage run's --random-leaks; here it is --leaks and --sites).
-  try {
-    maps::WithRandomLeaks(scenario, c.leaks, sites);
-  } catch (const maps::ScenarioError& e) {
-    std::string what = e.what();
-    const std::string run_option = "--random-leaks";
-    if (what.rfind(run_option + " = ", 0) == 0) {
-      what = "--leaks" + what.substr(run_option.size());
-    } else if (what.rfind(run_option + ":", 0) == 0) {
-      what = "--sites = " + c.sites + what.substr(run_option.size());
-    }
-    throw maps::ScenarioError(what);
-  }
+  // A field with no such sites is refused before anything is written, in the bench's own words.
+  const maps::LeakDrawOptions draw{"--leaks", "--sites"};
+  maps::WithRandomLeaks(scenario, c.leaks, sites, draw);
   const std::string profile = c.scenario.profile.empty() ? scenario.default_profile : c.scenario.profile;
   const std::vector<Config> configs = ParseConfigs(c.configs, scenario, profile);
   const fs::path dir = c.out_dir.empty() ? fs::path("runs") / ("bench_leaks_" + scenario.name) : fs::path(c.out_dir);
@@ -143,7 +132,7 @@ int CmdBenchLeaks(const BenchLeaksCommand& c) {
       try {
         maps::Scenario s = scenario;
         s.seed = c.first_seed + static_cast<std::uint64_t>(run);
-        s = maps::WithRandomLeaks(s, c.leaks, sites);
+        s = maps::WithRandomLeaks(s, c.leaks, sites, draw);
         s.fusion.steer = config.steer;
         MissionOptions options{config.profile, config.controller};
         options.keep_trajectory = false;

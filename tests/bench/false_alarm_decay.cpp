@@ -119,10 +119,8 @@ int main(int argc, char** argv) {
   base = maps::WithDuration(base, at_s + kLateAlarm_s + after_s);
   const int valve = base.ValveIndex(valve_name);
   if (valve < 0) {
-    std::string names;
-    for (const maps::Valve& v : base.AllValves()) names += (names.empty() ? "" : ", ") + v.name;
     std::cerr << "sage_bench_false_alarm: --valve = " << valve_name << ": no such valve in " << scenario_path
-              << " (its valves: " << names << ")\n";
+              << " (its valves: " << base.ValveNames() << ")\n";
     return 2;
   }
   if (base.sensors.empty()) {

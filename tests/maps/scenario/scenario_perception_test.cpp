@@ -280,7 +280,8 @@ fusion: {joint_prior_probability: 0.02}
   EXPECT_EQ(EmitScenario(unset).find("joint_prior_probability"), std::string::npos);
 }
 
-// A field without flowlines has nowhere to put flowline or joint leaks: one line that says so.
+// A field without flowlines has nowhere to put flowline or joint leaks: one line that says so,
+// starting with the option that asked for those sites (sage run's by default, or the caller's).
 void ExpectRefusedWithoutFlowlines(LeakSites sites) {
   const Scenario bare = ParseScenario(WithSection(""), "x.yaml");
   try {
@@ -288,6 +289,13 @@ void ExpectRefusedWithoutFlowlines(LeakSites sites) {
     ADD_FAILURE() << "drew " << ToString(sites) << " leaks without flowlines";
   } catch (const ScenarioError& e) {
     EXPECT_NE(std::string(e.what()).find("has no flowlines"), std::string::npos) << e.what();
+    EXPECT_EQ(std::string(e.what()).rfind("--leak-sites = " + std::string(ToString(sites)) + ": ", 0), 0u) << e.what();
+  }
+  try {
+    WithRandomLeaks(bare, 1, sites, {"--leaks", "--sites"});
+    ADD_FAILURE() << "drew " << ToString(sites) << " leaks without flowlines";
+  } catch (const ScenarioError& e) {
+    EXPECT_EQ(std::string(e.what()).rfind("--sites = " + std::string(ToString(sites)) + ": ", 0), 0u) << e.what();
   }
 }
 

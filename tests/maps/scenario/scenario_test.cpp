@@ -1,6 +1,7 @@
 // Scenario YAML: the shipped scenarios load, emit/parse round-trips exactly, every bad input
 // gives one line naming file, field and value, and --vehicles N resizes a fleet.
 #include "maps/scenario/scenario.h"
+#include "maps/scenario/field_generator.h"
 
 #include <algorithm>
 #include <cmath>
@@ -497,6 +498,30 @@ struct BadInput {
   std::string from, to;                 // substring of kBase and its replacement
   std::vector<std::string> expected;    // the message must contain each (field path, value, rule)
 };
+
+// An unknown valve in a generated field's profile is refused in a line that names the first
+// valves and the count, not its thousands (35,000 names had made one line of ~250 kB).
+TEST(Scenario, UnknownValveOfALargeFieldListsAFew) {
+  FieldOptions options;
+  options.xts = 100;
+  options.valves = 350;
+  options.vehicles = 2;
+  Scenario field = GenerateField(options);
+  ASSERT_FALSE(field.profiles.empty());
+  field.profiles.front().weights["NOPE"] = 1.0;
+  try {
+    field.Validate();
+    FAIL() << "a weight on an unknown valve was taken";
+  } catch (const ScenarioError& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("unknown valve (valves: "), std::string::npos) << what;
+    EXPECT_NE(what.find(", ... (350 in all))"), std::string::npos) << what;
+    EXPECT_LT(what.size(), 600u) << what;
+    EXPECT_EQ(what.find('\n'), std::string::npos) << what;
+  }
+  // A small field lists them all.
+  EXPECT_EQ(field.ValveNames(400).find("in all"), std::string::npos);
+}
 
 // Each bad input throws ScenarioError: one line, starting with the file, naming field and value.
 TEST(Scenario, BadInputsGiveOneLineNamingFieldAndValue) {
