@@ -135,6 +135,9 @@ int RunServerNode(const maps::Scenario& scenario, const ServerNodeOptions& optio
     core.Restore(checkpoint);
     const RecordTail tail = ReadRecordTail(options.out_dir, checkpoint.time_s);
     first_cycle = core.Replay(tail.samples, tail.fleet_events, tail.risk_events) + 1;
+    std::map<std::string, int> index_of;
+    for (const auto& [id, member] : core.roster().members()) index_of[member.name] = member.index;
+    run.RestorePlot(index_of);
     // The outage in the record: how long the mission had no server (since the record's last write).
     std::error_code error;
     const auto written = std::filesystem::last_write_time(std::filesystem::path(options.out_dir) / "trajectory.csv", error);
@@ -635,6 +638,12 @@ int RunServerNode(const maps::Scenario& scenario, const ServerNodeOptions& optio
   getrusage(RUSAGE_SELF, &usage);  // ru_maxrss: KiB on Linux
   const double peak_rss_mb = static_cast<double>(usage.ru_maxrss) * 1024.0 / 1e6;
   const double p99_ms = cycle_ms.empty() ? 0.0 : NearestRankPercentile(std::move(cycle_ms), 0.99);
+  if (options.resume) {
+    // The figures below are this server's own: a resumed mission's first part ran on another.
+    spdlog::info("server: resumed at t = {:.1f} s: the mission ran to t = {:.1f} s; the figures below are of this "
+                 "server's {:.0f} s",
+                 static_cast<double>(first_cycle) / rate, end_time, mission_s);
+  }
   // One line that scripts and `sage bench scale` parse (tests/bench/launch_scale.sh): keep its order.
   spdlog::info("server: {:.0f} s of mission in {:.1f} s wall ({:.2f}x real time); {} messages in, {} out ({:.0f}/s); "
                "{:.3f} MB in, {:.3f} MB out at {:.3f} MB/s; server cycle {:.2f} ms mean, {:.2f} ms p99, {:.2f} ms max; "

@@ -13,6 +13,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iterator>
+#include <limits>
 #include <stdexcept>
 
 #include <fmt/format.h>
@@ -192,6 +193,27 @@ void RunDirectory::OnRiskEvent(const RiskEventRecord& e) {
   plot_.OnRiskEvent(e);
   fmt::format_to(std::back_inserter(risk_events_.buffer), "{},{},{},{},{}\n", e.time_s, e.valve, e.raw_weight,
                  e.new_share, Quoted(e.source));
+}
+
+void RunDirectory::RestorePlot(const std::map<std::string, int>& index_of) {
+  const RecordTail record = ReadRecordTail(dir_, -std::numeric_limits<double>::infinity());
+  // In the order a live mission fed them: a cycle's events, then its samples.
+  std::size_t next_fleet = 0, next_risk = 0;
+  const auto events_until = [&](double t) {
+    for (; next_fleet < record.fleet_events.size() && record.fleet_events[next_fleet].time_s <= t; ++next_fleet)
+      plot_.OnFleetEvent(record.fleet_events[next_fleet]);
+    for (; next_risk < record.risk_events.size() && record.risk_events[next_risk].time_s <= t; ++next_risk)
+      plot_.OnRiskEvent(record.risk_events[next_risk]);
+  };
+  for (const auto& [sample, name] : record.samples) {
+    events_until(sample.time_s + 1e-9);
+    const auto index = index_of.find(name);
+    if (index == index_of.end()) continue;  // a row of a vehicle the mission never joined: not drawn
+    TrajectorySample s = sample;
+    s.vehicle = index->second;
+    plot_.OnSample(s, name);
+  }
+  events_until(std::numeric_limits<double>::infinity());
 }
 
 void RunDirectory::FlushOne(Appender& file) {

@@ -68,6 +68,13 @@ class RunDirectory final : public MissionRecorder {
   void OnRiskEvent(const RiskEventRecord& event) override;
   void OnRegions(double time_s, const std::vector<RegionRecord>& regions) override;
 
+  /// A resumed mission's plots start from its whole record so far, not from the resume: the
+  /// tracks, joins, losses and risk changes before the crash (a resumed launch had drawn only
+  /// what came after it). Called once, after the mission is restored and before it records
+  /// anything new; `index_of` maps the record's vehicle names to their indices (the roster's).
+  /// Throws maps::ScenarioError naming the file and line of anything unreadable.
+  void RestorePlot(const std::map<std::string, int>& index_of);
+
   /// Once a cycle: flushes the appended files when the flush period is due, and writes the
   /// checkpoint and partial metrics when the checkpoint period is.
   void Tick(const MissionCore& core);

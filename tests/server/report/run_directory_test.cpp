@@ -9,6 +9,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <sstream>
 #include <string>
 
@@ -171,6 +172,44 @@ TEST_F(RunDirectoryTest, ResumeContinuesACutRecord) {
   EXPECT_EQ(tail.samples[0].second, "rov1");
   { RunDirectory fresh(dir_.string(), s); }
   EXPECT_EQ(Read(dir_ / "trajectory.csv"), "t,vehicle,x,y,heading,vx,vy,cmd_x,cmd_y\n");
+}
+
+// A resumed mission draws its whole record, not only what came after the resume: a record cut
+// by a crash just before the end, restored into the plot and finished, draws plot.svg byte for
+// byte as the mission that never stopped (the tracks and the risk change at 150 s included).
+TEST_F(RunDirectoryTest, ResumedPlotDrawsTheWholeRecord) {
+  const maps::Scenario s = maps::WithDuration(maps::LoadScenario(kTwoXt), 200.0);
+  const fs::path whole = dir_.string() + "_whole";
+  fs::remove_all(whole);
+  {
+    RunDirectory run(whole.string(), s);
+    Mission mission(s, MissionOptions{"leak_injection", ControllerKind::kErgodic, &run, false});
+    while (mission.Step()) run.Tick(mission.core());
+    run.Finish(mission.core(), mission.world(), 200.0, false);
+  }
+  RunDirectoryOptions options;
+  options.flush_period_s = 0.0;
+  Mission mission(s, MissionOptions{"leak_injection", ControllerKind::kErgodic, nullptr, false});
+  {
+    RunDirectory run(dir_.string(), s, options);
+    Mission recorded(s, MissionOptions{"leak_injection", ControllerKind::kErgodic, &run, false});
+    while (recorded.Step()) run.Tick(recorded.core());
+  }  // the crash: everything flushed, nothing finished
+  while (mission.Step()) {
+  }
+  ASSERT_NE(Read(dir_ / "risk_events.csv").find("150,P1"), std::string::npos) << Read(dir_ / "risk_events.csv");
+  RunDirectoryOptions resume = options;
+  resume.resume = true;
+  RunDirectory run(dir_.string(), s, resume);
+  std::map<std::string, int> index_of;
+  for (const auto& [id, member] : mission.core().roster().members()) index_of[member.name] = member.index;
+  run.RestorePlot(index_of);
+  run.Finish(mission.core(), mission.world(), 200.0, false);
+  const std::string drawn = Read(dir_ / "plot.svg");
+  EXPECT_NE(drawn.find("150"), std::string::npos);
+  EXPECT_EQ(drawn, Read(whole / "plot.svg"));
+  // Without the restore, the resumed plot had no track and no mark at all.
+  fs::remove_all(whole);
 }
 
 // A large fleet's cycles (rows formatted off the cycle) land in trajectory.csv in order and
