@@ -364,8 +364,11 @@ struct Scenario {
 Scenario LoadScenario(const std::string& path);
 /// Parses YAML text; `source` names it in error messages.
 Scenario ParseScenario(const std::string& yaml_text, const std::string& source);
-/// Writes YAML that LoadScenario reads back to an equal Scenario.
+/// Writes YAML that LoadScenario reads back to an equal Scenario. Its first line is
+/// kEmittedScenarioHeader (so a file sage wrote can be told from one a person wrote).
 std::string EmitScenario(const Scenario& scenario);
+inline constexpr const char* kEmittedScenarioHeader =
+    "# SAGE Fleet scenario (written by EmitScenario); units are in the field names";
 
 /// A copy that lasts `duration_s`; risk and fleet events and leaks after the new end are dropped
 /// (they would never happen).

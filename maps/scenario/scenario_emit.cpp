@@ -31,7 +31,7 @@ std::string EmitScenario(const Scenario& s) {
     number("transit_speed_mps", vehicle.transit_speed_mps);
     out << YAML::EndMap;
   };
-  out << YAML::Comment("SAGE Fleet scenario (written by EmitScenario); units are in the field names");
+  out << YAML::Comment(std::string(kEmittedScenarioHeader).substr(2));  // YAML::Comment writes the "# "
   out << YAML::BeginMap;
   key("name") << s.name;
   key("workspace") << YAML::Flow << YAML::BeginMap;

@@ -54,19 +54,31 @@ maps::FieldOptions WithCountsSizedToEachOther(maps::FieldOptions options, bool x
 int CmdFieldGenerate(const maps::FieldOptions& options, const std::string& out_path) {
   const auto start = std::chrono::steady_clock::now();
   const maps::Scenario field = maps::GenerateField(options);
-  // Replaced, as a run directory is (it had gone without a word; field seabed refuses instead,
-  // as its map and scenario are a pair).
+  // A field sage wrote (this command's, a run directory's scenario.yaml) is replaced, as a run
+  // directory is; any other file is refused: `-o scenarios/fleet_field.yaml` had replaced a
+  // hand-written scenario with only a warning. (field seabed refuses another map too.)
   if (std::error_code ec; std::filesystem::exists(out_path, ec)) {
-    spdlog::warn("{}: replacing the file there (give --out another path to keep it)", out_path);
+    std::ifstream in(out_path, std::ios::binary);
+    std::string first_line;
+    std::getline(in, first_line);
+    if (std::filesystem::is_directory(out_path, ec) || first_line != maps::kEmittedScenarioHeader) {
+      throw maps::ScenarioError(fmt::format(
+          "--out = {}: {} that sage did not write (a hand-written scenario?); give --out another path, or remove it first",
+          out_path, std::filesystem::is_directory(out_path, ec) ? "is a directory" : "exists and is a file"));
+    }
+    spdlog::warn("{}: replacing the field written there before (give --out another path to keep it)", out_path);
   }
   try {
     WriteScenarioTo(out_path, field);
   } catch (const std::runtime_error& e) {
     throw maps::ScenarioError(std::string("--out: ") + e.what());
   }
-  spdlog::info("wrote {}: {} XTs, {} valves, {} vehicles on {:.1f} x {:.1f} m (K = {}, A* grid {} m) in {:.2f} s; run it "
+  const auto counted = [](std::size_t n, const char* one, const char* many) { return fmt::format("{} {}", n, n == 1 ? one : many); };
+  spdlog::info("wrote {}: {}, {}, {} on {:.1f} x {:.1f} m (K = {}, A* grid {} m) in {:.2f} s; run it "
                "with sage run {} or sage launch {}",
-               out_path, field.structures.size(), field.ValveCount(), field.vehicles.size(),
+               out_path, counted(field.structures.size(), "XT", "XTs"),
+               counted(static_cast<std::size_t>(field.ValveCount()), "valve", "valves"),
+               counted(field.vehicles.size(), "vehicle", "vehicles"),
                field.workspace.width_m, field.workspace.height_m, field.ergodic.basis_order,
                field.astar.grid_resolution_m,
                std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(), out_path, out_path);

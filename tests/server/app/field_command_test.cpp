@@ -75,6 +75,37 @@ TEST_F(FieldSeabedCommand, NamesTheMapAfterTheScenarioAndKeepsAnotherScenariosMa
 
 // `sage field generate --xts 4` alone was refused for the default --valves = 87 the user never
 // typed; a count left out is now sized to the one given, at the default field's rate.
+// `sage field generate -o FILE` replaces a field sage wrote there, and refuses any other file (a
+// new user's -o scenarios/fleet_field.yaml would have replaced a shipped scenario) and a folder,
+// leaving them as they were.
+TEST_F(FieldSeabedCommand, GenerateReplacesOnlyAFieldItWrote) {
+  maps::FieldOptions options;
+  options.xts = 3;
+  options.valves = 8;
+  options.vehicles = 2;
+  const fs::path field = dir_ / "field.yaml";
+  ASSERT_EQ(CmdFieldGenerate(options, field.string()), 0);
+  const std::string first = Text(field);
+  options.seed = 9;
+  ASSERT_EQ(CmdFieldGenerate(options, field.string()), 0);
+  EXPECT_NE(Text(field), first);  // replaced: another seed, another field
+  const fs::path hand = dir_ / "hand.yaml";
+  {
+    std::ofstream out(hand);
+    out << "# my field\nname: mine\n";
+  }
+  try {
+    CmdFieldGenerate(options, hand.string());
+    ADD_FAILURE() << "a hand-written file was replaced";
+  } catch (const maps::ScenarioError& e) {
+    EXPECT_EQ(std::string(e.what()).rfind("--out = " + hand.string() + ": exists and is a file that sage did not write", 0), 0u)
+        << e.what();
+  }
+  EXPECT_EQ(Text(hand), "# my field\nname: mine\n");
+  EXPECT_THROW(CmdFieldGenerate(options, dir_.string()), maps::ScenarioError);
+  EXPECT_TRUE(fs::is_directory(dir_));
+}
+
 TEST(FieldGenerateCounts, ACountLeftOutIsSizedToTheOneGiven) {
   const maps::FieldOptions defaults;
   const double per_xt = static_cast<double>(defaults.valves) / defaults.xts;
