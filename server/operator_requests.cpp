@@ -14,7 +14,7 @@ void CheckRiskRequest(const maps::Scenario& scenario, const std::string& valve, 
 }
 
 void CheckAddCount(int count) {
-  if (count < 1 || count > 10000) throw maps::ScenarioError(fmt::format("--count = {}: must be in 1..10000", count));
+  if (count < 1 || count > 10000) throw maps::ScenarioError(fmt::format("count = {}: must be in 1..10000", count));
 }
 
 void CheckVehicleId(int id) {

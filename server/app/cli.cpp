@@ -69,8 +69,14 @@ std::string MustBeTimeScale(const std::string& text) {
 }
 
 // A check of a number option's range, in the project's words (RangeProblem).
+// A refusal that echoes what was typed, as the scenario's do ("--duration = -5: ..."): CLI11 puts
+// "OPTION: " before a check's message, and InOurWords joins the two ("--weight-exponent = 9: ...").
+std::string Echoed(const std::string& text, const std::string& problem) {
+  return problem.empty() ? problem : "= " + text + ": " + problem;
+}
+
 CLI::Validator MustBeIn(double low, double high, bool whole = false) {
-  return CLI::Validator([=](std::string& text) { return RangeProblem(text, low, high, whole); },
+  return CLI::Validator([=](std::string& text) { return Echoed(text, RangeProblem(text, low, high, whole)); },
                         whole ? fmt::format("{}..{}", low, high) : fmt::format("[{}, {}]", low, high));
 }
 
@@ -82,7 +88,7 @@ std::string MustBeWholeNumber(const std::string& text) {
   const auto [end, error] = std::from_chars(text.data(), text.data() + text.size(), value);
   return digits && error == std::errc() && end == text.data() + text.size()
              ? std::string()
-             : std::string("must be a whole number >= 0 (at most 18446744073709551615)");
+             : Echoed(text, "must be a whole number >= 0 (at most 18446744073709551615)");
 }
 
 void AddScenarioOverrides(CLI::App& cmd, ScenarioOverrides& o, OverrideSet set, const std::string& example_scenario,
@@ -246,8 +252,10 @@ bool ReportUnknownCommand(const CLI::App& app, int argc, char** argv, std::strin
 // Most 1 required but received 2" had read as if a second value were wanted).
 std::string InOurWords(const std::string& message) {
   static const std::regex repeated(R"(^(\S+): At Most 1 required but received ([0-9]+)$)");
+  static const std::regex echoed(R"(^(\S+): = ([\s\S]*)$)");  // Echoed's "OPTION: = VALUE: ..."
   std::smatch m;
   if (std::regex_match(message, m, repeated)) return m[1].str() + ": given " + m[2].str() + " times; give it once";
+  if (std::regex_match(message, m, echoed)) return m[1].str() + " = " + m[2].str();
   return message;
 }
 
@@ -581,7 +589,8 @@ int RunCli(int argc, char** argv) {
   try {
     for (const int domain : {server_cmd.domain, agents_cmd.domain, launch_cmd.domain.value_or(0)}) {
       if (domain < 0 || domain > proto::kMaxDomainId) {
-        throw maps::ScenarioError("--domain = " + std::to_string(domain) + ": must be in 0..232");
+        throw maps::ScenarioError(fmt::format("--domain = {}: must be in 0..{} (0..{} for a secured mission, the default)",
+                                              domain, proto::kMaxDomainId, proto::kMaxSecureDomainId));
       }
     }
     if (*run || *compare) {
@@ -663,6 +672,9 @@ int RunCli(int argc, char** argv) {
     if (*risk_set) return SetRisk(mission(), op.valve, op.weight, op.source, op.insecure);
     if (*stop) return StopMission(mission(), op.insecure);
     if (*security_init) return CmdSecurityInit(security_cmd);
+    // Their log lines on stderr, as run's and launch's: stdout holds only what they report (a
+    // field's [info] line had gone to stdout, so `2>/dev/null` did not quiet it).
+    if (*generate || *seabed || *bench_scale || *bench_leaks) LogToStderr();
     if (*generate) {
       return CmdFieldGenerate(WithCountsSizedToEachOther(field_options, generate_xts->count() > 0, generate_valves->count() > 0,
                                                          generate_vehicles->count() > 0),

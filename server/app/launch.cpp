@@ -582,8 +582,9 @@ int Launch(const LaunchCommand& c) {
     }
   }
   if (server_exited && server_failed) {
-    spdlog::error("launch: the server (pid {}) {} at t = {:.1f} s of {:.0f} s; kept in {}: {}; resume with: sage launch "
-                  "--resume {}",
+    // The time is the server's last status the launcher heard (a few cycles behind its record).
+    spdlog::error("launch: the server (pid {}) {} after t = {:.1f} s of {:.0f} s (its last status); kept in {}: {}; "
+                  "resume with: sage launch --resume {}",
                   server, DescribeExit(server_wait_status), mission_time, scenario.duration_s, out_dir,
                   WhatWasKept(out_dir), out_dir);
     return kServerDied;

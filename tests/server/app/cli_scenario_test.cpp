@@ -252,7 +252,22 @@ TEST(RangeProblem, SaysWhatIsAllowed) {
   EXPECT_EQ(RangeProblem("1001", 0, 1000, true), "must be a whole number in 0..1000");
   EXPECT_EQ(RangeProblem("2.5", 0, 1000, true), "must be a whole number in 0..1000");
   const std::string file = std::string(SAGE_SOURCE_DIR) + "/scenarios/two_xt.yaml";
-  EXPECT_EQ(RunSage({"run", file, "--weight-exponent", "5"}).status, 2);
+  // Refused with what was typed, as the scenario's refusals are ("--weight-exponent: must be ..." had
+  // not said the value).
+  const SageRun five = RunSage({"run", file, "--weight-exponent", "5"});
+  EXPECT_EQ(five.status, 2);
+  EXPECT_NE(five.err.find("sage: error: run: --weight-exponent = 5: must be a number in [0, 4] (see sage run --help)"),
+            std::string::npos)
+      << five.err;
+  const SageRun seed = RunSage({"run", file, "--seed", "-3"});
+  EXPECT_EQ(seed.status, 2);
+  EXPECT_NE(seed.err.find("--seed = -3: must be a whole number >= 0"), std::string::npos) << seed.err;
+  // A launch's domain past the secured range says both ranges (0..232 had been followed by 0..230).
+  const SageRun domain = RunSage({"launch", file, "--domain", "999"});
+  EXPECT_EQ(domain.status, 2);
+  EXPECT_NE(domain.err.find("--domain = 999: must be in 0..232 (0..230 for a secured mission, the default)"),
+            std::string::npos)
+      << domain.err;
   // An option given twice is said so (CLI11's "At Most 1 required but received 2" had read as
   // if a second value were wanted).
   const SageRun twice = RunSage({"run", file, "--duration", "30", "--duration", "60"});
