@@ -2,6 +2,7 @@
 #include <algorithm>
 #include <cmath>
 #include <functional>
+#include <iterator>
 #include <map>
 #include <set>
 #include <stdexcept>
@@ -33,6 +34,9 @@ constexpr std::size_t kCrowdedValves = 60, kMaxCrowdedValveLabels = 40;
 // Tracks: colours that are none of the markers' (red, green, orange) nor the risk's reds.
 constexpr const char* kTrackColours[] = {"#1f77b4", "#9467bd", "#17becf", "#8c564b", "#e377c2", "#7f7f7f",
                                          "#bcbd22", "#000080", "#008080", "#6a3d9a", "#222222", "#b15928"};
+// Over the fleet's density (blues), the few tracks drawn take none of the blues (a new user's
+// highlighted rov9 in #1f77b4 was lost in it), each on a white halo.
+constexpr const char* kTracksOverDensity[] = {"#e377c2", "#8c564b", "#bcbd22", "#222222", "#9467bd", "#b15928"};
 constexpr const char* kStructureFill = "#404040";
 constexpr const char* kRiskMarker = "#e6550d";
 constexpr const char* kJoinMarker = "#2ca02c";
@@ -234,7 +238,8 @@ std::string FieldPlotSvg(const MissionPlotInput& input, FieldPlotLayout* layout_
   std::vector<LegendItem> legend;
   std::map<int, std::string> colour_of;
   for (std::size_t k = 0; k < drawn.size(); ++k) {
-    colour_of[drawn[k]] = kTrackColours[k % std::size(kTrackColours)];
+    colour_of[drawn[k]] = layout.density ? kTracksOverDensity[k % std::size(kTracksOverDensity)]
+                                         : kTrackColours[k % std::size(kTrackColours)];
     legend.push_back({fmt::format("<line x1=\"0\" y1=\"0\" x2=\"22\" y2=\"0\" stroke=\"{}\" stroke-width=\"3\"/>",
                                   colour_of[drawn[k]]),
                       vehicle_name(drawn[k])});
@@ -414,10 +419,17 @@ std::string FieldPlotSvg(const MissionPlotInput& input, FieldPlotLayout* layout_
   for (const int v : drawn) {
     const std::vector<Eigen::Vector2d>& points = paths.at(v);
     const std::size_t stride = std::max<std::size_t>(1, static_cast<std::size_t>(std::ceil(points.size() / kMaxPointsPerTrack)));
-    put("<polyline fill=\"none\" stroke=\"{}\" stroke-width=\"{}\" stroke-opacity=\"0.8\" stroke-linejoin=\"round\" points=\"",
-        colour_of[v], layout.density ? 1.6 : 1.2);
-    for (std::size_t k = 0; k < points.size(); k += stride) put("{:.1f},{:.1f} ", px(points[k].x()), py(points[k].y()));
-    put("{:.1f},{:.1f}\"><title>{}</title></polyline>\n", px(points.back().x()), py(points.back().y()), XmlEscape(vehicle_name(v)));
+    std::string line;
+    for (std::size_t k = 0; k < points.size(); k += stride) fmt::format_to(std::back_inserter(line), "{:.1f},{:.1f} ", px(points[k].x()), py(points[k].y()));
+    fmt::format_to(std::back_inserter(line), "{:.1f},{:.1f}", px(points.back().x()), py(points.back().y()));
+    if (layout.density) {
+      put("<polyline fill=\"none\" stroke=\"white\" stroke-width=\"3.6\" stroke-opacity=\"0.9\" stroke-linejoin=\"round\" "
+          "points=\"{}\"/>\n",
+          line);
+    }
+    put("<polyline fill=\"none\" stroke=\"{}\" stroke-width=\"{}\" stroke-opacity=\"0.8\" stroke-linejoin=\"round\" "
+        "points=\"{}\"><title>{}</title></polyline>\n",
+        colour_of[v], layout.density ? 1.6 : 1.2, line, XmlEscape(vehicle_name(v)));
   }
   put("</g>\n");
 

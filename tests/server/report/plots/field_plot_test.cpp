@@ -246,7 +246,10 @@ TEST(FieldPlot, DensityAboveTwelveVehiclesWithTheCount) {
   EXPECT_EQ(thousand.vehicles, 1000);
   EXPECT_EQ(thousand.highlighted.size(), 3u);
   EXPECT_EQ(Count(svg, "1,000 vehicles; 3 tracks shown"), 1);
-  EXPECT_EQ(Count(svg, "<polyline"), 3);
+  EXPECT_EQ(Count(svg, "</polyline>"), 3);  // the three tracks, each on a white halo, in none of the density's blues
+  EXPECT_EQ(Count(svg, "<polyline fill=\"none\" stroke=\"white\" stroke-width=\"3.6\""), 3);
+  EXPECT_EQ(Count(svg, "stroke=\"#1f77b4\""), 0);
+  EXPECT_EQ(Count(svg12, "stroke=\"white\" stroke-width=\"3.6\""), 0);  // twelve tracks, no density: no halo
   EXPECT_EQ(Count(svg, "fleet time (vehicle-s per m\u00b2)"), 1);
   EXPECT_LE(Attribute(svg, "height"), Attribute(svg12, "height") + 20.0);
   EXPECT_LE(Attribute(svg, "width"), 1000.0);
