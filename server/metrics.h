@@ -124,6 +124,9 @@ struct ValveMetrics {
   /// Sum over the unwatched stretches g of g^2 (s^2): a leak starting at a random moment waits
   /// sum g^2 / (2 T) for a vehicle to be there.
   double unwatched_squares_s2 = 0.0;
+  /// With sensors: the expected wait (s) from a leak's start here to its first detection, from the
+  /// scans the mission made (server/perception/expected_detection.h); NaN without sensors.
+  double expected_detection_by_scans_s = std::numeric_limits<double>::quiet_NaN();
 };
 
 struct MetricSample {
@@ -210,6 +213,11 @@ struct MissionMetrics {
   std::vector<LeakMetrics> leaks;
   FalseAlarmMetrics false_alarms;
   std::uint64_t scans = 0;            ///< scans fused
+  /// The valves' expected_detection_by_scans_s weighted as --random-leaks draws a leak's valve (by
+  /// the profile's risk), for onsets in [0.1, 0.9] of the mission: what `sage bench leaks`
+  /// measures over seeds, from this one mission's scans. NaN without sensors.
+  double expected_detection_by_scans_s = std::numeric_limits<double>::quiet_NaN();
+  double leak_onsets_from_s = 0.0, leak_onsets_to_s = 0.0;  ///< the onsets it is over
 };
 
 struct MetricsOptions {

@@ -147,6 +147,9 @@ enum class LeakSites {
   kJoints,
 };
 
+/// Random leaks start uniformly within this part of the mission (of its duration).
+inline constexpr double kRandomLeakOnsetFrom = 0.1, kRandomLeakOnsetTo = 0.9;
+
 /// A copy whose leaks are `count` random ones (replacing the file's), drawn from the scenario's
 /// seed alone: onsets uniform in [0.1, 0.9] of the mission, strength 1, sites as asked. Throws
 /// ScenarioError if count is out of 0..1000 or no seabed point (flowline point) qualifies; the

@@ -330,7 +330,7 @@ Scenario WithRandomLeaks(const Scenario& scenario, int count, LeakSites sites, c
   };
   for (int n = 0; n < count; ++n) {
     LeakSpec leak;
-    leak.start_s = scenario.duration_s * (0.1 + 0.8 * uniform());
+    leak.start_s = scenario.duration_s * (kRandomLeakOnsetFrom + (kRandomLeakOnsetTo - kRandomLeakOnsetFrom) * uniform());
     if (sites == LeakSites::kJoints) {
       if (joints.empty()) throw no_room("at its flowline joints");
       const std::size_t at = std::min(joints.size() - 1, static_cast<std::size_t>(uniform() * joints.size()));

@@ -28,7 +28,17 @@ constexpr double kNegligibleMass = 1e-5;
 }  // namespace
 
 RiskLoop::RiskLoop(const maps::Scenario& scenario, const maps::World& world, maps::RiskLayer& layer)
-    : scenario_(scenario), world_(world), layer_(layer), belief_(scenario, world, layer.resolution_m()) {
+    : scenario_(scenario),
+      world_(world),
+      layer_(layer),
+      belief_(scenario, world, layer.resolution_m()),
+      // Onsets as --random-leaks draws them (maps::WithRandomLeaks): uniform in [0.1, 0.9] of the mission.
+      scan_waits_(scenario.ValveCount(), maps::kRandomLeakOnsetFrom * scenario.duration_s, maps::kRandomLeakOnsetTo * scenario.duration_s) {
+  if (sensing()) {
+    valve_positions_ = scenario.ValvePositions();
+    for (const maps::SensorModel& model : belief_.sensors()) longest_range_m_ = std::max(longest_range_m_, model.spec().range_m);
+    valve_index_.emplace(valve_positions_, std::max(longest_range_m_, 0.25));
+  }
   // A detection belongs to a leak within three position sigmas of the noisiest sensor (at least
   // half a metre: a few leaves).
   for (const maps::SensorSpec& s : scenario.sensors) association_m_ = std::max(association_m_, 3.0 * s.position_sigma_m);
@@ -105,10 +115,25 @@ void RiskLoop::Fuse(std::int64_t cycle, double time_s, const Roster& roster, Rej
     }
     last_fused_[{s.id, s.sensor}] = s.cycle;
     belief_.Fuse(s.sensor, s.position_m, s.heading_rad, s.detections_m, s.time_s);
+    LookAtValves(s);
     ++scans_;
     fused.push_back(std::move(s));
   }
   Score(fused, time_s);
+}
+
+void RiskLoop::LookAtValves(const agents::ScanReport& s) {
+  // Each valve in this sensor's view would have shown a leak of strength 1 there with the
+  // sensor's probability at its distance (what the hosts' sensors draw their detections by).
+  const maps::SensorModel& model = belief_.sensors()[static_cast<std::size_t>(s.sensor)];
+  thread_local std::vector<int> near;
+  valve_index_->Within(s.position_m, model.spec().range_m, near);
+  for (const int v : near) {
+    const Eigen::Vector2d& valve = valve_positions_[static_cast<std::size_t>(v)];
+    if (!model.InView(s.position_m, s.heading_rad, valve)) continue;
+    const double p = model.DetectionProbability((valve - s.position_m).norm(), 1.0);
+    if (p > 0.0) scan_waits_.Look(v, s.time_s, p);
+  }
 }
 
 Eigen::VectorXd RiskLoop::ValveFactors(double time_s) const {
@@ -312,6 +337,24 @@ void RiskLoop::Fill(MissionMetrics& metrics, double end_s) const {
   metrics.sensing = sensing();
   metrics.steered_on_posterior = steers();
   metrics.scans = scans_;
+  if (sensing()) {
+    // Weighted as a random leak's valve is drawn: by the run's profile's risk (maps::WithRandomLeaks).
+    const std::vector<double> waits = scan_waits_.Waits(end_s);
+    const maps::RiskProfile* profile = scenario_.FindProfile(metrics.profile);
+    const Eigen::VectorXd weights =
+        scenario_.ProfileWeights(profile != nullptr ? *profile : scenario_.ProfileOrThrow(""));
+    double sum = 0.0, weight = 0.0;
+    for (std::size_t v = 0; v < waits.size() && v < metrics.valves.size(); ++v) {
+      metrics.valves[v].expected_detection_by_scans_s = waits[v];
+      const double w = weights[static_cast<Eigen::Index>(v)];
+      if (std::isnan(waits[v]) || !(w > 0.0)) continue;
+      sum += w * waits[v];
+      weight += w;
+    }
+    metrics.expected_detection_by_scans_s = weight > 0.0 ? sum / weight : std::numeric_limits<double>::quiet_NaN();
+    metrics.leak_onsets_from_s = maps::kRandomLeakOnsetFrom * scenario_.duration_s;
+    metrics.leak_onsets_to_s = maps::kRandomLeakOnsetTo * scenario_.duration_s;
+  }
   metrics.leaks.clear();
   for (std::size_t k = 0; k < truth_.size(); ++k) {
     const maps::LeakSpec& spec = scenario_.leaks[k];
@@ -367,6 +410,7 @@ RiskLoop::State RiskLoop::Checkpoint() const {
   s.scans = scans_;
   for (const auto& [key, v] : written_) s.written.emplace_back(KeyCell(key), v);
   std::sort(s.written.begin(), s.written.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+  s.scan_waits = scan_waits_.Checkpoint();
   return s;
 }
 
@@ -386,6 +430,7 @@ void RiskLoop::Restore(const State& s) {
   scans_ = s.scans;
   written_.clear();
   for (const auto& [c, v] : s.written) written_[CellKey(c)] = v;
+  scan_waits_.Restore(s.scan_waits);
 }
 
 }  // namespace sage::server

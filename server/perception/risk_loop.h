@@ -16,6 +16,7 @@
 // No transport, no files.
 #include <cstdint>
 #include <map>
+#include <optional>
 #include <set>
 #include <string>
 #include <tuple>
@@ -26,10 +27,12 @@
 #include <Eigen/Core>
 
 #include "agents/fleet_messages.h"
+#include "maps/nearby_points.h"
 #include "maps/risk_layer.h"
 #include "maps/scenario/scenario.h"
 #include "maps/world.h"
 #include "server/metrics.h"
+#include "server/perception/expected_detection.h"
 #include "server/perception/leak_belief.h"
 #include "server/rejections.h"
 #include "server/roster.h"
@@ -91,6 +94,7 @@ class RiskLoop {
     int false_detections = 0;
     std::uint64_t scans = 0;
     std::vector<std::pair<LeakBelief::Cell, float>> written;  ///< leaves whose excess the loop set
+    ExpectedDetection::State scan_waits;
   };
   State Checkpoint() const;
   /// Throws std::invalid_argument if the state does not fit the scenario.
@@ -110,6 +114,13 @@ class RiskLoop {
     double start_s;
   };
   std::vector<Truth> truth_;
+  // What each valve's leak would have waited for the scans fused (metrics' expected detection),
+  // and the valves by place for a scan's reach.
+  ExpectedDetection scan_waits_;
+  std::vector<Eigen::Vector2d> valve_positions_;
+  std::optional<maps::NearbyPoints> valve_index_;
+  double longest_range_m_ = 0.0;
+  void LookAtValves(const agents::ScanReport& scan);
   std::vector<agents::ScanReport> held_;
   std::set<std::tuple<int, int, std::int64_t>> held_keys_;  // (vehicle, sensor, cycle)
   std::map<std::pair<int, int>, std::int64_t> last_fused_;

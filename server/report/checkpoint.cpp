@@ -16,7 +16,7 @@ namespace sage::server {
 namespace {
 
 using Json = nlohmann::json;
-constexpr int kFormatVersion = 2;  // 2: visit arming as each vehicle's disarmed valves
+constexpr int kFormatVersion = 3;  // 2: visit arming as each vehicle's disarmed valves; 3: the scans' expected detection
 
 // Doubles as raw bytes (CBOR byte string): exact and a third of a text encoding's size.
 Json Doubles(const double* data, std::size_t count) {
@@ -263,8 +263,18 @@ Json RiskLoopJson(const RiskLoop::State& r) {
   }
   Json written = Json::array();
   for (const auto& [cell, value] : r.written) written.push_back({cell.i, cell.j, value});
+  // The expected detection's waits: per valve its sum, where its next block begins, and its blocks
+  // (from, to, undetected), flat.
+  Json blocks = Json::array();
+  for (const std::vector<ExpectedDetection::Block>& valve : r.scan_waits.blocks) {
+    std::vector<double> flat;
+    for (const ExpectedDetection::Block& b : valve) flat.insert(flat.end(), {b.from_s, b.to_s, b.undetected});
+    blocks.push_back(Doubles(flat));
+  }
+  const Json waits = {{"sums", Doubles(r.scan_waits.wait_sums)}, {"open", Doubles(r.scan_waits.open_from_s)},
+                      {"blocks", blocks}};
   return {{"belief", belief}, {"held", held}, {"last_fused", last}, {"leaks", leaks}, {"alarms", alarms},
-          {"false_detections", r.false_detections}, {"scans", r.scans}, {"written", written}};
+          {"false_detections", r.false_detections}, {"scans", r.scans}, {"written", written}, {"scan_waits", waits}};
 }
 RiskLoop::State ToRiskLoop(const Json& j) {
   RiskLoop::State r;
@@ -298,6 +308,15 @@ RiskLoop::State ToRiskLoop(const Json& j) {
   r.false_detections = j.at("false_detections").get<int>();
   r.scans = j.at("scans").get<std::uint64_t>();
   for (const Json& w : j.at("written")) r.written.push_back({{w.at(0).get<int>(), w.at(1).get<int>()}, w.at(2).get<float>()});
+  const Json& waits = j.at("scan_waits");
+  r.scan_waits.wait_sums = ToDoubles(waits.at("sums"));
+  r.scan_waits.open_from_s = ToDoubles(waits.at("open"));
+  for (const Json& valve : waits.at("blocks")) {
+    const std::vector<double> flat = ToDoubles(valve);
+    if (flat.size() % 3 != 0) throw std::invalid_argument("scan_waits: a valve's blocks are not (from, to, undetected) triples");
+    std::vector<ExpectedDetection::Block>& out = r.scan_waits.blocks.emplace_back();
+    for (std::size_t k = 0; k < flat.size(); k += 3) out.push_back({flat[k], flat[k + 1], flat[k + 2]});
+  }
   return r;
 }
 

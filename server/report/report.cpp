@@ -325,6 +325,12 @@ std::string FormatLeaks(const std::vector<MissionMetrics>& runs) {
                                                       fa.max_time_to_clear_s)
                                         : "",
                          fa.confirmed, fa.detections, fa.detections == 1 ? "" : "s", run.scans);
+      // What sage bench leaks measures over seeds, from this mission's scans alone.
+      if (std::isfinite(run.expected_detection_by_scans_s)) {
+        out += fmt::format("  expected time to detect a leak, from these scans: {:.1f} s (a leak at a valve drawn by its "
+                           "risk, starting in [{:.0f}, {:.0f}] s)\n",
+                           run.expected_detection_by_scans_s, run.leak_onsets_from_s, run.leak_onsets_to_s);
+      }
     }
   }
   return out;
@@ -349,6 +355,7 @@ std::string MetricsJson(const MissionMetrics& metrics, const RunInfo* info) {
                       {"time_near_s", number(v.time_near_s)},
                       {"longest_unwatched_s", number(v.longest_unwatched_s)},
                       {"visit_times_s", times}});
+    if (metrics.sensing) valves.back()["expected_detection_by_scans_s"] = number(v.expected_detection_by_scans_s);
   }
   Json events = Json::array();
   for (const EventResponse& e : metrics.events) {
@@ -404,6 +411,8 @@ std::string MetricsJson(const MissionMetrics& metrics, const RunInfo* info) {
                             {"detections", fa.detections}};
     json["scans"] = metrics.scans;
     json["steer"] = metrics.steered_on_posterior ? "posterior" : "prior";
+    json["expected_detection_by_scans_s"] = number(metrics.expected_detection_by_scans_s);
+    json["leak_onsets_s"] = {number(metrics.leak_onsets_from_s), number(metrics.leak_onsets_to_s)};
   }
   if (info != nullptr) {
     json["complete"] = info->complete;

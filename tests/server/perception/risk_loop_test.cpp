@@ -327,6 +327,8 @@ TEST(RiskLoop, SameSeedSameFindingsAndCheckpointRoundTrip) {
   EXPECT_EQ(mr.leaks[0].detections, ma.leaks[0].detections);
   EXPECT_EQ(mr.false_alarms.raised, ma.false_alarms.raised);
   EXPECT_EQ(mr.scans, ma.scans);
+  EXPECT_EQ(mr.expected_detection_by_scans_s, ma.expected_detection_by_scans_s);
+  EXPECT_GT(ma.expected_detection_by_scans_s, 0.0);
   const auto entries = restored.risk_loop().belief().Checkpoint();
   ASSERT_EQ(entries.size(), a.core().risk_loop().belief().Checkpoint().size());
 
@@ -339,6 +341,39 @@ TEST(RiskLoop, SameSeedSameFindingsAndCheckpointRoundTrip) {
   EXPECT_TRUE(j["leaks"][0].contains("confirmed_s"));
   EXPECT_TRUE(j.contains("false_alarms"));
   EXPECT_EQ(j["scans"], ma.scans);
+  EXPECT_EQ(j["expected_detection_by_scans_s"], ma.expected_detection_by_scans_s);
+  EXPECT_EQ(j["valves"][2]["expected_detection_by_scans_s"], ma.valves[2].expected_detection_by_scans_s);
+}
+
+// The expected time to detect a leak, from the scans: a vehicle held 0.7 m north of P3 facing it
+// scans it at 5 Hz with p = 0.9 x 2^-(0.7 / 0.7)^2 = 0.45 (the camera's fall-off), so a leak there
+// waits 0.1 s for the next scan and 0.2 s (1 - p) / p more for a detection; the other four valves
+// are out of its view and a leak at them waits to the end, 50 - 25 s for onsets uniform in
+// [5, 45] s; the figure weighs them as a random leak's valve is drawn, by the profile (P3: 0.10).
+TEST(RiskLoop, ExpectedDetectionFromTheScans) {
+  maps::Scenario s = maps::WithDuration(maps::LoadScenario(kTwoXtLeaks), 50.0);
+  s.leaks.clear();
+  maps::World world(s);
+  MissionCore core(world, s, "", ControllerKind::kErgodic);
+  const Eigen::Vector2d at(3.6, 1.6);
+  for (std::int64_t k = 0; k <= 500; ++k) {
+    ASSERT_TRUE(core.OnState(State(0, k, at, -M_PI / 2)));
+    if (k % 2 == 0) ASSERT_TRUE(core.OnScan(Scan(0, k, at, -M_PI / 2))) << k;
+    core.Cycle(k);
+  }
+  const MissionMetrics m = core.Metrics(50.0);
+  const double p = 0.9 * 0.5;
+  const double at_p3 = 0.1 + 0.2 * (1.0 - p) / p;
+  ASSERT_EQ(m.valves.size(), 5u);
+  EXPECT_NEAR(m.valves[2].expected_detection_by_scans_s, at_p3, 1e-6);
+  for (const int v : {0, 1, 3, 4}) EXPECT_NEAR(m.valves[static_cast<std::size_t>(v)].expected_detection_by_scans_s, 25.0, 1e-9) << v;
+  const Eigen::VectorXd w = s.ProfileWeights(s.ProfileOrThrow(""));
+  EXPECT_NEAR(m.expected_detection_by_scans_s, (w[2] * at_p3 + (w.sum() - w[2]) * 25.0) / w.sum(), 1e-6);
+  EXPECT_EQ(m.leak_onsets_from_s, 5.0);
+  EXPECT_EQ(m.leak_onsets_to_s, 45.0);
+  // In the leaks' lines of the run table, with the onsets it is over.
+  EXPECT_NE(FormatLeaks({m}).find("expected time to detect a leak, from these scans: 22.5 s"), std::string::npos)
+      << FormatLeaks({m});
 }
 
 // A leak along a flowline, 1.5 m from the nearest valve: the vehicles' sensors see it where the
