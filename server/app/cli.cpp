@@ -4,6 +4,7 @@
 #include "server/app/cli.h"
 
 #include <algorithm>
+#include <cctype>
 #include <charconv>
 #include <cmath>
 #include <cstdint>
@@ -246,6 +247,64 @@ bool ReportUnknownCommand(const CLI::App& app, int argc, char** argv, std::strin
   for (const CLI::App* sub : subs) commands += (commands.empty() ? "" : ", ") + sub->get_name();
   std::cerr << "sage: error: " << path << " needs a command (commands: " << commands << "; see " << path << " --help)\n";
   return true;
+}
+
+// Edit distance (insertions, deletions, substitutions), for "did you mean".
+std::size_t EditDistance(const std::string& a, const std::string& b) {
+  std::vector<std::size_t> row(b.size() + 1);
+  for (std::size_t j = 0; j <= b.size(); ++j) row[j] = j;
+  for (std::size_t i = 1; i <= a.size(); ++i) {
+    std::size_t diagonal = row[0];
+    row[0] = i;
+    for (std::size_t j = 1; j <= b.size(); ++j) {
+      const std::size_t above = row[j];
+      row[j] = std::min({row[j] + 1, row[j - 1] + 1, diagonal + (a[i - 1] == b[j - 1] ? 0 : 1)});
+      diagonal = above;
+    }
+  }
+  return row[b.size()];
+}
+
+// An option the command does not have, said as such with the nearest it does have ("The
+// following arguments were not expected: 20 --durations" had named the value first and offered
+// nothing). Words that read as numbers (-3, -0.5) are values, not options.
+bool ReportUnknownOption(const CLI::App& app, int argc, char** argv) {
+  const CLI::App* level = &app;
+  std::string path = "sage";
+  for (int i = 1; i < argc; ++i) {
+    const std::string word = argv[i];
+    if (word.empty() || word[0] == '-') break;
+    const CLI::App* next = nullptr;
+    for (const CLI::App* sub : level->get_subcommands([](const CLI::App*) { return true; })) {
+      if (sub->get_name() == word) next = sub;
+    }
+    if (next == nullptr) break;
+    level = next;
+    path += " " + word;
+  }
+  for (int i = 1; i < argc; ++i) {
+    std::string word = argv[i];
+    if (word.size() < 2 || word[0] != '-' || word == "--" || std::isdigit(static_cast<unsigned char>(word[1])) ||
+        word[1] == '.') {
+      continue;
+    }
+    if (const std::size_t eq = word.find('='); eq != std::string::npos) word.resize(eq);
+    bool known = false;
+    for (const CLI::App* a = level; a != nullptr && !known; a = a->get_parent()) known = a->get_option_no_throw(word) != nullptr;
+    if (known) continue;
+    std::string nearest;
+    std::size_t best = std::max<std::size_t>(2, word.size() / 4) + 1;
+    for (const CLI::Option* option : level->get_options()) {
+      for (const std::string& name : option->get_lnames()) {
+        const std::size_t d = EditDistance(word, "--" + name);
+        if (d < best) best = d, nearest = "--" + name;
+      }
+    }
+    std::cerr << "sage: error: " << (path == "sage" ? "" : path.substr(5) + ": ") << word << ": no such option"
+              << (nearest.empty() ? "" : "; did you mean " + nearest + "?") << " (see " << path << " --help)\n";
+    return true;
+  }
+  return false;
 }
 
 // CLI11's words for an option given more often than it takes, in the project's ("--duration: At
@@ -580,6 +639,7 @@ int RunCli(int argc, char** argv) {
     // Bad arguments: one line, like every other input error.
     std::string path;
     if (ReportUnknownCommand(app, argc, argv, path)) return 2;
+    if (dynamic_cast<const CLI::ExtrasError*>(&e) != nullptr && ReportUnknownOption(app, argc, argv)) return 2;
     std::cerr << "sage: error: " << (path == "sage" ? "" : path.substr(5) + ": ") << InOurWords(e.what()) << " (see " << path
               << " --help)\n";
     return 2;

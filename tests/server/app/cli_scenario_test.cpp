@@ -262,6 +262,16 @@ TEST(RangeProblem, SaysWhatIsAllowed) {
   const SageRun seed = RunSage({"run", file, "--seed", "-3"});
   EXPECT_EQ(seed.status, 2);
   EXPECT_NE(seed.err.find("--seed = -3: must be a whole number >= 0"), std::string::npos) << seed.err;
+  // An option the command does not have is named, with the nearest it has (CLI11 had said "The
+  // following arguments were not expected: 20 --durations").
+  const SageRun typo = RunSage({"run", file, "--durations", "20"});
+  EXPECT_EQ(typo.status, 2);
+  EXPECT_NE(typo.err.find("sage: error: run: --durations: no such option; did you mean --duration? (see sage run --help)"),
+            std::string::npos)
+      << typo.err;
+  const SageRun nested = RunSage({"bench", "leaks", file, "--run", "5"});
+  EXPECT_EQ(nested.status, 2);
+  EXPECT_NE(nested.err.find("bench leaks: --run: no such option; did you mean --runs?"), std::string::npos) << nested.err;
   // A launch's domain past the secured range says both ranges (0..232 had been followed by 0..230).
   const SageRun domain = RunSage({"launch", file, "--domain", "999"});
   EXPECT_EQ(domain.status, 2);
