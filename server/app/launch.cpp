@@ -593,6 +593,13 @@ int Launch(const LaunchCommand& c) {
   // Interrupted (the server, in the same process group, may have seen Ctrl-C and finished first):
   // the run directory is written, but the exit status says the mission was cut short.
   const bool interrupted = stop_sent || (c.stop && c.stop->load());
+  // Ended before its duration and not by this launcher: an operator's `sage stop` (the last
+  // lines had been the server's summary and a progress line, with no word of why it ended).
+  const RecordSummary record = ReadRecordSummary(out_dir);
+  if (!interrupted && record.complete && record.recorded_until_s + 1.0 / scenario.control_rate_hz < scenario.duration_s) {
+    spdlog::info("launch: the mission was stopped at t = {:.1f} s of {:.0f} s (sage stop); its record is in {}",
+                 record.recorded_until_s, scenario.duration_s, out_dir);
+  }
   return interrupted ? 130 : 0;
 }
 
