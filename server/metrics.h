@@ -215,9 +215,10 @@ struct MissionMetrics {
   std::uint64_t scans = 0;            ///< scans fused
   /// The valves' expected_detection_by_scans_s weighted as --random-leaks draws a leak's valve (by
   /// the profile's risk), for onsets in [0.1, 0.9] of the mission: what `sage bench leaks`
-  /// measures over seeds, from this one mission's scans. NaN without sensors.
+  /// measures over seeds, from this one mission's scans (a resumed mission's without those between
+  /// its checkpoint and the crash, as its belief). NaN without sensors.
   double expected_detection_by_scans_s = std::numeric_limits<double>::quiet_NaN();
-  double leak_onsets_from_s = 0.0, leak_onsets_to_s = 0.0;  ///< the onsets it is over
+  double leak_onsets_from_s = 0.0, leak_onsets_to_s = 0.0;  ///< the onsets it is over (to the end, if sooner)
 };
 
 struct MetricsOptions {

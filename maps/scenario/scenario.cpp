@@ -79,7 +79,7 @@ std::string Scenario::ValveNames(int max_named) const {
       if (count++ < max_named) names += (names.empty() ? "" : ", ") + valve.name;
     }
   }
-  if (count > max_named) names += ", ... (" + std::to_string(count) + " in all)";
+  if (count > max_named) names += (names.empty() ? "... (" : ", ... (") + std::to_string(count) + " in all)";
   return names;
 }
 

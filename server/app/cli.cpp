@@ -10,7 +10,6 @@
 #include <cstdint>
 #include <cstdlib>
 #include <iostream>
-#include <regex>
 #include <string>
 #include <system_error>
 
@@ -69,13 +68,13 @@ std::string MustBeTimeScale(const std::string& text) {
   return "must be a number in 0.001..1000";
 }
 
-// A check of a number option's range, in the project's words (RangeProblem).
 // A refusal that echoes what was typed, as the scenario's do ("--duration = -5: ..."): CLI11 puts
 // "OPTION: " before a check's message, and InOurWords joins the two ("--weight-exponent = 9: ...").
 std::string Echoed(const std::string& text, const std::string& problem) {
   return problem.empty() ? problem : "= " + text + ": " + problem;
 }
 
+// A check of a number option's range, in the project's words (RangeProblem).
 CLI::Validator MustBeIn(double low, double high, bool whole = false) {
   return CLI::Validator([=](std::string& text) { return Echoed(text, RangeProblem(text, low, high, whole)); },
                         whole ? fmt::format("{}..{}", low, high) : fmt::format("[{}, {}]", low, high));
@@ -310,11 +309,19 @@ bool ReportUnknownOption(const CLI::App& app, int argc, char** argv) {
 // CLI11's words for an option given more often than it takes, in the project's ("--duration: At
 // Most 1 required but received 2" had read as if a second value were wanted).
 std::string InOurWords(const std::string& message) {
-  static const std::regex repeated(R"(^(\S+): At Most 1 required but received ([0-9]+)$)");
-  static const std::regex echoed(R"(^(\S+): = ([\s\S]*)$)");  // Echoed's "OPTION: = VALUE: ..."
-  std::smatch m;
-  if (std::regex_match(message, m, repeated)) return m[1].str() + ": given " + m[2].str() + " times; give it once";
-  if (std::regex_match(message, m, echoed)) return m[1].str() + " = " + m[2].str();
+  // Plain string work, no std::regex: a refusal echoes what was typed, and libstdc++'s regex
+  // recursed once a character (a 100,000-character value had crashed the command).
+  const std::size_t colon = message.find(": ");
+  if (colon == std::string::npos || message.find_first_of(" \t\n") < colon) return message;
+  const std::string option = message.substr(0, colon), rest = message.substr(colon + 2);
+  if (rest.starts_with("= ")) return option + " " + rest;  // Echoed's "OPTION: = VALUE: ..."
+  constexpr std::string_view kRepeated = "At Most 1 required but received ";
+  if (rest.starts_with(kRepeated)) {
+    const std::string count = rest.substr(kRepeated.size());
+    if (!count.empty() && count.find_first_not_of("0123456789") == std::string::npos) {
+      return option + ": given " + count + " times; give it once";
+    }
+  }
   return message;
 }
 

@@ -58,13 +58,20 @@ int CmdFieldGenerate(const maps::FieldOptions& options, const std::string& out_p
   // directory is; any other file is refused: `-o scenarios/fleet_field.yaml` had replaced a
   // hand-written scenario with only a warning. (field seabed refuses another map too.)
   if (std::error_code ec; std::filesystem::exists(out_path, ec)) {
+    // Only a regular file is opened to be read: a FIFO or /dev/stdout would block on itself.
+    if (!std::filesystem::is_regular_file(out_path, ec)) {
+      throw maps::ScenarioError(fmt::format("--out = {}: exists and is not a regular file (a folder, a device?); give a "
+                                            "file path",
+                                            out_path));
+    }
     std::ifstream in(out_path, std::ios::binary);
     std::string first_line;
     std::getline(in, first_line);
-    if (std::filesystem::is_directory(out_path, ec) || first_line != maps::kEmittedScenarioHeader) {
+    if (first_line != maps::kEmittedScenarioHeader) {
       throw maps::ScenarioError(fmt::format(
-          "--out = {}: {} that sage did not write (a hand-written scenario?); give --out another path, or remove it first",
-          out_path, std::filesystem::is_directory(out_path, ec) ? "is a directory" : "exists and is a file"));
+          "--out = {}: exists and is a file that sage did not write (a hand-written scenario?); give --out another path, "
+          "or remove it first",
+          out_path));
     }
     spdlog::warn("{}: replacing the field written there before (give --out another path to keep it)", out_path);
   }

@@ -135,9 +135,9 @@ int RunServerNode(const maps::Scenario& scenario, const ServerNodeOptions& optio
     core.Restore(checkpoint);
     const RecordTail tail = ReadRecordTail(options.out_dir, checkpoint.time_s);
     first_cycle = core.Replay(tail.samples, tail.fleet_events, tail.risk_events) + 1;
-    std::map<std::string, int> index_of;
-    for (const auto& [id, member] : core.roster().members()) index_of[member.name] = member.index;
-    run.RestorePlot(index_of);
+    std::map<int, int> index_of_id;
+    for (const auto& [id, member] : core.roster().members()) index_of_id[id] = member.index;
+    run.RestorePlot(index_of_id);
     // The outage in the record: how long the mission had no server (since the record's last write).
     std::error_code error;
     const auto written = std::filesystem::last_write_time(std::filesystem::path(options.out_dir) / "trajectory.csv", error);

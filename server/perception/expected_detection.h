@@ -11,10 +11,10 @@
 // `sage bench leaks` in one run (two_xt_leaks: 5.9 s against the bench's 5.8 s over 800 runs;
 // the tour 5.3 s against 5.3 s).
 //
-// Online, in O(1) memory a valve between its looks: the onsets between two scans that see the
-// valve share one future, so they are kept as one block (its onset interval and the probability
-// that none of the scans since has detected it); a scan with p > 0 adds to the waits of every
-// block still undetected and shrinks it, and a block below 1e-12 is done.
+// Online in four numbers a valve: the onsets since the valve's last look share one future, and
+// every scan after multiplies all undetected onsets alike by (1 - p), so the sums over them of
+// their (undetected) length A and of their length times mean onset B are all a scan needs:
+// integral (t - t0) dt0 over them = t A - B.
 #include <vector>
 
 namespace sage::server {
@@ -24,27 +24,23 @@ class ExpectedDetection {
   /// valves >= 0; onsets uniform in [from_s, to_s], from_s < to_s. Throws std::invalid_argument.
   ExpectedDetection(int valves, double from_s, double to_s);
 
-  /// A scan at time_s that would have detected a leak at `valve` with probability p (in (0, 1];
-  /// 0 changes nothing). Scans of one valve come in non-decreasing time; an earlier one, a valve
-  /// out of range or p outside [0, 1] throws std::invalid_argument.
+  /// A scan at time_s that would have detected a leak at `valve` with probability p (0 changes
+  /// nothing). A scan older than the valve's last look (another vehicle's, fused a few cycles
+  /// late: the order is kept per vehicle and sensor only) counts as made at that last look. A
+  /// valve out of range, p outside [0, 1] or a time not finite throws std::invalid_argument (the
+  /// caller's fault, never a vehicle's).
   void Look(int valve, double time_s, double p);
 
   /// Per valve, the expected wait (s) from a leak's start to its first detection, a leak never
   /// detected counted to end_s; over the onsets in [from_s, min(to_s, end_s)] (a mission ended
-  /// earlier has seen only those). NaN where no onset lies before end_s.
+  /// earlier has seen only those). NaN where no onset lies before end_s, or end_s is before the
+  /// valve's last look (the sums hold what came after).
   std::vector<double> Waits(double end_s) const;
 
-  struct Block {
-    double from_s = 0.0, to_s = 0.0;  ///< the onsets it holds
-    double undetected = 1.0;          ///< probability that no scan since has detected them
-    bool operator==(const Block&) const = default;
-  };
-  /// A checkpoint's: per valve, the summed waits so far (s x s of onsets), where the next block
-  /// begins, and the blocks still undetected.
+  /// A checkpoint's: per valve, the waits summed so far (s x s of onsets), A and B of the onsets
+  /// still undetected (s, s x s), and its last look (from_s before any).
   struct State {
-    std::vector<double> wait_sums;
-    std::vector<double> open_from_s;
-    std::vector<std::vector<Block>> blocks;
+    std::vector<double> wait_sums, undetected_s, undetected_onset_s2, last_look_s;
     bool operator==(const State&) const = default;
   };
   State Checkpoint() const { return state_; }

@@ -33,7 +33,9 @@ RiskLoop::RiskLoop(const maps::Scenario& scenario, const maps::World& world, map
       layer_(layer),
       belief_(scenario, world, layer.resolution_m()),
       // Onsets as --random-leaks draws them (maps::WithRandomLeaks): uniform in [0.1, 0.9] of the mission.
-      scan_waits_(scenario.ValveCount(), maps::kRandomLeakOnsetFrom * scenario.duration_s, maps::kRandomLeakOnsetTo * scenario.duration_s) {
+      // (A mission without sensors keeps none: its checkpoint holds no 35,000 empty valves.)
+      scan_waits_(scenario.sensors.empty() ? 0 : scenario.ValveCount(), maps::kRandomLeakOnsetFrom * scenario.duration_s,
+                  maps::kRandomLeakOnsetTo * scenario.duration_s) {
   if (sensing()) {
     valve_positions_ = scenario.ValvePositions();
     for (const maps::SensorModel& model : belief_.sensors()) longest_range_m_ = std::max(longest_range_m_, model.spec().range_m);
@@ -353,7 +355,7 @@ void RiskLoop::Fill(MissionMetrics& metrics, double end_s) const {
     }
     metrics.expected_detection_by_scans_s = weight > 0.0 ? sum / weight : std::numeric_limits<double>::quiet_NaN();
     metrics.leak_onsets_from_s = maps::kRandomLeakOnsetFrom * scenario_.duration_s;
-    metrics.leak_onsets_to_s = maps::kRandomLeakOnsetTo * scenario_.duration_s;
+    metrics.leak_onsets_to_s = std::min(maps::kRandomLeakOnsetTo * scenario_.duration_s, end_s);
   }
   metrics.leaks.clear();
   for (std::size_t k = 0; k < truth_.size(); ++k) {

@@ -263,16 +263,11 @@ Json RiskLoopJson(const RiskLoop::State& r) {
   }
   Json written = Json::array();
   for (const auto& [cell, value] : r.written) written.push_back({cell.i, cell.j, value});
-  // The expected detection's waits: per valve its sum, where its next block begins, and its blocks
-  // (from, to, undetected), flat.
-  Json blocks = Json::array();
-  for (const std::vector<ExpectedDetection::Block>& valve : r.scan_waits.blocks) {
-    std::vector<double> flat;
-    for (const ExpectedDetection::Block& b : valve) flat.insert(flat.end(), {b.from_s, b.to_s, b.undetected});
-    blocks.push_back(Doubles(flat));
-  }
-  const Json waits = {{"sums", Doubles(r.scan_waits.wait_sums)}, {"open", Doubles(r.scan_waits.open_from_s)},
-                      {"blocks", blocks}};
+  // The expected detection's four numbers a valve (server/perception/expected_detection.h).
+  const Json waits = {{"sums", Doubles(r.scan_waits.wait_sums)},
+                      {"undetected", Doubles(r.scan_waits.undetected_s)},
+                      {"moment", Doubles(r.scan_waits.undetected_onset_s2)},
+                      {"last", Doubles(r.scan_waits.last_look_s)}};
   return {{"belief", belief}, {"held", held}, {"last_fused", last}, {"leaks", leaks}, {"alarms", alarms},
           {"false_detections", r.false_detections}, {"scans", r.scans}, {"written", written}, {"scan_waits", waits}};
 }
@@ -310,13 +305,9 @@ RiskLoop::State ToRiskLoop(const Json& j) {
   for (const Json& w : j.at("written")) r.written.push_back({{w.at(0).get<int>(), w.at(1).get<int>()}, w.at(2).get<float>()});
   const Json& waits = j.at("scan_waits");
   r.scan_waits.wait_sums = ToDoubles(waits.at("sums"));
-  r.scan_waits.open_from_s = ToDoubles(waits.at("open"));
-  for (const Json& valve : waits.at("blocks")) {
-    const std::vector<double> flat = ToDoubles(valve);
-    if (flat.size() % 3 != 0) throw std::invalid_argument("scan_waits: a valve's blocks are not (from, to, undetected) triples");
-    std::vector<ExpectedDetection::Block>& out = r.scan_waits.blocks.emplace_back();
-    for (std::size_t k = 0; k < flat.size(); k += 3) out.push_back({flat[k], flat[k + 1], flat[k + 2]});
-  }
+  r.scan_waits.undetected_s = ToDoubles(waits.at("undetected"));
+  r.scan_waits.undetected_onset_s2 = ToDoubles(waits.at("moment"));
+  r.scan_waits.last_look_s = ToDoubles(waits.at("last"));
   return r;
 }
 

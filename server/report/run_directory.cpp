@@ -12,6 +12,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <string_view>
 #include <iterator>
 #include <limits>
 #include <stdexcept>
@@ -195,21 +196,51 @@ void RunDirectory::OnRiskEvent(const RiskEventRecord& e) {
                  e.new_share, Quoted(e.source));
 }
 
-void RunDirectory::RestorePlot(const std::map<std::string, int>& index_of) {
-  const RecordTail record = ReadRecordTail(dir_, -std::numeric_limits<double>::infinity());
-  // In the order a live mission fed them: a cycle's events, then its samples.
+namespace {
+void ReadRecordEvents(const std::string& dir, double after_s, RecordTail& tail);  // below, beside ReadRecordTail
+}  // namespace
+
+void RunDirectory::RestorePlot(const std::map<int, int>& index_of_id) {
+  RecordTail events;
+  ReadRecordEvents(dir_, -std::numeric_limits<double>::infinity(), events);
+  // A row names its vehicle; the joins say which vehicle a name was at the time (a vehicle may
+  // rejoin under another name, and a name freed may be taken by another).
+  std::map<std::string, int> id_of_name;
   std::size_t next_fleet = 0, next_risk = 0;
   const auto events_until = [&](double t) {
-    for (; next_fleet < record.fleet_events.size() && record.fleet_events[next_fleet].time_s <= t; ++next_fleet)
-      plot_.OnFleetEvent(record.fleet_events[next_fleet]);
-    for (; next_risk < record.risk_events.size() && record.risk_events[next_risk].time_s <= t; ++next_risk)
-      plot_.OnRiskEvent(record.risk_events[next_risk]);
+    for (; next_fleet < events.fleet_events.size() && events.fleet_events[next_fleet].time_s <= t; ++next_fleet) {
+      const FleetEventRecord& e = events.fleet_events[next_fleet];
+      if ((e.what == "joined" || e.what == "rejoined") && e.vehicle_id >= 0) id_of_name[e.name] = e.vehicle_id;
+      plot_.OnFleetEvent(e);
+    }
+    for (; next_risk < events.risk_events.size() && events.risk_events[next_risk].time_s <= t; ++next_risk)
+      plot_.OnRiskEvent(events.risk_events[next_risk]);
   };
-  for (const auto& [sample, name] : record.samples) {
-    events_until(sample.time_s + 1e-9);
-    const auto index = index_of.find(name);
-    if (index == index_of.end()) continue;  // a row of a vehicle the mission never joined: not drawn
-    TrajectorySample s = sample;
+  // The trajectory streamed a row at a time (a long fleet mission's file is gigabytes): only its
+  // time, name and position, all the plot draws.
+  const std::string path = (fs::path(dir_) / "trajectory.csv").string();
+  std::ifstream in(path, std::ios::binary);
+  std::string row;
+  std::getline(in, row);  // the header
+  for (int line = 2; std::getline(in, row); ++line) {
+    std::string_view fields[4];
+    std::size_t start = 0;
+    for (int f = 0; f < 4; ++f) {
+      const std::size_t comma = row.find(',', start);
+      if (comma == std::string::npos) throw maps::ScenarioError(fmt::format("{}:{}: not a trajectory row", path, line));
+      fields[f] = std::string_view(row).substr(start, comma - start);
+      start = comma + 1;
+    }
+    TrajectorySample s;
+    s.time_s = detail::NumberField(std::string(fields[0]), path, line);
+    s.position_m = {detail::NumberField(std::string(fields[2]), path, line),
+                    detail::NumberField(std::string(fields[3]), path, line)};
+    events_until(s.time_s + 1e-9);
+    const std::string name(fields[1]);
+    const auto id = id_of_name.find(name);
+    if (id == id_of_name.end()) continue;  // a row of a vehicle the record never joined: not drawn
+    const auto index = index_of_id.find(id->second);
+    if (index == index_of_id.end()) continue;
     s.vehicle = index->second;
     plot_.OnSample(s, name);
   }
@@ -333,6 +364,33 @@ void RunDirectory::Finish(const MissionCore& core, const maps::World& world, dou
   fs::remove(fs::path(dir_) / kCheckpointFile, ignored);  // complete: nothing to resume
 }
 
+namespace {
+
+// The record's fleet and risk events after mission time after_s, into `tail` (the files cut back
+// to their last complete line first).
+void ReadRecordEvents(const std::string& dir, double after_s, RecordTail& tail) {
+  const std::string fleet = (fs::path(dir) / "fleet_events.csv").string();
+  CutToLastLine(fleet);
+  for (const auto& [line, text] : Lines(fleet)) {
+    const std::vector<std::string> f = detail::SplitCsvLine(text);
+    if (f.size() != 5) throw maps::ScenarioError(fmt::format("{}:{}: {} fields, need 5", fleet, line, f.size()));
+    const double t = detail::NumberField(f[0], fleet, line);
+    if (t <= after_s) continue;
+    tail.fleet_events.push_back({t, f[1], static_cast<int>(detail::NumberField(f[2], fleet, line)), f[3], f[4]});
+  }
+  const std::string risk = (fs::path(dir) / "risk_events.csv").string();
+  CutToLastLine(risk);
+  for (const auto& [line, text] : Lines(risk)) {
+    const std::vector<std::string> f = detail::SplitCsvLine(text);
+    if (f.size() != 5) throw maps::ScenarioError(fmt::format("{}:{}: {} fields, need 5", risk, line, f.size()));
+    const double t = detail::NumberField(f[0], risk, line);
+    if (t <= after_s) continue;
+    tail.risk_events.push_back({t, f[1], detail::NumberField(f[2], risk, line), detail::NumberField(f[3], risk, line), f[4]});
+  }
+}
+
+}  // namespace
+
 RecordTail ReadRecordTail(const std::string& dir, double after_s) {
   RecordTail tail;
   const std::string trajectory = (fs::path(dir) / "trajectory.csv").string();
@@ -354,24 +412,7 @@ RecordTail ReadRecordTail(const std::string& dir, double after_s) {
     s.command_mps = {v[6], v[7]};
     tail.samples.emplace_back(s, f[1]);
   }
-  const std::string fleet = (fs::path(dir) / "fleet_events.csv").string();
-  CutToLastLine(fleet);
-  for (const auto& [line, text] : Lines(fleet)) {
-    const std::vector<std::string> f = detail::SplitCsvLine(text);
-    if (f.size() != 5) throw maps::ScenarioError(fmt::format("{}:{}: {} fields, need 5", fleet, line, f.size()));
-    const double t = detail::NumberField(f[0], fleet, line);
-    if (t <= after_s) continue;
-    tail.fleet_events.push_back({t, f[1], static_cast<int>(detail::NumberField(f[2], fleet, line)), f[3], f[4]});
-  }
-  const std::string risk = (fs::path(dir) / "risk_events.csv").string();
-  CutToLastLine(risk);
-  for (const auto& [line, text] : Lines(risk)) {
-    const std::vector<std::string> f = detail::SplitCsvLine(text);
-    if (f.size() != 5) throw maps::ScenarioError(fmt::format("{}:{}: {} fields, need 5", risk, line, f.size()));
-    const double t = detail::NumberField(f[0], risk, line);
-    if (t <= after_s) continue;
-    tail.risk_events.push_back({t, f[1], detail::NumberField(f[2], risk, line), detail::NumberField(f[3], risk, line), f[4]});
-  }
+  ReadRecordEvents(dir, after_s, tail);
   return tail;
 }
 

@@ -71,9 +71,10 @@ class RunDirectory final : public MissionRecorder {
   /// A resumed mission's plots start from its whole record so far, not from the resume: the
   /// tracks, joins, losses and risk changes before the crash (a resumed launch had drawn only
   /// what came after it). Called once, after the mission is restored and before it records
-  /// anything new; `index_of` maps the record's vehicle names to their indices (the roster's).
-  /// Throws maps::ScenarioError naming the file and line of anything unreadable.
-  void RestorePlot(const std::map<std::string, int>& index_of);
+  /// anything new; `index_of_id` maps vehicle ids to their record indices (the roster's), and a
+  /// row's name is the vehicle's whose join last took it. The trajectory is streamed, a row at a
+  /// time. Throws maps::ScenarioError naming the file and line of anything unreadable.
+  void RestorePlot(const std::map<int, int>& index_of_id);
 
   /// Once a cycle: flushes the appended files when the flush period is due, and writes the
   /// checkpoint and partial metrics when the checkpoint period is.

@@ -416,10 +416,11 @@ std::string FieldPlotSvg(const MissionPlotInput& input, FieldPlotLayout* layout_
   }
   // Tracks: at most ~4,000 points each (the eye cannot tell more apart at this size).
   constexpr double kMaxPointsPerTrack = 4000.0;
+  std::vector<std::string> lines;  // each track's points, drawn halos first (a later halo had cut earlier tracks)
   for (const int v : drawn) {
     const std::vector<Eigen::Vector2d>& points = paths.at(v);
     const std::size_t stride = std::max<std::size_t>(1, static_cast<std::size_t>(std::ceil(points.size() / kMaxPointsPerTrack)));
-    std::string line;
+    std::string& line = lines.emplace_back();
     for (std::size_t k = 0; k < points.size(); k += stride) fmt::format_to(std::back_inserter(line), "{:.1f},{:.1f} ", px(points[k].x()), py(points[k].y()));
     fmt::format_to(std::back_inserter(line), "{:.1f},{:.1f}", px(points.back().x()), py(points.back().y()));
     if (layout.density) {
@@ -427,9 +428,11 @@ std::string FieldPlotSvg(const MissionPlotInput& input, FieldPlotLayout* layout_
           "points=\"{}\"/>\n",
           line);
     }
+  }
+  for (std::size_t k = 0; k < drawn.size(); ++k) {
     put("<polyline fill=\"none\" stroke=\"{}\" stroke-width=\"{}\" stroke-opacity=\"0.8\" stroke-linejoin=\"round\" "
         "points=\"{}\"><title>{}</title></polyline>\n",
-        colour_of[v], layout.density ? 1.6 : 1.2, line, XmlEscape(vehicle_name(v)));
+        colour_of[drawn[k]], layout.density ? 1.6 : 1.2, lines[k], XmlEscape(vehicle_name(drawn[k])));
   }
   put("</g>\n");
 

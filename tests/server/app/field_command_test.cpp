@@ -73,8 +73,6 @@ TEST_F(FieldSeabedCommand, NamesTheMapAfterTheScenarioAndKeepsAnotherScenariosMa
   EXPECT_TRUE(fs::exists(dir_ / "my_slope.xyz"));
 }
 
-// `sage field generate --xts 4` alone was refused for the default --valves = 87 the user never
-// typed; a count left out is now sized to the one given, at the default field's rate.
 // `sage field generate -o FILE` replaces a field sage wrote there, and refuses any other file (a
 // new user's -o scenarios/fleet_field.yaml would have replaced a shipped scenario) and a folder,
 // leaving them as they were.
@@ -104,8 +102,17 @@ TEST_F(FieldSeabedCommand, GenerateReplacesOnlyAFieldItWrote) {
   EXPECT_EQ(Text(hand), "# my field\nname: mine\n");
   EXPECT_THROW(CmdFieldGenerate(options, dir_.string()), maps::ScenarioError);
   EXPECT_TRUE(fs::is_directory(dir_));
+  // Not opened to be read: /dev/stdout piped to a reader had blocked on itself.
+  try {
+    CmdFieldGenerate(options, "/dev/null");
+    ADD_FAILURE() << "/dev/null taken as a field's file";
+  } catch (const maps::ScenarioError& e) {
+    EXPECT_NE(std::string(e.what()).find("is not a regular file"), std::string::npos) << e.what();
+  }
 }
 
+// `sage field generate --xts 4` alone was refused for the default --valves = 87 the user never
+// typed; a count left out is now sized to the one given, at the default field's rate.
 TEST(FieldGenerateCounts, ACountLeftOutIsSizedToTheOneGiven) {
   const maps::FieldOptions defaults;
   const double per_xt = static_cast<double>(defaults.valves) / defaults.xts;

@@ -345,6 +345,33 @@ TEST(RiskLoop, SameSeedSameFindingsAndCheckpointRoundTrip) {
   EXPECT_EQ(j["valves"][2]["expected_detection_by_scans_s"], ma.valves[2].expected_detection_by_scans_s);
 }
 
+// Scans are ordered per vehicle and sensor only: another vehicle's scan of a valve may be fused
+// cycles after this one's newer scans of it (a slow host answering in a burst). It counts, as made
+// at the valve's last look, and the server goes on (the expected detection had thrown, and the
+// server died of it).
+TEST(RiskLoop, ALateScanOfAnotherVehicleIsTaken) {
+  maps::Scenario s = maps::WithDuration(maps::LoadScenario(kTwoXtLeaks), 50.0);
+  s.leaks.clear();
+  s.vehicles.push_back(s.vehicles.front());
+  s.vehicles.back().name = "rov2";
+  s.vehicles.back().start_m = {3.9, 1.5};
+  maps::World world(s);
+  MissionCore core(world, s, "", ControllerKind::kErgodic);
+  const Eigen::Vector2d a(3.6, 1.6), b(3.9, 1.5);
+  std::uint64_t given = 0;
+  for (std::int64_t k = 0; k <= 110; ++k) {
+    ASSERT_TRUE(core.OnState(State(0, k, a, -M_PI / 2)));
+    ASSERT_TRUE(core.OnState(State(1, k, b, -M_PI / 2)));
+    if (k % 2 == 0) given += core.OnScan(Scan(0, k, a, -M_PI / 2)) ? 1 : 0;
+    if (k % 2 == 0 && k != 100 && k != 102 && k != 104) given += core.OnScan(Scan(1, k, b, -M_PI / 2)) ? 1 : 0;
+    if (k == 104) given += core.OnScan(Scan(1, 100, b, -M_PI / 2)) ? 1 : 0;  // four cycles late
+    ASSERT_NO_THROW(core.Cycle(k)) << k;
+  }
+  const MissionMetrics m = core.Metrics(11.0);
+  EXPECT_EQ(m.scans, given);
+  EXPECT_TRUE(std::isfinite(m.valves[2].expected_detection_by_scans_s));
+}
+
 // The expected time to detect a leak, from the scans: a vehicle held 0.7 m north of P3 facing it
 // scans it at 5 Hz with p = 0.9 x 2^-(0.7 / 0.7)^2 = 0.45 (the camera's fall-off), so a leak there
 // waits 0.1 s for the next scan and 0.2 s (1 - p) / p more for a detection; the other four valves

@@ -174,39 +174,43 @@ TEST_F(RunDirectoryTest, ResumeContinuesACutRecord) {
   EXPECT_EQ(Read(dir_ / "trajectory.csv"), "t,vehicle,x,y,heading,vx,vy,cmd_x,cmd_y\n");
 }
 
-// A resumed mission draws its whole record, not only what came after the resume: a record cut
-// by a crash just before the end, restored into the plot and finished, draws plot.svg byte for
-// byte as the mission that never stopped (the tracks and the risk change at 150 s included).
+// A resumed mission draws its whole record, not only what came after the resume: a record left
+// by a crash at its end (everything flushed, nothing finished), restored into the plot of a new
+// RunDirectory and finished, draws plot.svg byte for byte as the mission that never stopped —
+// fleet_field under 'leak' to 450 s: P9's risk change at 300 s, rov5's join at 200 s and rov2's
+// loss at 400 s, five vehicles' tracks.
 TEST_F(RunDirectoryTest, ResumedPlotDrawsTheWholeRecord) {
-  const maps::Scenario s = maps::WithDuration(maps::LoadScenario(kTwoXt), 200.0);
+  const maps::Scenario s =
+      maps::WithDuration(maps::LoadScenario(std::string(SAGE_SOURCE_DIR) + "/scenarios/fleet_field.yaml"), 450.0);
   const fs::path whole = dir_.string() + "_whole";
   fs::remove_all(whole);
   {
     RunDirectory run(whole.string(), s);
-    Mission mission(s, MissionOptions{"leak_injection", ControllerKind::kErgodic, &run, false});
+    Mission mission(s, MissionOptions{"leak", ControllerKind::kErgodic, &run, false});
     while (mission.Step()) run.Tick(mission.core());
-    run.Finish(mission.core(), mission.world(), 200.0, false);
+    run.Finish(mission.core(), mission.world(), 450.0, false);
   }
   RunDirectoryOptions options;
   options.flush_period_s = 0.0;
-  Mission mission(s, MissionOptions{"leak_injection", ControllerKind::kErgodic, nullptr, false});
+  Mission mission(s, MissionOptions{"leak", ControllerKind::kErgodic, nullptr, false});
   {
     RunDirectory run(dir_.string(), s, options);
-    Mission recorded(s, MissionOptions{"leak_injection", ControllerKind::kErgodic, &run, false});
+    Mission recorded(s, MissionOptions{"leak", ControllerKind::kErgodic, &run, false});
     while (recorded.Step()) run.Tick(recorded.core());
   }  // the crash: everything flushed, nothing finished
   while (mission.Step()) {
   }
-  ASSERT_NE(Read(dir_ / "risk_events.csv").find("150,P1"), std::string::npos) << Read(dir_ / "risk_events.csv");
+  ASSERT_NE(Read(dir_ / "risk_events.csv").find("300,P9"), std::string::npos) << Read(dir_ / "risk_events.csv");
+  ASSERT_NE(Read(dir_ / "fleet_events.csv").find(",joined,4,rov5"), std::string::npos);
   RunDirectoryOptions resume = options;
   resume.resume = true;
   RunDirectory run(dir_.string(), s, resume);
-  std::map<std::string, int> index_of;
-  for (const auto& [id, member] : mission.core().roster().members()) index_of[member.name] = member.index;
-  run.RestorePlot(index_of);
-  run.Finish(mission.core(), mission.world(), 200.0, false);
+  std::map<int, int> index_of_id;
+  for (const auto& [id, member] : mission.core().roster().members()) index_of_id[id] = member.index;
+  run.RestorePlot(index_of_id);
+  run.Finish(mission.core(), mission.world(), 450.0, false);
   const std::string drawn = Read(dir_ / "plot.svg");
-  EXPECT_NE(drawn.find("150"), std::string::npos);
+  EXPECT_NE(drawn.find("rov5 joined"), std::string::npos);
   EXPECT_EQ(drawn, Read(whole / "plot.svg"));
   // Without the restore, the resumed plot had no track and no mark at all.
   fs::remove_all(whole);
