@@ -38,8 +38,9 @@ RiskLoop::RiskLoop(const maps::Scenario& scenario, const maps::World& world, map
                   maps::kRandomLeakOnsetTo * scenario.duration_s) {
   if (sensing()) {
     valve_positions_ = scenario.ValvePositions();
-    for (const maps::SensorModel& model : belief_.sensors()) longest_range_m_ = std::max(longest_range_m_, model.spec().range_m);
-    valve_index_.emplace(valve_positions_, std::max(longest_range_m_, 0.25));
+    double longest_range_m = 0.25;  // the index's cell: a scan's reach reads a few cells
+    for (const maps::SensorModel& model : belief_.sensors()) longest_range_m = std::max(longest_range_m, model.spec().range_m);
+    valve_index_.emplace(valve_positions_, longest_range_m);
   }
   // A detection belongs to a leak within three position sigmas of the noisiest sensor (at least
   // half a metre: a few leaves).

@@ -119,7 +119,6 @@ class RiskLoop {
   ExpectedDetection scan_waits_;
   std::vector<Eigen::Vector2d> valve_positions_;
   std::optional<maps::NearbyPoints> valve_index_;
-  double longest_range_m_ = 0.0;
   void LookAtValves(const agents::ScanReport& scan);
   std::vector<agents::ScanReport> held_;
   std::set<std::tuple<int, int, std::int64_t>> held_keys_;  // (vehicle, sensor, cycle)
