@@ -369,24 +369,23 @@ namespace {
 // The record's fleet and risk events after mission time after_s, into `tail` (the files cut back
 // to their last complete line first).
 void ReadRecordEvents(const std::string& dir, double after_s, RecordTail& tail) {
-  const std::string fleet = (fs::path(dir) / "fleet_events.csv").string();
-  CutToLastLine(fleet);
-  for (const auto& [line, text] : Lines(fleet)) {
-    const std::vector<std::string> f = detail::SplitCsvLine(text);
-    if (f.size() != 5) throw maps::ScenarioError(fmt::format("{}:{}: {} fields, need 5", fleet, line, f.size()));
-    const double t = detail::NumberField(f[0], fleet, line);
-    if (t <= after_s) continue;
-    tail.fleet_events.push_back({t, f[1], static_cast<int>(detail::NumberField(f[2], fleet, line)), f[3], f[4]});
-  }
-  const std::string risk = (fs::path(dir) / "risk_events.csv").string();
-  CutToLastLine(risk);
-  for (const auto& [line, text] : Lines(risk)) {
-    const std::vector<std::string> f = detail::SplitCsvLine(text);
-    if (f.size() != 5) throw maps::ScenarioError(fmt::format("{}:{}: {} fields, need 5", risk, line, f.size()));
-    const double t = detail::NumberField(f[0], risk, line);
-    if (t <= after_s) continue;
-    tail.risk_events.push_back({t, f[1], detail::NumberField(f[2], risk, line), detail::NumberField(f[3], risk, line), f[4]});
-  }
+  // Both files are rows of five fields, the time first: each row after after_s to `take`.
+  const auto rows_after = [&](const char* name, const auto& take) {
+    const std::string path = (fs::path(dir) / name).string();
+    CutToLastLine(path);
+    for (const auto& [line, text] : Lines(path)) {
+      const std::vector<std::string> f = detail::SplitCsvLine(text);
+      if (f.size() != 5) throw maps::ScenarioError(fmt::format("{}:{}: {} fields, need 5", path, line, f.size()));
+      const double t = detail::NumberField(f[0], path, line);
+      if (t > after_s) take(t, f, path, line);
+    }
+  };
+  rows_after("fleet_events.csv", [&](double t, const std::vector<std::string>& f, const std::string& path, int line) {
+    tail.fleet_events.push_back({t, f[1], static_cast<int>(detail::NumberField(f[2], path, line)), f[3], f[4]});
+  });
+  rows_after("risk_events.csv", [&](double t, const std::vector<std::string>& f, const std::string& path, int line) {
+    tail.risk_events.push_back({t, f[1], detail::NumberField(f[2], path, line), detail::NumberField(f[3], path, line), f[4]});
+  });
 }
 
 }  // namespace
