@@ -46,7 +46,7 @@ TEST_F(AgentMissionDoor, RefusesMalformedAssignments) {
   };
   const Case cases[] = {
       {"phi NaN", [](Assignment& a) { a.phi[2] = std::numeric_limits<double>::quiet_NaN(); }, "not finite"},
-      {"phi size", [](Assignment& a) { a.phi.resize(7); }, "coefficients"},
+      {"phi size", [](Assignment& a) { a.phi = Eigen::VectorXd::Zero(7); }, "coefficients"},  // (resize left garbage: a draw beyond 1e6 read as that)
       {"region off the field",
        [](Assignment& a) {
          a.region_order = 8, a.region_origin_m = {4.0, 1.0}, a.region_size_m = {3.0, 3.0}, a.phi.resize(0);
