@@ -209,6 +209,7 @@ struct MissionMetrics {
 
   // Leak sensing (server/perception): empty / all zero when the scenario has no sensors.
   bool sensing = false;               ///< the vehicles carried leak sensors
+  bool tours_on_scans = false;  ///< A* vehicles whose next valves the look planner chose on the scans (astar.order: looks)
   bool steered_on_posterior = false;  ///< ergodic vehicles steered on the fused belief (fusion.steer: posterior), not the profile alone
   std::vector<LeakMetrics> leaks;
   FalseAlarmMetrics false_alarms;

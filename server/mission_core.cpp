@@ -10,6 +10,7 @@
 
 #include <fmt/format.h>
 
+#include "agents/tour_planner.h"
 #include "maps/prefetch.h"
 #include "maps/scenario/printable_text.h"
 
@@ -451,6 +452,7 @@ void MissionCore::AssignTours(const std::vector<int>& alive, bool risk_changed, 
       plan.pending_started_s = time_s_;
     }
   }
+  if (scenario_.astar.order == maps::AstarSettings::Order::kLooks) ChooseLooks(alive, out.snapshot.cycle);
   for (int id : alive) {
     Roster::Member& m = *roster_.Find(id);
     const auto tour = plan.tours.find(id);
@@ -474,6 +476,9 @@ void MissionCore::TakeTours(const agents::FleetTourPlan& tours, const std::vecto
     a.cycle = out.snapshot.cycle;
     a.shared = false;
     for (int i : v.tour.order) a.tour.push_back(v.valves[i]);
+    std::vector<int>& share = plan.shares[a.id];
+    share = a.tour;
+    std::sort(share.begin(), share.end());
     a.tour_weights.resize(static_cast<Eigen::Index>(v.tour.order.size()));
     for (std::size_t i = 0; i < v.tour.order.size(); ++i) a.tour_weights[static_cast<Eigen::Index>(i)] = v.weights[v.tour.order[i]];
     plan.tours[a.id] = std::move(a);
@@ -485,6 +490,104 @@ void MissionCore::TakeTours(const agents::FleetTourPlan& tours, const std::vecto
   Note("tours", fmt::format("{} tours planned for {} vehicles{}: laps {:.1f} s at most, {:.1f} s on average{}",
                             tours.vehicles.size(), planned_for.size(), how, tours.max_lap_s, tours.mean_lap_s,
                             tours.ok ? "" : " (some leg has no path)"));
+}
+
+// The look planner's turn: a vehicle that has reached the valve it flies to (within the visit
+// radius, or as near as the grid lets it stand), or has not within twice the leg's time and 10 s
+// more, gets the next valves of its share chosen on the scans fused so far: U from the risk loop,
+// and each valve's weight its risk (the profile's, normalised) plus the chance of a leak there
+// the scans give. Its tour is then that sequence (the last valve back to the first if nothing
+// new comes), sent this cycle.
+void MissionCore::ChooseLooks(const std::vector<int>& alive, std::uint64_t cycle) {
+  TourPlan& plan = tour_plan_;
+  const Eigen::VectorXd& risk = fleet_.schedule().back().weights;
+  const Eigen::VectorXd undetected = loop_.Undetected(time_s_);
+  const Eigen::VectorXd leak = loop_.ValveLeakProbabilities(time_s_);
+  const std::vector<Eigen::Vector2d> positions = scenario_.ValvePositions();
+  // The longest-reaching sensor: the camera a tour vehicle turns to the valves.
+  const std::vector<maps::SensorModel>& sensors = loop_.belief().sensors();
+  if (sensors.empty()) return;
+  const maps::SensorModel* sensor = &sensors.front();
+  for (const maps::SensorModel& m : sensors) {
+    if (m.spec().range_m > sensor->spec().range_m) sensor = &m;
+  }
+  const double risk_sum = risk.sum() > 0.0 ? risk.sum() : 1.0;
+  for (int id : alive) {
+    const auto share = plan.shares.find(id);
+    const auto tour = plan.tours.find(id);
+    Roster::Member* m = roster_.Find(id);
+    if (share == plan.shares.end() || tour == plan.tours.end() || m == nullptr || !m->has_state || share->second.empty()) continue;
+    LookTour& look = looks_[id];
+    const maps::VehicleSpec spec = SpecForVehicle(scenario_, id, m->name);
+    if (look.valves != share->second || !look.planner) {
+      look.valves = share->second;
+      std::vector<Eigen::Vector2d> at;
+      look.reach_m.clear();
+      for (int v : look.valves) {
+        at.push_back(positions[static_cast<std::size_t>(v)]);
+        const std::vector<Eigen::Vector2d> stand = agents::PlanGridPath(world_.astar_grid(), at.back(), at.back());
+        const double off = stand.empty() ? 0.0 : (stand.front() - at.back()).norm();
+        look.reach_m.push_back(off + 0.15);
+      }
+      look.planner = std::make_unique<agents::LookPlanner>(world_.astar_grid(), std::move(at), *sensor, spec.transit_speed_mps);
+      look.target = -1;
+    } else if (look.target >= 0 && tour->second.tour != look.sent) {
+      // The shares were planned again with the same valves: it keeps flying its looks.
+      tour->second.tour = look.sent;
+      tour->second.tour_weights = look.sent_weights;
+    }
+    const auto send = [&](std::vector<int> valves, Eigen::VectorXd waits) {
+      look.sent = valves;
+      look.sent_weights = waits;
+      tour->second.tour = std::move(valves);
+      tour->second.tour_weights = std::move(waits);
+      tour->second.cycle = cycle;
+      m->target_sent = false;
+    };
+    const Eigen::Vector2d x = m->last.state.position_m;
+    int from = -1;
+    if (look.target < 0 || time_s_ >= look.due_s) {
+      // From the share's valve nearest to where it is.
+      double best = std::numeric_limits<double>::infinity();
+      for (std::size_t k = 0; k < look.valves.size(); ++k) {
+        const double d = (positions[static_cast<std::size_t>(look.valves[k])] - x).norm();
+        if (d < best) {
+          best = d;
+          from = static_cast<int>(k);
+        }
+      }
+      if (look.target < 0) {
+        look.target = from;
+        look.due_s = time_s_ + 10.0 + 2.0 * (positions[static_cast<std::size_t>(look.valves[static_cast<std::size_t>(from)])] - x).norm() / spec.transit_speed_mps;
+        send({look.valves[static_cast<std::size_t>(look.target)]}, Eigen::VectorXd::Ones(1));
+        continue;
+      }
+    } else if ((positions[static_cast<std::size_t>(look.valves[static_cast<std::size_t>(look.target)])] - x).norm() <=
+               look.reach_m[static_cast<std::size_t>(look.target)]) {
+      from = look.target;
+    }
+    if (from < 0) continue;
+    const auto n = static_cast<Eigen::Index>(look.valves.size());
+    Eigen::VectorXd u(n), w(n);
+    for (Eigen::Index k = 0; k < n; ++k) {
+      const auto v = static_cast<Eigen::Index>(look.valves[static_cast<std::size_t>(k)]);
+      u[k] = undetected.size() > v ? undetected[v] : 0.0;
+      w[k] = std::pow(risk[v] / risk_sum, scenario_.astar.look_exponent) +
+             scenario_.astar.look_leak_weight * (leak.size() > v ? leak[v] : 0.0);
+    }
+    const std::vector<int> next = look.planner->Plan(from, u, w);
+    look.target = next.front();
+    const double leg_s = look.planner->leg(from, look.target).duration_s;
+    look.due_s = time_s_ + 10.0 + 2.0 * (std::isfinite(leg_s) ? leg_s : 0.0);
+    // The tour starts at the valve it has reached, so that it flies the very legs the planner
+    // priced (a path planned from beside the valve may pass a structure on the other side).
+    std::vector<int> sequence{look.valves[static_cast<std::size_t>(from)]};
+    for (int k : next) sequence.push_back(look.valves[static_cast<std::size_t>(k)]);
+    if (sequence == look.sent) continue;  // a share of one valve: nothing new to send
+    Eigen::VectorXd waits = Eigen::VectorXd::Ones(static_cast<Eigen::Index>(sequence.size()));
+    waits[0] = 0.0;  // no wait where it already is
+    send(std::move(sequence), std::move(waits));
+  }
 }
 
 std::vector<agents::FleetVehicle> MissionCore::FleetVehicles(const std::vector<int>& alive) const {
@@ -783,8 +886,10 @@ MissionMetrics MissionCore::Metrics(double end_s) const {
   metrics.events = fleet_.responses();
   FillEventResponses(metrics_.visits(), metrics);
   loop_.Fill(metrics, std::max(end_s, 1.0 / scenario_.control_rate_hz));
-  // The A* tours fly the profile's weights whatever the belief says.
+  // The A* tours fly the profile's weights whatever the belief says; under astar.order looks
+  // their next valves are chosen on the scans (tours_on_scans).
   metrics.steered_on_posterior = metrics.steered_on_posterior && controller_ == ControllerKind::kErgodic;
+  metrics.tours_on_scans = controller_ == ControllerKind::kAstar && scenario_.astar.order == maps::AstarSettings::Order::kLooks;
   return metrics;
 }
 

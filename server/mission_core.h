@@ -16,6 +16,7 @@
 
 #include "agents/fleet_messages.h"
 #include "agents/fleet_tour_planner.h"
+#include "agents/look_planner.h"
 #include "maps/region.h"
 #include "maps/risk_layer.h"
 #include "maps/scenario/scenario.h"
@@ -228,6 +229,9 @@ class MissionCore {
   void AssignTargets(const std::vector<int>& alive, bool risk_changed, CycleOutput& out);
   void AssignTours(const std::vector<int>& alive, bool risk_changed, CycleOutput& out);
   void AssignRegions(const std::vector<int>& alive, CycleOutput& out);
+  // astar.order = looks: each tour vehicle's next valves within its share, chosen again as it
+  // reaches the one it flies to (agents::LookPlanner on the risk loop's scans).
+  void ChooseLooks(const std::vector<int>& alive, std::uint64_t cycle);
   void AccountMetrics();
   // The live vehicles as the planners see them: where each last reported (or its start), its speed.
   std::vector<agents::FleetVehicle> FleetVehicles(const std::vector<int>& alive) const;
@@ -282,8 +286,20 @@ class MissionCore {
     std::unique_ptr<PendingPlan<agents::FleetTourPlan>> pending;  // a large field's, on its own thread
     std::vector<int> pending_for;                                  // the vehicles it is for
     double pending_started_s = 0.0;
+    std::map<int, std::vector<int>> shares;     // vehicle id -> the valves of its tour, ascending
   };
   TourPlan tour_plan_;
+  // astar.order = looks, by vehicle id: its share's planner, and the valve it flies to.
+  struct LookTour {
+    std::vector<int> valves;                       // its share (scenario's indices, ascending)
+    std::unique_ptr<agents::LookPlanner> planner;  // over them
+    std::vector<double> reach_m;                   // a valve is reached within this of it
+    int target = -1;                               // index into valves; -1: none yet
+    double due_s = 0.0;                            // not reached by then: chosen again from where it is
+    std::vector<int> sent;                         // the tour last sent (scenario's valve indices)
+    Eigen::VectorXd sent_weights;                  // and its waits
+  };
+  std::map<int, LookTour> looks_;
   // Regions: each live vehicle's share of the valves, its box, basis and risk field there, and
   // the weights its phi was last sent with.
   struct RegionShare {

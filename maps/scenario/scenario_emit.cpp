@@ -63,6 +63,9 @@ std::string EmitScenario(const Scenario& s) {
   number("wait_per_lap_s", s.astar.wait_per_lap_s);
   number("weight_exponent", s.astar.weight_exponent);
   number("replan_delay_s", s.astar.replan_delay_s);
+  if (s.astar.order == AstarSettings::Order::kLooks) key("order") << "looks";
+  if (s.astar.look_exponent != AstarSettings{}.look_exponent) number("look_exponent", s.astar.look_exponent);
+  if (s.astar.look_leak_weight != AstarSettings{}.look_leak_weight) number("look_leak_weight", s.astar.look_leak_weight);
   out << YAML::EndMap;
   key("structures") << YAML::BeginSeq;
   for (const ChristmasTree& tree : s.structures) {

@@ -444,12 +444,20 @@ Scenario ReadScenario(const Reader& r, const YAML::Node& root, const std::string
     r.OptionalNumber(n, "revisit_bound_s", p, s.guard.revisit_bound_s);
   });
   r.Optional(root, "astar", "", [&](const YAML::Node& n, const std::string& p) {
-    r.ExpectMap(n, p, {"grid_resolution_m", "clearance_m", "wait_per_lap_s", "weight_exponent", "replan_delay_s"});
+    r.ExpectMap(n, p, {"grid_resolution_m", "clearance_m", "wait_per_lap_s", "weight_exponent", "replan_delay_s", "order", "look_exponent", "look_leak_weight"});
     r.OptionalNumber(n, "grid_resolution_m", p, s.astar.grid_resolution_m);
     r.OptionalNumber(n, "clearance_m", p, s.astar.clearance_m);
     r.OptionalNumber(n, "wait_per_lap_s", p, s.astar.wait_per_lap_s);
     r.OptionalNumber(n, "weight_exponent", p, s.astar.weight_exponent);
     r.OptionalNumber(n, "replan_delay_s", p, s.astar.replan_delay_s);
+    r.Optional(n, "order", p, [&](const YAML::Node& v, const std::string& q) {
+      const std::string text = r.Text(v, q);
+      if (text == "shortest") s.astar.order = AstarSettings::Order::kShortest;
+      else if (text == "looks") s.astar.order = AstarSettings::Order::kLooks;
+      else r.Fail(q, v, "must be shortest (the closed tour, lap after lap) or looks (the next valves chosen on the scans: needs sensors)");
+    });
+    r.OptionalNumber(n, "look_exponent", p, s.astar.look_exponent);
+    r.OptionalNumber(n, "look_leak_weight", p, s.astar.look_leak_weight);
   });
   const YAML::Node structures = r.Require(root, "structures", "");
   r.ExpectList(structures, "structures");

@@ -365,6 +365,13 @@ void Scenario::Validate() const {
   c.NonNegative("astar.weight_exponent", astar.weight_exponent);
   c.AtMost("astar.weight_exponent", astar.weight_exponent, kMaxWeightExponent, "(1 = by risk, 0.5 = the square-root law)");
   c.NonNegative("astar.replan_delay_s", astar.replan_delay_s);
+  c.NonNegative("astar.look_exponent", astar.look_exponent);
+  c.AtMost("astar.look_exponent", astar.look_exponent, kMaxWeightExponent, "(1 = by risk)");
+  c.NonNegative("astar.look_leak_weight", astar.look_leak_weight);
+  c.AtMost("astar.look_leak_weight", astar.look_leak_weight, 1e6, "(times a valve's chance of a leak, against the risks' 1)");
+  if (astar.order == AstarSettings::Order::kLooks && sensors.empty()) {
+    c.Fail("astar.order", "looks", "the look planner chooses on the vehicles' scans: give the vehicles sensors, or order: shortest");
+  }
 
   if (structures.empty()) c.Fail("structures", "must list at least one structure");
   std::map<std::string, std::string> structure_names, valve_names, vehicle_names, profile_names;

@@ -41,6 +41,7 @@ struct Config {
   ControllerKind controller = ControllerKind::kErgodic;
   std::string profile;
   bool steer = true;
+  maps::AstarSettings::Order order = maps::AstarSettings::Order::kShortest;  // of an A* configuration
 };
 
 std::vector<Config> ParseConfigs(const std::string& text, const maps::Scenario& scenario, const std::string& profile) {
@@ -52,13 +53,16 @@ std::vector<Config> ParseConfigs(const std::string& text, const maps::Scenario& 
       out.push_back({"bayes", fmt::format("ergodic + Bayesian loop ({})", profile), ControllerKind::kErgodic, profile, true});
     } else if (word == "astar") {
       out.push_back({"astar", fmt::format("A* tour ({})", profile), ControllerKind::kAstar, profile, false});
+    } else if (word == "looks") {
+      out.push_back({"looks", fmt::format("A* legs chosen on the scans ({})", profile), ControllerKind::kAstar, profile, true,
+                     maps::AstarSettings::Order::kLooks});
     } else if (word == "fixed") {
       for (const maps::RiskProfile& p : scenario.profiles) {
         out.push_back({"fixed " + p.name, fmt::format("ergodic, fixed profile {}", p.name), ControllerKind::kErgodic,
                        p.name, false});
       }
     } else {
-      throw maps::ScenarioError("--configs = " + text + ": '" + word + "' is none of bayes, astar, fixed");
+      throw maps::ScenarioError("--configs = " + text + ": '" + word + "' is none of bayes, looks, astar, fixed");
     }
   }
   if (out.empty()) throw maps::ScenarioError("--configs = " + text + ": names no configuration");
@@ -134,6 +138,7 @@ int CmdBenchLeaks(const BenchLeaksCommand& c) {
         s.seed = c.first_seed + static_cast<std::uint64_t>(run);
         s = maps::WithRandomLeaks(s, c.leaks, sites, draw);
         s.fusion.steer = config.steer;
+        s.astar.order = config.order;
         MissionOptions options{config.profile, config.controller};
         options.keep_trajectory = false;
         options.threads = 1;

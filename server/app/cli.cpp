@@ -105,6 +105,11 @@ void AddScenarioOverrides(CLI::App& cmd, ScenarioOverrides& o, OverrideSet set, 
                    "Fleet coverage: shared (Mathew-Mezic, one basis over the field), partition (valves split among "
                    "vehicles) or regions (each vehicle's share of the valves in a box with a basis of its own)")
         ->check(CLI::IsMember({"shared", "partition", "regions"}));
+    cmd.add_option("--order", o.order,
+                   "The A* vehicles' (-c astar) next valves: shortest (the closed tour, lap after lap: the operator's "
+                   "baseline) or looks (chosen on the scans, where a leak would wait longest unseen; needs sensors) "
+                   "(default: the scenario's astar.order)")
+        ->check(CLI::IsMember({"shortest", "looks"}));
     cmd.add_option("--weight-exponent", o.weight_exponent,
                    "Target shaping alpha: vehicles aim for visit rates by w^alpha (1 = by risk, the paper; 0.5 = the "
                    "square-root law, least expected time a leak goes unnoticed); sets ergodic and A* alike")
@@ -622,11 +627,12 @@ int RunCli(int argc, char** argv) {
   bench_leaks->add_option("--seed", leaks_cmd.first_seed, "Seed of the first run")->check(MustBeWholeNumber)->capture_default_str();
   bench_leaks
       ->add_option("--configs", leaks_cmd.configs,
-                   "What flies each run, comma-separated: bayes (ergodic on the Bayesian loop), astar (the tours), fixed "
-                   "(ergodic on each of the scenario's profiles, the loop not steering)")
+                   "What flies each run, comma-separated: bayes (ergodic on the Bayesian loop), looks (A* legs to the valves "
+                   "the look planner picks on the scans: astar.order looks), astar (the shortest tours), fixed (ergodic on "
+                   "each of the scenario's profiles, the loop not steering)")
       ->capture_default_str();
   bench_leaks->add_option("--profile,-p", leaks_cmd.scenario.profile,
-                          "Profile of bayes and astar (default: the scenario's default_profile)");
+                          "Profile of bayes, looks and astar (default: the scenario's default_profile)");
   bench_leaks->add_option("--duration", leaks_cmd.scenario.duration_s, "Mission length in seconds (default: the scenario's)");
   bench_leaks->add_option("--vehicles,-n", leaks_cmd.scenario.vehicles, "Fleet size (default: the scenario's)");
   bench_leaks->add_option("--assignment", leaks_cmd.scenario.assignment, "Fleet coverage of the ergodic runs")

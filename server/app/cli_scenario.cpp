@@ -80,6 +80,7 @@ std::string FirstScenarioOverride(const ScenarioOverrides& o) {
       {"--model", o.model.has_value()},
       {"--vehicles", o.vehicles.has_value()},
       {"--assignment", o.assignment.has_value()},
+      {"--order", o.order.has_value()},
       {"--start-jitter", o.start_jitter_m.has_value()},
       {"--weight-exponent", o.weight_exponent.has_value()},
       {"--age-weighting", o.age_weighting_laps.has_value()},
@@ -175,6 +176,9 @@ maps::Scenario LoadWithOverrides(const ScenarioOverrides& o) {
     }
   }
   if (o.assignment) scenario.fleet.assignment = maps::ParseFleetAssignment(*o.assignment, "--assignment");
+  if (o.order) {
+    scenario.astar.order = *o.order == "looks" ? maps::AstarSettings::Order::kLooks : maps::AstarSettings::Order::kShortest;
+  }
   if (o.duration_s) {
     // What starts after the shorter mission's end is left out; say so (a leak that silently went
     // read as "none hidden" in the run's table).

@@ -37,6 +37,7 @@ struct ScenarioOverrides {
   std::optional<std::string> model;       // overrides every vehicle's motion model
   std::optional<int> vehicles;            // fleet size
   std::optional<std::string> assignment;  // shared | partition
+  std::optional<std::string> order;       // the A* vehicles' next valves: shortest | looks
   std::optional<double> start_jitter_m;
   std::optional<double> weight_exponent;  // both the SMC target's and the A* waits
   std::optional<double> age_weighting_laps;  // regions

@@ -110,7 +110,7 @@ struct BenchLeaksCommand {
   int leaks = 1;                           ///< hidden leaks per run
   std::string sites = "valves";            ///< valves | valves-even | seabed | flowlines
   std::uint64_t first_seed = 1;
-  std::string configs = "bayes,astar,fixed";  ///< what flies each run (see CmdBenchLeaks)
+  std::string configs = "bayes,looks,astar,fixed";  ///< what flies each run (see CmdBenchLeaks)
   std::string out_dir;                     ///< default runs/bench_leaks_<scenario>
   int jobs = 1;                            ///< missions flown at once
 };

@@ -61,6 +61,16 @@ std::vector<double> ExpectedDetection::Waits(double end_s) const {
   return waits;
 }
 
+std::vector<double> ExpectedDetection::Undetected(double time_s) const {
+  std::vector<double> u(state_.undetected_s.size());
+  for (std::size_t v = 0; v < u.size(); ++v) {
+    const double last = state_.last_look_s[v];
+    const double a = std::min(last, to_s_), b = std::min(std::max(time_s, last), to_s_);
+    u[v] = state_.undetected_s[v] + std::max(0.0, b - a);
+  }
+  return u;
+}
+
 void ExpectedDetection::Restore(State state) {
   const std::size_t n = state_.wait_sums.size();
   if (state.wait_sums.size() != n || state.undetected_s.size() != n || state.undetected_onset_s2.size() != n ||

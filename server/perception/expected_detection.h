@@ -30,12 +30,17 @@ class ExpectedDetection {
   /// valve out of range, p outside [0, 1] or a time not finite throws std::invalid_argument (the
   /// caller's fault, never a vehicle's).
   void Look(int valve, double time_s, double p);
+  int valves() const { return static_cast<int>(state_.wait_sums.size()); }
 
   /// Per valve, the expected wait (s) from a leak's start to its first detection, a leak never
   /// detected counted to end_s; over the onsets in [from_s, min(to_s, end_s)] (a mission ended
   /// earlier has seen only those). NaN where no onset lies before end_s, or end_s is before the
   /// valve's last look (the sums hold what came after).
   std::vector<double> Waits(double end_s) const;
+
+  /// Per valve, the measure (s) of the onsets up to time_s a leak from which would still be
+  /// unseen: what the look planner (agents/look_planner.h) calls U.
+  std::vector<double> Undetected(double time_s) const;
 
   /// A checkpoint's: per valve, the waits summed so far (s x s of onsets), A and B of the onsets
   /// still undetected (s, s x s), and its last look (from_s before any).

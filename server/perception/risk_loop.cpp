@@ -35,7 +35,10 @@ RiskLoop::RiskLoop(const maps::Scenario& scenario, const maps::World& world, map
       // Onsets as --random-leaks draws them (maps::WithRandomLeaks): uniform in [0.1, 0.9] of the mission.
       // (A mission without sensors keeps none: its checkpoint holds no 35,000 empty valves.)
       scan_waits_(scenario.sensors.empty() ? 0 : scenario.ValveCount(), maps::kRandomLeakOnsetFrom * scenario.duration_s,
-                  maps::kRandomLeakOnsetTo * scenario.duration_s) {
+                  maps::kRandomLeakOnsetTo * scenario.duration_s),
+      // The look planner's: a leak may start at any moment of the mission.
+      look_waits_(!scenario.sensors.empty() && scenario.astar.order == maps::AstarSettings::Order::kLooks ? scenario.ValveCount() : 0,
+                  0.0, scenario.duration_s) {
   if (sensing()) {
     valve_positions_ = scenario.ValvePositions();
     double longest_range_m = 0.25;  // the index's cell: a scan's reach reads a few cells
@@ -135,7 +138,9 @@ void RiskLoop::LookAtValves(const agents::ScanReport& s) {
     const Eigen::Vector2d& valve = valve_positions_[static_cast<std::size_t>(v)];
     if (!model.InView(s.position_m, s.heading_rad, valve)) continue;
     const double p = model.DetectionProbability((valve - s.position_m).norm(), 1.0);
-    if (p > 0.0) scan_waits_.Look(v, s.time_s, p);
+    if (p <= 0.0) continue;
+    scan_waits_.Look(v, s.time_s, p);
+    if (look_waits_.valves() > 0) look_waits_.Look(v, s.time_s, p);
   }
 }
 
@@ -144,6 +149,24 @@ Eigen::VectorXd RiskLoop::ValveFactors(double time_s) const {
   Eigen::VectorXd factors = belief_.ValveFactors(time_s);
   if ((factors.array() == 1.0).all()) return {};
   return factors;
+}
+
+Eigen::VectorXd RiskLoop::Undetected(double time_s) const {
+  const std::vector<double> u = look_waits_.Undetected(time_s);
+  return Eigen::Map<const Eigen::VectorXd>(u.data(), static_cast<Eigen::Index>(u.size()));
+}
+
+Eigen::VectorXd RiskLoop::ValveLeakProbabilities(double time_s) const {
+  Eigen::VectorXd p = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(valve_positions_.size()));
+  if (!valve_index_) return p;
+  std::vector<int> near;
+  for (const LeakBelief::Cell& c : belief_.positive()) {
+    valve_index_->Within(belief_.CentreOf(c), association_m_, near);
+    if (near.empty()) continue;
+    const double pc = belief_.Probability(c, time_s);
+    for (int v : near) p[v] = std::max(p[v], pc);
+  }
+  return p;
 }
 
 void RiskLoop::UpdateLayer(double time_s) {
@@ -414,6 +437,7 @@ RiskLoop::State RiskLoop::Checkpoint() const {
   for (const auto& [key, v] : written_) s.written.emplace_back(KeyCell(key), v);
   std::sort(s.written.begin(), s.written.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
   s.scan_waits = scan_waits_.Checkpoint();
+  s.look_waits = look_waits_.Checkpoint();
   return s;
 }
 
@@ -434,6 +458,8 @@ void RiskLoop::Restore(const State& s) {
   written_.clear();
   for (const auto& [c, v] : s.written) written_[CellKey(c)] = v;
   scan_waits_.Restore(s.scan_waits);
+  // A checkpoint of a build before the look planner holds none: its U starts again from here.
+  if (!s.look_waits.last_look_s.empty() || look_waits_.valves() == 0) look_waits_.Restore(s.look_waits);
 }
 
 }  // namespace sage::server

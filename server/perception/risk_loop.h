@@ -66,6 +66,12 @@ class RiskLoop {
   /// Per valve, what the vehicles' weights are scaled by (evidence of no leak); empty when the
   /// loop does not steer or nothing was seen yet.
   Eigen::VectorXd ValveFactors(double time_s) const;
+  /// For the look planner: per valve, the moments since the mission's start a leak from which
+  /// would still be unseen (s, as of time_s; ExpectedDetection::Undetected; empty unless
+  /// astar.order is looks), and the chance of a leak at the valve the scans
+  /// give (the likeliest leaf with evidence of one within the association radius; 0 if none).
+  Eigen::VectorXd Undetected(double time_s) const;
+  Eigen::VectorXd ValveLeakProbabilities(double time_s) const;
   /// Writes the belief's evidence of leaks into the layer's excess (when the loop steers).
   void UpdateLayer(double time_s);
 
@@ -95,6 +101,7 @@ class RiskLoop {
     std::uint64_t scans = 0;
     std::vector<std::pair<LeakBelief::Cell, float>> written;  ///< leaves whose excess the loop set
     ExpectedDetection::State scan_waits;
+    ExpectedDetection::State look_waits;  ///< the look planner's U (astar.order: looks), or empty
   };
   State Checkpoint() const;
   /// Throws std::invalid_argument if the state does not fit the scenario.
@@ -117,6 +124,7 @@ class RiskLoop {
   // What each valve's leak would have waited for the scans fused (metrics' expected detection),
   // and the valves by place for a scan's reach.
   ExpectedDetection scan_waits_;
+  ExpectedDetection look_waits_;  // over the whole mission, for the look planner (astar.order: looks)
   std::vector<Eigen::Vector2d> valve_positions_;
   std::optional<maps::NearbyPoints> valve_index_;
   void LookAtValves(const agents::ScanReport& scan);

@@ -239,6 +239,20 @@ std::vector<VisitTracker::EventWatch> ToWatches(const Json& j) {
 }
 
 // The risk loop: the leak belief's leaves, the scans waiting for their cycle, the scoring.
+// The expected detection's four numbers a valve (server/perception/expected_detection.h).
+Json WaitsJson(const ExpectedDetection::State& w) {
+  return {{"sums", Doubles(w.wait_sums)}, {"undetected", Doubles(w.undetected_s)},
+          {"moment", Doubles(w.undetected_onset_s2)}, {"last", Doubles(w.last_look_s)}};
+}
+ExpectedDetection::State ToWaits(const Json& j) {
+  ExpectedDetection::State w;
+  w.wait_sums = ToDoubles(j.at("sums"));
+  w.undetected_s = ToDoubles(j.at("undetected"));
+  w.undetected_onset_s2 = ToDoubles(j.at("moment"));
+  w.last_look_s = ToDoubles(j.at("last"));
+  return w;
+}
+
 Json RiskLoopJson(const RiskLoop::State& r) {
   Json belief = Json::array();
   for (const LeakBelief::Entry& e : r.belief) belief.push_back({e.cell.i, e.cell.j, e.evidence, e.time_s});
@@ -263,13 +277,11 @@ Json RiskLoopJson(const RiskLoop::State& r) {
   }
   Json written = Json::array();
   for (const auto& [cell, value] : r.written) written.push_back({cell.i, cell.j, value});
-  // The expected detection's four numbers a valve (server/perception/expected_detection.h).
-  const Json waits = {{"sums", Doubles(r.scan_waits.wait_sums)},
-                      {"undetected", Doubles(r.scan_waits.undetected_s)},
-                      {"moment", Doubles(r.scan_waits.undetected_onset_s2)},
-                      {"last", Doubles(r.scan_waits.last_look_s)}};
-  return {{"belief", belief}, {"held", held}, {"last_fused", last}, {"leaks", leaks}, {"alarms", alarms},
-          {"false_detections", r.false_detections}, {"scans", r.scans}, {"written", written}, {"scan_waits", waits}};
+  Json out = {{"belief", belief}, {"held", held}, {"last_fused", last}, {"leaks", leaks}, {"alarms", alarms},
+              {"false_detections", r.false_detections}, {"scans", r.scans}, {"written", written},
+              {"scan_waits", WaitsJson(r.scan_waits)}};
+  if (!r.look_waits.last_look_s.empty()) out["look_waits"] = WaitsJson(r.look_waits);
+  return out;
 }
 RiskLoop::State ToRiskLoop(const Json& j) {
   RiskLoop::State r;
@@ -303,11 +315,8 @@ RiskLoop::State ToRiskLoop(const Json& j) {
   r.false_detections = j.at("false_detections").get<int>();
   r.scans = j.at("scans").get<std::uint64_t>();
   for (const Json& w : j.at("written")) r.written.push_back({{w.at(0).get<int>(), w.at(1).get<int>()}, w.at(2).get<float>()});
-  const Json& waits = j.at("scan_waits");
-  r.scan_waits.wait_sums = ToDoubles(waits.at("sums"));
-  r.scan_waits.undetected_s = ToDoubles(waits.at("undetected"));
-  r.scan_waits.undetected_onset_s2 = ToDoubles(waits.at("moment"));
-  r.scan_waits.last_look_s = ToDoubles(waits.at("last"));
+  r.scan_waits = ToWaits(j.at("scan_waits"));
+  if (j.contains("look_waits")) r.look_waits = ToWaits(j.at("look_waits"));
   return r;
 }
 

@@ -302,7 +302,7 @@ std::string FormatLeaks(const std::vector<MissionMetrics>& runs) {
     // alone is then what the vehicles flew on.
     std::string steered;
     if (run.sensing && run.controller == "astar") {
-      steered = ", the tours blind to the scans";
+      steered = run.tours_on_scans ? ", the next valves chosen on the scans" : ", the tours blind to the scans";
     } else if (run.sensing) {
       steered = run.steered_on_posterior ? ", steered on the posterior" : ", scored only: steered on the profile";
     }
@@ -411,6 +411,7 @@ std::string MetricsJson(const MissionMetrics& metrics, const RunInfo* info) {
                             {"detections", fa.detections}};
     json["scans"] = metrics.scans;
     json["steer"] = metrics.steered_on_posterior ? "posterior" : "prior";
+    if (metrics.controller == "astar") json["astar_order"] = metrics.tours_on_scans ? "looks" : "shortest";
     json["expected_detection_by_scans_s"] = number(metrics.expected_detection_by_scans_s);
     json["leak_onsets_s"] = {number(metrics.leak_onsets_from_s), number(metrics.leak_onsets_to_s)};
   }

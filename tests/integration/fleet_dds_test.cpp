@@ -257,6 +257,7 @@ std::optional<Json> EventOf(const Json& metrics, const std::string& valve) {
 // ---------------------------------------------------------------------------------------------
 class FleetDds : public ::testing::Test {
  protected:
+  void ExpectDetectionsOverDdsAsInProcess(bool order_looks);
   void SetUp() override {
     ASSERT_TRUE(fs::exists(SAGE_BINARY)) << SAGE_BINARY;
     std::string pattern = (fs::temp_directory_path() / "sage_integ_XXXXXX").string();
@@ -1471,9 +1472,17 @@ namespace {
 // At half the other tests' time scale: the camera's scans make a host's cycle the longest of any
 // two-vehicle mission, and the server waits 0.45 of a period for it. Should the server still go on
 // without a state (a loaded machine), the missions are compared up to that cycle.
-TEST_F(FleetDds, DetectionsOverDdsAreTheInProcessOnes) {
+// two_xt_leaks with its leak at P3 from 5 s, two vehicles, 40 s: `sage run` against `sage launch`.
+// `order_looks`: A* vehicles whose next valves the look planner picks on the fused scans (the
+// server's mission core, the same object behind DDS), else the ergodic fleet on the Bayesian loop.
+void FleetDds::ExpectDetectionsOverDdsAsInProcess(bool order_looks) {
   constexpr double kScale = kTimeScale / 2;
   std::string text = ReadFile(Scenario("two_xt_leaks.yaml"));
+  if (order_looks) {
+    const auto in_astar = text.find("  replan_delay_s: 10");
+    ASSERT_NE(in_astar, std::string::npos);
+    text.insert(in_astar, "  order: looks\n");
+  }
   const std::string from = "start_s: 120";
   const auto at = text.find(from);
   ASSERT_NE(at, std::string::npos);
@@ -1481,7 +1490,8 @@ TEST_F(FleetDds, DetectionsOverDdsAreTheInProcessOnes) {
   const fs::path scenario = run_dir_ / "two_xt_leak_soon.yaml";
   std::ofstream(scenario) << text;
   const fs::path in_process = run_dir_ / "run", over_dds = run_dir_ / "launch";
-  const std::vector<std::string> common = {"--duration", "40", "-n", "2", "--seed", "5"};
+  std::vector<std::string> common = {"--duration", "40", "-n", "2", "--seed", "5"};
+  if (order_looks) common.insert(common.end(), {"-c", "astar"});
   std::vector<std::string> run_args = {"run", scenario.string(), "--out", in_process.string()};
   run_args.insert(run_args.end(), common.begin(), common.end());
   ChildProcess& run = Start("run", run_args);
@@ -1514,6 +1524,10 @@ TEST_F(FleetDds, DetectionsOverDdsAreTheInProcessOnes) {
     }
   }
 }
+
+TEST_F(FleetDds, DetectionsOverDdsAreTheInProcessOnes) { ExpectDetectionsOverDdsAsInProcess(false); }
+
+TEST_F(FleetDds, TheLookPlannerFliesOverDdsAsInProcess) { ExpectDetectionsOverDdsAsInProcess(true); }
 
 }  // namespace
 }  // namespace sage

@@ -95,6 +95,9 @@ void ExpectSameScenario(const Scenario& a, const Scenario& b) {
   EXPECT_EQ(a.astar.grid_resolution_m, b.astar.grid_resolution_m);
   EXPECT_EQ(a.astar.clearance_m, b.astar.clearance_m);
   EXPECT_EQ(a.astar.wait_per_lap_s, b.astar.wait_per_lap_s);
+  EXPECT_EQ(a.astar.order, b.astar.order);
+  EXPECT_EQ(a.astar.look_exponent, b.astar.look_exponent);
+  EXPECT_EQ(a.astar.look_leak_weight, b.astar.look_leak_weight);
   EXPECT_EQ(a.default_profile, b.default_profile);
   ASSERT_EQ(a.structures.size(), b.structures.size());
   for (std::size_t i = 0; i < a.structures.size(); ++i) {
@@ -189,8 +192,13 @@ TEST(Scenario, VehicleIdsAndEventCycles) {
 TEST(Scenario, EmitParseRoundTripIsExact) {
   Scenario approaching = ParseScenario(kBase, "base.yaml");
   approaching.ergodic.final_approach_m = 1.25;  // written only when on
+  // The look planner's settings, written only when not the defaults.
+  Scenario looking = LoadScenario(std::string(SAGE_SOURCE_DIR) + "/scenarios/two_xt_leaks.yaml");
+  looking.astar.order = AstarSettings::Order::kLooks;
+  looking.astar.look_exponent = 0.75;
+  looking.astar.look_leak_weight = 12.5;
   for (const Scenario& s : {LoadScenario(kTwoXtPath), ParseScenario(kBase, "base.yaml"), LoadScenario(kFleetFieldPath),
-                            LoadScenario(kFleetLargePath), approaching}) {
+                            LoadScenario(kFleetLargePath), approaching, looking}) {
     SCOPED_TRACE(s.name);
     const std::string text = EmitScenario(s);
     const Scenario again = ParseScenario(text, s.source_path);
@@ -612,6 +620,11 @@ TEST(Scenario, BadInputsGiveOneLineNamingFieldAndValue) {
       {"width_m: 7.0, height_m: 5.0", "width_m: 1000, height_m: 900",
        {"base.yaml: astar.grid_resolution_m = 0.1: gives 90 million cells over the workspace; at most 64 million"}},
       {"fleet: {", "astar: {clearance_m: 300000}\nfleet: {", {"base.yaml: astar.clearance_m = 3e+05: must be <= 10 m"}},
+      {"fleet: {", "astar: {order: sideways}\nfleet: {", {"astar.order = sideways", "must be shortest", "or looks"}},
+      {"fleet: {", "astar: {order: looks}\nfleet: {",
+       {"base.yaml: astar.order = looks: the look planner chooses on the vehicles' scans: give the vehicles sensors"}},
+      {"fleet: {", "astar: {look_leak_weight: -1}\nfleet: {", {"astar.look_leak_weight = -1", ">= 0"}},
+      {"fleet: {", "astar: {look_exponent: 9}\nfleet: {", {"astar.look_exponent = 9", "must be <= 4"}},
       {"size_m: [0.8, 0.8]", "size_m: [0.8, 0.8]\n    height_m: 1e6",
        {"base.yaml: structures[0].height_m = 1e+06: must be <= 100 m"}},
       // Fleet settings and events.

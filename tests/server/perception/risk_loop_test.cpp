@@ -345,6 +345,26 @@ TEST(RiskLoop, SameSeedSameFindingsAndCheckpointRoundTrip) {
   EXPECT_EQ(j["valves"][2]["expected_detection_by_scans_s"], ma.valves[2].expected_detection_by_scans_s);
 }
 
+// The look planner's U (astar.order looks: the moments since the start a leak from which would
+// still be unseen, per valve) crosses a checkpoint exactly; without the planner the loop keeps none.
+TEST(RiskLoop, TheLookPlannersUnseenOnsetsCrossACheckpoint) {
+  maps::Scenario s = maps::WithDuration(maps::LoadScenario(kTwoXtLeaks), 60.0);
+  EXPECT_EQ(Mission(s, MissionOptions{"", ControllerKind::kAstar}).core().risk_loop().Undetected(10.0).size(), 0);
+  s.astar.order = maps::AstarSettings::Order::kLooks;
+  Mission a(s, MissionOptions{"", ControllerKind::kAstar});
+  while (a.Step()) {
+  }
+  const Eigen::VectorXd u = a.core().risk_loop().Undetected(60.0);
+  ASSERT_EQ(u.size(), 5);
+  // Looked at: each valve's U is below the 60 s it would hold unseen, and above 0.
+  EXPECT_TRUE((u.array() > 0.0).all() && (u.array() < 60.0).all()) << u.transpose();
+  const MissionCheckpoint c = DecodeCheckpoint(EncodeCheckpoint(a.core().Checkpoint()), "memory");
+  maps::World world(s);
+  MissionCore restored(world, s, "", ControllerKind::kAstar);
+  restored.Restore(c);
+  EXPECT_EQ(restored.risk_loop().Undetected(60.0), u);
+}
+
 // Scans are ordered per vehicle and sensor only: another vehicle's scan of a valve may be fused
 // cycles after this one's newer scans of it (a slow host answering in a burst). It counts, as made
 // at the valve's last look, and the server goes on (the expected detection had thrown, and the
