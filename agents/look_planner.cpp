@@ -117,11 +117,6 @@ LookPlanner::LookPlanner(const maps::OccupancyGrid& grid, std::vector<Eigen::Vec
       }
     }
   }
-  double longest_s = 0.0;
-  for (const Leg& leg : legs_) {
-    if (std::isfinite(leg.duration_s)) longest_s = std::max(longest_s, leg.duration_s);
-  }
-  horizon_s_ = std::max(options_.horizon_s, options_.legs_per_horizon * longest_s);
   // The deepest search that keeps the sequences within max_sequences.
   depth_ = 1;
   if (n > 1) {
@@ -131,6 +126,19 @@ LookPlanner::LookPlanner(const maps::OccupancyGrid& grid, std::vector<Eigen::Vec
       ++depth_;
     }
   }
+  // The horizon: legs_per_horizon of the longest leg (a far valve is worth its flight), but no
+  // longer than the search's legs last on average (past its last leg a sequence sees nothing, so
+  // a longer horizon would charge a sequence of short legs for hovering and send it far).
+  double longest_s = 0.0, sum_s = 0.0;
+  int finite = 0;
+  for (const Leg& leg : legs_) {
+    if (!std::isfinite(leg.duration_s) || leg.duration_s <= 0.0) continue;
+    longest_s = std::max(longest_s, leg.duration_s);
+    sum_s += leg.duration_s;
+    ++finite;
+  }
+  const double mean_s = finite > 0 ? sum_s / finite : 0.0;
+  horizon_s_ = std::max(options_.horizon_s, std::min(options_.legs_per_horizon * longest_s, depth_ * mean_s));
 }
 
 double LookPlanner::Cost(int from, const std::vector<int>& sequence, const Eigen::VectorXd& undetected_s,

@@ -36,8 +36,9 @@ class LookPlanner {
   };
   struct Options {
     /// The integral is taken over this much of the future at least, and over legs_per_horizon
-    /// times the longest leg where that is longer: a valve farther than the horizon reaches would
-    /// never be worth the flight (a generated field's far cluster went unseen for minutes).
+    /// times the longest leg where that is longer (a valve farther than the horizon reaches would
+    /// never be worth the flight: a generated field's far cluster went unseen for minutes), as far
+    /// as the search's depth of legs lasts on average.
     double horizon_s = 15.0;
     double legs_per_horizon = 2.5;
     int max_sequences = 50'000;       ///< the search's depth is the largest that keeps (n-1)^depth within this

@@ -492,6 +492,10 @@ void MissionCore::TakeTours(const agents::FleetTourPlan& tours, const std::vecto
                             tours.ok ? "" : " (some leg has no path)"));
 }
 
+// A share of more valves than this flies its shortest tour: the planner's n (n - 1) legs and its
+// search (depth 4 at 12 valves) grow beyond a cycle's time.
+constexpr std::size_t kMaxLookShare = 12;
+
 // The look planner's turn: a vehicle that has reached the valve it flies to (within the visit
 // radius, or as near as the grid lets it stand), or has not within twice the leg's time and 10 s
 // more, gets the next valves of its share chosen on the scans fused so far: U from the risk loop,
@@ -512,6 +516,8 @@ void MissionCore::ChooseLooks(const std::vector<int>& alive, std::uint64_t cycle
     if (m.spec().range_m > sensor->spec().range_m) sensor = &m;
   }
   const double risk_sum = risk.sum() > 0.0 ? risk.sum() : 1.0;
+  bool built = false;  // one planner a cycle: a share's n (n - 1) A* legs take time
+  int too_large = 0;
   for (int id : alive) {
     const auto share = plan.shares.find(id);
     const auto tour = plan.tours.find(id);
@@ -519,7 +525,16 @@ void MissionCore::ChooseLooks(const std::vector<int>& alive, std::uint64_t cycle
     if (share == plan.shares.end() || tour == plan.tours.end() || m == nullptr || !m->has_state || share->second.empty()) continue;
     LookTour& look = looks_[id];
     const maps::VehicleSpec spec = SpecForVehicle(scenario_, id, m->name);
+    if (share->second.size() > kMaxLookShare) {
+      // It flies its share's shortest tour (TakeTours'), said once a split.
+      if (look.valves != share->second) ++too_large;
+      look = LookTour{};
+      look.valves = share->second;
+      continue;
+    }
     if (look.valves != share->second || !look.planner) {
+      if (built) continue;  // next cycle; meanwhile the tour it has
+      built = true;
       look.valves = share->second;
       std::vector<Eigen::Vector2d> at;
       look.reach_m.clear();
@@ -587,6 +602,11 @@ void MissionCore::ChooseLooks(const std::vector<int>& alive, std::uint64_t cycle
     Eigen::VectorXd waits = Eigen::VectorXd::Ones(static_cast<Eigen::Index>(sequence.size()));
     waits[0] = 0.0;  // no wait where it already is
     send(std::move(sequence), std::move(waits));
+  }
+  if (too_large > 0) {
+    Note("looks", fmt::format("{} {} the shortest tour of {} share: more than {} valves for the look planner", too_large,
+                              too_large == 1 ? "vehicle flies" : "vehicles fly", too_large == 1 ? "its" : "their",
+                              kMaxLookShare));
   }
 }
 

@@ -183,9 +183,9 @@ struct AstarSettings {
   /// square-root law's rates by itself) plus look_leak_weight times the chance of a leak there
   /// the scans give, so that a leak seen is watched (at 3 a confirmed leak weighs ~2.7 against the
   /// risks' 1). Both >= 0. Measured on two_xt_leaks (sage bench leaks, 400 runs on each of two
-  /// sets of seeds): look_exponent 0.5-0.8 lengthened the time to detection's p90 by 0.1-2.4 s;
-  /// look_leak_weight 1-30 moved it by 0.4 s at most, and the visits to a leak found from 5.6 to
-  /// 13 a minute (3: 8.2), the other valves' longest gaps growing with them.
+  /// sets of seeds): look_exponent 0.5-0.8 raised the time to detection's mean by up to 0.9 s and
+  /// its p90 by up to 2.4 s; look_leak_weight 1-30 moved them by 0.1 and 0.4 s at most, and the
+  /// visits to a leak found from 5.6 to 13 a minute (3: 8.2), the other valves' gaps growing with them.
   double look_exponent = 1.0;
   double look_leak_weight = 3.0;
 };

@@ -230,6 +230,10 @@ maps::Scenario LoadWithOverrides(const ScenarioOverrides& o) {
                  "risk either way)",
                  *o.steer, scenario.name);
   }
+  if (o.order && *o.order == "looks" && scenario.gaze != maps::Gaze::kValves) {
+    spdlog::warn("--order looks: the look planner prices each leg with the camera turned to the nearest valve "
+                 "(gaze: valves); this scenario's vehicles look along their travel, so its legs see less than planned");
+  }
   if ((o.age_weighting_laps || o.risk_share) && scenario.fleet.assignment != maps::FleetAssignment::kRegions) {
     spdlog::warn("--age-weighting and --risk-share shape regions only; this mission's assignment is {} "
                  "(--assignment regions to use them)",
@@ -248,6 +252,11 @@ std::string ErgodicOnlyOverrides(const ScenarioOverrides& o) {
   if (given.empty()) return "";
   return fmt::format("{}: the ergodic controller's; -c astar flies tours without it (given, not used)",
                      fmt::join(given, ", "));
+}
+
+std::string AstarOnlyOverrides(const ScenarioOverrides& o) {
+  if (!o.order) return "";
+  return "--order: the A* vehicles' next valves; the ergodic fleet flies without it (given, not used; add -c astar)";
 }
 
 void CheckFleetFitsField(const maps::Scenario& scenario, bool tours) {

@@ -56,6 +56,8 @@ std::string FirstScenarioOverride(const ScenarioOverrides& o);
 
 /// The overrides given that shape only the ergodic controller (--basis-order, --forgetting,
 /// --turn-radius), as one line to warn an A* tour mission of; empty if none.
+/// "--order: ..." if it was given (to warn of when the controller is ergodic), else "".
+std::string AstarOnlyOverrides(const ScenarioOverrides& o);
 std::string ErgodicOnlyOverrides(const ScenarioOverrides& o);
 
 /// Warns of settings the mission cannot keep as written: a sensor whose rate_hz is not a whole

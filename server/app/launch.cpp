@@ -169,6 +169,10 @@ int Launch(const LaunchCommand& c) {
         ParseControllerKind(c.controller) == ControllerKind::kAstar && !unused.empty()) {
       spdlog::warn("{}", unused);
     }
+    if (const std::string unused = AstarOnlyOverrides(c.scenario);
+        ParseControllerKind(c.controller) == ControllerKind::kErgodic && !unused.empty()) {
+      spdlog::warn("{}", unused);
+    }
     maps::CheckMissionMaps(scenario);  // a bad map or an unreachable valve is refused here, not by the server
     out_dir = c.out_dir.empty() ? (fs::path("runs") / (scenario.name + "_launch")).string() : c.out_dir;
     CheckOutDirectory(out_dir);

@@ -130,6 +130,9 @@ int CmdRun(const RunCommand& c) {
   if (const std::string unused = ErgodicOnlyOverrides(c.scenario); kind == ControllerKind::kAstar && !unused.empty()) {
     spdlog::warn("{}", unused);
   }
+  if (const std::string unused = AstarOnlyOverrides(c.scenario); kind == ControllerKind::kErgodic && !unused.empty()) {
+    spdlog::warn("{}", unused);
+  }
   const std::string profile = c.scenario.profile.empty() ? scenario.default_profile : c.scenario.profile;
   // A bad seabed map or an unreachable valve is refused before the run directory is touched (an
   // earlier run there had been cut to a stub by the refused mission's record).

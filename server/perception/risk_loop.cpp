@@ -458,7 +458,8 @@ void RiskLoop::Restore(const State& s) {
   written_.clear();
   for (const auto& [c, v] : s.written) written_[CellKey(c)] = v;
   scan_waits_.Restore(s.scan_waits);
-  // A checkpoint of a build before the look planner holds none: its U starts again from here.
+  // A checkpoint of a build before the look planner holds none: U stays as if nothing had been
+  // looked at since the start (the planner then looks everywhere first).
   if (!s.look_waits.last_look_s.empty() || look_waits_.valves() == 0) look_waits_.Restore(s.look_waits);
 }
 

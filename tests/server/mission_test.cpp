@@ -185,6 +185,29 @@ TEST(Mission, LookOrderWatchesALeakItFound) {
   EXPECT_GT(looks.leaks[0].visits_per_min_after_detection, 1.4 * tour.leaks[0].visits_per_min_after_detection);
 }
 
+// A share of more than 12 valves is beyond the look planner (n (n - 1) legs, a shallow search):
+// its vehicle flies the share's shortest tour, visit for visit as under order shortest, and the
+// record says so. fleet_field_leaks' 20 valves, one vehicle.
+TEST(Mission, LookOrderLeavesALargeShareToTheTour) {
+  maps::Scenario s = maps::LoadScenario(std::string(SAGE_SOURCE_DIR) + "/scenarios/fleet_field_leaks.yaml");
+  s.vehicles.resize(1);
+  s.fleet_events.clear();
+  s = maps::WithDuration(s, 60.0);
+  ASSERT_GT(s.ValveCount(), 12);
+  const MissionMetrics tour = Mission(s, ControllerKind::kAstar, "").Run().metrics;
+  s.astar.order = maps::AstarSettings::Order::kLooks;
+  TrajectoryRecorder record;
+  const MissionMetrics looks = Mission(s, MissionOptions{"", ControllerKind::kAstar, &record, true}).Run().metrics;
+  ASSERT_EQ(looks.valves.size(), tour.valves.size());
+  for (std::size_t k = 0; k < looks.valves.size(); ++k) {
+    EXPECT_EQ(looks.valves[k].visit_times_s, tour.valves[k].visit_times_s) << looks.valves[k].name;
+  }
+  const auto note = std::find_if(record.fleet_events.begin(), record.fleet_events.end(),
+                                 [](const FleetEventRecord& e) { return e.what == "looks"; });
+  ASSERT_NE(note, record.fleet_events.end());
+  EXPECT_EQ(note->detail, "1 vehicle flies the shortest tour of its share: more than 12 valves for the look planner");
+}
+
 // Regions: the fleet's vehicles split fleet_field's valves (each valve in exactly one region,
 // the region's box holding its valves) and each vehicle flies its own; every valve is then seen
 // again well before the guard's bound, and the splits are in the record (regions.csv).
