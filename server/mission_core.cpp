@@ -504,13 +504,14 @@ constexpr std::size_t kMaxLookShare = 12;
 // new comes), sent this cycle.
 void MissionCore::ChooseLooks(const std::vector<int>& alive, std::uint64_t cycle) {
   TourPlan& plan = tour_plan_;
-  const Eigen::VectorXd& risk = fleet_.schedule().back().weights;
-  const Eigen::VectorXd undetected = loop_.Undetected(time_s_);
-  const Eigen::VectorXd leak = loop_.ValveLeakProbabilities(time_s_);
-  const std::vector<Eigen::Vector2d> positions = scenario_.ValvePositions();
-  // The longest-reaching sensor: the camera a tour vehicle turns to the valves.
   const std::vector<maps::SensorModel>& sensors = loop_.belief().sensors();
   if (sensors.empty()) return;
+  if (look_valve_positions_.empty()) look_valve_positions_ = scenario_.ValvePositions();
+  const std::vector<Eigen::Vector2d>& positions = look_valve_positions_;
+  const Eigen::VectorXd& risk = fleet_.schedule().back().weights;
+  // What the scans say, worked out at the first plan of the cycle (most cycles plan none).
+  std::optional<Eigen::VectorXd> undetected, leak;
+  // The longest-reaching sensor: the camera a tour vehicle turns to the valves.
   const maps::SensorModel* sensor = &sensors.front();
   for (const maps::SensorModel& m : sensors) {
     if (m.spec().range_m > sensor->spec().range_m) sensor = &m;
@@ -582,13 +583,17 @@ void MissionCore::ChooseLooks(const std::vector<int>& alive, std::uint64_t cycle
       from = look.target;
     }
     if (from < 0) continue;
+    if (!undetected) {
+      undetected = loop_.Undetected(time_s_);
+      leak = loop_.ValveLeakProbabilities(time_s_);
+    }
     const auto n = static_cast<Eigen::Index>(look.valves.size());
     Eigen::VectorXd u(n), w(n);
     for (Eigen::Index k = 0; k < n; ++k) {
       const auto v = static_cast<Eigen::Index>(look.valves[static_cast<std::size_t>(k)]);
-      u[k] = undetected.size() > v ? undetected[v] : 0.0;
+      u[k] = undetected->size() > v ? (*undetected)[v] : 0.0;
       w[k] = std::pow(risk[v] / risk_sum, scenario_.astar.look_exponent) +
-             scenario_.astar.look_leak_weight * (leak.size() > v ? leak[v] : 0.0);
+             scenario_.astar.look_leak_weight * (leak->size() > v ? (*leak)[v] : 0.0);
     }
     const std::vector<int> next = look.planner->Plan(from, u, w);
     look.target = next.front();

@@ -300,6 +300,7 @@ class MissionCore {
     Eigen::VectorXd sent_weights;                  // and its waits
   };
   std::map<int, LookTour> looks_;
+  std::vector<Eigen::Vector2d> look_valve_positions_;  // the scenario's, at the first ChooseLooks
   // Regions: each live vehicle's share of the valves, its box, basis and risk field there, and
   // the weights its phi was last sent with.
   struct RegionShare {
