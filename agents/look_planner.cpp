@@ -158,10 +158,12 @@ double LookPlanner::Cost(int from, const std::vector<int>& sequence, const Eigen
   return clock.Price(horizon_s_, w_sum, options_.terminal_s);
 }
 
-std::vector<int> LookPlanner::Plan(int from, const Eigen::VectorXd& undetected_s, const Eigen::VectorXd& weights) const {
+std::vector<int> LookPlanner::Plan(int from, const Eigen::VectorXd& undetected_s, const Eigen::VectorXd& weights,
+                                   int avoid_first) const {
   CheckInputs(size(), from, undetected_s, weights);
   const int n = size();
   if (n == 1) return {from};
+  if (n == 2 || avoid_first == from) avoid_first = -1;  // nowhere else to go, or nothing to avoid
   const double w_sum = weights.sum();
   const double horizon = horizon_s_;
   // One U a depth (the search copies it down a level, leg by leg), as U_k - t (see Cost).
@@ -181,7 +183,7 @@ std::vector<int> LookPlanner::Plan(int from, const Eigen::VectorXd& undetected_s
       return;
     }
     for (int next = 0; next < n; ++next) {
-      if (next == at) continue;
+      if (next == at || (depth == 0 && next == avoid_first)) continue;
       const Leg& l = leg(at, next);
       if (!std::isfinite(l.duration_s)) continue;
       Eigen::VectorXd& v = u[static_cast<std::size_t>(depth + 1)];

@@ -72,8 +72,11 @@ class LookPlanner {
 
   /// The sequence of next valves (no valve twice in a row, never `from` first) of the search's
   /// depth with the smallest Cost; ties to the lexicographically smaller. One valve: {from}.
-  /// Throws std::invalid_argument for sizes that do not match or values negative or not finite.
-  std::vector<int> Plan(int from, const Eigen::VectorXd& undetected_s, const Eigen::VectorXd& weights) const;
+  /// `avoid_first` (or -1): a valve not to fly to first (one the vehicle could not reach), unless
+  /// it is the only other. Throws std::invalid_argument for sizes that do not match or values
+  /// negative or not finite.
+  std::vector<int> Plan(int from, const Eigen::VectorXd& undetected_s, const Eigen::VectorXd& weights,
+                        int avoid_first = -1) const;
 
  private:
   std::vector<Eigen::Vector2d> valves_;

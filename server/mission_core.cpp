@@ -563,6 +563,12 @@ void MissionCore::ChooseLooks(const std::vector<int>& alive, std::uint64_t cycle
     const Eigen::Vector2d x = m->last.state.position_m;
     int from = -1;
     if (look.target < 0 || time_s_ >= look.due_s) {
+      if (look.target >= 0) {
+        // Held on the way (a structure's corner, a neighbour): not that valve first again for a
+        // minute, or the same leg brings it back to the same corner (a reviewer saw 27 s twice).
+        look.missed = look.target;
+        look.missed_until_s = time_s_ + 60.0;
+      }
       // From the share's valve nearest to where it is.
       double best = std::numeric_limits<double>::infinity();
       for (std::size_t k = 0; k < look.valves.size(); ++k) {
@@ -595,7 +601,7 @@ void MissionCore::ChooseLooks(const std::vector<int>& alive, std::uint64_t cycle
       w[k] = std::pow(risk[v] / risk_sum, scenario_.astar.look_exponent) +
              scenario_.astar.look_leak_weight * (leak->size() > v ? (*leak)[v] : 0.0);
     }
-    const std::vector<int> next = look.planner->Plan(from, u, w);
+    const std::vector<int> next = look.planner->Plan(from, u, w, time_s_ < look.missed_until_s ? look.missed : -1);
     look.target = next.front();
     const double leg_s = look.planner->leg(from, look.target).duration_s;
     look.due_s = time_s_ + 10.0 + 2.0 * (std::isfinite(leg_s) ? leg_s : 0.0);

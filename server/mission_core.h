@@ -296,6 +296,8 @@ class MissionCore {
     std::vector<double> reach_m;                   // a valve is reached within this of it
     int target = -1;                               // index into valves; -1: none yet
     double due_s = 0.0;                            // not reached by then: chosen again from where it is
+    int missed = -1;                               // the valve it did not reach by due_s, not flown to first
+    double missed_until_s = 0.0;                   // for a while (another way round may free it)
     std::vector<int> sent;                         // the tour last sent (scenario's valve indices)
     Eigen::VectorXd sent_weights;                  // and its waits
   };

@@ -154,6 +154,27 @@ TEST(LookPlanner, PlansTheCheapestSequenceOfAllEnumerated) {
     ASSERT_FALSE(plan.empty());
     EXPECT_NE(plan.front(), from);
     EXPECT_NEAR(planner.Cost(from, plan, u, w), best, 1e-9 * best) << "trial " << trial;
+    // A valve it could not reach is not flown to first: the best of the sequences that start elsewhere.
+    const int avoid = plan.front();
+    double best_elsewhere = std::numeric_limits<double>::infinity();
+    sequence.clear();
+    const std::function<void(int)> elsewhere = [&](int at) {
+      if (sequence.size() == 4) {
+        if (sequence.front() != avoid) best_elsewhere = std::min(best_elsewhere, planner.Cost(from, sequence, u, w));
+        return;
+      }
+      for (int next = 0; next < 5; ++next) {
+        if (next == at) continue;
+        sequence.push_back(next);
+        elsewhere(next);
+        sequence.pop_back();
+      }
+    };
+    elsewhere(from);
+    const std::vector<int> around = planner.Plan(from, u, w, avoid);
+    EXPECT_NE(around.front(), avoid);
+    EXPECT_NE(around.front(), from);
+    EXPECT_NEAR(planner.Cost(from, around, u, w), best_elsewhere, 1e-9 * best_elsewhere) << "trial " << trial;
   }
 }
 
