@@ -135,11 +135,12 @@ TEST(LookPlanner, PlansTheCheapestSequenceOfAllEnumerated) {
       w[k] = 0.05 + uniform(rng);
     }
     const int from = trial % 5;
-    double best = std::numeric_limits<double>::infinity();
+    // Every sequence of four legs, by its first valve and its price.
+    std::vector<std::pair<int, double>> priced;
     std::vector<int> sequence;
     const std::function<void(int)> enumerate = [&](int at) {
       if (sequence.size() == 4) {
-        best = std::min(best, planner.Cost(from, sequence, u, w));
+        priced.emplace_back(sequence.front(), planner.Cost(from, sequence, u, w));
         return;
       }
       for (int next = 0; next < 5; ++next) {
@@ -150,27 +151,21 @@ TEST(LookPlanner, PlansTheCheapestSequenceOfAllEnumerated) {
       }
     };
     enumerate(from);
+    const auto cheapest = [&](int avoid) {
+      double best = std::numeric_limits<double>::infinity();
+      for (const auto& [first, cost] : priced) {
+        if (first != avoid) best = std::min(best, cost);
+      }
+      return best;
+    };
+    const double best = cheapest(-1);
     const std::vector<int> plan = planner.Plan(from, u, w);
     ASSERT_FALSE(plan.empty());
     EXPECT_NE(plan.front(), from);
     EXPECT_NEAR(planner.Cost(from, plan, u, w), best, 1e-9 * best) << "trial " << trial;
     // A valve it could not reach is not flown to first: the best of the sequences that start elsewhere.
     const int avoid = plan.front();
-    double best_elsewhere = std::numeric_limits<double>::infinity();
-    sequence.clear();
-    const std::function<void(int)> elsewhere = [&](int at) {
-      if (sequence.size() == 4) {
-        if (sequence.front() != avoid) best_elsewhere = std::min(best_elsewhere, planner.Cost(from, sequence, u, w));
-        return;
-      }
-      for (int next = 0; next < 5; ++next) {
-        if (next == at) continue;
-        sequence.push_back(next);
-        elsewhere(next);
-        sequence.pop_back();
-      }
-    };
-    elsewhere(from);
+    const double best_elsewhere = cheapest(avoid);
     const std::vector<int> around = planner.Plan(from, u, w, avoid);
     EXPECT_NE(around.front(), avoid);
     EXPECT_NE(around.front(), from);
