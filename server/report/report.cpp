@@ -197,7 +197,8 @@ std::vector<std::vector<const ValveMetrics*>> MatchValves(const std::vector<Miss
 }
 
 std::string BuildTable(const std::vector<MissionMetrics>& runs, const std::vector<std::vector<const ValveMetrics*>>& matched,
-                       const std::vector<std::size_t>& listed, bool with_gaps, std::size_t gap) {
+                       const std::vector<std::size_t>& listed, bool with_gaps, bool with_intervals, bool with_scan_waits,
+                       std::size_t gap) {
   const MissionMetrics& first = runs.front();
   const std::size_t rows = listed.size();
   // One Weight column if every run prints the same weights (the paper's case), else one per run.
@@ -228,18 +229,25 @@ std::string BuildTable(const std::vector<MissionMetrics>& runs, const std::vecto
     Block block;
     block.label = run.controller;
     if (!same_profile && !run.profile.empty()) block.label += " (" + run.profile + ")";
-    Column weight{"weight", {}}, visits{"visits", {}}, interval{"interval", {}}, gap{"longest gap", {}};
+    Column weight{"weight", {}}, visits{"visits", {}}, interval{"interval", {}}, gap{"longest gap", {}},
+        scan_wait{"scan wait", {}};
     for (const std::size_t i : listed) {
       const ValveMetrics* m = matched[r][i];
       weight.cells.push_back(m ? WeightText(m->weight) : "-");
       visits.cells.push_back(m ? fmt::format("{}", m->visits) : "-");
       interval.cells.push_back(m ? Seconds(m->mean_interval_s) : "-");
       gap.cells.push_back(m ? Seconds(m->max_gap_s) : "-");
+      scan_wait.cells.push_back(m ? Seconds(m->expected_detection_by_scans_s) : "-");
     }
     if (!same_weights) block.columns.push_back(weight);
     block.columns.push_back(visits);
-    block.columns.push_back(interval);
+    if (with_intervals || !run.sensing) block.columns.push_back(interval);
     if (with_gaps) block.columns.push_back(gap);
+    // A camera inspects a valve from metres away: a vehicle that passes it on a leg, or turns to
+    // it from the next one, watches it without a visit (within 0.3 m) to count. With sensors the
+    // scans say how well each valve was watched (a valve of the look planner's with no visit had
+    // its leak found sooner than under the tour).
+    if (with_scan_waits && run.sensing) block.columns.push_back(scan_wait);
     const double vehicle_time = run.duration_s * run.vehicle_count;
     block.summary = {
         std::isnan(run.visit_weight_correlation) ? "undefined"
@@ -261,6 +269,11 @@ std::string BuildTable(const std::vector<MissionMetrics>& runs, const std::vecto
   // Under the Bayesian loop the weights above are the profile's, the prior: what the vehicles
   // steered on moved with every scan (a leaking valve with a tenth of the risk drew the most visits,
   // and a new user read the table's weight and correlation as what they flew by).
+  if (with_scan_waits && std::any_of(runs.begin(), runs.end(), [](const MissionMetrics& m) { return m.sensing; })) {
+    table += "(scan wait: how long a leak starting at the valve at a random moment would have\n"
+             " waited for a scan to see it, from this mission's scans and the sensors' model;\n"
+             " a camera watches a valve from its legs, with no visit counted)\n";
+  }
   if (std::any_of(runs.begin(), runs.end(), [](const MissionMetrics& m) { return m.steered_on_posterior; })) {
     table += "(weight: the profile's risk, the prior; the ergodic vehicles steered on the\n"
              " posterior, which the scans move: a detection raises its valve at once;\n"
@@ -280,12 +293,19 @@ std::string FormatTable(const std::vector<MissionMetrics>& runs) {
     }
     return widest;
   };
-  // To fit the terminal, drop the longest-gap column first, then tighten the column spacing.
+  // To fit the terminal, drop the longest-gap column first, then tighten the column spacing;
+  // with sensors then the intervals between visits before the scans' waits, which say better how
+  // a camera watched a valve (metrics.json has every one).
   const std::vector<std::vector<const ValveMetrics*>> matched = MatchValves(runs);
   const std::vector<std::size_t> listed = ListedValves(matched);
+  struct Layout {
+    bool gaps, intervals, scan_waits;
+    std::size_t spacing;
+  };
   std::string table;
-  for (const auto& [with_gaps, gap] : {std::pair{true, 2}, std::pair{false, 2}, std::pair{false, 1}}) {
-    table = BuildTable(runs, matched, listed, with_gaps, gap);
+  for (const Layout& l : {Layout{true, true, true, 2}, Layout{false, true, true, 2}, Layout{false, true, true, 1},
+                          Layout{false, false, true, 1}, Layout{false, false, false, 1}}) {
+    table = BuildTable(runs, matched, listed, l.gaps, l.intervals, l.scan_waits, l.spacing);
     if (widest_line(table) <= static_cast<std::size_t>(kTableWidth)) break;
   }
   return table + FormatLeaks(runs);

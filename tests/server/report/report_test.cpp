@@ -356,6 +356,57 @@ TEST(FormatTable, PaperLayout) {
   EXPECT_LE(widest(three), 100u) << three;
 }
 
+// With sensors each valve's row says how long a leak there would have waited for a scan (a
+// camera watches a valve from its legs, so a valve with no visit may be well watched): its own
+// value in its own row, "---" where no estimate exists; no such column without sensors, and
+// when three runs are too wide for the terminal the scans' waits are the last thing given up.
+TEST(FormatTable, ScanWaitsWithSensors) {
+  const auto row_of = [](const std::string& table, const std::string& valve) {
+    std::size_t start = 0;
+    for (std::size_t end; (end = table.find('\n', start)) != std::string::npos; start = end + 1) {
+      const std::string line = table.substr(start, end - start);
+      if (line.rfind(valve + " ", 0) == 0) return line;
+    }
+    return std::string();
+  };
+  MissionMetrics m = SampleMetrics();
+  const std::string blind = FormatTable({m});
+  EXPECT_EQ(blind.find("scan wait"), std::string::npos) << blind;
+  m.sensing = true;
+  m.valves[0].expected_detection_by_scans_s = 3.44;
+  m.valves[1].expected_detection_by_scans_s = 6.71;  // P3: no visit, yet watched
+  const std::string table = FormatTable({m});
+  EXPECT_NE(table.find("scan wait"), std::string::npos) << table;
+  EXPECT_NE(table.find("(scan wait: how long a leak starting at the valve"), std::string::npos) << table;
+  const std::string p1 = row_of(table, "P1"), p3 = row_of(table, "P3");
+  ASSERT_FALSE(p1.empty()) << table;
+  ASSERT_FALSE(p3.empty()) << table;
+  EXPECT_TRUE(p1.ends_with(" 3.4 s")) << p1;
+  EXPECT_TRUE(p3.ends_with(" 6.7 s")) << p3;
+  EXPECT_NE(p3.find(" 0 "), std::string::npos) << "P3's visits stay 0: " << p3;
+  m.valves[1].expected_detection_by_scans_s = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_TRUE(row_of(FormatTable({m}), "P3").ends_with("---")) << FormatTable({m});
+
+  // Three runs with sensors: the gaps go first, then the intervals between visits; the waits stay.
+  MissionMetrics b = m, c = m;
+  b.controller = "astar";
+  c.controller = "looks";
+  const std::string three = FormatTable({m, b, c});
+  const auto widest = [](const std::string& text) {
+    std::size_t widest = 0, start = 0;
+    for (std::size_t end; (end = text.find('\n', start)) != std::string::npos; start = end + 1) {
+      widest = std::max(widest, end - start);
+    }
+    return widest;
+  };
+  EXPECT_LE(widest(three), 100u) << three;
+  EXPECT_EQ(three.find("longest gap"), std::string::npos) << three;
+  EXPECT_EQ(three.find("visits interval"), std::string::npos) << three;
+  EXPECT_NE(three.find("visits scan wait"), std::string::npos) << three;
+  EXPECT_NE(three.find("scan wait"), std::string::npos) << three;
+  EXPECT_TRUE(row_of(three, "P1").ends_with(" 3.4 s")) << three;
+}
+
 // A large field's table lists the 40 valves with the longest gap in any run, longest first,
 // and says where the others are; up to 300 valves it lists every one, in scenario order. Weights
 // below 0.01 keep two significant digits.
