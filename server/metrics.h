@@ -127,6 +127,9 @@ struct ValveMetrics {
   /// With sensors: the expected wait (s) from a leak's start here to its first detection, from the
   /// scans the mission made (server/perception/expected_detection.h); NaN without sensors.
   double expected_detection_by_scans_s = std::numeric_limits<double>::quiet_NaN();
+  /// With sensors: some scan after the first possible onset could have seen a leak here. False:
+  /// no scan ever could, and the wait above is only the time left to the mission's end.
+  bool seen_by_scans = false;
 };
 
 struct MetricSample {
@@ -156,12 +159,13 @@ struct LeakMetrics {
   int valve = -1;                     ///< its valve's index, or -1 on open seabed
   double start_s = 0.0;
   double strength = 1.0;
-  /// Mission time of the first detection within the association radius after the onset; NaN if never.
+  /// Mission time of its first detection after the onset (a detection, from a scan that had the
+  /// leak in view, is of the nearest leak started within the association radius); NaN if never.
   double detected_s = std::numeric_limits<double>::quiet_NaN();
-  /// Mission time the posterior of a leaf within the association radius first reached
-  /// fusion.confirm_probability after the onset; NaN if never.
+  /// Mission time a leaf whose nearest started leak within the association radius it is first
+  /// reached fusion.confirm_probability, once the leak was detected; NaN if never.
   double confirmed_s = std::numeric_limits<double>::quiet_NaN();
-  int detections = 0;                 ///< detections associated with it
+  int detections = 0;                 ///< detections of it (of the nearest leak, as above)
   /// A valve's leak: visits to the valve per minute from its detection to the end (NaN if undetected).
   double visits_per_min_after_detection = std::numeric_limits<double>::quiet_NaN();
 };

@@ -224,6 +224,13 @@ maps::Scenario LoadWithOverrides(const ScenarioOverrides& o) {
     for (maps::FleetEvent& e : scenario.fleet_events)
       if (e.kind == maps::FleetEvent::Kind::kJoin) e.vehicle.model = model;
   }
+  // The file's own rule, said of the option that broke it (it had named the scenario's file,
+  // which holds no astar.order).
+  if (o.order && *o.order == "looks" && scenario.sensors.empty()) {
+    throw maps::ScenarioError("--order = looks: the look planner chooses the next valves on the vehicles' scans, and " +
+                              o.scenario_path + " has no sensors (give them a sensors: section, as "
+                              "scenarios/two_xt_leaks.yaml does, or --order shortest)");
+  }
   scenario.Validate();  // the overrides obey the same rules as the file
   if (o.steer && scenario.sensors.empty()) {
     spdlog::warn("--steer = {}: {} has no sensors, so no Bayesian risk loop to steer on (it steers on the profile's "

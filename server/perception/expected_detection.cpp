@@ -45,6 +45,13 @@ void ExpectedDetection::Look(int valve, double time_s, double p) {
   last = t;
 }
 
+bool ExpectedDetection::LookedAt(int valve) const {
+  if (valve < 0 || static_cast<std::size_t>(valve) >= state_.last_look_s.size()) {
+    throw std::invalid_argument("ExpectedDetection::LookedAt: no such valve");
+  }
+  return state_.last_look_s[static_cast<std::size_t>(valve)] > from_s_;  // a look with p > 0 moves it past from_s
+}
+
 std::vector<double> ExpectedDetection::Waits(double end_s) const {
   std::vector<double> waits(state_.wait_sums.size(), std::numeric_limits<double>::quiet_NaN());
   const double last_onset = std::min(to_s_, end_s);

@@ -38,6 +38,9 @@ class ExpectedDetection {
   /// valve's last look (the sums hold what came after).
   std::vector<double> Waits(double end_s) const;
 
+  /// Whether any scan since from_s could have seen a leak at the valve (a look with p > 0).
+  bool LookedAt(int valve) const;
+
   /// Per valve, the measure (s) of the onsets up to time_s a leak from which would still be
   /// unseen: what the look planner (agents/look_planner.h) calls U.
   std::vector<double> Undetected(double time_s) const;

@@ -291,21 +291,39 @@ void RiskLoop::UpdateLayer(double time_s) {
 
 void RiskLoop::Score(const std::vector<agents::ScanReport>& fused, double time_s) {
   const double a2 = association_m_ * association_m_;
+  // The leak a point is of: the nearest one started by t within the association radius that
+  // `could` be it (the first listed on a tie); truth_.size() if none. Two leaks may start closer
+  // than that radius (scenarios keep 0.5 m between sites; fleet_field_leaks' sonar associates
+  // within 0.6 m): counted for every leak in reach, a leak starting 0.58 m from one found long
+  // before was detected by the older one's echoes, and confirmed by its belief at its onset.
+  const auto nearest_leak = [&](const Eigen::Vector2d& p, double t, const auto& could) {
+    std::size_t nearest = truth_.size();
+    double nearest_d2 = a2;
+    for (std::size_t k = 0; k < truth_.size(); ++k) {
+      const double d2 = (p - truth_[k].position_m).squaredNorm();
+      if (t + 1e-9 < truth_[k].start_s || d2 > nearest_d2 || (nearest < truth_.size() && d2 == nearest_d2)) continue;
+      if (!could(k)) continue;
+      nearest = k;
+      nearest_d2 = d2;
+    }
+    return nearest;
+  };
+  const auto any_leak = [](std::size_t) { return true; };
   for (const agents::ScanReport& s : fused) {
     const maps::SensorModel& model = belief_.sensors()[static_cast<std::size_t>(s.sensor)];
     for (const Eigen::Vector2d& z : s.detections_m) {
-      bool of_a_leak = false;
-      for (std::size_t k = 0; k < truth_.size(); ++k) {
-        if (s.time_s + 1e-9 < truth_[k].start_s || (z - truth_[k].position_m).squaredNorm() > a2) continue;
-        // Only a scan that had the leak in view could have seen it: a false alarm that fell near a
-        // leak out of every sensor's reach (5.2 m from the nearest vehicle, the sonar's range 5 m)
-        // had counted as its detection.
-        if (!model.InView(s.position_m, s.heading_rad, truth_[k].position_m)) continue;
-        of_a_leak = true;
-        ++leaks_[k].detections;
-        if (std::isnan(leaks_[k].detected_s)) leaks_[k].detected_s = s.time_s;
+      // Only a scan that had the leak in view could have seen it: a false alarm that fell near a
+      // leak out of every sensor's reach (5.2 m from the nearest vehicle, the sonar's range 5 m)
+      // had counted as its detection.
+      const std::size_t k = nearest_leak(z, s.time_s, [&](std::size_t k) {
+        return model.InView(s.position_m, s.heading_rad, truth_[k].position_m);
+      });
+      if (k == truth_.size()) {
+        ++false_detections_;
+        continue;
       }
-      if (!of_a_leak) ++false_detections_;
+      ++leaks_[k].detections;
+      if (std::isnan(leaks_[k].detected_s)) leaks_[k].detected_s = s.time_s;
     }
   }
   const maps::FusionSettings& f = scenario_.fusion;
@@ -315,13 +333,13 @@ void RiskLoop::Score(const std::vector<agents::ScanReport>& fused, double time_s
     const double p = belief_.Probability(c, time_s);
     if (p >= 0.5 * f.alarm_probability) hot.emplace_back(belief_.CentreOf(c), p);
   }
-  for (std::size_t k = 0; k < truth_.size(); ++k) {
-    if (time_s + 1e-9 < truth_[k].start_s || !std::isnan(leaks_[k].confirmed_s)) continue;
-    for (const auto& [centre, p] : hot) {
-      if (p >= f.confirm_probability && (centre - truth_[k].position_m).squaredNorm() <= a2) {
-        leaks_[k].confirmed_s = time_s;
-        break;
-      }
+  // A leaf at the confirmation probability confirms the leak it is of, once a scan has seen that
+  // leak (the belief is only ever raised by detections, which are of the nearest leak).
+  for (const auto& [centre, p] : hot) {
+    if (p < f.confirm_probability) continue;
+    const std::size_t k = nearest_leak(centre, time_s, any_leak);
+    if (k < truth_.size() && std::isnan(leaks_[k].confirmed_s) && !std::isnan(leaks_[k].detected_s)) {
+      leaks_[k].confirmed_s = time_s;
     }
   }
   // Alarms: a leaf at the alarm probability far from every open alarm raises one; an open alarm
@@ -339,12 +357,7 @@ void RiskLoop::Score(const std::vector<agents::ScanReport>& fused, double time_s
       Alarm alarm;
       alarm.anchor_m = centre;
       alarm.raised_s = time_s;
-      for (std::size_t k = 0; k < truth_.size(); ++k) {
-        if (time_s + 1e-9 >= truth_[k].start_s && (centre - truth_[k].position_m).squaredNorm() <= a2) {
-          alarm.leak = static_cast<int>(k);
-          break;
-        }
-      }
+      if (const std::size_t k = nearest_leak(centre, time_s, any_leak); k < truth_.size()) alarm.leak = static_cast<int>(k);
       alarms_.push_back(alarm);
       open = &alarms_.back();
     }
@@ -372,6 +385,7 @@ void RiskLoop::Fill(MissionMetrics& metrics, double end_s) const {
     double sum = 0.0, weight = 0.0;
     for (std::size_t v = 0; v < waits.size() && v < metrics.valves.size(); ++v) {
       metrics.valves[v].expected_detection_by_scans_s = waits[v];
+      metrics.valves[v].seen_by_scans = scan_waits_.LookedAt(static_cast<int>(v));
       const double w = weights[static_cast<Eigen::Index>(v)];
       if (std::isnan(waits[v]) || !(w > 0.0)) continue;
       sum += w * waits[v];

@@ -196,9 +196,18 @@ std::vector<std::vector<const ValveMetrics*>> MatchValves(const std::vector<Miss
   return matched;
 }
 
+// Which per-valve columns a table shows, and how far apart (FormatTable narrows it to fit). The
+// intervals and the scans' waits are a sensing run's choice: a run without sensors always shows
+// its intervals and has no waits.
+struct TableLayout {
+  bool gaps = true, intervals = true, scan_waits = true;
+  std::size_t spacing = 2;
+};
+
 std::string BuildTable(const std::vector<MissionMetrics>& runs, const std::vector<std::vector<const ValveMetrics*>>& matched,
-                       const std::vector<std::size_t>& listed, bool with_gaps, bool with_intervals, bool with_scan_waits,
-                       std::size_t gap) {
+                       const std::vector<std::size_t>& listed, const TableLayout& layout) {
+  const bool with_gaps = layout.gaps, with_intervals = layout.intervals, with_scan_waits = layout.scan_waits;
+  const bool sensing = std::any_of(runs.begin(), runs.end(), [](const MissionMetrics& m) { return m.sensing; });
   const MissionMetrics& first = runs.front();
   const std::size_t rows = listed.size();
   // One Weight column if every run prints the same weights (the paper's case), else one per run.
@@ -214,10 +223,14 @@ std::string BuildTable(const std::vector<MissionMetrics>& runs, const std::vecto
 
   // What a fleet is judged by (metrics.json has them too) under the paper's three: a user had
   // found them only in the JSON.
+  // With sensors two expected delays: from the visits (a leak seen the moment a vehicle is within
+  // the visit radius) and from the scans (the leaks section's "from these scans"); a new user read
+  // one line's 17.6 s against the other's 12.3 s as one figure disagreeing with itself.
   Block lead{"",
              {{"Valve", {}, true}},
              {"corr(visits, weight)", "ergodic metric", "time at boundary", "unvisited valves", "risk-weighted interval",
-              "exp. detection delay"}};
+              sensing ? "exp. delay by visits" : "exp. detection delay"}};
+  if (sensing) lead.summary.push_back("exp. delay by scans");
   for (const std::size_t i : listed) lead.columns[0].cells.push_back(first.valves[i].name);
   if (same_weights) {
     lead.columns.push_back({"Weight", {}});
@@ -237,7 +250,7 @@ std::string BuildTable(const std::vector<MissionMetrics>& runs, const std::vecto
       visits.cells.push_back(m ? fmt::format("{}", m->visits) : "-");
       interval.cells.push_back(m ? Seconds(m->mean_interval_s) : "-");
       gap.cells.push_back(m ? Seconds(m->max_gap_s) : "-");
-      scan_wait.cells.push_back(m ? Seconds(m->expected_detection_by_scans_s) : "-");
+      scan_wait.cells.push_back(!m ? "-" : m->seen_by_scans ? Seconds(m->expected_detection_by_scans_s) : "unseen");
     }
     if (!same_weights) block.columns.push_back(weight);
     block.columns.push_back(visits);
@@ -259,9 +272,10 @@ std::string BuildTable(const std::vector<MissionMetrics>& runs, const std::vecto
         fmt::format("{} of {}", run.unvisited_valves, run.valves.size()),
         run.duration_s > 0.0 ? Seconds(run.risk_weighted_interval_s) : "---",
         run.duration_s > 0.0 ? Seconds(run.expected_detection_delay_s) : "---"};
+    if (sensing) block.summary.push_back(run.sensing ? Seconds(run.expected_detection_by_scans_s) : "---");
     blocks.push_back(std::move(block));
   }
-  std::string table = RenderTable(blocks, rows, gap);
+  std::string table = RenderTable(blocks, rows, layout.spacing);
   if (rows < first.valves.size()) {
     table += fmt::format("({} of {} valves listed: the longest gaps; every valve is in metrics.json, \"valves\")\n",
                          rows, first.valves.size());
@@ -269,10 +283,21 @@ std::string BuildTable(const std::vector<MissionMetrics>& runs, const std::vecto
   // Under the Bayesian loop the weights above are the profile's, the prior: what the vehicles
   // steered on moved with every scan (a leaking valve with a tenth of the risk drew the most visits,
   // and a new user read the table's weight and correlation as what they flew by).
-  if (with_scan_waits && std::any_of(runs.begin(), runs.end(), [](const MissionMetrics& m) { return m.sensing; })) {
-    table += "(scan wait: how long a leak starting at the valve at a random moment would have\n"
-             " waited for a scan to see it, from this mission's scans and the sensors' model;\n"
-             " a camera watches a valve from its legs, with no visit counted)\n";
+  std::vector<std::string> dropped;
+  if (!with_gaps) dropped.emplace_back("longest gap");
+  if (sensing && !with_intervals) dropped.emplace_back("interval");
+  if (sensing && !with_scan_waits) dropped.emplace_back("scan wait");
+  if (!dropped.empty()) {
+    std::string names;
+    for (const std::string& name : dropped) names += (names.empty() ? "" : ", ") + name;
+    table += fmt::format("(not shown, to fit {} columns: {}; metrics.json has every figure)\n", kTableWidth, names);
+  }
+  if (with_scan_waits && sensing) {
+    table += "(scan wait: the mean time a leak starting at the valve (onsets spread over the\n"
+             " mission) would have waited for a scan to see it, from this mission's scans and the\n"
+             " sensors' model; unseen: no scan could have. A visit, within the visit radius, need\n"
+             " not be a look (the camera may face away), and a sensor watches a valve from metres\n"
+             " off with no visit counted)\n";
   }
   if (std::any_of(runs.begin(), runs.end(), [](const MissionMetrics& m) { return m.steered_on_posterior; })) {
     table += "(weight: the profile's risk, the prior; the ergodic vehicles steered on the\n"
@@ -293,23 +318,51 @@ std::string FormatTable(const std::vector<MissionMetrics>& runs) {
     }
     return widest;
   };
-  // To fit the terminal, drop the longest-gap column first, then tighten the column spacing;
-  // with sensors then the intervals between visits before the scans' waits, which say better how
-  // a camera watched a valve (metrics.json has every one).
+  // To fit the terminal: with sensors first the intervals between visits (the scans' waits say
+  // better how a valve was watched), then the longest gaps, then the columns' spacing, and the
+  // waits last; the table says what it left out (metrics.json has every figure).
   const std::vector<std::vector<const ValveMetrics*>> matched = MatchValves(runs);
   const std::vector<std::size_t> listed = ListedValves(matched);
-  struct Layout {
-    bool gaps, intervals, scan_waits;
-    std::size_t spacing;
-  };
   std::string table;
-  for (const Layout& l : {Layout{true, true, true, 2}, Layout{false, true, true, 2}, Layout{false, true, true, 1},
-                          Layout{false, false, true, 1}, Layout{false, false, false, 1}}) {
-    table = BuildTable(runs, matched, listed, l.gaps, l.intervals, l.scan_waits, l.spacing);
+  for (const TableLayout& l : {TableLayout{true, true, true, 2}, TableLayout{true, false, true, 2},
+                               TableLayout{false, false, true, 2}, TableLayout{false, false, true, 1},
+                               TableLayout{false, false, false, 1}}) {
+    table = BuildTable(runs, matched, listed, l);
     if (widest_line(table) <= static_cast<std::size_t>(kTableWidth)) break;
   }
   return table + FormatLeaks(runs);
 }
+
+namespace {
+
+// `line` (no newline) onto out, broken at its last "; " (else ", ", else before " (") that keeps
+// the first part within the terminal's width, the rest on a line of its own indented four (a
+// leak's line with its visits after detection had run to 136 columns).
+void AppendWrapped(std::string& out, const std::string& line) {
+  const auto width = static_cast<std::size_t>(kTableWidth);
+  if (line.size() <= width) {
+    out += line + "\n";
+    return;
+  }
+  std::size_t at = std::string::npos;
+  for (const char* mark : {"; ", ", ", " ("}) {  // the first kind of break that fits, the latest of it
+    const std::size_t found = line.rfind(mark, width);
+    // Past the indent and a few words: a break at the start would only move the line along.
+    if (found != std::string::npos && found >= 12) {
+      at = found;
+      break;
+    }
+  }
+  if (at == std::string::npos) {
+    out += line + "\n";
+    return;
+  }
+  const std::size_t rest = line[at] == ' ' ? at + 1 : at + 2;
+  out += line.substr(0, line[at] == ',' ? at + 1 : at) + "\n";  // a comma stays where it was
+  AppendWrapped(out, "    " + line.substr(rest));
+}
+
+}  // namespace
 
 std::string FormatLeaks(const std::vector<MissionMetrics>& runs) {
   std::string out;
@@ -328,27 +381,30 @@ std::string FormatLeaks(const std::vector<MissionMetrics>& runs) {
     }
     out += fmt::format("leaks ({}{}{}):{}\n", run.controller, run.profile.empty() ? "" : ", " + run.profile, steered,
                        run.leaks.empty() ? " none hidden" : "");
+    std::size_t where_width = 0;  // the run's leaks' places in one column, as wide as the widest
+    for (const LeakMetrics& leak : run.leaks) where_width = std::max(where_width, leak.where.size());
     for (const LeakMetrics& leak : run.leaks) {
-      out += fmt::format("  {:<22} from {:6.1f} s: detected {}, confirmed {}, {} detection{}", leak.where, leak.start_s,
-                         after(leak.detected_s, leak.start_s), after(leak.confirmed_s, leak.start_s), leak.detections,
-                         leak.detections == 1 ? "" : "s");
+      std::string line = fmt::format("  {:<{}} from {:6.1f} s: detected {}, confirmed {}, {} detection{}", leak.where,
+                                     where_width, leak.start_s, after(leak.detected_s, leak.start_s),
+                                     after(leak.confirmed_s, leak.start_s), leak.detections, leak.detections == 1 ? "" : "s");
       if (std::isfinite(leak.visits_per_min_after_detection)) {
-        out += fmt::format("; then {:.1f} visits/min to it", leak.visits_per_min_after_detection);
+        line += fmt::format("; then {:.1f} visits/min to it", leak.visits_per_min_after_detection);
       }
-      out += "\n";
+      AppendWrapped(out, line);
     }
     if (run.sensing) {
       const FalseAlarmMetrics& fa = run.false_alarms;
-      out += fmt::format("  false alarms: {} raised, {} cleared{}, {} confirmed ({} false detection{} in {} scans)\n",
-                         fa.raised, fa.cleared,
-                         fa.cleared > 0 ? fmt::format(" (mean {:.1f} s, at most {:.1f} s)", fa.mean_time_to_clear_s,
-                                                      fa.max_time_to_clear_s)
-                                        : "",
-                         fa.confirmed, fa.detections, fa.detections == 1 ? "" : "s", run.scans);
-      // What sage bench leaks measures over seeds, from this mission's scans alone.
+      AppendWrapped(out, fmt::format("  false alarms: {} raised, {} cleared{}, {} confirmed ({} false detection{} in {} scans)",
+                                     fa.raised, fa.cleared,
+                                     fa.cleared > 0 ? fmt::format(" (mean {:.1f} s, at most {:.1f} s)",
+                                                                  fa.mean_time_to_clear_s, fa.max_time_to_clear_s)
+                                                    : "",
+                                     fa.confirmed, fa.detections, fa.detections == 1 ? "" : "s", run.scans));
+      // What sage bench leaks measures over seeds, from this mission's scans alone: the table's
+      // scan waits, weighted by the valves' risk.
       if (std::isfinite(run.expected_detection_by_scans_s)) {
-        out += fmt::format("  expected time to detect a leak, from these scans: {:.1f} s (a leak at a valve drawn by its "
-                           "risk, starting in [{:.0f}, {:.0f}] s)\n",
+        out += fmt::format("  expected time to detect a leak, from these scans: {:.1f} s (the scan waits above,\n"
+                           "    risk-weighted: a leak at a valve drawn by its risk, starting in [{:.0f}, {:.0f}] s)\n",
                            run.expected_detection_by_scans_s, run.leak_onsets_from_s, run.leak_onsets_to_s);
       }
     }

@@ -97,6 +97,9 @@ TEST(ScenarioOverrides, BadValuesNameTheOption) {
       {[](ScenarioOverrides& o) { o.duration_s = 1e9; }, "--duration = 1000000000: must be > 0 and <= 604800 s"},
       // Leaks no vehicle could see: refused as sage bench leaks refuses them.
       {[](ScenarioOverrides& o) { o.random_leaks = 2; }, "--random-leaks = 2: " + kFleetField + " has no sensors"},
+      // The option, not the file (it had read "fleet_field.yaml: astar.order = looks", a key the file has not).
+      {[](ScenarioOverrides& o) { o.order = "looks"; }, "--order = looks: the look planner chooses the next valves on the "
+                                                         "vehicles' scans, and " + kFleetField + " has no sensors"},
       {[](ScenarioOverrides& o) { o.basis_order = 65; }, "--basis-order = 65: must be in 1..64"},
       {[](ScenarioOverrides& o) { o.forgetting_time_s = 0.0; }, "--forgetting = 0: must be > 0"},
       {[](ScenarioOverrides& o) { o.min_turn_radius_m = -0.1; }, "--turn-radius = -0.1: must be a finite number >= 0"},
@@ -509,7 +512,7 @@ TEST(OutDirectory, ARefusedSeabedTouchesNoRunDirectory) {
   std::ofstream(root / "earlier" / "metrics.json") << R"({"complete": true})";
   std::ofstream(root / "earlier" / "trajectory.csv") << "t,vehicle,x,y\n0,0,1,1\n";
   const std::string scenario = (root / "shifted.yaml").string();
-  for (const std::string& command : {"run", "compare"}) {
+  for (const std::string command : {"run", "compare"}) {
     const SageRun refused = RunSage({command, scenario, "--duration", "5", "-o", (root / "earlier").string()});
     EXPECT_EQ(refused.status, 2) << command;
     EXPECT_NE(refused.err.find("the map must cover the workspace"), std::string::npos) << refused.err;

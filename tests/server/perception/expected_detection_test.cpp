@@ -103,6 +103,18 @@ TEST(ExpectedDetection, ClosedForms) {
   EXPECT_NEAR(w[1], 200.0 - 50.0, 1e-9);
   EXPECT_NEAR(w[2], 2.0 + 4.0, 1e-6);  // a leak of 90 s still undetected at 200 s: 2^-27
   EXPECT_TRUE(std::isnan(ExpectedDetection(1, 10.0, 90.0).Waits(5.0)[0]));  // no onset yet
+  // Valve 1 was never looked at: its wait is only the time left to the end, and it says so.
+  EXPECT_TRUE(d.LookedAt(0));
+  EXPECT_FALSE(d.LookedAt(1));
+  EXPECT_TRUE(d.LookedAt(2));
+  ExpectedDetection early(2, 10.0, 90.0);
+  early.Look(0, 5.0, 1.0);   // before any onset
+  early.Look(1, 50.0, 0.0);  // could not have seen it
+  EXPECT_FALSE(early.LookedAt(0));
+  EXPECT_FALSE(early.LookedAt(1));
+  early.Look(1, 50.0, 0.01);
+  EXPECT_TRUE(early.LookedAt(1));
+  EXPECT_THROW(early.LookedAt(2), std::invalid_argument);
 }
 
 // A checkpoint taken mid-mission and restored into a new one goes on to the same waits, bit for

@@ -178,6 +178,61 @@ TEST(RiskLoop, ADetectionCountsForALeakOnlyFromAScanThatSawIt) {
   EXPECT_EQ(m.false_alarms.detections, 1);
 }
 
+// Two leaks closer than the association radius (sites are kept 0.5 m apart; a sonar of 0.2 m
+// associates within 0.6 m): a detection is of the nearer one only, and a leak is confirmed only
+// once something saw it. A new user's leak starting 0.58 m from one found long before had been
+// "confirmed" at its onset by the older one's belief, 2 s before its first detection.
+TEST(RiskLoop, OfTwoLeaksCloseTogetherADetectionIsTheNearersAndNoneIsConfirmedUnseen) {
+  maps::Scenario s = maps::LoadScenario(kTwoXtLeaks);  // a leak at P3 (3.6, 0.9)
+  ASSERT_EQ(s.leaks.size(), 1u);
+  s.leaks[0].start_s = 0.1;
+  for (maps::SensorSpec& sensor : s.sensors) sensor.position_sigma_m = 0.2;  // associates within 0.6 m
+  maps::LeakSpec later;
+  later.point_m = Eigen::Vector2d(3.6, 0.35);  // 0.55 m below P3, open water
+  later.start_s = 0.5;
+  s.leaks.push_back(later);
+  s.Validate();
+  maps::World world(s);
+  MissionCore core(world, s, "", ControllerKind::kErgodic);
+  // Below XT-B (its footprint from y = 1.7 m up), looking down at both, in the camera's 1.2 m.
+  const Eigen::Vector2d p3(3.6, 0.9), b = later.point_m, near(3.6, 1.3);
+  const Eigen::Vector2d at_p3 = p3 + Eigen::Vector2d(0.0, 0.05);  // 0.05 m off P3, 0.60 m off b
+  std::int64_t cycle = 0;
+  ASSERT_TRUE(core.OnState(State(0, 0, near, -M_PI / 2)));
+  core.Cycle(0);
+  const auto look = [&](const std::vector<Eigen::Vector2d>& seen) {
+    cycle += 2;  // the camera scans at 5 Hz: every other cycle
+    ASSERT_TRUE(core.OnState(State(0, cycle, near, -M_PI / 2)));
+    ASSERT_TRUE(core.OnScan(Scan(0, cycle, near, -M_PI / 2, seen)));
+    core.Cycle(cycle);
+  };
+  // P3's leak seen cycle after cycle, from before the second leak's onset to long after.
+  MissionMetrics m;
+  for (int k = 0; k < 60; ++k) {
+    look({at_p3});
+    m = core.Metrics(static_cast<double>(cycle) / 10.0);
+  }
+  ASSERT_EQ(m.leaks.size(), 2u);
+  EXPECT_EQ(m.leaks[0].detections, 60) << "every detection is P3's";
+  EXPECT_FALSE(std::isnan(m.leaks[0].confirmed_s)) << "60 detections confirm P3's leak";
+  EXPECT_GE(m.leaks[0].confirmed_s, m.leaks[0].detected_s);
+  EXPECT_EQ(m.leaks[1].detections, 0) << "none is of the leak 0.60 m from them, though within the 0.6 m radius";
+  EXPECT_TRUE(std::isnan(m.leaks[1].detected_s));
+  EXPECT_TRUE(std::isnan(m.leaks[1].confirmed_s)) << "P3's belief confirms nothing that was never seen";
+  // Now the second one itself: its own detections, and a confirmation after them (or none yet).
+  for (int k = 0; k < 60; ++k) {
+    look({at_p3, b});
+    m = core.Metrics(static_cast<double>(cycle) / 10.0);
+  }
+  EXPECT_EQ(m.leaks[0].detections, 120);
+  EXPECT_EQ(m.leaks[1].detections, 60);
+  EXPECT_DOUBLE_EQ(m.leaks[1].detected_s, 12.2);
+  if (!std::isnan(m.leaks[1].confirmed_s)) {
+    EXPECT_GE(m.leaks[1].confirmed_s, m.leaks[1].detected_s);
+  }
+  EXPECT_EQ(m.false_alarms.detections, 0);
+}
+
 // One suspected leak weighs at most one leak's mass: a sonar-like sensor (0.3 m of position noise)
 // raises tens of leaves around each detection, and their sum of chances had put many times
 // leak_mass on one leak (a new user's shared fleet collapsed onto two). Two leaks far apart weigh
@@ -405,7 +460,9 @@ TEST(RiskLoop, ExpectedDetectionFromTheScans) {
   const Eigen::Vector2d at(3.6, 1.6);
   for (std::int64_t k = 0; k <= 500; ++k) {
     ASSERT_TRUE(core.OnState(State(0, k, at, -M_PI / 2)));
-    if (k % 2 == 0) ASSERT_TRUE(core.OnScan(Scan(0, k, at, -M_PI / 2))) << k;
+    if (k % 2 == 0) {
+      ASSERT_TRUE(core.OnScan(Scan(0, k, at, -M_PI / 2))) << k;
+    }
     core.Cycle(k);
   }
   const MissionMetrics m = core.Metrics(50.0);

@@ -358,8 +358,10 @@ TEST(FormatTable, PaperLayout) {
 
 // With sensors each valve's row says how long a leak there would have waited for a scan (a
 // camera watches a valve from its legs, so a valve with no visit may be well watched): its own
-// value in its own row, "---" where no estimate exists; no such column without sensors, and
-// when three runs are too wide for the terminal the scans' waits are the last thing given up.
+// value in its own row, "unseen" where no scan could have seen a leak (its wait would only be the
+// time left to the end), "---" where there is no estimate; no such column without sensors. The
+// two expected delays are told apart (visits, scans). When runs are too wide for the terminal
+// the intervals go first, then the gaps, and the table says what it left out.
 TEST(FormatTable, ScanWaitsWithSensors) {
   const auto row_of = [](const std::string& table, const std::string& valve) {
     std::size_t start = 0;
@@ -369,29 +371,6 @@ TEST(FormatTable, ScanWaitsWithSensors) {
     }
     return std::string();
   };
-  MissionMetrics m = SampleMetrics();
-  const std::string blind = FormatTable({m});
-  EXPECT_EQ(blind.find("scan wait"), std::string::npos) << blind;
-  m.sensing = true;
-  m.valves[0].expected_detection_by_scans_s = 3.44;
-  m.valves[1].expected_detection_by_scans_s = 6.71;  // P3: no visit, yet watched
-  const std::string table = FormatTable({m});
-  EXPECT_NE(table.find("scan wait"), std::string::npos) << table;
-  EXPECT_NE(table.find("(scan wait: how long a leak starting at the valve"), std::string::npos) << table;
-  const std::string p1 = row_of(table, "P1"), p3 = row_of(table, "P3");
-  ASSERT_FALSE(p1.empty()) << table;
-  ASSERT_FALSE(p3.empty()) << table;
-  EXPECT_TRUE(p1.ends_with(" 3.4 s")) << p1;
-  EXPECT_TRUE(p3.ends_with(" 6.7 s")) << p3;
-  EXPECT_NE(p3.find(" 0 "), std::string::npos) << "P3's visits stay 0: " << p3;
-  m.valves[1].expected_detection_by_scans_s = std::numeric_limits<double>::quiet_NaN();
-  EXPECT_TRUE(row_of(FormatTable({m}), "P3").ends_with("---")) << FormatTable({m});
-
-  // Three runs with sensors: the gaps go first, then the intervals between visits; the waits stay.
-  MissionMetrics b = m, c = m;
-  b.controller = "astar";
-  c.controller = "looks";
-  const std::string three = FormatTable({m, b, c});
   const auto widest = [](const std::string& text) {
     std::size_t widest = 0, start = 0;
     for (std::size_t end; (end = text.find('\n', start)) != std::string::npos; start = end + 1) {
@@ -399,12 +378,89 @@ TEST(FormatTable, ScanWaitsWithSensors) {
     }
     return widest;
   };
+  MissionMetrics m = SampleMetrics();
+  const std::string blind = FormatTable({m});
+  for (const char* absent : {"scan wait", "exp. delay by", "not shown"}) {
+    EXPECT_EQ(blind.find(absent), std::string::npos) << absent << " in\n" << blind;
+  }
+  EXPECT_NE(blind.find("exp. detection delay"), std::string::npos) << blind;
+  m.sensing = true;
+  m.expected_detection_by_scans_s = 4.46;
+  m.valves[0].expected_detection_by_scans_s = 3.44;
+  m.valves[0].seen_by_scans = true;
+  m.valves[1].expected_detection_by_scans_s = 6.71;  // P3: no visit, yet watched
+  m.valves[1].seen_by_scans = true;
+  const std::string table = FormatTable({m});
+  for (const char* needle : {"scan wait", "(scan wait: the mean time a leak starting at the valve", "exp. delay by visits",
+                             "exp. delay by scans"}) {
+    EXPECT_NE(table.find(needle), std::string::npos) << needle << " missing from\n" << table;
+  }
+  EXPECT_NE(row_of(table, "exp. delay by scans").find(" 4.5 s"), std::string::npos) << table;
+  EXPECT_EQ(table.find("not shown"), std::string::npos) << "one run fits whole:\n" << table;
+  const std::string p1 = row_of(table, "P1"), p3 = row_of(table, "P3");
+  ASSERT_FALSE(p1.empty()) << table;
+  ASSERT_FALSE(p3.empty()) << table;
+  EXPECT_TRUE(p1.ends_with(" 3.4 s")) << p1;
+  EXPECT_TRUE(p3.ends_with(" 6.7 s")) << p3;
+  EXPECT_NE(p3.find(" 0 "), std::string::npos) << "P3's visits stay 0: " << p3;
+  m.valves[1].seen_by_scans = false;
+  EXPECT_TRUE(row_of(FormatTable({m}), "P3").ends_with(" unseen")) << FormatTable({m});
+  m.valves[1].seen_by_scans = true;
+  m.valves[1].expected_detection_by_scans_s = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_TRUE(row_of(FormatTable({m}), "P3").ends_with("---")) << FormatTable({m});
+
+  // Two runs with sensors (sage compare): the intervals go, the longest gaps and the waits stay.
+  MissionMetrics b = m, c = m;
+  b.controller = "astar";
+  c.controller = "looks";
+  const std::string two = FormatTable({m, b});
+  EXPECT_LE(widest(two), 100u) << two;
+  EXPECT_NE(two.find("visits  longest gap  scan wait"), std::string::npos) << two;
+  EXPECT_NE(two.find("(not shown, to fit 100 columns: interval; metrics.json has every figure)"), std::string::npos) << two;
+  // Three: the gaps go too; the waits stay while the table fits.
+  const std::string three = FormatTable({m, b, c});
   EXPECT_LE(widest(three), 100u) << three;
-  EXPECT_EQ(three.find("longest gap"), std::string::npos) << three;
-  EXPECT_EQ(three.find("visits interval"), std::string::npos) << three;
-  EXPECT_NE(three.find("visits scan wait"), std::string::npos) << three;
-  EXPECT_NE(three.find("scan wait"), std::string::npos) << three;
+  EXPECT_NE(three.find("visits  scan wait"), std::string::npos) << three;
+  EXPECT_NE(three.find("(not shown, to fit 100 columns: longest gap, interval;"), std::string::npos) << three;
   EXPECT_TRUE(row_of(three, "P1").ends_with(" 3.4 s")) << three;
+}
+
+// The leak lines fit the terminal as the table does: a long line is broken at its last "; ",
+// else ", ", within 100 columns, the rest indented; nothing of it is lost.
+TEST(FormatLeaks, LinesFitTheTerminal) {
+  MissionMetrics m = SampleMetrics();
+  m.sensing = true;
+  m.scans = 91100;
+  m.expected_detection_by_scans_s = 10.7;
+  m.leak_onsets_from_s = 30.0;
+  m.leak_onsets_to_s = 270.0;
+  LeakMetrics leak;
+  leak.where = "seabed (104.25, 1033.5)";
+  leak.start_s = 1169.9;
+  leak.detected_s = 1178.5;
+  leak.confirmed_s = 1179.0;
+  leak.detections = 10400;
+  leak.visits_per_min_after_detection = 7.4;
+  m.leaks = {leak};
+  m.false_alarms.raised = 15;
+  m.false_alarms.cleared = 12;
+  m.false_alarms.confirmed = 3;
+  m.false_alarms.detections = 16700;
+  m.false_alarms.mean_time_to_clear_s = 32.1;
+  m.false_alarms.max_time_to_clear_s = 38.1;
+  const std::string text = FormatLeaks({m});
+  std::string joined;  // the lines run together again, as one line would read
+  std::size_t start = 0;
+  for (std::size_t end; (end = text.find('\n', start)) != std::string::npos; start = end + 1) {
+    const std::string line = text.substr(start, end - start);
+    EXPECT_LE(line.size(), 100u) << line;
+    joined += line.rfind("    ", 0) == 0 ? (joined.ends_with(",") ? " " : "; ") + line.substr(4) : "\n" + line;
+  }
+  for (const char* needle : {"seabed (104.25, 1033.5) from 1169.9 s: detected 1178.5 s (+8.6 s), confirmed 1179.0 s (+9.1 s), 10400 detections; then 7.4 visits/min to it",
+                             "15 raised, 12 cleared (mean 32.1 s, at most 38.1 s), 3 confirmed (16700 false detections in 91100 scans)",
+                             "from these scans: 10.7 s"}) {
+    EXPECT_NE(joined.find(needle), std::string::npos) << needle << " not in\n" << text;
+  }
 }
 
 // A large field's table lists the 40 valves with the longest gap in any run, longest first,
