@@ -431,7 +431,10 @@ std::string MetricsJson(const MissionMetrics& metrics, const RunInfo* info) {
                       {"time_near_s", number(v.time_near_s)},
                       {"longest_unwatched_s", number(v.longest_unwatched_s)},
                       {"visit_times_s", times}});
-    if (metrics.sensing) valves.back()["expected_detection_by_scans_s"] = number(v.expected_detection_by_scans_s);
+    if (metrics.sensing) {
+      valves.back()["expected_detection_by_scans_s"] = number(v.expected_detection_by_scans_s);
+      valves.back()["seen_by_scans"] = v.seen_by_scans;
+    }
   }
   Json events = Json::array();
   for (const EventResponse& e : metrics.events) {

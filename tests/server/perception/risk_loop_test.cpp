@@ -384,6 +384,10 @@ TEST(RiskLoop, SameSeedSameFindingsAndCheckpointRoundTrip) {
   EXPECT_EQ(mr.scans, ma.scans);
   EXPECT_EQ(mr.expected_detection_by_scans_s, ma.expected_detection_by_scans_s);
   EXPECT_GT(ma.expected_detection_by_scans_s, 0.0);
+  for (std::size_t v = 0; v < ma.valves.size(); ++v) {
+    EXPECT_EQ(mr.valves[v].seen_by_scans, ma.valves[v].seen_by_scans) << v;
+    EXPECT_TRUE(ma.valves[v].seen_by_scans) << "in 200 s the camera had each of two_xt's valves in view: " << v;
+  }
   const auto entries = restored.risk_loop().belief().Checkpoint();
   ASSERT_EQ(entries.size(), a.core().risk_loop().belief().Checkpoint().size());
 
@@ -398,6 +402,9 @@ TEST(RiskLoop, SameSeedSameFindingsAndCheckpointRoundTrip) {
   EXPECT_EQ(j["scans"], ma.scans);
   EXPECT_EQ(j["expected_detection_by_scans_s"], ma.expected_detection_by_scans_s);
   EXPECT_EQ(j["valves"][2]["expected_detection_by_scans_s"], ma.valves[2].expected_detection_by_scans_s);
+  for (std::size_t v = 0; v < ma.valves.size(); ++v) {
+    EXPECT_EQ(j["valves"][v]["seen_by_scans"], ma.valves[v].seen_by_scans) << v;
+  }
 }
 
 // The look planner's U (astar.order looks: the moments since the start a leak from which would
