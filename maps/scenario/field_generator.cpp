@@ -348,6 +348,36 @@ std::vector<VehicleSpec> PlaceVehicles(Rng& rng, const Scenario& s, int count) {
 
 }  // namespace
 
+FieldSensors ParseFieldSensors(const std::string& text, const std::string& option) {
+  if (text == "none") return FieldSensors::kNone;
+  if (text == "camera") return FieldSensors::kCamera;
+  if (text == "camera+sonar") return FieldSensors::kCameraAndSonar;
+  throw ScenarioError(option + " = " + text + ": must be none, camera or camera+sonar");
+}
+
+namespace {
+
+// The shipped scenarios' sensors (two_xt_leaks, fleet_field_leaks), so that a generated field's
+// detection times compare with theirs.
+SensorSpec FieldCamera() {
+  SensorSpec c;
+  c.name = "camera";
+  c.kind = SensorKind::kCamera;
+  c.range_m = 1.2, c.fov_deg = 80.0, c.p_detect = 0.9, c.half_range_m = 0.7;
+  c.false_alarms_per_s = 0.02, c.position_sigma_m = 0.08, c.rate_hz = 5.0;
+  return c;
+}
+SensorSpec FieldSonar() {
+  SensorSpec c;
+  c.name = "sonar";
+  c.kind = SensorKind::kSonar;
+  c.range_m = 4.0, c.fov_deg = 120.0, c.p_detect = 0.6, c.half_range_m = 2.0;
+  c.false_alarms_per_s = 0.1, c.position_sigma_m = 0.2, c.rate_hz = 2.0;
+  return c;
+}
+
+}  // namespace
+
 Scenario GenerateField(const FieldOptions& o) {
   CheckOptions(o);
   const double area = std::max(o.xts * o.area_per_xt_m2, o.vehicles * kFieldAreaPerVehicle_m2);
@@ -365,9 +395,10 @@ Scenario GenerateField(const FieldOptions& o) {
   }
 
   Scenario s;
+  const char* sensed = o.sensors == FieldSensors::kCamera ? "_camera" : o.sensors == FieldSensors::kCameraAndSonar ? "_sonar" : "";
   s.name = !o.name.empty() ? o.name
                            : "field_" + std::to_string(o.xts) + "xt_" + std::to_string(o.valves) + "v_" +
-                                 std::to_string(o.vehicles) + "rov_s" + std::to_string(o.seed);
+                                 std::to_string(o.vehicles) + "rov_s" + std::to_string(o.seed) + sensed;
   s.workspace = field;
   AddStructures(std::move(clusters), o.xts, s);
   AddProfiles(rng, s);
@@ -399,6 +430,13 @@ Scenario GenerateField(const FieldOptions& o) {
   // and they scale (README, fleet allocation).
   s.fleet = {o.vehicles > 1 ? FleetAssignment::kRegions : FleetAssignment::kShared,
              std::max(0.5, std::round(vehicles / 500 * 2) / 2), 0.5};
+  // Sensors as the shipped leak scenarios carry them, turned to the valves in reach (two_xt_leaks'
+  // gaze: the look planner prices its legs so); the fusion's defaults are theirs too.
+  if (o.sensors != FieldSensors::kNone) {
+    s.sensors.push_back(FieldCamera());
+    if (o.sensors == FieldSensors::kCameraAndSonar) s.sensors.push_back(FieldSonar());
+    s.gaze = Gaze::kValves;
+  }
   return s;
 }
 

@@ -37,14 +37,27 @@ inline constexpr double kFieldStartClearance_m = 1.0;
 inline constexpr double kFieldStartSeparation_m = 1.5;
 
 /// What `sage field generate` asks for; each field is one command-line option.
+/// Leak sensors a generated field's vehicles carry (--sensors).
+enum class FieldSensors {
+  kNone,            ///< none: the field is inspected by visits (the default; what sage bench scale flies)
+  kCamera,          ///< two_xt_leaks' camera, the vehicles turning to the valves in reach (gaze: valves)
+  kCameraAndSonar,  ///< fleet_field_leaks' camera and sonar, gaze: valves
+};
+/// "none", "camera" or "camera+sonar"; anything else throws ScenarioError naming `option`.
+FieldSensors ParseFieldSensors(const std::string& text, const std::string& option);
+
 struct FieldOptions {
   int xts = 28;                  ///< --xts: Christmas trees (count), >= 1; default 28
   int valves = 87;               ///< --valves: valves in all (count), 2 to 5 per XT; default 87
   int vehicles = 24;             ///< --vehicles: BlueROV2s (count), >= 1; default 24
   std::uint64_t seed = 1;        ///< --seed: same seed, same field; also the mission's seed; default 1
   double area_per_xt_m2 = 80.0;  ///< --area-per-xt: seabed per XT (m^2), in [50, 10000]; default 80
-  /// --name: the scenario's name; empty (default): "field_<xts>xt_<valves>v_<vehicles>rov_s<seed>".
+  /// --name: the scenario's name; empty (default): "field_<xts>xt_<valves>v_<vehicles>rov_s<seed>"
+  /// (then "_camera" or "_sonar" with sensors).
   std::string name;
+  /// --sensors: with any, the field can hide leaks (sage run --random-leaks, sage bench leaks) and
+  /// the Bayesian loop steers on what the vehicles see.
+  FieldSensors sensors = FieldSensors::kNone;
 };
 
 /// A valid scenario (Scenario::Validate() passes, EmitScenario/ParseScenario round-trips it

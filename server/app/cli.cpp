@@ -529,8 +529,9 @@ int RunCli(int argc, char** argv) {
   field->require_subcommand(1);
   CLI::App* generate = field->add_subcommand(
       "generate", "Write a realistic scenario of any size: XTs in manifold clusters, valves at the inspection "
-                  "standoff, graded risk with leaks, a fleet of BlueROV2s, settings sized for the field; the same "
-                  "seed gives the same field (the field grows with the counts: about 80 m^2 of seabed per XT)");
+                  "standoff, graded risk (a few valves suspected of leaking, weighted 10-20), a fleet of BlueROV2s, "
+                  "settings sized for the field, and leak sensors if asked; the same seed gives the same field (the "
+                  "field grows with the counts: about 80 m^2 of seabed per XT)");
   CLI::Option* generate_xts = generate->add_option(
       "--xts", field_options.xts, "Christmas trees (>= 1); without it, as many as --valves needs at the default's rate")
       ->capture_default_str();
@@ -545,7 +546,18 @@ int RunCli(int argc, char** argv) {
       ->capture_default_str();
   generate->add_option("--area-per-xt", field_options.area_per_xt_m2, "Seabed per XT (m^2), 50..10000")
       ->capture_default_str();
-  generate->add_option("--name", field_options.name, "The scenario's name (default: field_<xts>xt_<valves>v_<vehicles>rov_s<seed>)");
+  generate->add_option("--name", field_options.name,
+                       "The scenario's name (default: field_<xts>xt_<valves>v_<vehicles>rov_s<seed>, then _camera or "
+                       "_sonar with --sensors)");
+  std::string field_sensors = "none";
+  generate
+      ->add_option("--sensors", field_sensors,
+                   "Leak sensors on every vehicle: none; camera (two_xt_leaks' 1.2 m camera, the vehicles turning to "
+                   "the valves in reach); camera+sonar (fleet_field_leaks' camera and 4 m sonar). With sensors the "
+                   "field can hide leaks (sage run --random-leaks, sage bench leaks) and the vehicles steer on what "
+                   "they see")
+      ->check(CLI::IsMember({"none", "camera", "camera+sonar"}))
+      ->capture_default_str();
   generate->add_option("--out,-o", field_out, "Scenario file to write")->required();
   std::uint64_t seabed_seed = 7;
   std::string seabed_name, seabed_out;
@@ -749,6 +761,7 @@ int RunCli(int argc, char** argv) {
     // field's [info] line had gone to stdout, so `2>/dev/null` did not quiet it).
     if (*generate || *seabed || *bench_scale || *bench_leaks) LogToStderr();
     if (*generate) {
+      field_options.sensors = maps::ParseFieldSensors(field_sensors, "--sensors");
       return CmdFieldGenerate(WithCountsSizedToEachOther(field_options, generate_xts->count() > 0, generate_valves->count() > 0,
                                                          generate_vehicles->count() > 0),
                               field_out);

@@ -75,20 +75,29 @@ int CmdFieldGenerate(const maps::FieldOptions& options, const std::string& out_p
     }
     spdlog::warn("{}: replacing the field written there before (give --out another path to keep it)", out_path);
   }
+  if (const std::filesystem::path folder = std::filesystem::path(out_path).parent_path(); !folder.empty()) {
+    if (std::error_code ec; !std::filesystem::is_directory(folder, ec)) {
+      throw maps::ScenarioError(fmt::format("--out = {}: its folder {} does not exist; make it first, or give another path",
+                                            out_path, folder.string()));
+    }
+  }
   try {
     WriteScenarioTo(out_path, field);
   } catch (const std::runtime_error& e) {
     throw maps::ScenarioError(std::string("--out: ") + e.what());
   }
   const auto counted = [](std::size_t n, const char* one, const char* many) { return fmt::format("{} {}", n, n == 1 ? one : many); };
-  spdlog::info("wrote {}: {}, {}, {} on {:.1f} x {:.1f} m (K = {}, A* grid {} m) in {:.2f} s; run it "
-               "with sage run {} or sage launch {}",
+  std::string sensors;
+  for (const maps::SensorSpec& sensor : field.sensors) sensors += (sensors.empty() ? "" : " and a ") + sensor.name;
+  spdlog::info("wrote {}: {}, {}, {}{} on {:.1f} x {:.1f} m (K = {}, A* grid {} m) in {:.2f} s; run it "
+               "with sage run {}{} or sage launch {}",
                out_path, counted(field.structures.size(), "XT", "XTs"),
                counted(static_cast<std::size_t>(field.ValveCount()), "valve", "valves"),
-               counted(field.vehicles.size(), "vehicle", "vehicles"),
+               counted(field.vehicles.size(), "vehicle", "vehicles"), sensors.empty() ? "" : " with a " + sensors + " each",
                field.workspace.width_m, field.workspace.height_m, field.ergodic.basis_order,
                field.astar.grid_resolution_m,
-               std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(), out_path, out_path);
+               std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(), out_path,
+               sensors.empty() ? "" : " --random-leaks 3 (leaks it must find)", out_path);
   return 0;
 }
 

@@ -3,6 +3,7 @@
 // the generator's own helpers): water between XTs, the valve standoff, clear vehicle starts,
 // and a density that stays put as the field grows.
 #include "maps/scenario/field_generator.h"
+#include "maps/scenario/perception.h"
 
 #include <algorithm>
 #include <array>
@@ -211,6 +212,53 @@ TEST(FieldGenerator, EmitParseRoundTripIsExact) {
       EXPECT_EQ(again.profiles[i].weights, s.profiles[i].weights);
     }
     EXPECT_EQ(EmitScenario(again), text);
+  }
+}
+
+// --sensors: the shipped leak scenarios' camera (and sonar), turned to the valves; the same field
+// otherwise, named apart; valid, round-trip exact, and able to hide leaks the vehicles can see.
+TEST(FieldGenerator, SensorsAsTheLeakScenariosCarryThem) {
+  FieldOptions plain = Proportional(10, 3), camera = plain, both = plain;
+  camera.sensors = FieldSensors::kCamera;
+  both.sensors = FieldSensors::kCameraAndSonar;
+  const Scenario p = GenerateField(plain), c = GenerateField(camera), b = GenerateField(both);
+  EXPECT_TRUE(p.sensors.empty());
+  EXPECT_EQ(p.gaze, Gaze::kTravel);
+  ASSERT_EQ(c.sensors.size(), 1u);
+  ASSERT_EQ(b.sensors.size(), 2u);
+  EXPECT_EQ(c.sensors[0].kind, SensorKind::kCamera);
+  EXPECT_EQ(c.sensors[0].range_m, 1.2);
+  EXPECT_EQ(b.sensors[1].kind, SensorKind::kSonar);
+  EXPECT_EQ(b.sensors[1].range_m, 4.0);
+  EXPECT_EQ(c.gaze, Gaze::kValves);
+  EXPECT_EQ(c.name, p.name + "_camera");
+  EXPECT_EQ(b.name, p.name + "_sonar");
+  // The field is the same: sensors draw nothing from the seed.
+  ASSERT_EQ(c.structures.size(), p.structures.size());
+  for (std::size_t i = 0; i < p.structures.size(); ++i) EXPECT_EQ(c.structures[i].center_m, p.structures[i].center_m);
+  ASSERT_EQ(c.vehicles.size(), p.vehicles.size());
+  for (std::size_t i = 0; i < p.vehicles.size(); ++i) EXPECT_EQ(c.vehicles[i].start_m, p.vehicles[i].start_m);
+  for (const Scenario* s : {&c, &b}) {
+    EXPECT_NO_THROW(s->Validate()) << s->name;
+    const Scenario again = ParseScenario(EmitScenario(*s), "field.yaml");
+    ASSERT_EQ(again.sensors.size(), s->sensors.size());
+    for (std::size_t i = 0; i < s->sensors.size(); ++i) {
+      EXPECT_EQ(again.sensors[i].name, s->sensors[i].name);
+      EXPECT_EQ(again.sensors[i].position_sigma_m, s->sensors[i].position_sigma_m);
+      EXPECT_EQ(again.sensors[i].rate_hz, s->sensors[i].rate_hz);
+    }
+    EXPECT_EQ(again.gaze, Gaze::kValves);
+    EXPECT_EQ(EmitScenario(again), EmitScenario(*s));
+    const Scenario hidden = WithRandomLeaks(*s, 3, LeakSites::kValves);
+    EXPECT_EQ(hidden.leaks.size(), 3u);
+    EXPECT_NO_THROW(hidden.Validate());
+  }
+  EXPECT_EQ(ParseFieldSensors("camera+sonar", "--sensors"), FieldSensors::kCameraAndSonar);
+  try {
+    ParseFieldSensors("lidar", "--sensors");
+    FAIL() << "accepted";
+  } catch (const ScenarioError& e) {
+    EXPECT_STREQ(e.what(), "--sensors = lidar: must be none, camera or camera+sonar");
   }
 }
 
