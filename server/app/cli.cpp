@@ -316,6 +316,11 @@ bool ReportUnknownOption(const CLI::App& app, int argc, char** argv) {
 std::string InOurWords(const std::string& message) {
   // Plain string work, no std::regex: a refusal echoes what was typed, and libstdc++'s regex
   // recursed once a character (a 100,000-character value had crashed the command).
+  // CLI11's "Could not convert: --duration = abc" said nothing of what was wanted.
+  constexpr std::string_view kNotConverted = "Could not convert: ";
+  if (message.starts_with(kNotConverted)) {
+    return message.substr(kNotConverted.size()) + ": must be a number (a whole one for a count)";
+  }
   const std::size_t colon = message.find(": ");
   if (colon == std::string::npos || message.find_first_of(" \t\n") < colon) return message;
   const std::string option = message.substr(0, colon), rest = message.substr(colon + 2);

@@ -288,6 +288,13 @@ TEST(RangeProblem, SaysWhatIsAllowed) {
   EXPECT_NE(twice.err.find("sage: error: run: --duration: given 2 times; give it once (see sage run --help)"),
             std::string::npos)
       << twice.err;
+  // A value that is no number says what was wanted (CLI11's "Could not convert: --duration = abc" had not).
+  const SageRun word = RunSage({"run", file, "--duration", "abc"});
+  EXPECT_EQ(word.status, 2);
+  EXPECT_NE(word.err.find("sage: error: run: --duration = abc: must be a number (a whole one for a count) (see sage run "
+                          "--help)"),
+            std::string::npos)
+      << word.err;
   // A risk change's source is a name: not empty, no line of its own (refused before any mission is looked for).
   for (const std::string& source : {std::string(""), std::string("ops\ndesk")}) {
     const SageRun said = RunSage({"risk", "set", "P1", "2", "--source", source});
