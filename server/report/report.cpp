@@ -7,6 +7,7 @@
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
+#include <limits>
 #include <string_view>
 #include <system_error>
 #include <cmath>
@@ -163,16 +164,25 @@ std::string Seconds(double s) { return std::isfinite(s) ? fmt::format("{:.1f} s"
 
 // The valves a table lists, as indices into the first run's (matched: each run's valve for each of
 // them, or null): every valve up to kTableRows, beyond the kTableRowsOfLarge with the longest gap
-// in any run, longest first (ties in scenario order).
-std::vector<std::size_t> ListedValves(const std::vector<std::vector<const ValveMetrics*>>& matched) {
+// in any run (with sensors the longest scan wait, the unseen first), longest first (ties in
+// scenario order).
+std::vector<std::size_t> ListedValves(const std::vector<std::vector<const ValveMetrics*>>& matched, bool by_scans) {
   const std::size_t m = matched.front().size();
   std::vector<std::size_t> listed(m);
   for (std::size_t i = 0; i < m; ++i) listed[i] = i;
   if (m <= kTableRows) return listed;
+  // With sensors the valves a leak would have waited longest at (the unseen first): what the
+  // scans, not the visits, say was watched least.
+  const auto badness = [by_scans](const ValveMetrics& v) {
+    if (!by_scans) return v.max_gap_s;
+    return v.seen_by_scans ? v.expected_detection_by_scans_s : std::numeric_limits<double>::infinity();
+  };
   std::vector<double> worst(m, 0.0);
   for (const auto& run : matched) {
     for (std::size_t i = 0; i < m; ++i) {
-      if (run[i] != nullptr && std::isfinite(run[i]->max_gap_s)) worst[i] = std::max(worst[i], run[i]->max_gap_s);
+      if (run[i] == nullptr) continue;
+      const double b = badness(*run[i]);
+      if (!std::isnan(b)) worst[i] = std::max(worst[i], b);
     }
   }
   std::stable_sort(listed.begin(), listed.end(), [&](std::size_t a, std::size_t b) { return worst[a] > worst[b]; });
@@ -277,8 +287,8 @@ std::string BuildTable(const std::vector<MissionMetrics>& runs, const std::vecto
   }
   std::string table = RenderTable(blocks, rows, layout.spacing);
   if (rows < first.valves.size()) {
-    table += fmt::format("({} of {} valves listed: the longest gaps; every valve is in metrics.json, \"valves\")\n",
-                         rows, first.valves.size());
+    table += fmt::format("({} of {} valves listed: the longest {}; every valve is in metrics.json, \"valves\")\n", rows,
+                         first.valves.size(), sensing ? "scan waits, the unseen first" : "gaps");
   }
   // Under the Bayesian loop the weights above are the profile's, the prior: what the vehicles
   // steered on moved with every scan (a leaking valve with a tenth of the risk drew the most visits,
@@ -322,7 +332,8 @@ std::string FormatTable(const std::vector<MissionMetrics>& runs) {
   // better how a valve was watched), then the longest gaps, then the columns' spacing, and the
   // waits last; the table says what it left out (metrics.json has every figure).
   const std::vector<std::vector<const ValveMetrics*>> matched = MatchValves(runs);
-  const std::vector<std::size_t> listed = ListedValves(matched);
+  const std::vector<std::size_t> listed =
+      ListedValves(matched, std::any_of(runs.begin(), runs.end(), [](const MissionMetrics& m) { return m.sensing; }));
   std::string table;
   for (const TableLayout& l : {TableLayout{true, true, true, 2}, TableLayout{true, false, true, 2},
                                TableLayout{false, false, true, 2}, TableLayout{false, false, true, 1},

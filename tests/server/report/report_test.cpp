@@ -499,6 +499,27 @@ TEST(FormatTable, LargeFieldListsLongestGaps) {
   EXPECT_NE(table.find("(40 of 2000 valves listed: the longest gaps; every valve is in metrics.json"), std::string::npos);
   EXPECT_NE(table.find("0.0005 "), std::string::npos) << "a weight below 0.01 keeps two significant digits";
 
+  // With sensors: the 40 a leak would have waited longest at, the never-seen first.
+  MissionMetrics sensed = field(2000, 11);
+  sensed.sensing = true;
+  for (int i = 0; i < 2000; ++i) {
+    ValveMetrics& v = sensed.valves[static_cast<std::size_t>(i)];
+    v.seen_by_scans = i % 97 != 5;  // 21 never seen
+    v.expected_detection_by_scans_s = static_cast<double>((static_cast<std::uint64_t>(i) * 6421u + 17u) % 100019u) / 1000.0;
+  }
+  const std::vector<std::string> by_scans = rows_of(FormatTable({sensed}));
+  std::vector<std::pair<double, int>> waits;
+  for (int i = 0; i < 2000; ++i) {
+    const ValveMetrics& v = sensed.valves[static_cast<std::size_t>(i)];
+    waits.push_back({v.seen_by_scans ? v.expected_detection_by_scans_s : std::numeric_limits<double>::infinity(), i});
+  }
+  std::sort(waits.begin(), waits.end(),
+            [](const auto& x, const auto& y) { return x.first > y.first || (x.first == y.first && x.second < y.second); });
+  ASSERT_EQ(by_scans.size(), 40u);
+  for (int k = 0; k < 40; ++k) EXPECT_EQ(by_scans[k], sensed.valves[waits[k].second].name) << k;
+  EXPECT_NE(FormatTable({sensed}).find("(40 of 2000 valves listed: the longest scan waits, the unseen first;"),
+            std::string::npos);
+
   const std::vector<std::string> all = rows_of(FormatTable({field(300, 11)}));
   ASSERT_EQ(all.size(), 300u);
   EXPECT_EQ(all.front(), "P1");
