@@ -527,8 +527,10 @@ int Launch(const LaunchCommand& c) {
       }
       overdue.erase(std::remove_if(overdue.begin(), overdue.end(), [&](const Overdue& o) { return o.at_s <= t; }),
                     overdue.end());
-      // On a terminal the line is redrawn with every status; in a log, once per tenth.
-      if (t > last_print && (tty || t - last_print >= s.duration_s / 10.0 - 1e-9 || s.finished)) {
+      // On a terminal the line is redrawn with every status; in a log, once per tenth. Not for the
+      // server's last status: its summary, relayed as it came, says where the mission ended (a
+      // progress line had followed the summary after a `sage stop`).
+      if (!s.finished && t > last_print && (tty || t - last_print >= s.duration_s / 10.0 - 1e-9)) {
         last_print = t;
         // No metric before the first vehicle's coverage: "---", as in the run table.
         const std::string metric = std::isfinite(s.ergodic_metric) ? fmt::format("{:.2e}", s.ergodic_metric) : "---";
