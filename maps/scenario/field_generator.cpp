@@ -357,22 +357,20 @@ FieldSensors ParseFieldSensors(const std::string& text, const std::string& optio
 
 namespace {
 
-// The shipped scenarios' sensors (two_xt_leaks, fleet_field_leaks), so that a generated field's
-// detection times compare with theirs.
-SensorSpec FieldCamera() {
+// The shipped scenarios' sensors (two_xt_leaks' camera, fleet_field_leaks' camera and sonar), so
+// that a generated field's detection times compare with theirs (a test holds them equal).
+SensorSpec FieldSensor(SensorKind kind) {
+  const bool camera = kind == SensorKind::kCamera;
   SensorSpec c;
-  c.name = "camera";
-  c.kind = SensorKind::kCamera;
-  c.range_m = 1.2, c.fov_deg = 80.0, c.p_detect = 0.9, c.half_range_m = 0.7;
-  c.false_alarms_per_s = 0.02, c.position_sigma_m = 0.08, c.rate_hz = 5.0;
-  return c;
-}
-SensorSpec FieldSonar() {
-  SensorSpec c;
-  c.name = "sonar";
-  c.kind = SensorKind::kSonar;
-  c.range_m = 4.0, c.fov_deg = 120.0, c.p_detect = 0.6, c.half_range_m = 2.0;
-  c.false_alarms_per_s = 0.1, c.position_sigma_m = 0.2, c.rate_hz = 2.0;
+  c.name = camera ? "camera" : "sonar";
+  c.kind = kind;
+  c.range_m = camera ? 1.2 : 4.0;
+  c.fov_deg = camera ? 80.0 : 120.0;
+  c.p_detect = camera ? 0.9 : 0.6;
+  c.half_range_m = camera ? 0.7 : 2.0;
+  c.false_alarms_per_s = camera ? 0.02 : 0.1;
+  c.position_sigma_m = camera ? 0.08 : 0.2;
+  c.rate_hz = camera ? 5.0 : 2.0;
   return c;
 }
 
@@ -395,7 +393,7 @@ Scenario GenerateField(const FieldOptions& o) {
   }
 
   Scenario s;
-  const char* sensed = o.sensors == FieldSensors::kCamera ? "_camera" : o.sensors == FieldSensors::kCameraAndSonar ? "_sonar" : "";
+  const char* sensed = o.sensors == FieldSensors::kCamera ? "_camera" : o.sensors == FieldSensors::kCameraAndSonar ? "_camera_sonar" : "";
   s.name = !o.name.empty() ? o.name
                            : "field_" + std::to_string(o.xts) + "xt_" + std::to_string(o.valves) + "v_" +
                                  std::to_string(o.vehicles) + "rov_s" + std::to_string(o.seed) + sensed;
@@ -433,8 +431,8 @@ Scenario GenerateField(const FieldOptions& o) {
   // Sensors as the shipped leak scenarios carry them, turned to the valves in reach (two_xt_leaks'
   // gaze: the look planner prices its legs so); the fusion's defaults are theirs too.
   if (o.sensors != FieldSensors::kNone) {
-    s.sensors.push_back(FieldCamera());
-    if (o.sensors == FieldSensors::kCameraAndSonar) s.sensors.push_back(FieldSonar());
+    s.sensors.push_back(FieldSensor(SensorKind::kCamera));
+    if (o.sensors == FieldSensors::kCameraAndSonar) s.sensors.push_back(FieldSensor(SensorKind::kSonar));
     s.gaze = Gaze::kValves;
   }
   return s;

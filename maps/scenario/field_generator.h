@@ -53,7 +53,7 @@ struct FieldOptions {
   std::uint64_t seed = 1;        ///< --seed: same seed, same field; also the mission's seed; default 1
   double area_per_xt_m2 = 80.0;  ///< --area-per-xt: seabed per XT (m^2), in [50, 10000]; default 80
   /// --name: the scenario's name; empty (default): "field_<xts>xt_<valves>v_<vehicles>rov_s<seed>"
-  /// (then "_camera" or "_sonar" with sensors).
+  /// (then "_camera" or "_camera_sonar" with sensors).
   std::string name;
   /// --sensors: with any, the field can hide leaks (sage run --random-leaks, sage bench leaks) and
   /// the Bayesian loop steers on what the vehicles see.

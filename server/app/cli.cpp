@@ -319,7 +319,19 @@ std::string InOurWords(const std::string& message) {
   // CLI11's "Could not convert: --duration = abc" said nothing of what was wanted.
   constexpr std::string_view kNotConverted = "Could not convert: ";
   if (message.starts_with(kNotConverted)) {
-    return message.substr(kNotConverted.size()) + ": must be a number (a whole one for a count)";
+    // "--xts = 2.5" is a number, not a whole one; "--duration = abc" is none.
+    const std::string said = message.substr(kNotConverted.size());
+    const std::size_t eq = said.find(" = ");
+    const std::string value = eq == std::string::npos ? "" : said.substr(eq + 3);
+    double parsed = 0.0;
+    std::size_t used = 0;
+    try {
+      parsed = std::stod(value, &used);
+    } catch (const std::exception&) {
+      used = 0;
+    }
+    const bool number = !value.empty() && used == value.size() && std::isfinite(parsed);
+    return said + (number ? ": must be a whole number" : ": must be a number");
   }
   const std::size_t colon = message.find(": ");
   if (colon == std::string::npos || message.find_first_of(" \t\n") < colon) return message;
@@ -553,7 +565,7 @@ int RunCli(int argc, char** argv) {
       ->capture_default_str();
   generate->add_option("--name", field_options.name,
                        "The scenario's name (default: field_<xts>xt_<valves>v_<vehicles>rov_s<seed>, then _camera or "
-                       "_sonar with --sensors)");
+                       "_camera_sonar with --sensors)");
   std::string field_sensors = "none";
   generate
       ->add_option("--sensors", field_sensors,
@@ -561,7 +573,6 @@ int RunCli(int argc, char** argv) {
                    "the valves in reach); camera+sonar (fleet_field_leaks' camera and 4 m sonar). With sensors the "
                    "field can hide leaks (sage run --random-leaks, sage bench leaks) and the vehicles steer on what "
                    "they see")
-      ->check(CLI::IsMember({"none", "camera", "camera+sonar"}))
       ->capture_default_str();
   generate->add_option("--out,-o", field_out, "Scenario file to write")->required();
   std::uint64_t seabed_seed = 7;

@@ -175,7 +175,8 @@ std::vector<std::size_t> ListedValves(const std::vector<std::vector<const ValveM
   // scans, not the visits, say was watched least.
   const auto badness = [by_scans](const ValveMetrics& v) {
     if (!by_scans) return v.max_gap_s;
-    return v.seen_by_scans ? v.expected_detection_by_scans_s : std::numeric_limits<double>::infinity();
+    const double wait = v.expected_detection_by_scans_s;  // NaN (no estimate): not counted
+    return v.seen_by_scans || std::isnan(wait) ? wait : std::numeric_limits<double>::infinity();
   };
   std::vector<double> worst(m, 0.0);
   for (const auto& run : matched) {
@@ -240,7 +241,10 @@ std::string BuildTable(const std::vector<MissionMetrics>& runs, const std::vecto
              {{"Valve", {}, true}},
              {"corr(visits, weight)", "ergodic metric", "time at boundary", "unvisited valves", "risk-weighted interval",
               sensing ? "exp. delay by visits" : "exp. detection delay"}};
-  if (sensing) lead.summary.push_back("exp. delay by scans");
+  if (sensing) {
+    lead.summary.push_back("exp. delay by scans");
+    lead.summary.push_back("unseen by the scans");
+  }
   for (const std::size_t i : listed) lead.columns[0].cells.push_back(first.valves[i].name);
   if (same_weights) {
     lead.columns.push_back({"Weight", {}});
@@ -260,7 +264,10 @@ std::string BuildTable(const std::vector<MissionMetrics>& runs, const std::vecto
       visits.cells.push_back(m ? fmt::format("{}", m->visits) : "-");
       interval.cells.push_back(m ? Seconds(m->mean_interval_s) : "-");
       gap.cells.push_back(m ? Seconds(m->max_gap_s) : "-");
-      scan_wait.cells.push_back(!m ? "-" : m->seen_by_scans ? Seconds(m->expected_detection_by_scans_s) : "unseen");
+      // No estimate (no onset yet: a mission stopped in its first tenth) says "---", not unseen.
+      scan_wait.cells.push_back(!m                                               ? "-"
+                                : m->seen_by_scans || std::isnan(m->expected_detection_by_scans_s) ? Seconds(m->expected_detection_by_scans_s)
+                                                                                   : "unseen");
     }
     if (!same_weights) block.columns.push_back(weight);
     block.columns.push_back(visits);
@@ -282,13 +289,21 @@ std::string BuildTable(const std::vector<MissionMetrics>& runs, const std::vecto
         fmt::format("{} of {}", run.unvisited_valves, run.valves.size()),
         run.duration_s > 0.0 ? Seconds(run.risk_weighted_interval_s) : "---",
         run.duration_s > 0.0 ? Seconds(run.expected_detection_delay_s) : "---"};
-    if (sensing) block.summary.push_back(run.sensing ? Seconds(run.expected_detection_by_scans_s) : "---");
+    if (sensing) {
+      block.summary.push_back(run.sensing ? Seconds(run.expected_detection_by_scans_s) : "---");
+      const auto unseen = std::count_if(run.valves.begin(), run.valves.end(), [](const ValveMetrics& v) {
+        return !v.seen_by_scans && !std::isnan(v.expected_detection_by_scans_s);
+      });
+      block.summary.push_back(run.sensing ? fmt::format("{} of {}", unseen, run.valves.size()) : "---");
+    }
     blocks.push_back(std::move(block));
   }
   std::string table = RenderTable(blocks, rows, layout.spacing);
   if (rows < first.valves.size()) {
-    table += fmt::format("({} of {} valves listed: the longest {}; every valve is in metrics.json, \"valves\")\n", rows,
-                         first.valves.size(), sensing ? "scan waits, the unseen first" : "gaps");
+    table += sensing ? fmt::format("({} of {} valves listed: the longest scan waits; every valve is in metrics.json)\n",
+                                   rows, first.valves.size())
+                     : fmt::format("({} of {} valves listed: the longest gaps; every valve is in metrics.json, \"valves\")\n",
+                                   rows, first.valves.size());
   }
   // Under the Bayesian loop the weights above are the profile's, the prior: what the vehicles
   // steered on moved with every scan (a leaking valve with a tenth of the risk drew the most visits,
@@ -303,11 +318,11 @@ std::string BuildTable(const std::vector<MissionMetrics>& runs, const std::vecto
     table += fmt::format("(not shown, to fit {} columns: {}; metrics.json has every figure)\n", kTableWidth, names);
   }
   if (with_scan_waits && sensing) {
-    table += "(scan wait: the mean time a leak starting at the valve (onsets spread over the\n"
-             " mission) would have waited for a scan to see it, from this mission's scans and the\n"
-             " sensors' model; unseen: no scan could have. A visit, within the visit radius, need\n"
-             " not be a look (the camera may face away), and a sensor watches a valve from metres\n"
-             " off with no visit counted)\n";
+    table += "(scan wait: the mean time a leak starting at the valve (onsets spread over 0.1 to 0.9\n"
+             " of the mission) would have waited for a scan to see it, from this mission's scans and\n"
+             " the sensors' model; unseen: no scan could have seen it, its wait only the time left to\n"
+             " the end. A visit, within the visit radius, need not be a look (the camera may face\n"
+             " away), and a sensor watches a valve from metres off with no visit counted)\n";
   }
   if (std::any_of(runs.begin(), runs.end(), [](const MissionMetrics& m) { return m.steered_on_posterior; })) {
     table += "(weight: the profile's risk, the prior; the ergodic vehicles steered on the\n"
@@ -356,8 +371,9 @@ void AppendWrapped(std::string& out, const std::string& line) {
     return;
   }
   std::size_t at = std::string::npos;
-  for (const char* mark : {"; ", ", ", " ("}) {  // the first kind of break that fits, the latest of it
-    const std::size_t found = line.rfind(mark, width);
+  for (const std::string_view mark : {"; ", ", ", " ("}) {  // the first kind of break that fits, the latest of it
+    // A comma stays on the first line, so it must end within the width too.
+    const std::size_t found = line.rfind(mark, mark == ", " ? width - 1 : width);
     // Past the indent and a few words: a break at the start would only move the line along.
     if (found != std::string::npos && found >= 12) {
       at = found;
@@ -369,7 +385,7 @@ void AppendWrapped(std::string& out, const std::string& line) {
     return;
   }
   const std::size_t rest = line[at] == ' ' ? at + 1 : at + 2;
-  out += line.substr(0, line[at] == ',' ? at + 1 : at) + "\n";  // a comma stays where it was
+  out += line.substr(0, line[at] == ',' ? at + 1 : at) + "\n";  // a comma stays where it was; a "; " goes
   AppendWrapped(out, "    " + line.substr(rest));
 }
 

@@ -226,13 +226,26 @@ TEST(FieldGenerator, SensorsAsTheLeakScenariosCarryThem) {
   EXPECT_EQ(p.gaze, Gaze::kTravel);
   ASSERT_EQ(c.sensors.size(), 1u);
   ASSERT_EQ(b.sensors.size(), 2u);
-  EXPECT_EQ(c.sensors[0].kind, SensorKind::kCamera);
-  EXPECT_EQ(c.sensors[0].range_m, 1.2);
-  EXPECT_EQ(b.sensors[1].kind, SensorKind::kSonar);
-  EXPECT_EQ(b.sensors[1].range_m, 4.0);
+  // The very sensors of the shipped leak scenarios, every field of them.
+  const auto same = [](const SensorSpec& x, const SensorSpec& y) {
+    EXPECT_EQ(x.name, y.name);
+    EXPECT_EQ(x.kind, y.kind);
+    EXPECT_EQ((std::vector<double>{x.range_m, x.fov_deg, x.p_detect, x.half_range_m, x.false_alarms_per_s,
+                                   x.position_sigma_m, x.rate_hz}),
+              (std::vector<double>{y.range_m, y.fov_deg, y.p_detect, y.half_range_m, y.false_alarms_per_s,
+                                   y.position_sigma_m, y.rate_hz}))
+        << x.name;
+  };
+  const Scenario two_xt_leaks = LoadScenario(std::string(SAGE_SOURCE_DIR) + "/scenarios/two_xt_leaks.yaml");
+  const Scenario fleet_field_leaks = LoadScenario(std::string(SAGE_SOURCE_DIR) + "/scenarios/fleet_field_leaks.yaml");
+  ASSERT_EQ(two_xt_leaks.sensors.size(), 1u);
+  ASSERT_EQ(fleet_field_leaks.sensors.size(), 2u);
+  same(c.sensors[0], two_xt_leaks.sensors[0]);
+  same(b.sensors[0], fleet_field_leaks.sensors[0]);
+  same(b.sensors[1], fleet_field_leaks.sensors[1]);
   EXPECT_EQ(c.gaze, Gaze::kValves);
   EXPECT_EQ(c.name, p.name + "_camera");
-  EXPECT_EQ(b.name, p.name + "_sonar");
+  EXPECT_EQ(b.name, p.name + "_camera_sonar");
   // The field is the same: sensors draw nothing from the seed.
   ASSERT_EQ(c.structures.size(), p.structures.size());
   for (std::size_t i = 0; i < p.structures.size(); ++i) EXPECT_EQ(c.structures[i].center_m, p.structures[i].center_m);

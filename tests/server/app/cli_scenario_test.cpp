@@ -291,10 +291,20 @@ TEST(RangeProblem, SaysWhatIsAllowed) {
   // A value that is no number says what was wanted (CLI11's "Could not convert: --duration = abc" had not).
   const SageRun word = RunSage({"run", file, "--duration", "abc"});
   EXPECT_EQ(word.status, 2);
-  EXPECT_NE(word.err.find("sage: error: run: --duration = abc: must be a number (a whole one for a count) (see sage run "
-                          "--help)"),
-            std::string::npos)
+  EXPECT_NE(word.err.find("sage: error: run: --duration = abc: must be a number (see sage run --help)"), std::string::npos)
       << word.err;
+  const SageRun half = RunSage({"field", "generate", "--xts", "2.5", "-o", "unused.yaml"});
+  EXPECT_EQ(half.status, 2);
+  EXPECT_NE(half.err.find("--xts = 2.5: must be a whole number"), std::string::npos) << half.err;
+  // field generate: the sensors by name, and a folder that is not there, each one line.
+  const SageRun lidar = RunSage({"field", "generate", "--sensors", "lidar", "-o", "unused.yaml"});
+  EXPECT_EQ(lidar.status, 2);
+  EXPECT_NE(lidar.err.find("--sensors = lidar: must be none, camera or camera+sonar"), std::string::npos) << lidar.err;
+  const std::string nowhere = (std::filesystem::temp_directory_path() / "sage_no_such_folder_x9" / "f.yaml").string();
+  const SageRun missing = RunSage({"field", "generate", "--xts", "3", "-o", nowhere});
+  EXPECT_EQ(missing.status, 2);
+  EXPECT_NE(missing.err.find("--out = " + nowhere + ": its folder"), std::string::npos) << missing.err;
+  EXPECT_NE(missing.err.find("does not exist"), std::string::npos) << missing.err;
   // A risk change's source is a name: not empty, no line of its own (refused before any mission is looked for).
   for (const std::string& source : {std::string(""), std::string("ops\ndesk")}) {
     const SageRun said = RunSage({"risk", "set", "P1", "2", "--source", source});

@@ -405,9 +405,14 @@ TEST(FormatTable, ScanWaitsWithSensors) {
   EXPECT_NE(p3.find(" 0 "), std::string::npos) << "P3's visits stay 0: " << p3;
   m.valves[1].seen_by_scans = false;
   EXPECT_TRUE(row_of(FormatTable({m}), "P3").ends_with(" unseen")) << FormatTable({m});
+  EXPECT_NE(row_of(FormatTable({m}), "unseen by the scans").find(" 1 of 2"), std::string::npos) << FormatTable({m});
+  // No estimate (a mission stopped before the first onset): "---", seen or not.
+  for (const bool seen : {true, false}) {
+    m.valves[1].seen_by_scans = seen;
+    m.valves[1].expected_detection_by_scans_s = std::numeric_limits<double>::quiet_NaN();
+    EXPECT_TRUE(row_of(FormatTable({m}), "P3").ends_with("---")) << FormatTable({m});
+  }
   m.valves[1].seen_by_scans = true;
-  m.valves[1].expected_detection_by_scans_s = std::numeric_limits<double>::quiet_NaN();
-  EXPECT_TRUE(row_of(FormatTable({m}), "P3").ends_with("---")) << FormatTable({m});
 
   // Two runs with sensors (sage compare): the intervals go, the longest gaps and the waits stay.
   MissionMetrics b = m, c = m;
@@ -435,7 +440,7 @@ TEST(FormatLeaks, LinesFitTheTerminal) {
   m.leak_onsets_from_s = 30.0;
   m.leak_onsets_to_s = 270.0;
   LeakMetrics leak;
-  leak.where = "seabed (104.25, 1033.5)";
+  leak.where = "seabed (1104.25, 1033.5125)";  // 27 characters: the ", " before the detections at column 100
   leak.start_s = 1169.9;
   leak.detected_s = 1178.5;
   leak.confirmed_s = 1179.0;
@@ -456,7 +461,7 @@ TEST(FormatLeaks, LinesFitTheTerminal) {
     EXPECT_LE(line.size(), 100u) << line;
     joined += line.rfind("    ", 0) == 0 ? (joined.ends_with(",") ? " " : "; ") + line.substr(4) : "\n" + line;
   }
-  for (const char* needle : {"seabed (104.25, 1033.5) from 1169.9 s: detected 1178.5 s (+8.6 s), confirmed 1179.0 s (+9.1 s), 10400 detections; then 7.4 visits/min to it",
+  for (const char* needle : {"seabed (1104.25, 1033.5125) from 1169.9 s: detected 1178.5 s (+8.6 s), confirmed 1179.0 s (+9.1 s), 10400 detections; then 7.4 visits/min to it",
                              "15 raised, 12 cleared (mean 32.1 s, at most 38.1 s), 3 confirmed (16700 false detections in 91100 scans)",
                              "from these scans: 10.7 s"}) {
     EXPECT_NE(joined.find(needle), std::string::npos) << needle << " not in\n" << text;
@@ -517,8 +522,16 @@ TEST(FormatTable, LargeFieldListsLongestGaps) {
             [](const auto& x, const auto& y) { return x.first > y.first || (x.first == y.first && x.second < y.second); });
   ASSERT_EQ(by_scans.size(), 40u);
   for (int k = 0; k < 40; ++k) EXPECT_EQ(by_scans[k], sensed.valves[waits[k].second].name) << k;
-  EXPECT_NE(FormatTable({sensed}).find("(40 of 2000 valves listed: the longest scan waits, the unseen first;"),
-            std::string::npos);
+  const std::string sensed_table = FormatTable({sensed});
+  EXPECT_NE(sensed_table.find("(40 of 2000 valves listed: the longest scan waits; every valve is in metrics.json)"),
+            std::string::npos)
+      << sensed_table;
+  EXPECT_NE(sensed_table.find("scan wait"), std::string::npos) << "the column the rows were chosen by is shown";
+  std::size_t widest_sensed = 0, at = 0;
+  for (std::size_t end; (end = sensed_table.find('\n', at)) != std::string::npos; at = end + 1) {
+    widest_sensed = std::max(widest_sensed, end - at);
+  }
+  EXPECT_LE(widest_sensed, 100u) << sensed_table;
 
   const std::vector<std::string> all = rows_of(FormatTable({field(300, 11)}));
   ASSERT_EQ(all.size(), 300u);
