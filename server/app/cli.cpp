@@ -7,6 +7,7 @@
 #include <cctype>
 #include <charconv>
 #include <cmath>
+#include <optional>
 #include <cstdint>
 #include <cstdlib>
 #include <iostream>
@@ -313,6 +314,19 @@ bool ReportUnknownOption(const CLI::App& app, int argc, char** argv) {
 
 // CLI11's words for an option given more often than it takes, in the project's ("--duration: At
 // Most 1 required but received 2" had read as if a second value were wanted).
+// The finite number `text` is, all of it; nullopt for anything else ("2.5x", "abc", "inf", "").
+std::optional<double> NumberIn(const std::string& text) {
+  double value = 0.0;
+  std::size_t used = 0;
+  try {
+    value = std::stod(text, &used);
+  } catch (const std::exception&) {
+    return std::nullopt;
+  }
+  if (used == 0 || used != text.size() || !std::isfinite(value)) return std::nullopt;
+  return value;
+}
+
 std::string InOurWords(const std::string& message) {
   // Plain string work, no std::regex: a refusal echoes what was typed, and libstdc++'s regex
   // recursed once a character (a 100,000-character value had crashed the command).
@@ -323,15 +337,7 @@ std::string InOurWords(const std::string& message) {
     const std::string said = message.substr(kNotConverted.size());
     const std::size_t eq = said.find(" = ");
     const std::string value = eq == std::string::npos ? "" : said.substr(eq + 3);
-    double parsed = 0.0;
-    std::size_t used = 0;
-    try {
-      parsed = std::stod(value, &used);
-    } catch (const std::exception&) {
-      used = 0;
-    }
-    const bool number = !value.empty() && used == value.size() && std::isfinite(parsed);
-    return said + (number ? ": must be a whole number" : ": must be a number");
+    return said + (NumberIn(value) ? ": must be a whole number" : ": must be a number");
   }
   const std::size_t colon = message.find(": ");
   if (colon == std::string::npos || message.find_first_of(" \t\n") < colon) return message;
@@ -350,15 +356,8 @@ std::string InOurWords(const std::string& message) {
 }  // namespace
 
 std::string RangeProblem(const std::string& text, double low, double high, bool whole) {
-  double value = 0.0;
-  std::size_t used = 0;
-  try {
-    value = std::stod(text, &used);
-  } catch (const std::exception&) {
-    used = 0;
-  }
-  const bool number = used > 0 && used == text.size() && std::isfinite(value);
-  if (number && value >= low && value <= high && (!whole || value == std::floor(value))) return "";
+  const std::optional<double> value = NumberIn(text);
+  if (value && *value >= low && *value <= high && (!whole || *value == std::floor(*value))) return "";
   return whole ? fmt::format("must be a whole number in {}..{}", low, high) : fmt::format("must be a number in [{}, {}]", low, high);
 }
 
