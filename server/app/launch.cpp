@@ -60,31 +60,6 @@ constexpr double kJoinLead_s = 2.0;
 // seconds) after it is stopped from here, as it would have been.
 constexpr double kSelfEndGrace_s = 2.0;
 
-// A run directory may take a new mission unless one still runs there, or one died there that
-// could be resumed (its record would be overwritten).
-void CheckRunDirectoryFree(const std::string& dir) {
-  if (fs::exists(fs::path(dir) / "mission.json")) {
-    try {
-      const MissionFile previous = ReadMissionFile(dir);
-      if (IsRunningLauncher(previous.launcher_pid)) {
-        throw maps::ScenarioError(fmt::format("--out = {}: a mission is running there (launcher pid {}); stop it or "
-                                              "choose another --out",
-                                              dir, previous.launcher_pid));
-      }
-    } catch (const maps::ScenarioError& e) {
-      if (std::string(e.what()).find("is running there") != std::string::npos) throw;
-    }
-  }
-  const RecordSummary record = ReadRecordSummary(dir);
-  if (record.exists && !record.complete) {
-    throw maps::ScenarioError(fmt::format(
-        "--out = {}: it holds a mission that did not finish (recorded to t = {:.1f} s{}); resume it with sage launch "
-        "--resume {}, or choose another --out",
-        dir, record.recorded_until_s,
-        record.has_checkpoint ? fmt::format(", checkpoint at t = {:.1f} s", record.checkpoint_s) : std::string(), dir));
-  }
-}
-
 void PointLatestAt(const std::string& dir) {
   std::error_code ignored;
   // A mission still running that runs/latest pointed at loses it here: its operators are told

@@ -22,6 +22,9 @@
 #include <spdlog/sinks/stdout_color_sinks.h>
 #include <spdlog/spdlog.h>
 
+#include "maps/scenario/scenario.h"
+#include "server/report/mission_file.h"
+
 namespace sage::server {
 
 namespace fs = std::filesystem;
@@ -203,6 +206,29 @@ void TerminalRelay::Print(const std::string& line) {
   std::FILE* to = IsLogLine(line) ? stderr : stdout;
   std::fputs(line.c_str(), to);
   std::fflush(to);
+}
+
+void CheckRunDirectoryFree(const std::string& dir) {
+  if (fs::exists(fs::path(dir) / "mission.json")) {
+    try {
+      const MissionFile previous = ReadMissionFile(dir);
+      if (IsRunningLauncher(previous.launcher_pid)) {
+        throw maps::ScenarioError(fmt::format("--out = {}: a mission is running there (launcher pid {}); stop it or "
+                                              "choose another --out",
+                                              dir, previous.launcher_pid));
+      }
+    } catch (const maps::ScenarioError& e) {
+      if (std::string(e.what()).find("is running there") != std::string::npos) throw;
+    }
+  }
+  const RecordSummary record = ReadRecordSummary(dir);
+  if (record.exists && !record.complete) {
+    throw maps::ScenarioError(fmt::format(
+        "--out = {}: it holds a mission that did not finish (recorded to t = {:.1f} s{}); resume it with sage launch "
+        "--resume {}, or choose another --out",
+        dir, record.recorded_until_s,
+        record.has_checkpoint ? fmt::format(", checkpoint at t = {:.1f} s", record.checkpoint_s) : std::string(), dir));
+  }
 }
 
 }  // namespace sage::server

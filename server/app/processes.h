@@ -33,6 +33,12 @@ int ExitCode(int wait_status);
 /// True if `pid` runs a `sage launch` (another launcher holding a run directory).
 bool IsRunningLauncher(int pid);
 
+/// A run directory may take a new mission (sage launch, run, compare, evaluate -o) unless one
+/// still runs there, or one died there that could be resumed (its record would be overwritten:
+/// a new user's `sage run -o` into a crashed launch's directory had replaced its checkpoint with
+/// only a warning). Throws ScenarioError naming --out and how to go on.
+void CheckRunDirectoryFree(const std::string& dir);
+
 /// An exclusive lock on a run directory (flock on DIR/.launch.lock, not inherited by the
 /// processes it starts), held by the launch that runs its mission for as long as it lives; the
 /// kernel lets it go however the launcher ends. Two `sage launch --resume DIR` at once had both

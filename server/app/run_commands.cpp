@@ -24,6 +24,13 @@
 namespace sage::server {
 namespace {
 
+// A launched mission's directory (mission.json) is refused while its mission runs or could be
+// resumed, as sage launch refuses it: a new user's `sage run -o` into a crashed launch's directory
+// had replaced its checkpoint and record with only a warning.
+void CheckNoLaunchThere(const std::string& dir) {
+  if (std::error_code ignored; fs::exists(fs::path(dir) / "mission.json", ignored)) CheckRunDirectoryFree(dir);
+}
+
 namespace fs = std::filesystem;
 
 // Progress on stderr: a redrawn bar on a terminal, a line every 10 % otherwise (CI logs).
@@ -139,6 +146,7 @@ int CmdRun(const RunCommand& c) {
   maps::CheckMissionMaps(scenario);
   const fs::path dir = c.out_dir.empty() ? DefaultOutDir(scenario, profile, ToString(kind)) : c.out_dir;
   CheckOutDirectory(dir.string());
+  CheckNoLaunchThere(dir.string());
   if (std::error_code ignored; fs::exists(dir / "trajectory.csv", ignored)) {
     spdlog::warn("{}: replacing the run recorded there (give --out another directory to keep it)", dir.string());
   }
@@ -165,6 +173,7 @@ int CmdCompare(const RunCommand& c) {
   maps::CheckMissionMaps(scenario);  // before the run directories are touched, as run
   const fs::path dir = c.out_dir.empty() ? DefaultOutDir(scenario, profile, "compare") : c.out_dir;
   CheckOutDirectory(dir.string());
+  CheckNoLaunchThere(dir.string());
   PrepareRunDirectory(dir.string());
   const RunOutcome first = RunInto(scenario, ControllerKind::kErgodic, profile, dir / "ergodic", c.stop);
   const MissionMetrics& ergodic = first.metrics;
@@ -285,6 +294,7 @@ int CmdEvaluate(const EvaluateCommand& c) {
   std::cout << FormatTable({metrics});
   if (!c.out_dir.empty()) {
     CheckOutDirectory(c.out_dir);
+    CheckNoLaunchThere(c.out_dir);
     PrepareRunDirectory(c.out_dir);
     WriteMetricsJson((fs::path(c.out_dir) / "metrics.json").string(), metrics);
     // The profile's risk changes are marked at their valves, with the share they gave.

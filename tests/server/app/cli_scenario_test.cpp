@@ -548,6 +548,47 @@ TEST(OutDirectory, ARefusedSeabedTouchesNoRunDirectory) {
   fs::remove_all(root);
 }
 
+// A crashed launch's directory (mission.json, a record that stops short, its launcher gone) is
+// refused by sage run, compare and evaluate -o as sage launch refuses it: a new user's `sage run
+// -o` there had replaced its checkpoint and record with only a warning. Finished, it may be reused.
+TEST(OutDirectory, ACrashedLaunchIsNotWrittenOver) {
+  namespace fs = std::filesystem;
+  const fs::path dir = fs::temp_directory_path() / "sage_crashed_launch_test";
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  const pid_t gone = fork();
+  if (gone == 0) _exit(0);
+  ASSERT_GT(gone, 0);
+  waitpid(gone, nullptr, 0);
+  MissionFile m;
+  m.domain_id = 7;
+  m.run_dir = dir.string();
+  m.scenario_path = (dir / "scenario.yaml").string();
+  m.launcher_pid = gone;
+  WriteMissionFile(dir.string(), m);
+  const std::string record = "t,vehicle,x,y\n0,0,1,1\n12.5,0,1.5,1\n";
+  std::ofstream(dir / "trajectory.csv") << record;
+  std::ofstream(dir / "metrics.json") << R"({"complete": false, "duration_s": 12.5})";
+  const std::string scenario = std::string(SAGE_SOURCE_DIR) + "/scenarios/two_xt.yaml";
+  for (const std::string command : {"run", "compare"}) {
+    const SageRun refused = RunSage({command, scenario, "--duration", "5", "-o", dir.string()});
+    EXPECT_EQ(refused.status, 2) << command;
+    EXPECT_NE(refused.err.find("--out = " + dir.string() + ": it holds a mission that did not finish (recorded to t = 12.5 s"),
+              std::string::npos)
+        << refused.err;
+    EXPECT_NE(refused.err.find("resume it with sage launch --resume " + dir.string()), std::string::npos) << refused.err;
+  }
+  std::ifstream kept(dir / "trajectory.csv");
+  EXPECT_EQ(std::string((std::istreambuf_iterator<char>(kept)), std::istreambuf_iterator<char>()), record);
+  EXPECT_FALSE(fs::exists(dir / "ergodic")) << "compare made its runs' directories";
+  // The same directory, its mission finished: a new run may replace it (with the warning).
+  std::ofstream(dir / "metrics.json") << R"({"complete": true, "duration_s": 12.5})";
+  const SageRun again = RunSage({"run", scenario, "--duration", "5", "-o", dir.string()});
+  EXPECT_EQ(again.status, 0) << again.err;
+  EXPECT_NE(again.err.find("replacing the run recorded there"), std::string::npos) << again.err;
+  fs::remove_all(dir);
+}
+
 // What a mission's settings would silently lose is said before it flies: hidden leaks with no
 // sensor to see them (the table had read "detected never" as a fleet that missed them), fusion
 // settings with no sensors, a sensor rate off the control cycles.
