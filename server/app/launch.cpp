@@ -265,6 +265,24 @@ int Launch(const LaunchCommand& c) {
       }
     }
     server_args.insert(server_args.end(), {"--resume", "--resumes", std::to_string(mission.resumes)});
+    // Hosts of this mission that still run but were not heard: every host steps on the same
+    // mission clock, so when none is heard they are all past the mission's end with no server,
+    // waiting (up to a minute) for a word that would end it. A new server's clock would wake them
+    // and they would fly on beside the vehicles restarted here from the record: a new user's
+    // resume after 50 s flew rov5 twice, its trajectory jumping between the two copies. They
+    // leave cleanly first; their vehicles restart from the record with the others.
+    if (live.empty()) {
+      for (const int pid : MissionHostPids(scenario_file)) {
+        kill(pid, SIGTERM);
+        for (int waited_ms = 0; waited_ms < 3000 && kill(pid, 0) == 0; waited_ms += 50) {
+          std::this_thread::sleep_for(std::chrono::milliseconds(50));
+        }
+        if (kill(pid, 0) == 0) kill(pid, SIGKILL);
+        spdlog::warn("launch: agent host pid {} of this mission still ran, silent (past the mission's end with no "
+                     "server); stopped it: its vehicles restart from the record",
+                     pid);
+      }
+    }
   }
   // The hosts start with the server; its clock starts far enough ahead that every host is in by
   // its first cycle (each builds its Box2D world and finds the server over DDS meanwhile), so all

@@ -7,6 +7,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <chrono>
 #include <cstdio>
@@ -143,6 +144,33 @@ bool IsRunningLauncher(int pid) {
   std::ifstream cmdline(fmt::format("/proc/{}/cmdline", pid));
   const std::string command((std::istreambuf_iterator<char>(cmdline)), std::istreambuf_iterator<char>());
   return command.find("launch") != std::string::npos;
+}
+
+std::vector<int> MissionHostPids(const std::string& scenario_path) {
+  std::vector<int> pids;
+  std::error_code ec;
+  for (const fs::directory_entry& entry : fs::directory_iterator("/proc", ec)) {
+    const std::string name = entry.path().filename().string();
+    if (name.empty() || name.find_first_not_of("0123456789") != std::string::npos) continue;
+    const int pid = std::stoi(name);
+    if (pid == getpid()) continue;
+    std::ifstream in(entry.path() / "cmdline");
+    const std::string command((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    std::vector<std::string> argv;
+    for (std::size_t start = 0, end; start < command.size(); start = end + 1) {
+      end = command.find('\0', start);
+      if (end == std::string::npos) end = command.size();
+      argv.push_back(command.substr(start, end - start));
+    }
+    for (std::size_t i = 0; i + 1 < argv.size(); ++i) {
+      if (argv[i] == "agents" && fs::path(argv[i + 1]).lexically_normal() == fs::path(scenario_path).lexically_normal()) {
+        pids.push_back(pid);
+        break;
+      }
+    }
+  }
+  std::sort(pids.begin(), pids.end());
+  return pids;
 }
 
 TerminalRelay::~TerminalRelay() {

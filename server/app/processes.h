@@ -32,6 +32,9 @@ std::string DescribeExit(int wait_status);
 int ExitCode(int wait_status);
 /// True if `pid` runs a `sage launch` (another launcher holding a run directory).
 bool IsRunningLauncher(int pid);
+/// The processes (other than this one) whose command line holds `agents` followed by
+/// `scenario_path`: a mission's agent hosts, sage launch's and sage vehicle add's alike. Ascending.
+std::vector<int> MissionHostPids(const std::string& scenario_path);
 
 /// A run directory may take a new mission (sage launch, run, compare, evaluate -o) unless one
 /// still runs there, or one died there that could be resumed (its record would be overwritten:

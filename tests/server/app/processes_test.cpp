@@ -4,8 +4,11 @@
 // directory.
 #include "server/app/processes.h"
 
+#include <signal.h>
+#include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <filesystem>
 #include <optional>
 #include <string>
@@ -56,6 +59,45 @@ TEST(TerminalRelay, LogLinesGoToStderrAndTheTableToStdout) {
 // A run directory is held by one launch at a time: a second lock is refused while the first
 // lives and given once it is gone; `sage launch --resume DIR` refuses a directory another launch
 // holds, before anything starts (two resumes at once had both flown into one record).
+// A mission's agent hosts are found by their command line (`agents <scenario.yaml>`, however
+// the path is written), and nothing else is: a resumed launch stops the silent ones of its own
+// mission only.
+TEST(MissionHostPids, FindsTheHostsOfOneMissionByTheirCommandLine) {
+  const std::string mine = "/tmp/sage_hosts_test/run/scenario.yaml", other = "/tmp/sage_hosts_test/other/scenario.yaml";
+  const auto spawn = [](const std::vector<std::string>& tail) {
+    const pid_t pid = fork();
+    if (pid == 0) {
+      // bash -c "...; true" stays bash (no exec of its one command), its argv ending in `tail`.
+      std::vector<const char*> argv = {"bash", "-c", "sleep 30; true"};
+      for (const std::string& a : tail) argv.push_back(a.c_str());
+      argv.push_back(nullptr);
+      execvp("bash", const_cast<char* const*>(argv.data()));
+      _exit(127);
+    }
+    return pid;
+  };
+  const pid_t a = spawn({"agents", mine, "--offset", "0"});
+  const pid_t b = spawn({"agents", "/tmp/sage_hosts_test/run/./scenario.yaml", "--add", "1"});
+  const pid_t c = spawn({"agents", other});
+  const pid_t d = spawn({"server", mine});
+  ASSERT_GT(a, 0);
+  ASSERT_GT(d, 0);
+  std::vector<int> found;
+  for (int tries = 0; tries < 100; ++tries) {  // until the children have exec'd
+    found = MissionHostPids(mine);
+    if (found.size() >= 2 && !MissionHostPids(other).empty()) break;
+    usleep(20'000);
+  }
+  EXPECT_EQ(found, (std::vector<int>{std::min(a, b), std::max(a, b)}));
+  EXPECT_EQ(MissionHostPids(other), std::vector<int>{c});
+  EXPECT_TRUE(MissionHostPids("/tmp/sage_hosts_test/none/scenario.yaml").empty());
+  for (const pid_t pid : {a, b, c, d}) {
+    kill(pid, SIGKILL);
+    waitpid(pid, nullptr, 0);
+  }
+  EXPECT_TRUE(MissionHostPids(mine).empty());
+}
+
 TEST(RunDirectoryLock, OneLaunchAtATime) {
   const std::filesystem::path dir = std::filesystem::temp_directory_path() / "sage_run_lock_test";
   std::filesystem::remove_all(dir);
