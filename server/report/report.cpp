@@ -325,9 +325,11 @@ std::string BuildTable(const std::vector<MissionMetrics>& runs, const std::vecto
              " away), and a sensor watches a valve from metres off with no visit counted)\n";
   }
   if (std::any_of(runs.begin(), runs.end(), [](const MissionMetrics& m) { return m.steered_on_posterior; })) {
-    table += "(weight: the profile's risk, the prior; the ergodic vehicles steered on the\n"
-             " posterior, which the scans move: a detection raises its valve at once;\n"
-             " see leaks below and risk.ot)\n";
+    // The column is the weight averaged over the mission: an operator's risk set moves it too
+    // (a new user read 0.20 for a valve set to 10 as the profile's number).
+    table += "(weight: each valve's risk weight averaged over the mission, the profile's with any\n"
+             " operator's changes: the prior; the ergodic vehicles steered on the posterior, which\n"
+             " the scans move: a detection raises its valve at once; see leaks below and risk.ot)\n";
   }
   return table;
 }

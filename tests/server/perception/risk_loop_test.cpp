@@ -554,7 +554,8 @@ TEST(RiskLoop, AFlowlineLeakIsFoundWhereTheLineIs) {
   EXPECT_TRUE(m.steered_on_posterior);
   EXPECT_EQ(j["steer"], "posterior");
   EXPECT_NE(FormatLeaks({m}).find("steered on the posterior"), std::string::npos) << FormatLeaks({m});
-  EXPECT_NE(FormatTable({m}).find("(weight: the profile's risk, the prior; the ergodic vehicles steered on the\n posterior"),
+  EXPECT_NE(FormatTable({m}).find("(weight: each valve's risk weight averaged over the mission, the profile's with any\n"
+                                  " operator's changes: the prior; the ergodic vehicles steered on the posterior"),
             std::string::npos)
       << FormatTable({m});
   // The tours fly the profile whatever the belief says: not "steered on the posterior".
