@@ -4,6 +4,7 @@
 // directory.
 #include "server/app/processes.h"
 
+#include <fcntl.h>
 #include <signal.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -67,6 +68,12 @@ TEST(MissionHostPids, FindsTheHostsOfOneMissionByTheirCommandLine) {
   const auto spawn = [](const std::vector<std::string>& tail) {
     const pid_t pid = fork();
     if (pid == 0) {
+      // A group of its own (killed whole below, its sleep too), and no hold on the test's output
+      // (an orphaned sleep had kept ctest waiting for it).
+      setpgid(0, 0);
+      const int null = open("/dev/null", O_RDWR);
+      dup2(null, STDOUT_FILENO);
+      dup2(null, STDERR_FILENO);
       // bash -c "...; true" stays bash (no exec of its one command), its argv ending in `tail`.
       std::vector<const char*> argv = {"bash", "-c", "sleep 30; true"};
       for (const std::string& a : tail) argv.push_back(a.c_str());
@@ -92,7 +99,7 @@ TEST(MissionHostPids, FindsTheHostsOfOneMissionByTheirCommandLine) {
   EXPECT_EQ(MissionHostPids(other), std::vector<int>{c});
   EXPECT_TRUE(MissionHostPids("/tmp/sage_hosts_test/none/scenario.yaml").empty());
   for (const pid_t pid : {a, b, c, d}) {
-    kill(pid, SIGKILL);
+    kill(-pid, SIGKILL);  // the group: bash and its sleep
     waitpid(pid, nullptr, 0);
   }
   EXPECT_TRUE(MissionHostPids(mine).empty());
