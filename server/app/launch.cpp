@@ -51,6 +51,8 @@ struct Host {
   std::vector<std::string> vehicle_names;
   bool running = true;
   bool ends_itself = false;  // started with --lose-at / --leave-at: it ends at the event's cycle
+  std::string log;           // its log file
+  bool ended_here = false;   // this launcher ended it (a scenario's loss or leave)
 };
 
 // A joining vehicle's host is started this long (wall seconds) before its join, so that it is up
@@ -315,7 +317,7 @@ int Launch(const LaunchCommand& c) {
                                 .string();
     const bool ends_itself = std::find(args.begin(), args.end(), "--lose-at") != args.end() ||
                              std::find(args.begin(), args.end(), "--leave-at") != args.end();
-    hosts.push_back({Spawn(args, log), std::move(names), true, ends_itself});
+    hosts.push_back({Spawn(args, log), std::move(names), true, ends_itself, log});
   };
   // Runs of consecutive entries share a host, up to per_host each.
   auto start_shared_hosts = [&](const std::vector<std::pair<int, std::string>>& vehicles, auto make_args) {
@@ -504,6 +506,7 @@ int Launch(const LaunchCommand& c) {
             continue;
           }
           kill(h.pid, lose ? SIGKILL : SIGTERM);
+          h.ended_here = true;
           terminal.Log(fmt::format("launch: t = {:.1f} s: {} {} (pid {})", t, e.vehicle.name,
                                    lose ? "killed (SIGKILL)" : "leaves", h.pid));
         }
@@ -513,6 +516,7 @@ int Launch(const LaunchCommand& c) {
         for (Host& h : hosts) {
           if (h.pid != o.pid || !h.running) continue;
           kill(h.pid, o.lose ? SIGKILL : SIGTERM);
+          h.ended_here = true;
           terminal.Log(fmt::format("launch: t = {:.1f} s: host pid {} had not ended itself; {}", t, h.pid,
                                    o.lose ? "killed (SIGKILL)" : "stopped (SIGTERM)"),
                        /*warning=*/true);
@@ -538,7 +542,20 @@ int Launch(const LaunchCommand& c) {
     bool any_host = false;
     for (Host& h : hosts) {
       int ws = 0;
-      if (h.running && waitpid(h.pid, &ws, WNOHANG) == h.pid) h.running = false;
+      if (h.running && waitpid(h.pid, &ws, WNOHANG) == h.pid) {
+        h.running = false;
+        // A host that ended on its own with a failure (killed from outside, crashed): which one,
+        // how, and its log. (A new user's kill -9 of a host had read only "every agent host has
+        // exited" 6.8 s later.) A scenario's loss or leave, or a host whose vehicles all left
+        // (exit 0), is no news.
+        if (!h.ended_here && !h.ends_itself && ExitCode(ws) != 0) {
+          std::string names;
+          for (const std::string& n : h.vehicle_names) names += (names.empty() ? "" : ", ") + n;
+          terminal.Log(fmt::format("launch: agent host pid {} ({}) {} at t = {:.1f} s; its vehicles are lost (log: {})",
+                                   h.pid, names, DescribeExit(ws), mission_time, h.log),
+                       /*warning=*/true);
+        }
+      }
       any_host = any_host || h.running;
     }
     // Every host gone and no vehicle left (none to join either): the mission has nothing to do.

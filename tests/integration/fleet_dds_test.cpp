@@ -1167,6 +1167,9 @@ TEST_F(FleetDds, LaunchEndsWhenTheFleetIsGone) {
   EXPECT_EQ(*launch_exit, 4);
   EXPECT_NE(launch.LogText().find("every agent host has exited and no vehicle is left"), std::string::npos)
       << launch.LogText();
+  // The host killed from outside is named at once, with how it ended and its log.
+  EXPECT_NE(launch.LogText().find("(rov1) was killed by SIGKILL"), std::string::npos) << launch.LogText();
+  EXPECT_NE(launch.LogText().find("its vehicles are lost (log: "), std::string::npos) << launch.LogText();
   const Json metrics = ReadJson(out / "metrics.json");
   EXPECT_TRUE(metrics.at("complete").get<bool>());
   EXPECT_TRUE(metrics.at("stopped_early").get<bool>());
