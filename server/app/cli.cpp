@@ -507,9 +507,9 @@ int RunCli(int argc, char** argv) {
   vehicle_add->add_option("count,--count,-c", op.add_count, "How many vehicles (1..10000)")->capture_default_str();
   AddMissionDir(*vehicle_add, op);
   CLI::App* vehicle_remove = vehicle->add_subcommand("remove", "Take a vehicle out of the running mission cleanly");
-  vehicle_remove->add_option("id", op.remove_id,
-                             "Vehicle id: the launch's vehicles are 0..N-1 in scenario order (rov1 is 0), joins and "
-                             "added ones follow; the server's log names every vehicle with its id as it joins")
+  vehicle_remove->add_option("vehicle", op.remove_vehicle,
+                             "The vehicle: its name (rov2), as every log names it, or its id (the launch's vehicles "
+                             "are 0..N-1 in scenario order, rov1 is 0; joins and added ones follow)")
       ->required();
   AddMissionDir(*vehicle_remove, op);
 
@@ -768,7 +768,7 @@ int RunCli(int argc, char** argv) {
       return m;
     };
     if (*vehicle_add) return AddVehicles(mission(), op.add_count, op.insecure);
-    if (*vehicle_remove) return RemoveVehicle(mission(), op.remove_id, op.insecure);
+    if (*vehicle_remove) return RemoveVehicle(mission(), op.remove_vehicle, op.insecure);
     if (*risk_set) return SetRisk(mission(), op.valve, op.weight, op.source, op.insecure);
     if (*stop) return StopMission(mission(), op.insecure);
     if (*security_init) return CmdSecurityInit(security_cmd);

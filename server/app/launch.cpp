@@ -432,7 +432,7 @@ int Launch(const LaunchCommand& c) {
   const std::vector<maps::Valve> valves = scenario.AllValves();
   const std::string example_valve = valves.empty() ? std::string("VALVE") : valves.front().name;
   terminal.Log("launch: in another shell: sage risk set " + example_valve + " 0.9 | sage vehicle add --count 2 | sage vehicle "
-               "remove ID | " +
+               "remove NAME | " +
                (c.point_latest ? std::string("sage stop (they find this mission through runs/latest)")
                                : fmt::format("sage stop, each with --mission {}", out_dir)));
   if (c.http != "off") {

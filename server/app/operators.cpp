@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cstdio>
 #include <functional>
+#include <map>
 #include <cstdlib>
 #include <filesystem>
 #include <optional>
@@ -149,21 +150,42 @@ int AddVehicles(const MissionFile& mission, int count, bool insecure) {
   return 0;
 }
 
-int RemoveVehicle(const MissionFile& mission, int id, bool insecure) {
-  CheckVehicleId(id);
+int RemoveVehicle(const MissionFile& mission, const std::string& vehicle, bool insecure) {
+  // An id, or a name (every log names the vehicles; rov4 is id 3, and a new user's `vehicle
+  // remove rov2` had been refused as not a number).
+  const bool by_id = !vehicle.empty() && vehicle.size() <= 9 && vehicle.find_first_not_of("0123456789") == std::string::npos;
+  int id = -1;
+  if (by_id) {
+    id = std::stoi(vehicle);
+    CheckVehicleId(id);
+  } else if (vehicle.empty() || vehicle.size() > maps::kMaxNameLength) {
+    throw maps::ScenarioError(fmt::format("vehicle = {}: give its name (1..{} characters, e.g. rov2) or its id",
+                                          vehicle, maps::kMaxNameLength));
+  }
   proto::Participant participant = OperatorParticipant(mission, insecure);
   proto::Reader<proto::VehicleState> states(participant, proto::VehicleStateReaderQos());
   // Hear the vehicle before ordering it out: the host's dispose reaches only a reader already
   // matched with it, and DDS Security's handshake takes tenths of a second, seconds on a loaded
-  // machine (the leave had gone unseen). A vehicle not heard within 3 s is asked for anyway: the
-  // server knows one that already left or never was.
+  // machine (the leave had gone unseen). A vehicle not heard within 3 s is asked for anyway by
+  // id: the server knows one that already left or never was. A name is what the states say.
   const auto heard_by = std::chrono::steady_clock::now() + std::chrono::seconds(3);
   bool heard = false;
+  std::map<std::uint32_t, std::string> flying;  // what was heard, for a name not found
   while (!heard && std::chrono::steady_clock::now() < heard_by) {
     states.WaitForData(std::chrono::milliseconds(100));
     states.TakeEach([&](const proto::VehicleState& s, const dds_sample_info_t& info) {
-      heard = heard || (info.valid_data && s.vehicle_id == static_cast<std::uint32_t>(id));
+      if (!info.valid_data) return;
+      flying[s.vehicle_id] = s.name;
+      if (!by_id && !heard && vehicle == s.name) id = static_cast<int>(s.vehicle_id);
+      heard = heard || s.vehicle_id == static_cast<std::uint32_t>(id);
     }, 1024);
+  }
+  if (!by_id && id < 0) {
+    std::string names;
+    for (const auto& [v, name] : flying) names += fmt::format("{}{} (id {})", names.empty() ? "" : ", ", name, v);
+    std::fprintf(stderr, "sage: error: vehicle remove: no vehicle named %s is flying (heard in 3 s: %s)\n",
+                 vehicle.c_str(), names.empty() ? "none" : names.c_str());
+    return 2;
   }
   const std::optional<CommandAnswer> answer = AskServer(participant, "remove", 0, static_cast<std::uint32_t>(id));
   if (!answer) return NoMission(mission, insecure);

@@ -29,8 +29,9 @@ int AddVehicles(const MissionFile& mission, int count, bool insecure = false);
 /// the one-line answer (HostStartedLine). Both `sage vehicle add` and the live view's "add" use it.
 /// Throws std::runtime_error if it cannot fork.
 std::string StartAddedHost(const MissionFile& mission, int first_id, int count);
-/// `sage vehicle remove`: the server takes vehicle `id` out (or says why not); waits for it to leave.
-int RemoveVehicle(const MissionFile& mission, int id, bool insecure = false);
+/// `sage vehicle remove`: the server takes the vehicle out (or says why not); waits for it to
+/// leave. `vehicle`: its id ("1") or its name ("rov2", found among the vehicles heard flying).
+int RemoveVehicle(const MissionFile& mission, const std::string& vehicle, bool insecure = false);
 /// `sage risk set`: a valve's new raw risk weight.
 int SetRisk(const MissionFile& mission, const std::string& valve, double weight, const std::string& source,
             bool insecure = false);

@@ -119,7 +119,7 @@ struct BenchLeaksCommand {
 struct OperatorCommand {
   std::string mission_dir;       ///< default: $SAGE_MISSION, else runs/latest
   int add_count = 1;
-  int remove_id = 0;
+  std::string remove_vehicle;  ///< its id ("1") or its name ("rov2")
   std::string valve;
   double weight = 0.0;
   std::string source = "operator";
