@@ -162,6 +162,14 @@ std::string RenderTable(const std::vector<Block>& blocks, std::size_t rows, std:
 
 std::string Seconds(double s) { return std::isfinite(s) ? fmt::format("{:.1f} s", s) : "---"; }
 
+// No scan could have seen a leak at the valve: its wait is only the time left to the end. Without
+// an estimate (no onset yet: a mission stopped in its first tenth) it is not called unseen.
+bool UnseenByScans(const ValveMetrics& v) { return !v.seen_by_scans && !std::isnan(v.expected_detection_by_scans_s); }
+
+bool AnySensing(const std::vector<MissionMetrics>& runs) {
+  return std::any_of(runs.begin(), runs.end(), [](const MissionMetrics& m) { return m.sensing; });
+}
+
 // The valves a table lists, as indices into the first run's (matched: each run's valve for each of
 // them, or null): every valve up to kTableRows, beyond the kTableRowsOfLarge with the longest gap
 // in any run (with sensors the longest scan wait, the unseen first), longest first (ties in
@@ -175,8 +183,8 @@ std::vector<std::size_t> ListedValves(const std::vector<std::vector<const ValveM
   // scans, not the visits, say was watched least.
   const auto badness = [by_scans](const ValveMetrics& v) {
     if (!by_scans) return v.max_gap_s;
-    const double wait = v.expected_detection_by_scans_s;  // NaN (no estimate): not counted
-    return v.seen_by_scans || std::isnan(wait) ? wait : std::numeric_limits<double>::infinity();
+    // NaN (no estimate): not counted.
+    return UnseenByScans(v) ? std::numeric_limits<double>::infinity() : v.expected_detection_by_scans_s;
   };
   std::vector<double> worst(m, 0.0);
   for (const auto& run : matched) {
@@ -218,7 +226,7 @@ struct TableLayout {
 std::string BuildTable(const std::vector<MissionMetrics>& runs, const std::vector<std::vector<const ValveMetrics*>>& matched,
                        const std::vector<std::size_t>& listed, const TableLayout& layout) {
   const bool with_gaps = layout.gaps, with_intervals = layout.intervals, with_scan_waits = layout.scan_waits;
-  const bool sensing = std::any_of(runs.begin(), runs.end(), [](const MissionMetrics& m) { return m.sensing; });
+  const bool sensing = AnySensing(runs);
   const MissionMetrics& first = runs.front();
   const std::size_t rows = listed.size();
   // One Weight column if every run prints the same weights (the paper's case), else one per run.
@@ -264,10 +272,7 @@ std::string BuildTable(const std::vector<MissionMetrics>& runs, const std::vecto
       visits.cells.push_back(m ? fmt::format("{}", m->visits) : "-");
       interval.cells.push_back(m ? Seconds(m->mean_interval_s) : "-");
       gap.cells.push_back(m ? Seconds(m->max_gap_s) : "-");
-      // No estimate (no onset yet: a mission stopped in its first tenth) says "---", not unseen.
-      scan_wait.cells.push_back(!m                                               ? "-"
-                                : m->seen_by_scans || std::isnan(m->expected_detection_by_scans_s) ? Seconds(m->expected_detection_by_scans_s)
-                                                                                   : "unseen");
+      scan_wait.cells.push_back(!m ? "-" : UnseenByScans(*m) ? "unseen" : Seconds(m->expected_detection_by_scans_s));
     }
     if (!same_weights) block.columns.push_back(weight);
     block.columns.push_back(visits);
@@ -291,9 +296,7 @@ std::string BuildTable(const std::vector<MissionMetrics>& runs, const std::vecto
         run.duration_s > 0.0 ? Seconds(run.expected_detection_delay_s) : "---"};
     if (sensing) {
       block.summary.push_back(run.sensing ? Seconds(run.expected_detection_by_scans_s) : "---");
-      const auto unseen = std::count_if(run.valves.begin(), run.valves.end(), [](const ValveMetrics& v) {
-        return !v.seen_by_scans && !std::isnan(v.expected_detection_by_scans_s);
-      });
+      const auto unseen = std::count_if(run.valves.begin(), run.valves.end(), UnseenByScans);
       block.summary.push_back(run.sensing ? fmt::format("{} of {}", unseen, run.valves.size()) : "---");
     }
     blocks.push_back(std::move(block));
@@ -350,7 +353,7 @@ std::string FormatTable(const std::vector<MissionMetrics>& runs) {
   // waits last; the table says what it left out (metrics.json has every figure).
   const std::vector<std::vector<const ValveMetrics*>> matched = MatchValves(runs);
   const std::vector<std::size_t> listed =
-      ListedValves(matched, std::any_of(runs.begin(), runs.end(), [](const MissionMetrics& m) { return m.sensing; }));
+      ListedValves(matched, AnySensing(runs));
   std::string table;
   for (const TableLayout& l : {TableLayout{true, true, true, 2}, TableLayout{true, false, true, 2},
                                TableLayout{false, false, true, 2}, TableLayout{false, false, true, 1},
