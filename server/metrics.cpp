@@ -348,14 +348,14 @@ void MetricsAccumulator::SettleCoverage() const {
 void MetricsAccumulator::CoverageBacklog::Launch(const maps::SpectralBasis& basis, Eigen::VectorXd& sums) {
   Wait();
   job_ = std::async(std::launch::async, [batch = std::move(queued_), &basis, &sums] {
-           for (const auto& [x, dt] : batch) basis.AddScaled(x, dt, sums);
+           basis.AddScaledAll(batch, sums);
          }).share();
   queued_.clear();  // moved from: empty it for certain
 }
 
 void MetricsAccumulator::CoverageBacklog::Settle(const maps::SpectralBasis& basis, Eigen::VectorXd& sums) const {
   Wait();
-  for (const auto& [x, dt] : queued_) basis.AddScaled(x, dt, sums);
+  basis.AddScaledAll(queued_, sums);
   queued_.clear();
 }
 

@@ -1,6 +1,8 @@
 #include "maps/spectral_basis.h"
 
 #include <cmath>
+#include <utility>
+#include <vector>
 
 #include <gtest/gtest.h>
 
@@ -80,6 +82,31 @@ TEST(SpectralBasis, AddScaledAccumulatesScaledFunctions) {
       }
   }
   EXPECT_LT((sum - expected).cwiseAbs().maxCoeff(), 1e-12 * expected.cwiseAbs().maxCoeff());
+}
+
+// AddScaledAll is AddScaled of each sample in turn, to the bit (the fleet metric's sums must not
+// depend on how a mission's samples were batched): orders with and without a tail past the
+// 16-coefficient runs, sample counts with and without a tail past the 16-sample blocks, and the
+// single samples added after a batch.
+TEST(SpectralBasis, AddScaledAllIsAddScaledOfEachInTurn) {
+  for (const int order : {1, 13, 16, 37, 64}) {
+    const SpectralBasis basis(1096.0, 730.0, order);
+    for (const std::size_t count : {1u, 16u, 37u, 200u}) {
+      std::vector<std::pair<Eigen::Vector2d, double>> samples;
+      for (std::size_t s = 0; s < count; ++s) {
+        samples.emplace_back(Eigen::Vector2d(1096.0 * std::fmod(0.37 * s + 0.05, 1.0), 730.0 * std::fmod(0.61 * s + 0.11, 1.0)),
+                             0.1 + 0.003 * static_cast<double>(s % 7));
+      }
+      Eigen::VectorXd one_by_one = Eigen::VectorXd::LinSpaced(basis.size(), -1.0, 1.0), batched = one_by_one;
+      for (const auto& [x, scale] : samples) basis.AddScaled(x, scale, one_by_one);
+      basis.AddScaledAll(samples, batched);
+      ASSERT_EQ(batched.size(), one_by_one.size());
+      for (Eigen::Index k = 0; k < batched.size(); ++k) {
+        ASSERT_EQ(batched[k], one_by_one[k]) << "order " << order << ", " << count << " samples, coefficient " << k;
+      }
+      EXPECT_GT((batched - Eigen::VectorXd::LinSpaced(basis.size(), -1.0, 1.0)).cwiseAbs().maxCoeff(), 0.0);
+    }
+  }
 }
 
 TEST(SpectralBasis, TrigonometryTablesMatchDirectCalls) {
