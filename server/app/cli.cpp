@@ -413,7 +413,7 @@ int RunCli(int argc, char** argv) {
   launch->add_option("--domain", launch_cmd.domain,
                      "DDS domain id 0..230 (secured, the default) or 0..232 (--insecure) (default: a free one, reserved "
                      "machine-wide)");
-  launch->add_flag("!--no-latest", launch_cmd.point_latest,
+  launch->add_flag("--no-latest", launch_cmd.no_latest,
                    "Leave runs/latest alone (scripts and benchmarks that run many missions); operators then need "
                    "--mission DIR");
   CLI::Option* launch_security = launch->add_option(
@@ -680,7 +680,12 @@ int RunCli(int argc, char** argv) {
     std::string path;
     if (ReportUnknownCommand(app, argc, argv, path)) return 2;
     if (dynamic_cast<const CLI::ExtrasError*>(&e) != nullptr && ReportUnknownOption(app, argc, argv)) return 2;
-    std::cerr << "sage: error: " << (path == "sage" ? "" : path.substr(5) + ": ") << InOurWords(e.what()) << " (see " << path
+    std::string words = InOurWords(e.what());
+    // `sage vehicle add 2 --count 3`: the argument and --count are one option to CLI11.
+    if (constexpr std::string_view kCount = "--count: given "; path == "sage vehicle add" && words.starts_with(kCount)) {
+      words = "the count: given " + words.substr(kCount.size()) + " (as an argument, --count or -c: they are one)";
+    }
+    std::cerr << "sage: error: " << (path == "sage" ? "" : path.substr(5) + ": ") << words << " (see " << path
               << " --help)\n";
     return 2;
   }

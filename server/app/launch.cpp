@@ -241,7 +241,7 @@ int Launch(const LaunchCommand& c) {
   } catch (const std::runtime_error& e) {
     throw maps::ScenarioError(fmt::format("--out = {}: cannot write there: {}", out_dir, e.what()));
   }
-  if (c.point_latest) PointLatestAt(out_dir);
+  if (!c.no_latest) PointLatestAt(out_dir);
 
   std::vector<std::string> common = {"--domain", std::to_string(domain), "--controller", mission.controller};
   // Every process on the mission's network (the scenario's, or a resumed mission's new --interface).
@@ -433,7 +433,7 @@ int Launch(const LaunchCommand& c) {
   const std::string example_valve = valves.empty() ? std::string("VALVE") : valves.front().name;
   terminal.Log("launch: in another shell: sage risk set " + example_valve + " 0.9 | sage vehicle add --count 2 | sage vehicle "
                "remove NAME | " +
-               (c.point_latest ? std::string("sage stop (they find this mission through runs/latest)")
+               (!c.no_latest ? std::string("sage stop (they find this mission through runs/latest)")
                                : fmt::format("sage stop, each with --mission {}", out_dir)));
   if (c.http != "off") {
     terminal.Log("launch: or in a browser on this machine, at the address of the server's 'live view' line (its token "

@@ -42,7 +42,7 @@ struct LaunchCommand {
   std::optional<int> hosts;      ///< agent host processes (default: one per 250 vehicles)
   double time_scale = 1.0;       ///< mission seconds per wall second
   std::string resume_dir;        ///< continue the crashed mission recorded there
-  bool point_latest = true;      ///< runs/latest points to the mission (off: --no-latest)
+  bool no_latest = false;        ///< --no-latest: runs/latest is left alone (it points to the mission otherwise)
   std::string security_dir;      ///< DDS Security identities to use (default: new ones in DIR/security)
   bool insecure = false;         ///< plain DDS: no authentication, no encryption (--insecure)
   std::string http = "0";        ///< the live view's port: "off", or 0..65535 (0: any free one)

@@ -288,6 +288,19 @@ TEST(RangeProblem, SaysWhatIsAllowed) {
   EXPECT_NE(twice.err.find("sage: error: run: --duration: given 2 times; give it once (see sage run --help)"),
             std::string::npos)
       << twice.err;
+  // `vehicle add 2 --count 3` names the two ways the count came ("--count: given 2 times" had
+  // named one option, given once); parsing fails before any mission is looked for.
+  const SageRun count_twice = RunSage({"vehicle", "add", "2", "--count", "3"});
+  EXPECT_EQ(count_twice.status, 2);
+  EXPECT_NE(count_twice.err.find("sage: error: vehicle add: the count: given 2 times; give it once (as an argument, "
+                                 "--count or -c: they are one)"),
+            std::string::npos)
+      << count_twice.err;
+  // A flag's help shows no CLI11 default ("--no-latest{false}" had).
+  const SageRun launch_help = RunSage({"launch", "--help"});
+  EXPECT_EQ(launch_help.status, 0);
+  EXPECT_NE(launch_help.out.find("--no-latest"), std::string::npos) << launch_help.out;
+  EXPECT_EQ(launch_help.out.find("{false}"), std::string::npos) << launch_help.out;
   // A value that is no number says what was wanted (CLI11's "Could not convert: --duration = abc" had not).
   const SageRun word = RunSage({"run", file, "--duration", "abc"});
   EXPECT_EQ(word.status, 2);
