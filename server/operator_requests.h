@@ -4,7 +4,13 @@
 // `sage vehicle add|remove` and `sage stop` commands (server/app/operators.cpp) and the live
 // view's buttons (server/node/server_node.cpp). The mission core's own checks (a valve's
 // weight, which vehicle may be taken out, how many may join) come after these in both paths.
+#include <cstddef>
+#include <limits>
+#include <optional>
 #include <string>
+#include <vector>
+
+#include <Eigen/Core>
 
 #include "maps/scenario/scenario.h"
 
@@ -34,5 +40,41 @@ std::string VehicleLeftLine(int id, double told_at_s);
 std::string VehicleNotLeftLine(int id, double told_at_s, double waited_s);
 /// "the mission stops at t = 40.1 s; its server writes runs/x"
 std::string StopLine(double time_s, const std::string& run_dir);
+
+/// What `sage status` heard of a running mission in a second or so on DDS: the server's latest
+/// MissionStatus and each vehicle's latest state, each checked at the door (HeardStateProblem).
+struct HeardStatus {
+  bool has_status = false;  ///< the server's status was heard
+  double time_s = 0.0, duration_s = 0.0, time_scale = 1.0, cycle_ms = 0.0;
+  double ergodic_metric = std::numeric_limits<double>::quiet_NaN();  ///< NaN: none yet
+  int alive = 0, lost = 0;
+  bool finished = false;
+  struct Vehicle {
+    int id = 0;
+    std::string name;
+    double time_s = 0.0;  ///< mission time of its latest state
+    Eigen::Vector2d position_m = Eigen::Vector2d::Zero();
+    double speed_mps = 0.0;
+  };
+  std::vector<Vehicle> vehicles;  ///< ascending id, the latest state of each
+  double listened_s = 0.0;
+  std::size_t refused = 0;  ///< samples refused at the door
+  std::string last_refusal;
+};
+
+/// Why a vehicle's state heard on the mission's domain is not believed (empty: it is): a name of
+/// 1..64 printable characters, a finite position within 1 m of the workspace, a finite velocity
+/// under 10 m/s (a BlueROV2 makes 1.5), a finite mission time >= 0.
+std::string HeardStateProblem(const std::string& name, double time_s, const Eigen::Vector2d& position_m,
+                              const Eigen::Vector2d& velocity_mps, const maps::Workspace& workspace);
+/// Why a MissionStatus heard is not believed (empty: it is): finite times >= 0, a duration > 0, a
+/// time scale > 0, finite cycle time >= 0, a metric finite >= 0 or NaN (none yet).
+std::string HeardStatusProblem(const HeardStatus& status);
+
+/// `sage status`'s report: the mission's time against its duration and how fast it runs, the
+/// server's cycle and metric, vehicles flying and lost, then one row a vehicle heard (id, name,
+/// position, speed, time of its state), the first max_rows by id with a count of the rest, and
+/// the samples refused. `mission` names it (scenario name and run directory).
+std::string StatusReport(const HeardStatus& heard, const std::string& mission, std::size_t max_rows = 40);
 
 }  // namespace sage::server

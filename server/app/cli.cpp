@@ -525,6 +525,15 @@ int RunCli(int argc, char** argv) {
 
   CLI::App* stop = app.add_subcommand("stop", "End the running mission now; its server writes the run directory");
   AddMissionDir(*stop, op);
+  CLI::App* status = app.add_subcommand(
+      "status", "Where the running mission stands: its time, the server's cycle, vehicles flying and lost, and each "
+                "vehicle heard with its position and speed (read only: joins as the mission's viewer)");
+  status->add_option("--listen", op.status_listen_s,
+                     "Seconds to hear the vehicles' states once the mission has answered (0.2..60; each sends 10 a second)")
+      ->capture_default_str()
+      ->check(MustBeIn(0.2, 60.0));
+  status->add_flag("--all", op.status_all, "List every vehicle heard (default: the first 40 by id, and a count of the rest)");
+  AddMissionDir(*status, op);
 
   SecurityInitCommand security_cmd;
   CLI::App* security = app.add_subcommand("security", "DDS Security material for missions");
@@ -776,6 +785,7 @@ int RunCli(int argc, char** argv) {
     if (*vehicle_remove) return RemoveVehicle(mission(), op.remove_vehicle, op.insecure);
     if (*risk_set) return SetRisk(mission(), op.valve, op.weight, op.source, op.insecure);
     if (*stop) return StopMission(mission(), op.insecure);
+    if (*status) return ShowStatus(mission(), op.status_listen_s, op.status_all, op.insecure);
     if (*security_init) return CmdSecurityInit(security_cmd);
     // Their log lines on stderr, as run's and launch's: stdout holds only what they report (a
     // field's [info] line had gone to stdout, so `2>/dev/null` did not quiet it).

@@ -5,6 +5,7 @@
 #include <functional>
 #include <map>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <optional>
 
@@ -40,11 +41,10 @@ int NoMission(const MissionFile& mission, bool insecure) {
 // The operator's participant on the mission's domain: with the mission's operator identity when
 // it is secured, plain DDS when it is not or when asked (--insecure; a secured mission's
 // participants then never match it).
-proto::Participant OperatorParticipant(const MissionFile& mission, bool insecure) {
+proto::Participant OperatorParticipant(const MissionFile& mission, bool insecure,
+                                       proto::SecurityRole role = proto::SecurityRole::kOperator) {
   const std::optional<proto::SecurityIdentity> identity =
-      insecure ? std::nullopt
-               : MissionIdentity(mission.security_dir, proto::SecurityRole::kOperator, mission.domain_id,
-                                 "mission.json security_dir");
+      insecure ? std::nullopt : MissionIdentity(mission.security_dir, role, mission.domain_id, "mission.json security_dir");
   return proto::Participant(mission.domain_id, proto::CycloneConfigXml(agents::NetworkOf(mission.network),
                                                                        proto::kMaxLocalParticipants, identity));
 }
@@ -255,6 +255,69 @@ int SetRisk(const MissionFile& mission, const std::string& valve, double weight,
   }
   std::printf("%s (mission in %s)\n", RiskAppliedLine(valve, weight, answer->mission_time_s, answer->new_share).c_str(),
               mission.run_dir.c_str());
+  return 0;
+}
+
+int ShowStatus(const MissionFile& mission, double listen_s, bool all, bool insecure) {
+  const maps::Scenario scenario = maps::LoadScenario(mission.scenario_path);
+  // Read only: the viewer's identity, which may write nothing to the mission.
+  proto::Participant participant = OperatorParticipant(mission, insecure, proto::SecurityRole::kViewer);
+  proto::Reader<proto::MissionStatus> status(participant, proto::MissionStatusQos());
+  proto::Reader<proto::VehicleState> states(participant, proto::VehicleStateReaderQos());
+  HeardStatus heard;
+  std::map<int, HeardStatus::Vehicle> vehicles;
+  const auto refuse = [&](std::string why) {
+    ++heard.refused;
+    heard.last_refusal = std::move(why);
+  };
+  using Clock = std::chrono::steady_clock;
+  // DDS Security's handshake takes tenths of a second (seconds on a loaded machine): up to 3 s for
+  // the first word of the mission, then listen_s for every vehicle's state (10 a second each).
+  const Clock::time_point start = Clock::now();
+  Clock::time_point end = start + std::chrono::seconds(3);
+  bool listening = false;
+  while (Clock::now() < end) {
+    states.WaitForData(std::chrono::milliseconds(50));
+    status.TakeEach([&](const proto::MissionStatus& m, const dds_sample_info_t& info) {
+      if (!info.valid_data) return;
+      HeardStatus next = heard;
+      next.time_s = m.mission_time_s;
+      next.duration_s = m.duration_s;
+      next.time_scale = m.time_scale;
+      next.cycle_ms = m.cycle_time_ms;
+      next.ergodic_metric = m.ergodic_metric;
+      next.alive = static_cast<int>(std::min<std::uint32_t>(m.vehicles_alive, 1u << 30));
+      next.lost = static_cast<int>(std::min<std::uint32_t>(m.vehicles_lost, 1u << 30));
+      next.finished = m.finished;
+      if (std::string why = HeardStatusProblem(next); !why.empty()) return refuse(std::move(why));
+      next.has_status = true;
+      heard = std::move(next);
+    });
+    while (states.TakeEach([&](const proto::VehicleState& m, const dds_sample_info_t& info) {
+      if (!info.valid_data) return;
+      const std::string name(m.name, strnlen(m.name, sizeof(m.name)));
+      const double time_s = static_cast<double>(m.cycle) / scenario.control_rate_hz;
+      const Eigen::Vector2d position(m.x_m, m.y_m), velocity(m.vx_mps, m.vy_mps);
+      if (std::string why = HeardStateProblem(name, time_s, position, velocity, scenario.workspace); !why.empty()) {
+        return refuse(std::move(why));
+      }
+      HeardStatus::Vehicle& v = vehicles[static_cast<int>(std::min<std::uint32_t>(m.vehicle_id, 1u << 30))];
+      if (!v.name.empty() && time_s < v.time_s) return;  // an older state than held
+      v = {static_cast<int>(m.vehicle_id), name, time_s, position, velocity.norm()};
+    }, 1024) == 1024) {
+    }
+    if (!listening && (heard.has_status || !vehicles.empty())) {
+      listening = true;
+      end = Clock::now() + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(listen_s));
+    }
+  }
+  heard.listened_s = std::chrono::duration<double>(Clock::now() - start).count();
+  if (!heard.has_status && vehicles.empty()) return NoMission(mission, insecure);
+  for (auto& [id, v] : vehicles) heard.vehicles.push_back(std::move(v));
+  std::fputs(StatusReport(heard, fmt::format("{} ({})", scenario.name, mission.run_dir),
+                          all ? heard.vehicles.size() : std::size_t{40})
+                 .c_str(),
+             stdout);
   return 0;
 }
 

@@ -35,6 +35,10 @@ int RemoveVehicle(const MissionFile& mission, const std::string& vehicle, bool i
 /// `sage risk set`: a valve's new raw risk weight.
 int SetRisk(const MissionFile& mission, const std::string& valve, double weight, const std::string& source,
             bool insecure = false);
+/// `sage status`: what the mission's server and vehicles say on its domain (as the read-only
+/// viewer): mission time, server cycle, vehicles flying and lost, and each vehicle heard within
+/// listen_s (the first 40 by id, every one if `all`). 1 if nothing is heard within 3 s.
+int ShowStatus(const MissionFile& mission, double listen_s, bool all, bool insecure = false);
 /// `sage stop`: the mission ends now; the server writes the run directory.
 int StopMission(const MissionFile& mission, bool insecure = false);
 

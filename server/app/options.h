@@ -125,6 +125,8 @@ struct OperatorCommand {
   std::string source = "operator";
   bool insecure = false;         ///< plain DDS even if the mission is secured (its server will not hear it)
   NetworkOverrides network;      ///< where this machine's DDS traffic goes (default: mission.json's)
+  double status_listen_s = 1.0;  ///< sage status: how long to hear the vehicles' states
+  bool status_all = false;       ///< sage status: every vehicle heard, not the first 40
 };
 
 /// sage security init

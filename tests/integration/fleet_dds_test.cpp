@@ -644,7 +644,7 @@ TEST_F(FleetDds, KilledVehicleIsNoticedAndOthersTakeOver) {
 // the server, and a removed vehicle leaves cleanly.
 TEST_F(FleetDds, OperatorRiskUpdateReachesServer) {
   const int domain_id = FreeDomainForLaunch();
-  const double duration = 40;
+  const double duration = 60;  // 15 s of wall: room for every command below, each joining the secured domain
   const fs::path out = run_dir_ / "out";
   ChildProcess& launch = StartLaunch("launch", {Scenario("two_xt.yaml"), "--vehicles", "2", "--duration", Num(duration),
                                                 "--time-scale", Num(kTimeScale)},
@@ -675,6 +675,18 @@ TEST_F(FleetDds, OperatorRiskUpdateReachesServer) {
     EXPECT_NE(risk.LogText().find(share), std::string::npos) << "expected '" << share << "' in: " << risk.LogText();
   }
   Report("risk_set_command_wall_s", risk.WallSeconds(), "s wall (sage risk set start to exit)");
+
+  // sage status, as the mission's read-only viewer: the server's time and both vehicles by id
+  // and name, each with a position inside the field.
+  ChildProcess& status = Start("status", {"status", "--mission", out.string(), "--listen", "0.5"});
+  ASSERT_EQ(status.WaitExit(15s), std::optional<int>(0)) << status.LogText();
+  EXPECT_TRUE(std::regex_search(status.LogText(),
+                                std::regex(R"(two_xt \(.+\): t = [0-9.]+ of 60\.0 s \([0-9]+ %\), running at [0-9.]+x real time)")))
+      << status.LogText();
+  EXPECT_NE(status.LogText().find("2 vehicles flying, 0 lost"), std::string::npos) << status.LogText();
+  EXPECT_TRUE(std::regex_search(status.LogText(), std::regex(R"(\n +0  rov1 +[0-9.]+ +[0-9.]+ +[0-9.]+ +[0-9.]+\n +1  rov2 )")))
+      << status.LogText();
+  EXPECT_EQ(status.LogText().find("refused"), std::string::npos) << status.LogText();
 
   // An update the mission refuses is an error in the operator's shell, not a line in a log:
   // with every other valve at zero, P3 at zero would leave no risk anywhere.
