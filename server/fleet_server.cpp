@@ -49,12 +49,18 @@ std::vector<int> FleetServer::alive() const {
 
 const std::string& FleetServer::Name(int id) const { return vehicles_.at(id).name; }
 
+// Only a partition reads where its vehicles are (Repartition); regions and tours are planned
+// from the mission's roster. Written for them too, this record was a cache miss a vehicle a
+// cycle at 10,000 vehicles (2 % of the mission in perf), for nothing.
 void FleetServer::SetPosition(int id, const Eigen::Vector2d& position_m) {
+  if (scenario_.fleet.assignment != maps::FleetAssignment::kPartition) return;
   VehicleRecord* v = by_id_.Find(vehicles_, id);
   if (v != nullptr && v->alive) v->position_m = position_m;
 }
 
-void FleetServer::PrefetchVehicle(int id) const { maps::PrefetchObject(by_id_.Find(vehicles_, id)); }
+void FleetServer::PrefetchVehicle(int id) const {
+  if (scenario_.fleet.assignment == maps::FleetAssignment::kPartition) maps::PrefetchObject(by_id_.Find(vehicles_, id));
+}
 
 bool FleetServer::OnCoverage(int id, std::uint64_t seq, double stamp_s, double kernel_time_s,
                              const Eigen::VectorXd& sums) {

@@ -58,7 +58,8 @@ class FleetServer {
   std::vector<int> alive() const;  ///< ascending ids
   const std::string& Name(int id) const;
 
-  /// A vehicle's latest position (m): partition shares start from where vehicles are.
+  /// A vehicle's latest position (m): partition shares start from where vehicles are. Kept only
+  /// under a partition (nothing else reads it; Vehicle::position_m stays as it was otherwise).
   void SetPosition(int id, const Eigen::Vector2d& position_m);
   /// Asks for vehicle id's record (what SetPosition writes) to be brought into cache; changes nothing.
   void PrefetchVehicle(int id) const;
