@@ -1,10 +1,11 @@
 #include "server/operator_requests.h"
 
 #include <algorithm>
-#include <cctype>
 #include <cmath>
 
 #include <fmt/format.h>
+
+#include "maps/scenario/scenario_detail.h"
 
 namespace sage::server {
 
@@ -59,10 +60,8 @@ std::string StopLine(double time_s, const std::string& run_dir) {
 std::string HeardStateProblem(const std::string& name, double time_s, const Eigen::Vector2d& position_m,
                               const Eigen::Vector2d& velocity_mps, const maps::Workspace& workspace) {
   constexpr double kMargin_m = 1.0, kMaxSpeed_mps = 10.0;
-  if (name.empty() || name.size() > 64 ||
-      !std::all_of(name.begin(), name.end(), [](unsigned char c) { return std::isprint(c) != 0; })) {
-    return "a vehicle's name is not 1..64 printable characters";
-  }
+  // The scenario's rules for a name (1..64 characters of UTF-8, no control character).
+  if (std::string problem = maps::detail::NameProblem(name); !problem.empty()) return "a vehicle's name " + problem;
   if (!std::isfinite(time_s) || time_s < 0.0) return fmt::format("{}: its mission time {} is not a time >= 0", name, time_s);
   if (!position_m.allFinite() || position_m.x() < -kMargin_m || position_m.y() < -kMargin_m ||
       position_m.x() > workspace.width_m + kMargin_m || position_m.y() > workspace.height_m + kMargin_m) {

@@ -62,8 +62,8 @@ struct HeardStatus {
   std::string last_refusal;
 };
 
-/// Why a vehicle's state heard on the mission's domain is not believed (empty: it is): a name of
-/// 1..64 printable characters, a finite position within 1 m of the workspace, a finite velocity
+/// Why a vehicle's state heard on the mission's domain is not believed (empty: it is): a name as
+/// a scenario's (1..64 characters of UTF-8, no control character), a finite position within 1 m of the workspace, a finite velocity
 /// under 10 m/s (a BlueROV2 makes 1.5), a finite mission time >= 0.
 std::string HeardStateProblem(const std::string& name, double time_s, const Eigen::Vector2d& position_m,
                               const Eigen::Vector2d& velocity_mps, const maps::Workspace& workspace);

@@ -7,6 +7,7 @@
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
+#include <limits>
 #include <optional>
 
 #include <fmt/format.h>
@@ -301,9 +302,13 @@ int ShowStatus(const MissionFile& mission, double listen_s, bool all, bool insec
       if (std::string why = HeardStateProblem(name, time_s, position, velocity, scenario.workspace); !why.empty()) {
         return refuse(std::move(why));
       }
-      HeardStatus::Vehicle& v = vehicles[static_cast<int>(std::min<std::uint32_t>(m.vehicle_id, 1u << 30))];
+      if (m.vehicle_id > static_cast<std::uint32_t>(std::numeric_limits<int>::max())) {
+        return refuse(fmt::format("{}: id {} is not one a mission issues", name, m.vehicle_id));
+      }
+      const int id = static_cast<int>(m.vehicle_id);
+      HeardStatus::Vehicle& v = vehicles[id];
       if (!v.name.empty() && time_s < v.time_s) return;  // an older state than held
-      v = {static_cast<int>(m.vehicle_id), name, time_s, position, velocity.norm()};
+      v = {id, name, time_s, position, velocity.norm()};
     }, 1024) == 1024) {
     }
     if (!listening && (heard.has_status || !vehicles.empty())) {

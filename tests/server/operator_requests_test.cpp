@@ -62,7 +62,8 @@ TEST(OperatorRequests, HeardStatesCheckedAtTheDoor) {
   EXPECT_EQ(HeardStateProblem("rov1", 0.0, Eigen::Vector2d(-0.9, 10.9), slow, field), "");  // within the 1 m margin
   EXPECT_NE(HeardStateProblem("", 1.0, in, slow, field).find("name"), std::string::npos);
   EXPECT_NE(HeardStateProblem(std::string(65, 'r'), 1.0, in, slow, field).find("name"), std::string::npos);
-  EXPECT_NE(HeardStateProblem("rov\n1", 1.0, in, slow, field).find("printable"), std::string::npos);
+  EXPECT_NE(HeardStateProblem("rov\n1", 1.0, in, slow, field).find("control characters"), std::string::npos);
+  EXPECT_EQ(HeardStateProblem("røv1", 1.0, in, slow, field), "");  // UTF-8, as a scenario allows
   EXPECT_NE(HeardStateProblem("rov1", -0.1, in, slow, field).find("mission time"), std::string::npos);
   EXPECT_NE(HeardStateProblem("rov1", NAN, in, slow, field).find("mission time"), std::string::npos);
   EXPECT_NE(HeardStateProblem("rov1", 1.0, Eigen::Vector2d(21.5, 4.0), slow, field).find("not within the 20 x 10 m"),
