@@ -208,10 +208,10 @@ int CmdBenchLeaks(const BenchLeaksCommand& c) {
       c.first_seed, c.first_seed + static_cast<std::uint64_t>(c.runs) - 1, tasks, wall_s, c.jobs, load_before,
       LoadAverage());
   WriteLeakBench(dir.string(), summaries, runs, preamble, baseline, title);
-  std::cout << LeakBenchTable(summaries);
+  std::cout << LeakBenchTerminalTable(summaries);  // leaks.md has the Markdown table, its columns explained
   for (const std::string& name : names) {
     if (baseline.empty() || name == baseline) continue;
-    std::cout << name << " against " << baseline << ", time to detection leak by leak: "
+    std::cout << name << " against " << baseline << ", time to detection leak by leak:\n  "
               << PairingText(PairDetections(runs, name, baseline)) << "\n";
   }
   spdlog::info("{} missions in {:.0f} s; wrote {}/leaks.md, leaks.json, leaks.svg", tasks, wall_s, dir.string());

@@ -249,6 +249,24 @@ std::string LeakBenchTable(const std::vector<LeakSummary>& summaries) {
   return out;
 }
 
+std::string LeakBenchTerminalTable(const std::vector<LeakSummary>& summaries) {
+  // Times without their unit (the group header says s); a leak never detected where it sets the rank.
+  const auto t = [](double s) { return std::isfinite(s) ? fmt::format("{:.1f}", s) : std::string("never"); };
+  constexpr const char* kRow = "{:<10} {:>5} {:>5} {:>6} {:>6} {:>6} {:>6} {:>5} {:>6} {:>6} {:>10} {:>9}\n";
+  // The groups over their columns: detection from "found" to "max", confirmation to its "p90".
+  std::string out = fmt::format("{:<17}{:<34}{}\n", "", "detected (s from onset):", "confirmed (s):");
+  out += fmt::format(fmt::runtime(kRow), "config", "leaks", "found", "mean", "median", "p90", "max", "found", "mean",
+                     "p90", "visits/min", "false/run");
+  for (const LeakSummary& s : summaries) {
+    out += fmt::format(fmt::runtime(kRow), s.config.substr(0, 10), s.leaks, s.detected, t(s.detection_mean_s),
+                       t(s.detection_median_s), t(s.detection_p90_s), t(s.detection_max_s), s.confirmed,
+                       t(s.confirmation_mean_s), t(s.confirmation_p90_s), lr::Plain(s.visits_per_min_after_detection),
+                       lr::Plain(s.false_alarms_per_run));
+  }
+  for (const LeakSummary& s : summaries) out += fmt::format("  {}: {}\n", s.config, s.description);
+  return out;
+}
+
 std::string LeakBenchMarkdown(const std::vector<LeakSummary>& summaries, const std::vector<LeakRun>& runs,
                               const std::string& preamble, const std::string& baseline) {
   std::string out = "# sage bench leaks: time to detect a hidden leak\n\n" + preamble + "\n\n" + LeakBenchTable(summaries);

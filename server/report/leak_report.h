@@ -80,8 +80,11 @@ std::string LeakBenchJson(const std::vector<LeakSummary>& summaries, const std::
 /// (PairDetections) against `baseline` (a config name; empty: none) and what each column means.
 std::string LeakBenchMarkdown(const std::vector<LeakSummary>& summaries, const std::vector<LeakRun>& runs,
                               const std::string& preamble, const std::string& baseline);
-/// The summary table alone (for the terminal).
+/// The summary table alone, in Markdown (leaks.md's; 150-190 columns).
 std::string LeakBenchTable(const std::vector<LeakSummary>& summaries);
+/// The summary for a terminal: aligned columns within 100, by configuration name (its description
+/// on a line of its own below), times in seconds from each leak's onset.
+std::string LeakBenchTerminalTable(const std::vector<LeakSummary>& summaries);
 /// leaks.svg: the empirical CDF of time to first detection, one line per configuration.
 std::string LeakBenchSvg(const std::vector<LeakSummary>& summaries, const std::vector<LeakRun>& runs,
                          const std::string& title);

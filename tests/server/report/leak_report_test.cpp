@@ -63,6 +63,17 @@ TEST(LeakReport, SummariesMatchAHandCount) {
   // A's mean is over the 9 leaks it found: the ratio says so (a missed leak must not read as sooner).
   EXPECT_NE(md.find("| A | 2.50x (of 9 / 10 detected against 10 / 10) | 4.50x | 2.67x | "), std::string::npos) << md;
   EXPECT_NE(md.find("never"), std::string::npos);
+  // The terminal's table: within 100 columns, a row per configuration by its name with its figures
+  // (A: 10 leaks, 9 found, mean 5.0 s, p90 9.0 s, max never; B's description below).
+  const std::string terminal = LeakBenchTerminalTable(s);
+  for (std::size_t at = 0; at < terminal.size();) {
+    const std::size_t end = terminal.find('\n', at);
+    EXPECT_LE(end - at, 100u) << terminal.substr(at, end - at);
+    at = end + 1;
+  }
+  EXPECT_NE(terminal.find("a             10     9    5.0    5.0    9.0  never"), std::string::npos) << terminal;
+  EXPECT_NE(terminal.find("  b: B\n"), std::string::npos) << terminal;
+  EXPECT_EQ(terminal.find('|'), std::string::npos) << terminal;
   const std::string svg = LeakBenchSvg(s, runs, "t <&> title");
   EXPECT_NE(svg.find("t &lt;&amp;&gt; title"), std::string::npos);
   EXPECT_EQ(svg.rfind("</svg>"), svg.size() - 7);
