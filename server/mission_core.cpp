@@ -99,10 +99,7 @@ bool MissionCore::OnState(const agents::StateReport& s, std::uint64_t writer) {
   // A vehicle flies inside the workspace (a little beyond its edge at most): one reported a whole
   // workspace away from it is no vehicle of this mission (such a place, 1e154 m, had made the
   // tour plan's matching costs infinite).
-  const double margin_m = std::max({scenario_.workspace.width_m, scenario_.workspace.height_m, 10.0});
-  const bool on_field = finite && s.state.position_m.x() > -margin_m && s.state.position_m.y() > -margin_m &&
-                        s.state.position_m.x() < scenario_.workspace.width_m + margin_m &&
-                        s.state.position_m.y() < scenario_.workspace.height_m + margin_m;
+  const bool on_field = finite && scenario_.workspace.Reaches(s.state.position_m);
   const Roster::Member* known = roster_.Find(s.id);
   const bool joins = known == nullptr || known->status != Roster::Status::kAlive;
   const char* refusal = !finite                                                      ? "state not finite"

@@ -5,7 +5,9 @@
 
 #include <fmt/format.h>
 
+#include "maps/scenario/printable_text.h"
 #include "maps/scenario/scenario_detail.h"
+#include "proto/mission_clock.h"
 
 namespace sage::server {
 
@@ -57,61 +59,96 @@ std::string StopLine(double time_s, const std::string& run_dir) {
   return fmt::format("the mission stops at t = {:.1f} s; its server writes {}", time_s, run_dir);
 }
 
-std::string HeardStateProblem(const std::string& name, double time_s, const Eigen::Vector2d& position_m,
-                              const Eigen::Vector2d& velocity_mps, const maps::Workspace& workspace) {
-  constexpr double kMargin_m = 1.0, kMaxSpeed_mps = 10.0;
+std::string HeardStateProblem(std::uint64_t id, const std::string& name, double time_s, const Eigen::Vector2d& position_m,
+                              const Eigen::Vector2d& velocity_mps, const maps::Scenario& scenario, std::int64_t max_id) {
+  if (id > static_cast<std::uint64_t>(max_id)) return fmt::format("id {}: not one a mission issues (0..{})", id, max_id);
   // The scenario's rules for a name (1..64 characters of UTF-8, no control character).
   if (std::string problem = maps::detail::NameProblem(name); !problem.empty()) return "a vehicle's name " + problem;
-  if (!std::isfinite(time_s) || time_s < 0.0) return fmt::format("{}: its mission time {} is not a time >= 0", name, time_s);
-  if (!position_m.allFinite() || position_m.x() < -kMargin_m || position_m.y() < -kMargin_m ||
-      position_m.x() > workspace.width_m + kMargin_m || position_m.y() > workspace.height_m + kMargin_m) {
-    return fmt::format("{}: position ({}, {}) m is not within the {} x {} m workspace", name, position_m.x(),
-                       position_m.y(), workspace.width_m, workspace.height_m);
+  const std::string who = maps::PrintableUtf8(name, maps::kMaxNameLength);
+  if (!std::isfinite(time_s) || time_s < 0.0) return fmt::format("{}: its mission time {:.6g} is not a time >= 0", who, time_s);
+  const maps::Workspace& w = scenario.workspace;
+  if (!w.Reaches(position_m)) {  // as the server's door
+    return fmt::format("{}: position ({:.6g}, {:.6g}) m is far outside the {} x {} m workspace", who, position_m.x(),
+                       position_m.y(), w.width_m, w.height_m);
   }
-  if (!velocity_mps.allFinite() || velocity_mps.norm() > kMaxSpeed_mps) {
-    return fmt::format("{}: velocity ({}, {}) m/s is not a speed under {} m/s", name, velocity_mps.x(), velocity_mps.y(),
-                       kMaxSpeed_mps);
+  double fastest = 0.0;
+  for (const maps::VehicleSpec& v : scenario.vehicles) fastest = std::max(fastest, v.transit_speed_mps);
+  const double max_speed = std::max(10.0, 3.0 * fastest);
+  if (!velocity_mps.allFinite() || velocity_mps.norm() > max_speed) {
+    return fmt::format("{}: velocity ({:.6g}, {:.6g}) m/s is not a speed within {:.3g} m/s", who, velocity_mps.x(),
+                       velocity_mps.y(), max_speed);
   }
   return {};
 }
 
-std::string HeardStatusProblem(const HeardStatus& s) {
-  if (!std::isfinite(s.time_s) || s.time_s < 0.0 || !std::isfinite(s.duration_s) || !(s.duration_s > 0.0)) {
-    return fmt::format("the mission status's time {} s of {} s is not a time >= 0 of a duration > 0", s.time_s, s.duration_s);
+std::string HeardStatusProblem(const HeardStatus& s, std::int64_t max_id) {
+  constexpr double kSlack_s = 1.0, kMaxCycle_ms = 1e6;
+  if (!std::isfinite(s.duration_s) || !(s.duration_s > 0.0) || !std::isfinite(s.time_s) || s.time_s < 0.0 ||
+      s.time_s > s.duration_s + kSlack_s) {
+    return fmt::format("the mission status's time {:.6g} s of {:.6g} s is not a time in [0, duration] of a duration > 0",
+                       s.time_s, s.duration_s);
   }
-  if (!std::isfinite(s.time_scale) || !(s.time_scale > 0.0)) {
-    return fmt::format("the mission status's time scale {} is not > 0", s.time_scale);
+  if (!(s.time_scale >= proto::kMinTimeScale && s.time_scale <= proto::kMaxTimeScale)) {
+    return fmt::format("the mission status's time scale {:.6g} is not in {:g}..{:g}", s.time_scale, proto::kMinTimeScale,
+                       proto::kMaxTimeScale);
   }
-  if (!std::isfinite(s.cycle_ms) || s.cycle_ms < 0.0) return fmt::format("the mission status's cycle time {} ms is not >= 0", s.cycle_ms);
+  if (!(s.cycle_ms >= 0.0 && s.cycle_ms <= kMaxCycle_ms)) {
+    return fmt::format("the mission status's cycle time {:.6g} ms is not in [0, {:g}]", s.cycle_ms, kMaxCycle_ms);
+  }
   if (std::isinf(s.ergodic_metric) || s.ergodic_metric < 0.0) {
-    return fmt::format("the mission status's ergodic metric {} is not >= 0", s.ergodic_metric);
+    return fmt::format("the mission status's ergodic metric {:.6g} is not >= 0", s.ergodic_metric);
   }
-  if (s.alive < 0 || s.lost < 0) return "the mission status's vehicle counts are negative";
+  if (s.alive < 0 || s.lost < 0 || s.alive > max_id + 1 || s.lost > max_id + 1) {
+    return fmt::format("the mission status's vehicle counts {} flying, {} lost are not in 0..{}", s.alive, s.lost, max_id + 1);
+  }
   return {};
 }
 
-std::string StatusReport(const HeardStatus& heard, const std::string& mission, std::size_t max_rows) {
+std::string StatusReport(const HeardStatus& heard, const std::string& mission, const std::string& run_dir,
+                         std::size_t max_rows) {
   std::string out;
+  const std::string name = maps::PrintableUtf8(mission, 24);  // the run directory, below, names it whole
   if (heard.has_status) {
     const double done = std::clamp(heard.time_s / heard.duration_s, 0.0, 1.0);
-    out += fmt::format("{}: t = {:.1f} of {:.1f} s ({:.0f} %), {}\n", mission, heard.time_s, heard.duration_s, 100.0 * done,
-                       heard.finished ? "finished" : fmt::format("running at {:.2f}x real time", heard.time_scale));
+    // How fast it runs as measured between two statuses; the asked time scale when too close.
+    std::string pace = "finished";
+    if (!heard.finished) {
+      pace = std::isfinite(heard.measured_rate)
+                 ? fmt::format("running at {:.2f}x real time (asked {:.3g}x)", heard.measured_rate, heard.time_scale)
+                 : fmt::format("running, asked {:.3g}x real time", heard.time_scale);
+    }
+    out += fmt::format("{}: t = {:.1f} of {:.1f} s ({:.0f} %), {}\n", name, heard.time_s, heard.duration_s, 100.0 * done, pace);
+    out += "run directory " + run_dir + "\n";
     out += fmt::format("server cycle {:.2f} ms; ergodic metric {}; {} vehicle{} flying, {} lost\n", heard.cycle_ms,
                        std::isnan(heard.ergodic_metric) ? std::string("not yet") : fmt::format("{:.4g}", heard.ergodic_metric),
                        heard.alive, heard.alive == 1 ? "" : "s", heard.lost);
   } else {
-    out += fmt::format("{}: no mission status heard in {:.1f} s\n", mission, heard.listened_s);
+    out += fmt::format("{}: no mission status heard in {:.1f} s\nrun directory {}\n", name, heard.listened_s, run_dir);
   }
   if (heard.vehicles.empty()) {
     out += fmt::format("no vehicle heard in {:.1f} s\n", heard.listened_s);
   } else {
-    out += fmt::format("vehicles heard in {:.1f} s:\n", heard.listened_s);
-    out += fmt::format("{:>6}  {:<12} {:>9} {:>9} {:>11} {:>9}\n", "id", "name", "x (m)", "y (m)", "speed (m/s)", "at t (s)");
+    out += fmt::format("vehicles heard in {:.1f} s{}:\n", heard.listened_s,
+                       heard.has_status ? fmt::format(" ({} of {} flying)", heard.vehicles.size(), heard.alive) : "");
     const std::size_t shown = std::min(max_rows, heard.vehicles.size());
+    // The name column as wide as the longest name shown, up to 24 characters (a longer one cut).
+    constexpr std::size_t kNameWidth = 24;
+    const auto columns = [](const std::string& text) {  // characters, not bytes (UTF-8 names)
+      return static_cast<std::size_t>(std::count_if(text.begin(), text.end(), [](char c) { return (c & 0xC0) != 0x80; }));
+    };
+    std::size_t width = 4;
+    for (std::size_t i = 0; i < shown; ++i) width = std::max(width, columns(maps::PrintableUtf8(heard.vehicles[i].name, kNameWidth)));
+    const auto row = [&](const auto& id, const std::string& who, const auto& x, const auto& y, const auto& speed,
+                         const auto& t) {
+      const std::string shown_name = maps::PrintableUtf8(who, kNameWidth);
+      return fmt::format("{:>8}  {}{} {:>9} {:>9} {:>11} {:>9}\n", id, shown_name,
+                         std::string(width - std::min(width, columns(shown_name)), ' '), x, y, speed, t);
+    };
+    out += row("id", "name", "x (m)", "y (m)", "speed (m/s)", "at t (s)");
     for (std::size_t i = 0; i < shown; ++i) {
       const HeardStatus::Vehicle& v = heard.vehicles[i];
-      out += fmt::format("{:>6}  {:<12} {:>9.2f} {:>9.2f} {:>11.2f} {:>9.1f}\n", v.id, v.name, v.position_m.x(),
-                         v.position_m.y(), v.speed_mps, v.time_s);
+      out += row(v.id, v.name, fmt::format("{:.2f}", v.position_m.x()), fmt::format("{:.2f}", v.position_m.y()),
+                 fmt::format("{:.2f}", v.speed_mps), fmt::format("{:.1f}", v.time_s));
     }
     if (shown < heard.vehicles.size()) {
       out += fmt::format("(and {} more: {} heard; the first {} by id are shown, --all shows every one)\n",

@@ -5,6 +5,7 @@
 // view's buttons (server/node/server_node.cpp). The mission core's own checks (a valve's
 // weight, which vehicle may be taken out, how many may join) come after these in both paths.
 #include <cstddef>
+#include <cstdint>
 #include <limits>
 #include <optional>
 #include <string>
@@ -47,8 +48,10 @@ struct HeardStatus {
   bool has_status = false;  ///< the server's status was heard
   double time_s = 0.0, duration_s = 0.0, time_scale = 1.0, cycle_ms = 0.0;
   double ergodic_metric = std::numeric_limits<double>::quiet_NaN();  ///< NaN: none yet
-  int alive = 0, lost = 0;
+  std::int64_t alive = 0, lost = 0;
   bool finished = false;
+  /// Mission seconds per wall second between the first and last status heard (NaN: too close).
+  double measured_rate = std::numeric_limits<double>::quiet_NaN();
   struct Vehicle {
     int id = 0;
     std::string name;
@@ -62,19 +65,23 @@ struct HeardStatus {
   std::string last_refusal;
 };
 
-/// Why a vehicle's state heard on the mission's domain is not believed (empty: it is): a name as
-/// a scenario's (1..64 characters of UTF-8, no control character), a finite position within 1 m of the workspace, a finite velocity
-/// under 10 m/s (a BlueROV2 makes 1.5), a finite mission time >= 0.
-std::string HeardStateProblem(const std::string& name, double time_s, const Eigen::Vector2d& position_m,
-                              const Eigen::Vector2d& velocity_mps, const maps::Workspace& workspace);
-/// Why a MissionStatus heard is not believed (empty: it is): finite times >= 0, a duration > 0, a
-/// time scale > 0, finite cycle time >= 0, a metric finite >= 0 or NaN (none yet).
-std::string HeardStatusProblem(const HeardStatus& status);
+/// Why a vehicle's state heard on the mission's domain is not believed (empty: it is): an id in
+/// 0..max_id, a name as a scenario's (1..64 characters of UTF-8, no control character), a finite
+/// mission time >= 0, a place the server's door takes (maps::Workspace::Reaches), a finite speed
+/// within three times the scenario's fastest transit speed (10 m/s at least).
+std::string HeardStateProblem(std::uint64_t id, const std::string& name, double time_s, const Eigen::Vector2d& position_m,
+                              const Eigen::Vector2d& velocity_mps, const maps::Scenario& scenario, std::int64_t max_id);
+/// Why a MissionStatus heard is not believed (empty: it is): a time in [0, duration + 1 s] of a
+/// finite duration > 0, a time scale a mission can run at (proto's 1e-3..1e3), a cycle time in
+/// [0, 1e6] ms, a metric finite >= 0 or NaN (none yet), vehicle counts in 0..max_id + 1.
+std::string HeardStatusProblem(const HeardStatus& status, std::int64_t max_id);
 
-/// `sage status`'s report: the mission's time against its duration and how fast it runs, the
-/// server's cycle and metric, vehicles flying and lost, then one row a vehicle heard (id, name,
-/// position, speed, time of its state), the first max_rows by id with a count of the rest, and
-/// the samples refused. `mission` names it (scenario name and run directory).
-std::string StatusReport(const HeardStatus& heard, const std::string& mission, std::size_t max_rows = 40);
+/// `sage status`'s report: the mission's time against its duration and how fast it runs, its run
+/// directory, the server's cycle and metric, vehicles flying and lost, then one row a vehicle
+/// heard (id, name, position, speed, time of its state), the first max_rows by id with a count of
+/// the rest, and the samples refused. Within 100 columns but for the run directory's and the last
+/// refusal's own words.
+std::string StatusReport(const HeardStatus& heard, const std::string& mission, const std::string& run_dir,
+                         std::size_t max_rows = 40);
 
 }  // namespace sage::server

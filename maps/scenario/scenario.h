@@ -3,6 +3,7 @@
 // (XTs) with their valves, named risk profiles with timed events, the vehicles, and the
 // controller settings. Plain structs with defaults; LoadScenario() validates and throws
 // ScenarioError with one line naming file, field, value and rule.
+#include <algorithm>
 #include <cstddef>
 #include <cstdint>
 #include <limits>
@@ -29,6 +30,16 @@ class ScenarioError : public std::runtime_error {
 struct Workspace {
   double width_m = 12.0;   ///< extent along x (m), > 0; the box is [0, width] x [0, height]
   double height_m = 10.0;  ///< extent along y (m), > 0
+
+  /// Where a vehicle of the mission may report being: a finite place inside the box or at most
+  /// max(width, height, 10 m) beyond its edge (a crowded fleet pushes hulls a little out; a place
+  /// a whole workspace away is no vehicle of this mission). The server's door and sage status
+  /// both ask it.
+  bool Reaches(const Eigen::Vector2d& x_m) const {
+    const double margin_m = std::max({width_m, height_m, 10.0});
+    return x_m.allFinite() && x_m.x() > -margin_m && x_m.y() > -margin_m && x_m.x() < width_m + margin_m &&
+           x_m.y() < height_m + margin_m;
+  }
 };
 
 /// A point of interest on an XT.

@@ -529,7 +529,8 @@ int RunCli(int argc, char** argv) {
       "status", "Where the running mission stands: its time, the server's cycle, vehicles flying and lost, and each "
                 "vehicle heard with its position and speed (read only: joins as the mission's viewer)");
   status->add_option("--listen", op.status_listen_s,
-                     "Seconds to hear the vehicles' states once the mission has answered (0.2..60; each sends 10 a second)")
+                     "Seconds to hear the vehicles' states once the mission has answered, and up to 3 s more while "
+                     "fewer are heard than fly (0.2..60; each vehicle sends one a control cycle)")
       ->capture_default_str()
       ->check(MustBeIn(0.2, 60.0));
   status->add_flag("--all", op.status_all, "List every vehicle heard (default: the first 40 by id, and a count of the rest)");
@@ -692,7 +693,8 @@ int RunCli(int argc, char** argv) {
     std::string words = InOurWords(e.what());
     // `sage vehicle add 2 --count 3`: the argument and --count are one option to CLI11.
     if (constexpr std::string_view kCount = "--count: given "; path == "sage vehicle add" && words.starts_with(kCount)) {
-      words = "the count: given " + words.substr(kCount.size()) + " (as an argument, --count or -c: they are one)";
+      const std::string times = words.substr(kCount.size(), words.find(';') - kCount.size());  // "2 times"
+      words = "the count was given " + times + " (the argument, --count and -c are one option); give it once";
     }
     std::cerr << "sage: error: " << (path == "sage" ? "" : path.substr(5) + ": ") << words << " (see " << path
               << " --help)\n";

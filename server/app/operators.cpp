@@ -20,6 +20,7 @@
 #include "proto/qos.h"
 #include "server/app/processes.h"
 #include "server/app/security_command.h"
+#include "server/mission_core.h"
 #include "server/operator_requests.h"
 
 namespace sage::server {
@@ -261,6 +262,7 @@ int SetRisk(const MissionFile& mission, const std::string& valve, double weight,
 
 int ShowStatus(const MissionFile& mission, double listen_s, bool all, bool insecure) {
   const maps::Scenario scenario = maps::LoadScenario(mission.scenario_path);
+  constexpr std::int64_t kMaxId = MissionCore::kMaxVehicleId;
   // Read only: the viewer's identity, which may write nothing to the mission.
   proto::Participant participant = OperatorParticipant(mission, insecure, proto::SecurityRole::kViewer);
   proto::Reader<proto::MissionStatus> status(participant, proto::MissionStatusQos());
@@ -271,27 +273,38 @@ int ShowStatus(const MissionFile& mission, double listen_s, bool all, bool insec
     ++heard.refused;
     heard.last_refusal = std::move(why);
   };
+  std::optional<std::pair<std::int64_t, double>> first_status;  // (stamp, mission time): the pace
   using Clock = std::chrono::steady_clock;
-  // DDS Security's handshake takes tenths of a second (seconds on a loaded machine): up to 3 s for
-  // the first word of the mission, then listen_s for every vehicle's state (10 a second each).
+  const auto seconds = [](double s) { return std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(s)); };
+  // DDS Security's handshake takes tenths of a second (seconds on a loaded machine), with the
+  // server and with each agent host apart: up to 3 s for the first word, then listen_s, and on
+  // (up to 3 s more) while fewer vehicles are heard than the server says fly.
   const Clock::time_point start = Clock::now();
-  Clock::time_point end = start + std::chrono::seconds(3);
+  Clock::time_point end = start + std::chrono::seconds(3), last_chance = end + seconds(listen_s);
   bool listening = false;
-  while (Clock::now() < end) {
+  const auto all_heard = [&] { return heard.has_status && static_cast<std::int64_t>(vehicles.size()) >= heard.alive; };
+  while (Clock::now() < end || (listening && !all_heard() && Clock::now() < last_chance)) {
     states.WaitForData(std::chrono::milliseconds(50));
     status.TakeEach([&](const proto::MissionStatus& m, const dds_sample_info_t& info) {
       if (!info.valid_data) return;
+      if (m.vehicles_alive > kMaxId + 1 || m.vehicles_lost > kMaxId + 1) {
+        return refuse(fmt::format("the mission status's vehicle counts {} flying, {} lost are not in 0..{}",
+                                  m.vehicles_alive, m.vehicles_lost, kMaxId + 1));
+      }
       HeardStatus next = heard;
       next.time_s = m.mission_time_s;
       next.duration_s = m.duration_s;
       next.time_scale = m.time_scale;
       next.cycle_ms = m.cycle_time_ms;
       next.ergodic_metric = m.ergodic_metric;
-      next.alive = static_cast<int>(std::min<std::uint32_t>(m.vehicles_alive, 1u << 30));
-      next.lost = static_cast<int>(std::min<std::uint32_t>(m.vehicles_lost, 1u << 30));
+      next.alive = m.vehicles_alive;
+      next.lost = m.vehicles_lost;
       next.finished = m.finished;
-      if (std::string why = HeardStatusProblem(next); !why.empty()) return refuse(std::move(why));
+      if (std::string why = HeardStatusProblem(next, kMaxId); !why.empty()) return refuse(std::move(why));
       next.has_status = true;
+      if (!first_status) first_status.emplace(m.stamp_ns, m.mission_time_s);
+      const double wall_s = 1e-9 * static_cast<double>(m.stamp_ns - first_status->first);
+      if (wall_s >= 0.2) next.measured_rate = (m.mission_time_s - first_status->second) / wall_s;
       heard = std::move(next);
     });
     while (states.TakeEach([&](const proto::VehicleState& m, const dds_sample_info_t& info) {
@@ -299,11 +312,8 @@ int ShowStatus(const MissionFile& mission, double listen_s, bool all, bool insec
       const std::string name(m.name, strnlen(m.name, sizeof(m.name)));
       const double time_s = static_cast<double>(m.cycle) / scenario.control_rate_hz;
       const Eigen::Vector2d position(m.x_m, m.y_m), velocity(m.vx_mps, m.vy_mps);
-      if (std::string why = HeardStateProblem(name, time_s, position, velocity, scenario.workspace); !why.empty()) {
+      if (std::string why = HeardStateProblem(m.vehicle_id, name, time_s, position, velocity, scenario, kMaxId); !why.empty()) {
         return refuse(std::move(why));
-      }
-      if (m.vehicle_id > static_cast<std::uint32_t>(std::numeric_limits<int>::max())) {
-        return refuse(fmt::format("{}: id {} is not one a mission issues", name, m.vehicle_id));
       }
       const int id = static_cast<int>(m.vehicle_id);
       HeardStatus::Vehicle& v = vehicles[id];
@@ -313,17 +323,17 @@ int ShowStatus(const MissionFile& mission, double listen_s, bool all, bool insec
     }
     if (!listening && (heard.has_status || !vehicles.empty())) {
       listening = true;
-      end = Clock::now() + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(listen_s));
+      end = Clock::now() + seconds(listen_s);
+      last_chance = end + std::chrono::seconds(3);
     }
   }
   heard.listened_s = std::chrono::duration<double>(Clock::now() - start).count();
-  if (!heard.has_status && vehicles.empty()) return NoMission(mission, insecure);
+  // Nothing believed: no mission answered, unless what came was refused (then the report says so).
+  if (!heard.has_status && vehicles.empty() && heard.refused == 0) return NoMission(mission, insecure);
   for (auto& [id, v] : vehicles) heard.vehicles.push_back(std::move(v));
-  std::fputs(StatusReport(heard, fmt::format("{} ({})", scenario.name, mission.run_dir),
-                          all ? heard.vehicles.size() : std::size_t{40})
-                 .c_str(),
+  std::fputs(StatusReport(heard, scenario.name, mission.run_dir, all ? heard.vehicles.size() : std::size_t{40}).c_str(),
              stdout);
-  return 0;
+  return heard.has_status || !heard.vehicles.empty() ? 0 : 1;
 }
 
 int StopMission(const MissionFile& mission, bool insecure) {

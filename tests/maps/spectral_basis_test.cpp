@@ -86,8 +86,7 @@ TEST(SpectralBasis, AddScaledAccumulatesScaledFunctions) {
 
 // AddScaledAll is AddScaled of each sample in turn, to the bit (the fleet metric's sums must not
 // depend on how a mission's samples were batched): orders with and without a tail past the
-// 16-coefficient runs, sample counts with and without a tail past the 16-sample blocks, and the
-// single samples added after a batch.
+// 16-coefficient runs, and sample counts with and without a tail past the 16-sample blocks.
 TEST(SpectralBasis, AddScaledAllIsAddScaledOfEachInTurn) {
   for (const int order : {1, 13, 16, 37, 64}) {
     const SpectralBasis basis(1096.0, 730.0, order);

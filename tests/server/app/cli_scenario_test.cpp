@@ -292,8 +292,8 @@ TEST(RangeProblem, SaysWhatIsAllowed) {
   // named one option, given once); parsing fails before any mission is looked for.
   const SageRun count_twice = RunSage({"vehicle", "add", "2", "--count", "3"});
   EXPECT_EQ(count_twice.status, 2);
-  EXPECT_NE(count_twice.err.find("sage: error: vehicle add: the count: given 2 times; give it once (as an argument, "
-                                 "--count or -c: they are one)"),
+  EXPECT_NE(count_twice.err.find("sage: error: vehicle add: the count was given 2 times (the argument, --count and -c "
+                                 "are one option); give it once (see sage vehicle add --help)"),
             std::string::npos)
       << count_twice.err;
   // A flag's help shows no CLI11 default ("--no-latest{false}" had).
