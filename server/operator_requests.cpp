@@ -7,7 +7,6 @@
 
 #include "maps/scenario/printable_text.h"
 #include "maps/scenario/scenario_detail.h"
-#include "proto/mission_clock.h"
 
 namespace sage::server {
 
@@ -81,16 +80,16 @@ std::string HeardStateProblem(std::uint64_t id, const std::string& name, double 
   return {};
 }
 
-std::string HeardStatusProblem(const HeardStatus& s, std::int64_t max_id) {
+std::string HeardStatusProblem(const HeardStatus& s, std::int64_t max_id, double min_time_scale, double max_time_scale) {
   constexpr double kSlack_s = 1.0, kMaxCycle_ms = 1e6;
   if (!std::isfinite(s.duration_s) || !(s.duration_s > 0.0) || !std::isfinite(s.time_s) || s.time_s < 0.0 ||
       s.time_s > s.duration_s + kSlack_s) {
     return fmt::format("the mission status's time {:.6g} s of {:.6g} s is not a time in [0, duration] of a duration > 0",
                        s.time_s, s.duration_s);
   }
-  if (!(s.time_scale >= proto::kMinTimeScale && s.time_scale <= proto::kMaxTimeScale)) {
-    return fmt::format("the mission status's time scale {:.6g} is not in {:g}..{:g}", s.time_scale, proto::kMinTimeScale,
-                       proto::kMaxTimeScale);
+  if (!(s.time_scale >= min_time_scale && s.time_scale <= max_time_scale)) {
+    return fmt::format("the mission status's time scale {:.6g} is not in {:g}..{:g}", s.time_scale, min_time_scale,
+                       max_time_scale);
   }
   if (!(s.cycle_ms >= 0.0 && s.cycle_ms <= kMaxCycle_ms)) {
     return fmt::format("the mission status's cycle time {:.6g} ms is not in [0, {:g}]", s.cycle_ms, kMaxCycle_ms);

@@ -72,9 +72,11 @@ struct HeardStatus {
 std::string HeardStateProblem(std::uint64_t id, const std::string& name, double time_s, const Eigen::Vector2d& position_m,
                               const Eigen::Vector2d& velocity_mps, const maps::Scenario& scenario, std::int64_t max_id);
 /// Why a MissionStatus heard is not believed (empty: it is): a time in [0, duration + 1 s] of a
-/// finite duration > 0, a time scale a mission can run at (proto's 1e-3..1e3), a cycle time in
-/// [0, 1e6] ms, a metric finite >= 0 or NaN (none yet), vehicle counts in 0..max_id + 1.
-std::string HeardStatusProblem(const HeardStatus& status, std::int64_t max_id);
+/// finite duration > 0, a time scale in [min_time_scale, max_time_scale] (what a mission's clock
+/// may run at: the transport's bounds, given by the caller), a cycle time in [0, 1e6] ms, a metric
+/// finite >= 0 or NaN (none yet), vehicle counts in 0..max_id + 1.
+std::string HeardStatusProblem(const HeardStatus& status, std::int64_t max_id, double min_time_scale,
+                               double max_time_scale);
 
 /// `sage status`'s report: the mission's time against its duration and how fast it runs, its run
 /// directory, the server's cycle and metric, vehicles flying and lost, then one row a vehicle

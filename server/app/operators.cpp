@@ -296,7 +296,7 @@ int ShowStatus(const MissionFile& mission, double listen_s, bool all, bool insec
       next.alive = m.vehicles_alive;
       next.lost = m.vehicles_lost;
       next.finished = m.finished;
-      if (std::string why = HeardStatusProblem(next, kMaxId); !why.empty()) return refuse(std::move(why));
+      if (std::string why = HeardStatusProblem(next, kMaxId, proto::kMinTimeScale, proto::kMaxTimeScale); !why.empty()) return refuse(std::move(why));
       next.has_status = true;
       if (!first_status) first_status.emplace(m.stamp_ns, m.mission_time_s);
       const double wall_s = 1e-9 * static_cast<double>(m.stamp_ns - first_status->first);

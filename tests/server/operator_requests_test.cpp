@@ -89,7 +89,7 @@ TEST(OperatorRequests, HeardStatesCheckedAtTheDoor) {
   HeardStatus status;
   status.time_s = 42.0;
   status.duration_s = 600.0;
-  EXPECT_EQ(HeardStatusProblem(status, kMaxId), "");  // no metric yet (NaN) is allowed
+  EXPECT_EQ(HeardStatusProblem(status, kMaxId, 1e-3, 1e3), "");  // no metric yet (NaN) is allowed
   for (auto spoil : std::vector<void (*)(HeardStatus&)>{
            [](HeardStatus& s) { s.time_s = -1.0; }, [](HeardStatus& s) { s.time_s = 602.0; },
            [](HeardStatus& s) { s.duration_s = 0.0; }, [](HeardStatus& s) { s.time_scale = 0.0; },
@@ -99,8 +99,8 @@ TEST(OperatorRequests, HeardStatesCheckedAtTheDoor) {
            [](HeardStatus& s) { s.alive = 1002; }}) {
     HeardStatus bad = status;
     spoil(bad);
-    EXPECT_NE(HeardStatusProblem(bad, kMaxId), "");
-    EXPECT_LT(HeardStatusProblem(bad, kMaxId).size(), 120u) << HeardStatusProblem(bad, kMaxId);
+    EXPECT_NE(HeardStatusProblem(bad, kMaxId, 1e-3, 1e3), "");
+    EXPECT_LT(HeardStatusProblem(bad, kMaxId, 1e-3, 1e3).size(), 120u) << HeardStatusProblem(bad, kMaxId, 1e-3, 1e3);
   }
 }
 
