@@ -2,6 +2,7 @@
 // and writing a scenario live in scenario_parse.cpp, scenario_validate.cpp and scenario_emit.cpp.
 #include "maps/scenario/scenario.h"
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 #include <random>
@@ -48,6 +49,11 @@ int Scenario::VehicleId(const std::string& vehicle_name) const {
 
 std::int64_t Scenario::CycleAt(double time_s) const {
   return static_cast<std::int64_t>(std::ceil(time_s * control_rate_hz - 1e-9));
+}
+
+std::int64_t Scenario::TrajectoryEvery() const {
+  if (!(trajectory_rate_hz > 0.0)) return 1;
+  return std::max<std::int64_t>(1, std::llround(control_rate_hz / trajectory_rate_hz));
 }
 
 std::map<int, std::int64_t> Scenario::VehicleEndCycles() const {

@@ -245,6 +245,9 @@ inline constexpr std::size_t kMaxPeers = 32;
 /// [A-Za-z0-9_.:-] or an IPv4 address; peers IPv4 addresses or host names (1-253 characters of
 /// [A-Za-z0-9.-]), at most kMaxPeers.
 std::string NetworkProblem(const NetworkSettings& network, const std::string& where);
+/// Empty if rate_hz is a trajectory rate a mission at control_rate_hz can record (0, or the
+/// control rate over a whole number k >= 1), else what is allowed, as one line.
+std::string TrajectoryRateRule(double rate_hz, double control_rate_hz);
 
 /// A change of the fleet during a mission: a vehicle joins, is lost (dies without a word), or
 /// leaves cleanly.
@@ -331,6 +334,10 @@ struct Scenario {
   double duration_s = 300.0;                ///< mission length (s), > 0
   double control_rate_hz = 10.0;            ///< SMC / tour controller rate (Hz), > 0
   double physics_rate_hz = 50.0;            ///< Box2D step rate (Hz), a multiple of control rate
+  /// Rows a vehicle per mission second in trajectory.csv: the control rate over a whole number
+  /// k, a row every k-th control cycle (a 10,000-vehicle field at 1 Hz writes 88 MB a minute,
+  /// not 880); 0 = every control cycle. The metrics count every cycle either way.
+  double trajectory_rate_hz = 0.0;
   double visit_radius_m = 0.5;              ///< a visit is an entry within this of a valve (m), > 0
   double rearm_radius_m = 1.0;              ///< re-armed only after leaving this (m), > visit radius
   std::uint64_t seed = 1;                   ///< fixed seed, same mission
@@ -368,6 +375,9 @@ struct Scenario {
   int VehicleId(const std::string& name) const;
   /// The first control cycle at or after mission time t: the cycle a timed event happens on.
   std::int64_t CycleAt(double time_s) const;
+  /// Control cycles from one trajectory.csv row of a vehicle to its next (1 at trajectory_rate_hz
+  /// 0): cycle c is recorded when c is a multiple of it.
+  std::int64_t TrajectoryEvery() const;
   /// Vehicle id -> the control cycle of its first fleet_events loss or leave (none: not listed).
   std::map<int, std::int64_t> VehicleEndCycles() const;
   const RiskProfile* FindProfile(const std::string& name) const;  ///< nullptr if none

@@ -41,6 +41,7 @@ std::string EmitScenario(const Scenario& s) {
   number("duration_s", s.duration_s);
   number("control_rate_hz", s.control_rate_hz);
   number("physics_rate_hz", s.physics_rate_hz);
+  if (s.trajectory_rate_hz > 0.0) number("trajectory_rate_hz", s.trajectory_rate_hz);
   number("visit_radius_m", s.visit_radius_m);
   number("rearm_radius_m", s.rearm_radius_m);
   key("seed") << std::to_string(s.seed);

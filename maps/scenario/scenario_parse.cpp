@@ -403,7 +403,7 @@ void ReadPerception(const Reader& r, const YAML::Node& root, Scenario& s) {
 
 Scenario ReadScenario(const Reader& r, const YAML::Node& root, const std::string& source) {
   if (!root.IsMap()) r.Fail("scenario", root, "must be a YAML map of sections (workspace, structures, ...)");
-  r.ExpectMap(root, "", {"name", "workspace", "duration_s", "control_rate_hz", "physics_rate_hz",
+  r.ExpectMap(root, "", {"name", "workspace", "duration_s", "control_rate_hz", "physics_rate_hz", "trajectory_rate_hz",
                          "visit_radius_m", "rearm_radius_m", "seed", "start_jitter_m", "ergodic", "guard", "astar",
                          "structures", "vehicles", "default_profile", "profiles", "fleet", "fleet_events",
                          "seabed", "flowlines", "boulders", "network", "sensors", "gaze", "leaks", "fusion"});
@@ -421,6 +421,7 @@ Scenario ReadScenario(const Reader& r, const YAML::Node& root, const std::string
   r.OptionalNumber(root, "duration_s", "", s.duration_s);
   r.OptionalNumber(root, "control_rate_hz", "", s.control_rate_hz);
   r.OptionalNumber(root, "physics_rate_hz", "", s.physics_rate_hz);
+  r.OptionalNumber(root, "trajectory_rate_hz", "", s.trajectory_rate_hz);
   r.OptionalNumber(root, "visit_radius_m", "", s.visit_radius_m);
   r.OptionalNumber(root, "rearm_radius_m", "", s.rearm_radius_m);
   r.Optional(root, "seed", "", [&](const YAML::Node& n, const std::string& p) {

@@ -270,6 +270,14 @@ std::string Shown(const std::string& text) { return text.empty() ? "\"\"" : Prin
 
 }  // namespace
 
+std::string TrajectoryRateRule(double rate_hz, double control_rate_hz) {
+  if (rate_hz == 0.0) return "";  // every cycle
+  const double every = control_rate_hz / rate_hz;
+  if (rate_hz > 0.0 && every >= 1 - 1e-9 && std::abs(every - std::round(every)) <= 1e-9 * every) return "";
+  return "must be control_rate_hz = " + FormatNumber(control_rate_hz) +
+         " over a whole number (a row every k-th control cycle), or 0 for every cycle";
+}
+
 std::string NetworkProblem(const NetworkSettings& network, const std::string& where) {
   const std::string& name = network.interface_name;
   if (!IsIpv4(name) && (name.empty() || name.size() > 15 || !OnlyOf(name, "_.:-"))) {
@@ -309,6 +317,9 @@ void Scenario::Validate() const {
   if (steps < 1 - 1e-9 || std::abs(steps - std::round(steps)) > 1e-9 * steps) {
     c.Fail("physics_rate_hz", FormatNumber(physics_rate_hz),
            "must be a whole multiple of control_rate_hz = " + FormatNumber(control_rate_hz));
+  }
+  if (const std::string rule = TrajectoryRateRule(trajectory_rate_hz, control_rate_hz); !rule.empty()) {
+    c.Fail("trajectory_rate_hz", FormatNumber(trajectory_rate_hz), rule);
   }
   c.Positive("visit_radius_m", visit_radius_m);
   c.Positive("rearm_radius_m", rearm_radius_m);

@@ -123,6 +123,10 @@ void AddScenarioOverrides(CLI::App& cmd, ScenarioOverrides& o, OverrideSet set, 
                    "Regions: the split balances lap x (1 + beta n W), W a region's share of the field's risk, so the "
                    "riskier valves come in smaller regions (default: the scenario's, 0.5; 0 = laps alone)")
         ->check(MustBeIn(0.0, 10.0));
+    cmd.add_option("--trajectory-rate", o.trajectory_rate_hz,
+                   "trajectory.csv's rows a vehicle per mission second: the control rate over a whole number (a row "
+                   "every k-th cycle), 0 = every cycle (default: the scenario's trajectory_rate_hz; generated fields "
+                   "of over 1,000 vehicles record about 10,000 rows a second). The metrics count every cycle");
     cmd.add_option("--guard", o.guard,
                    "No-starving-valve guard (weight floor + revisit bound): on|off (default: the scenario's; off "
                    "reproduces the paper)")

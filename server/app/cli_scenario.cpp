@@ -85,6 +85,7 @@ std::string FirstScenarioOverride(const ScenarioOverrides& o) {
       {"--weight-exponent", o.weight_exponent.has_value()},
       {"--age-weighting", o.age_weighting_laps.has_value()},
       {"--risk-share", o.risk_share.has_value()},
+      {"--trajectory-rate", o.trajectory_rate_hz.has_value()},
       {"--random-leaks", o.random_leaks.has_value()},
       {"--leak-sites", o.leak_sites.has_value()},
       {"--steer", o.steer.has_value()},
@@ -192,6 +193,12 @@ maps::Scenario LoadWithOverrides(const ScenarioOverrides& o) {
   if (o.start_jitter_m) scenario.start_jitter_m = *o.start_jitter_m;
   if (o.age_weighting_laps) scenario.fleet.age_weighting_laps = *o.age_weighting_laps;
   if (o.risk_share) scenario.fleet.risk_share = *o.risk_share;
+  if (o.trajectory_rate_hz) {
+    if (const std::string rule = maps::TrajectoryRateRule(*o.trajectory_rate_hz, scenario.control_rate_hz); !rule.empty()) {
+      throw maps::ScenarioError(fmt::format("--trajectory-rate = {}: {}", *o.trajectory_rate_hz, rule));
+    }
+    scenario.trajectory_rate_hz = *o.trajectory_rate_hz;
+  }
   if (o.guard) scenario.guard.enabled = (*o.guard == "on");
   scenario.network = o.network.Applied(scenario.network);
   if (o.forgetting_time_s) scenario.ergodic.forgetting_time_s = *o.forgetting_time_s;

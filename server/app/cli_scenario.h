@@ -42,6 +42,7 @@ struct ScenarioOverrides {
   std::optional<double> weight_exponent;  // both the SMC target's and the A* waits
   std::optional<double> age_weighting_laps;  // regions
   std::optional<double> risk_share;          // regions
+  std::optional<double> trajectory_rate_hz;  // trajectory.csv's rows a vehicle-second
   NetworkOverrides network;                  // launch, server, agents
   // Leak sensing (issue 9): random hidden leaks drawn by seed, and whether vehicles steer on the posterior.
   std::optional<int> random_leaks;

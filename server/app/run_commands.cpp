@@ -291,6 +291,11 @@ int CmdEvaluate(const EvaluateCommand& c) {
                  profile->name, metrics.duration_s);
   }
   WarnOfAForeignRecord(trajectory, scenario, c.trajectory_path, c.scenario_path);
+  if (scenario.TrajectoryEvery() > 1) {
+    spdlog::warn("{}: trajectory_rate_hz = {} records a vehicle every {} control cycles: a pass between two rows is not "
+                 "seen, so the visits here can fall short of the run's own metrics.json, which counted every cycle",
+                 c.scenario_path, scenario.trajectory_rate_hz, scenario.TrajectoryEvery());
+  }
   std::cout << FormatTable({metrics});
   if (!c.out_dir.empty()) {
     CheckOutDirectory(c.out_dir);

@@ -97,6 +97,7 @@ RunDirectory::RunDirectory(std::string dir, const maps::Scenario& scenario, RunD
     : dir_(std::move(dir)),
       scenario_(scenario),
       options_(std::move(options)),
+      trajectory_every_(scenario.TrajectoryEvery()),
       plot_(scenario, options_.plot_points, options_.plot_events) {
   PrepareRunDirectory(dir_);
   if (!options_.resume) {
@@ -139,7 +140,12 @@ void RunDirectory::Open(Appender& file, const char* name, const char* header) {
   }
 }
 
+bool RunDirectory::Recorded(const TrajectorySample& s) const {
+  return trajectory_every_ == 1 || std::llround(s.time_s * scenario_.control_rate_hz) % trajectory_every_ == 0;
+}
+
 void RunDirectory::OnSample(const TrajectorySample& s, const std::string& name) {
+  if (!Recorded(s)) return;
   CollectRows();
   AppendTrajectoryRow(trajectory_.buffer, s, name);
   pending_until_s_ = std::max(pending_until_s_, s.time_s);
@@ -153,6 +159,8 @@ void RunDirectory::OnSamples(const std::vector<TrajectorySample>& samples, const
     MissionRecorder::OnSamples(samples, names);
     return;
   }
+  // A cycle's samples share its time: recorded all or none (Scenario::trajectory_rate_hz).
+  if (!Recorded(samples.front())) return;
   CollectRows();
   std::vector<std::string> row_names;
   row_names.reserve(samples.size());

@@ -60,6 +60,8 @@ class RunDirectory final : public MissionRecorder {
   std::size_t buffered_bytes() const;
   RunDirectory& operator=(const RunDirectory&) = delete;
 
+  /// Rows go to trajectory.csv (and the plots' copy) on the cycles the scenario's
+  /// trajectory_rate_hz records, every cycle by default.
   void OnSample(const TrajectorySample& sample, const std::string& vehicle_name) override;
   /// A large fleet's cycle of trajectory rows is formatted on another thread while the mission
   /// goes on (10,000 rows took 12 ms of a 10,000-vehicle cycle); the rows land in order.
@@ -101,6 +103,7 @@ class RunDirectory final : public MissionRecorder {
     int fd = -1;
     std::string buffer;
   };
+  bool Recorded(const TrajectorySample& sample) const;
   void Open(Appender& file, const char* name, const char* header);
   void Flush();
   void CollectRows();
@@ -111,6 +114,7 @@ class RunDirectory final : public MissionRecorder {
   std::string dir_;
   const maps::Scenario& scenario_;
   RunDirectoryOptions options_;
+  std::int64_t trajectory_every_;  // control cycles between a vehicle's rows (Scenario::TrajectoryEvery)
   Appender trajectory_, fleet_events_, risk_events_, regions_;
   std::chrono::steady_clock::time_point last_flush_, last_checkpoint_;
   double pending_until_s_ = -1.0, flushed_until_s_ = -1.0, checkpoint_time_s_ = -1.0;

@@ -136,6 +136,22 @@ void ExpectLayoutRules(const Scenario& s) {
   }
 }
 
+// trajectory.csv at most about 10,000 rows a mission second: every cycle up to 1,000 vehicles,
+// then a row every ceil(N / 1,000) cycles, a rate the scenario accepts and writes back.
+TEST(FieldGenerator, LargeFleetsRecordAboutTenThousandRowsASecond) {
+  for (const auto& [vehicles, every] : std::vector<std::array<int, 2>>{{1000, 1}, {1001, 2}, {2500, 3}}) {
+    FieldOptions o;
+    o.xts = 20;
+    o.valves = 60;
+    o.vehicles = vehicles;
+    const Scenario s = GenerateField(o);
+    EXPECT_NO_THROW(s.Validate()) << vehicles;
+    EXPECT_EQ(s.TrajectoryEvery(), every) << vehicles;
+    EXPECT_LE(vehicles * s.control_rate_hz / s.TrajectoryEvery(), 10000.0) << vehicles;
+    EXPECT_EQ(ParseScenario(EmitScenario(s), "field.yaml").TrajectoryEvery(), every) << vehicles;
+  }
+}
+
 TEST(FieldGenerator, ExactCounts) {
   for (const auto& [xts, valves, vehicles] : std::vector<std::array<int, 3>>{
            {1, 2, 1}, {1, 5, 3}, {6, 20, 4}, {28, 87, 24}, {40, 80, 5}, {40, 200, 100}, {7, 30, 300}}) {

@@ -82,6 +82,7 @@ void ExpectSameScenario(const Scenario& a, const Scenario& b) {
   EXPECT_EQ(a.duration_s, b.duration_s);
   EXPECT_EQ(a.control_rate_hz, b.control_rate_hz);
   EXPECT_EQ(a.physics_rate_hz, b.physics_rate_hz);
+  EXPECT_EQ(a.trajectory_rate_hz, b.trajectory_rate_hz);
   EXPECT_EQ(a.visit_radius_m, b.visit_radius_m);
   EXPECT_EQ(a.rearm_radius_m, b.rearm_radius_m);
   EXPECT_EQ(a.seed, b.seed);
@@ -187,6 +188,13 @@ TEST(Scenario, VehicleIdsAndEventCycles) {
   EXPECT_EQ(s.CycleAt(0.12), 2);
   EXPECT_EQ(s.CycleAt(200.0), 2000);
   EXPECT_EQ(s.VehicleEndCycles(), (std::map<int, std::int64_t>{{1, 4000}}));
+  EXPECT_EQ(s.TrajectoryEvery(), 1);  // trajectory_rate_hz 0: every cycle
+  Scenario thinned = s;
+  for (const auto& [rate, every] : std::vector<std::pair<double, int>>{{10.0, 1}, {5.0, 2}, {2.0, 5}, {10.0 / 3.0, 3}, {0.1, 100}}) {
+    thinned.trajectory_rate_hz = rate;
+    EXPECT_NO_THROW(thinned.Validate()) << rate;
+    EXPECT_EQ(thinned.TrajectoryEvery(), every) << rate;
+  }
 }
 
 TEST(Scenario, EmitParseRoundTripIsExact) {
@@ -197,8 +205,12 @@ TEST(Scenario, EmitParseRoundTripIsExact) {
   looking.astar.order = AstarSettings::Order::kLooks;
   looking.astar.look_exponent = 0.75;
   looking.astar.look_leak_weight = 12.5;
+  // A thinned trajectory, written only when set: 10 Hz / 3, a rate with no short decimal.
+  Scenario thinned = LoadScenario(kFleetFieldPath);
+  thinned.trajectory_rate_hz = 10.0 / 3.0;
+  EXPECT_EQ(EmitScenario(LoadScenario(kFleetFieldPath)).find("trajectory_rate_hz"), std::string::npos);
   for (const Scenario& s : {LoadScenario(kTwoXtPath), ParseScenario(kBase, "base.yaml"), LoadScenario(kFleetFieldPath),
-                            LoadScenario(kFleetLargePath), approaching, looking}) {
+                            LoadScenario(kFleetLargePath), approaching, looking, thinned}) {
     SCOPED_TRACE(s.name);
     const std::string text = EmitScenario(s);
     const Scenario again = ParseScenario(text, s.source_path);
@@ -544,6 +556,12 @@ TEST(Scenario, BadInputsGiveOneLineNamingFieldAndValue) {
       {"duration_s: 300", "duraton_s: 300", {"duraton_s", "unknown key", "duration_s"}},
       {"rearm_radius_m: 0.6", "rearm_radius_m: 0.2", {"rearm_radius_m = 0.2", "> visit_radius_m = 0.3"}},
       {"physics_rate_hz: 50", "physics_rate_hz: 25", {"physics_rate_hz = 25", "whole multiple"}},
+      {"physics_rate_hz: 50", "physics_rate_hz: 50\ntrajectory_rate_hz: 3",
+       {"base.yaml: trajectory_rate_hz = 3: must be control_rate_hz = 10 over a whole number (a row every k-th control "
+        "cycle), or 0 for every cycle"}},
+      {"physics_rate_hz: 50", "physics_rate_hz: 50\ntrajectory_rate_hz: 20", {"trajectory_rate_hz = 20", "over a whole number"}},
+      {"physics_rate_hz: 50", "physics_rate_hz: 50\ntrajectory_rate_hz: -2", {"trajectory_rate_hz = -2", "or 0 for every"}},
+      {"physics_rate_hz: 50", "physics_rate_hz: 50\ntrajectory_rate_hz: .nan", {"trajectory_rate_hz", "over a whole number"}},
       {"basis_order: 10", "basis_order: 65", {"ergodic.basis_order = 65", "1..64"}},
       {"basis_order: 10", "basis_order: 10.5", {"ergodic.basis_order = 10.5", "whole number"}},
       {"forgetting_time_s: .inf", "forgetting_time_s: -5", {"ergodic.forgetting_time_s = -5", "> 0"}},

@@ -260,6 +260,67 @@ TEST_F(RunDirectoryTest, LargeCyclesWriteTheSameRowsInOrder) {
   EXPECT_EQ(Read(dir_ / "trajectory.csv"), expected);
 }
 
+// trajectory_rate_hz thins trajectory.csv, not the mission: at 2 Hz (every 5th cycle at 10 Hz) the
+// file holds exactly the full record's rows of those cycles, byte for byte, and metrics.json the
+// same figures (they count every cycle); a large cycle between them (rows formatted off the
+// cycle) is left out as a small one is.
+TEST_F(RunDirectoryTest, TrajectoryRateThinsTheRecordNotTheMetrics) {
+  const maps::Scenario full =
+      maps::WithDuration(maps::LoadScenario(std::string(SAGE_SOURCE_DIR) + "/scenarios/fleet_field.yaml"), 30.0);
+  maps::Scenario thinned = full;
+  thinned.trajectory_rate_hz = 2.0;
+  thinned.Validate();
+  ASSERT_EQ(thinned.TrajectoryEvery(), 5);
+  const fs::path whole = dir_.string() + "_whole";
+  fs::remove_all(whole);
+  const auto fly = [](const fs::path& dir, const maps::Scenario& s) {
+    RunDirectory run(dir.string(), s);
+    Mission mission(s, MissionOptions{"", ControllerKind::kErgodic, &run, false});
+    while (mission.Step()) run.Tick(mission.core());
+    run.Finish(mission.core(), mission.world(), s.duration_s, false);
+  };
+  fly(whole, full);
+  fly(dir_, thinned);
+  std::istringstream all(Read(whole / "trajectory.csv"));
+  std::string line, expected;
+  std::getline(all, line);
+  expected = line + "\n";
+  int rows = 0;
+  while (std::getline(all, line)) {
+    const long cycle = std::lround(std::stod(line.substr(0, line.find(','))) * full.control_rate_hz);
+    if (cycle % 5 == 0) expected += line + "\n", ++rows;
+  }
+  EXPECT_EQ(rows, 4 * (300 / 5 + 1));  // four vehicles, t = 0, 0.5, ..., 30
+  EXPECT_EQ(Read(dir_ / "trajectory.csv"), expected);
+  const nlohmann::json a = nlohmann::json::parse(Read(whole / "metrics.json"));
+  const nlohmann::json b = nlohmann::json::parse(Read(dir_ / "metrics.json"));
+  for (const char* key : {"valves", "ergodic_metric", "risk_weighted_interval_s", "longest_gap_s", "metric_over_time"}) {
+    EXPECT_EQ(a.at(key), b.at(key)) << key;
+  }
+  fs::remove_all(whole);
+
+  // A large cycle off the rate leaves no row; one on it leaves all of them.
+  const fs::path large = dir_.string() + "_large";
+  fs::remove_all(large);
+  std::vector<std::string> names;
+  std::vector<const std::string*> name_of;
+  for (int v = 0; v < 600; ++v) names.push_back(fmt::format("rov{}", v));
+  for (const std::string& n : names) name_of.push_back(&n);
+  {
+    RunDirectory run(large.string(), thinned);
+    for (const int c : {3, 10}) {
+      std::vector<TrajectorySample> samples;
+      for (int v = 0; v < 600; ++v) samples.push_back({0.1 * c, v, {0.01 * v, 1.0}, 0.0, {0, 0}, {0, 0}});
+      run.OnSamples(samples, name_of);
+    }
+  }
+  const std::string rows_large = Read(large / "trajectory.csv");
+  EXPECT_EQ(std::count(rows_large.begin(), rows_large.end(), '\n'), 1 + 600);
+  EXPECT_NE(rows_large.find("\n1,rov0,"), std::string::npos);
+  EXPECT_EQ(rows_large.find("\n0.3,"), std::string::npos);
+  fs::remove_all(large);
+}
+
 // Free text in the event files cannot break a row: a detail with commas, quotes and a newline
 // reads back as it was (control characters as spaces).
 TEST_F(RunDirectoryTest, EventTextStaysInItsField) {
