@@ -214,12 +214,15 @@ void AddCyclePriority(CLI::App& cmd, int& priority) {
       ->capture_default_str();
 }
 
-void AddMissionDir(CLI::App& cmd, OperatorCommand& o) {
+// identity: whose certificate the command joins a secured mission with ("operator": commands
+// that write; "viewer": sage status, which may write nothing).
+void AddMissionDir(CLI::App& cmd, OperatorCommand& o, const std::string& identity = "operator") {
   cmd.add_option("--mission", o.mission_dir, "Run directory of the mission (default: $SAGE_MISSION or runs/latest)");
   AddNetwork(cmd, o.network, "the mission's, in mission.json");
   cmd.add_flag("--insecure", o.insecure,
-               "Plain DDS instead of the mission's operator identity (mission.json security_dir); a secured mission "
-               "does not hear such a command");
+               "Plain DDS instead of the mission's " + identity + " identity (mission.json security_dir); a secured " +
+                   (identity == "operator" ? std::string("mission does not hear such a command")
+                                           : std::string("mission is not heard that way")));
 }
 
 // One line for a mistyped or missing command word, at any depth: "unknown command 'frobnicate'
@@ -538,7 +541,7 @@ int RunCli(int argc, char** argv) {
       ->capture_default_str()
       ->check(MustBeIn(0.2, 60.0));
   status->add_flag("--all", op.status_all, "List every vehicle heard (default: the first 40 by id, and a count of the rest)");
-  AddMissionDir(*status, op);
+  AddMissionDir(*status, op, "viewer");
 
   SecurityInitCommand security_cmd;
   CLI::App* security = app.add_subcommand("security", "DDS Security material for missions");
