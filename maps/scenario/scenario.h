@@ -245,8 +245,12 @@ inline constexpr std::size_t kMaxPeers = 32;
 /// [A-Za-z0-9_.:-] or an IPv4 address; peers IPv4 addresses or host names (1-253 characters of
 /// [A-Za-z0-9.-]), at most kMaxPeers.
 std::string NetworkProblem(const NetworkSettings& network, const std::string& where);
+/// Most control cycles between a vehicle's trajectory rows (a day's mission at 10 Hz keeps a row
+/// every 2.8 hours).
+inline constexpr double kMaxTrajectoryEvery = 100000;
 /// Empty if rate_hz is a trajectory rate a mission at control_rate_hz can record (0, or the
-/// control rate over a whole number k >= 1), else what is allowed, as one line.
+/// control rate over a whole number k in 1..kMaxTrajectoryEvery, to five significant figures),
+/// else what is allowed and the nearest rates that are, as one line.
 std::string TrajectoryRateRule(double rate_hz, double control_rate_hz);
 
 /// A change of the fleet during a mission: a vehicle joins, is lost (dies without a word), or

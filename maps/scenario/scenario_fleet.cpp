@@ -251,6 +251,7 @@ std::uint64_t VehicleFingerprint(const Scenario& scenario) {
   }
   vehicles_only.network = {};  // each machine has its own
   vehicles_only.fusion = FusionSettings{};  // the server's alone (the sensors and the leaks are the vehicles' world)
+  vehicles_only.trajectory_rate_hz = 0.0;   // what the server records, not how anything flies
   return Fnv1a(EmitScenario(vehicles_only));
 }
 

@@ -272,10 +272,20 @@ std::string Shown(const std::string& text) { return text.empty() ? "\"\"" : Prin
 
 std::string TrajectoryRateRule(double rate_hz, double control_rate_hz) {
   if (rate_hz == 0.0) return "";  // every cycle
+  // k to five significant figures, so that 3.33333 reads as 10 Hz / 3.
   const double every = control_rate_hz / rate_hz;
-  if (rate_hz > 0.0 && every >= 1 - 1e-9 && std::abs(every - std::round(every)) <= 1e-9 * every) return "";
-  return "must be control_rate_hz = " + FormatNumber(control_rate_hz) +
-         " over a whole number (a row every k-th control cycle), or 0 for every cycle";
+  const bool whole = std::abs(every - std::round(every)) <= 1e-5 * every;
+  if (rate_hz > 0.0 && whole && std::round(every) >= 1 && std::round(every) <= kMaxTrajectoryEvery) return "";
+  std::string nearest;
+  if (rate_hz > 0.0 && std::isfinite(every)) {
+    const double low = std::clamp(std::floor(every), 1.0, kMaxTrajectoryEvery);
+    const double high = std::clamp(std::ceil(every), 1.0, kMaxTrajectoryEvery);
+    const auto k = [](double v) { return std::to_string(static_cast<long long>(v)); };
+    nearest = "; the nearest: " + FormatNumber(control_rate_hz / low) + " (k = " + k(low) + ")";
+    if (high != low) nearest += " and " + FormatNumber(control_rate_hz / high) + " (k = " + k(high) + ")";
+  }
+  return "must be control_rate_hz = " + FormatNumber(control_rate_hz) + " over a whole number k in 1.." +
+         std::to_string(static_cast<long long>(kMaxTrajectoryEvery)) + " (a row every k-th control cycle" + nearest + "), or 0 for every cycle";
 }
 
 std::string NetworkProblem(const NetworkSettings& network, const std::string& where) {

@@ -67,6 +67,12 @@ maps::NetworkSettings NetworkOverrides::Applied(maps::NetworkSettings network) c
   return network;
 }
 
+std::string RecordRateNote(const maps::Scenario& scenario) {
+  if (scenario.TrajectoryEvery() == 1) return "";
+  return fmt::format(" (a vehicle's row every {} cycles: trajectory_rate_hz = {:g})", scenario.TrajectoryEvery(),
+                     scenario.trajectory_rate_hz);
+}
+
 std::string FirstScenarioOverride(const ScenarioOverrides& o) {
   const std::pair<const char*, bool> given[] = {
       {"--profile", !o.profile.empty()},

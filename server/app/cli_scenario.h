@@ -50,6 +50,10 @@ struct ScenarioOverrides {
   std::optional<std::string> steer;          // posterior | prior
 };
 
+/// " (a vehicle's row every k cycles: trajectory_rate_hz = r)" when the scenario thins
+/// trajectory.csv, else empty: said where a run or launch names its record.
+std::string RecordRateNote(const maps::Scenario& scenario);
+
 /// The first option of `o` that changes the scenario (--profile, --duration, --seed, ... as the
 /// command line spells it), or empty if none: `sage launch --resume` flies the run's own scenario
 /// and refuses them rather than ignore them. The network options are not among them.

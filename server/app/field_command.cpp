@@ -89,13 +89,15 @@ int CmdFieldGenerate(const maps::FieldOptions& options, const std::string& out_p
   const auto counted = [](std::size_t n, const char* one, const char* many) { return fmt::format("{} {}", n, n == 1 ? one : many); };
   std::string sensors;
   for (const maps::SensorSpec& sensor : field.sensors) sensors += (sensors.empty() ? "" : " and a ") + sensor.name;
-  spdlog::info("wrote {}: {}, {}, {}{} on {:.1f} x {:.1f} m (K = {}, A* grid {} m) in {:.2f} s; run it "
+  const std::string record =
+      field.TrajectoryEvery() > 1 ? fmt::format(", trajectory.csv at {:g} Hz", field.trajectory_rate_hz) : "";
+  spdlog::info("wrote {}: {}, {}, {}{} on {:.1f} x {:.1f} m (K = {}, A* grid {} m{}) in {:.2f} s; run it "
                "with sage run {}{} or sage launch {}",
                out_path, counted(field.structures.size(), "XT", "XTs"),
                counted(static_cast<std::size_t>(field.ValveCount()), "valve", "valves"),
                counted(field.vehicles.size(), "vehicle", "vehicles"), sensors.empty() ? "" : " with a " + sensors + " each",
                field.workspace.width_m, field.workspace.height_m, field.ergodic.basis_order,
-               field.astar.grid_resolution_m,
+               field.astar.grid_resolution_m, record,
                std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(), out_path,
                sensors.empty() ? "" : " --random-leaks 3 (leaks it must find)", out_path);
   return 0;

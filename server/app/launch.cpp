@@ -416,12 +416,12 @@ int Launch(const LaunchCommand& c) {
   // this launch's (it had said "1 agent host(s) for 5 vehicles" with four of them in its one host).
   const std::size_t carried_on = CarriedOn(to_resume, live);
   terminal.Log(fmt::format("launch: mission '{}' on DDS domain {}: server pid {}, {} agent host(s) for {} vehicles{}; run "
-                           "dir {}",
+                           "dir {}{}",
                            scenario.name, domain, server, hosts.size(),
                            resume ? to_resume.size() - carried_on : scenario.vehicles.size(),
                            carried_on > 0 ? fmt::format(" ({} more flying on in the hosts they had)", carried_on)
                                           : std::string(),
-                           out_dir));
+                           out_dir, RecordRateNote(scenario)));
   terminal.Log(secured ? fmt::format("launch: DDS Security on: every process authenticates with its role's identity and "
                                      "all mission traffic is encrypted (identities in {}); --insecure turns it off",
                                      mission.security_dir)

@@ -11,6 +11,7 @@
 #include <iostream>
 #include <map>
 #include <memory>
+#include <vector>
 
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
@@ -158,9 +159,9 @@ int CmdRun(const RunCommand& c) {
     SayStopped("the mission", outcome, scenario.duration_s, dir);
     return 130;
   }
-  spdlog::info("{:.0f} s mission simulated in {:.2f} s wall time; wrote {}/metrics.json, trajectory.csv, plot.svg and .png",
+  spdlog::info("{:.0f} s mission simulated in {:.2f} s wall time; wrote {}/metrics.json, trajectory.csv{}, plot.svg and .png",
                scenario.duration_s, std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(),
-               dir.string());
+               dir.string(), RecordRateNote(scenario));
   return 0;
 }
 
@@ -264,6 +265,23 @@ void WarnOfAForeignRecord(const Trajectory& trajectory, const maps::Scenario& sc
   }
 }
 
+// The median time between a vehicle's consecutive rows (0 if no vehicle has two).
+double MedianRowSpacing(const Trajectory& trajectory) {
+  std::map<int, double> last_s;
+  std::vector<double> spacings;
+  for (const TrajectorySample& s : trajectory.samples) {
+    const auto [it, first] = last_s.try_emplace(s.vehicle, s.time_s);
+    if (!first) {
+      if (s.time_s > it->second) spacings.push_back(s.time_s - it->second);
+      it->second = s.time_s;
+    }
+  }
+  if (spacings.empty()) return 0.0;
+  auto middle = spacings.begin() + static_cast<std::ptrdiff_t>(spacings.size() / 2);
+  std::nth_element(spacings.begin(), middle, spacings.end());
+  return *middle;
+}
+
 }  // namespace
 
 int CmdEvaluate(const EvaluateCommand& c) {
@@ -291,10 +309,13 @@ int CmdEvaluate(const EvaluateCommand& c) {
                  profile->name, metrics.duration_s);
   }
   WarnOfAForeignRecord(trajectory, scenario, c.trajectory_path, c.scenario_path);
-  if (scenario.TrajectoryEvery() > 1) {
-    spdlog::warn("{}: trajectory_rate_hz = {} records a vehicle every {} control cycles: a pass between two rows is not "
-                 "seen, so the visits here can fall short of the run's own metrics.json, which counted every cycle",
-                 c.scenario_path, scenario.trajectory_rate_hz, scenario.TrajectoryEvery());
+  // Read from the file itself: whichever scenario is given, a thinned record (trajectory_rate_hz,
+  // or a vehicle's log at its own rate) misses passes between its rows.
+  if (const double spacing = MedianRowSpacing(trajectory); spacing > 1.5 / scenario.control_rate_hz) {
+    spdlog::warn("{}: a vehicle's rows are {:.3g} s apart (the median), the scenario's control cycle {:.3g} s: a pass "
+                 "between two rows is not seen, so the visits here can fall short of what the mission counted (a run's "
+                 "metrics.json counts every cycle whatever trajectory_rate_hz keeps)",
+                 c.trajectory_path, spacing, 1.0 / scenario.control_rate_hz);
   }
   std::cout << FormatTable({metrics});
   if (!c.out_dir.empty()) {

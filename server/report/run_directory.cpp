@@ -140,12 +140,35 @@ void RunDirectory::Open(Appender& file, const char* name, const char* header) {
   }
 }
 
-bool RunDirectory::Recorded(const TrajectorySample& s) const {
-  return trajectory_every_ == 1 || std::llround(s.time_s * scenario_.control_rate_hz) % trajectory_every_ == 0;
+bool RunDirectory::RecordedAt(double time_s) const {
+  return trajectory_every_ == 1 || std::llround(time_s * scenario_.control_rate_hz) % trajectory_every_ == 0;
+}
+
+void RunDirectory::Hold(const TrajectorySample& s, const std::string& name) {
+  if (s.time_s < held_time_s_) return;  // a late sample of a cycle already passed
+  if (s.time_s > held_time_s_) {
+    held_.clear();
+    held_time_s_ = s.time_s;
+  }
+  held_.emplace_back(s, name);
+}
+
+void RunDirectory::WriteHeldRows() {
+  CollectRows();
+  if (held_.empty() || !(held_time_s_ > pending_until_s_)) return;
+  for (const auto& [s, name] : held_) {
+    AppendTrajectoryRow(trajectory_.buffer, s, name);
+    plot_.OnSample(s, name);
+  }
+  pending_until_s_ = held_time_s_;
+  held_.clear();
 }
 
 void RunDirectory::OnSample(const TrajectorySample& s, const std::string& name) {
-  if (!Recorded(s)) return;
+  if (!RecordedAt(s.time_s)) {
+    Hold(s, name);
+    return;
+  }
   CollectRows();
   AppendTrajectoryRow(trajectory_.buffer, s, name);
   pending_until_s_ = std::max(pending_until_s_, s.time_s);
@@ -159,17 +182,25 @@ void RunDirectory::OnSamples(const std::vector<TrajectorySample>& samples, const
     MissionRecorder::OnSamples(samples, names);
     return;
   }
-  // A cycle's samples share its time: recorded all or none (Scenario::trajectory_rate_hz).
-  if (!Recorded(samples.front())) return;
   CollectRows();
+  // Over DDS a cycle's batch can hold late states of the cycles before it: each sample is
+  // recorded or held by its own time (Scenario::trajectory_rate_hz).
+  std::vector<TrajectorySample> kept;
   std::vector<std::string> row_names;
+  kept.reserve(samples.size());
   row_names.reserve(samples.size());
   for (const TrajectorySample& s : samples) {
+    if (!RecordedAt(s.time_s)) {
+      Hold(s, *names[s.vehicle]);
+      continue;
+    }
+    kept.push_back(s);
     row_names.push_back(*names[s.vehicle]);
     pending_until_s_ = std::max(pending_until_s_, s.time_s);
     plot_.OnSample(s, row_names.back());
   }
-  rows_ = std::async(std::launch::async, [samples, row_names = std::move(row_names)] {
+  if (kept.empty()) return;
+  rows_ = std::async(std::launch::async, [samples = std::move(kept), row_names = std::move(row_names)] {
     std::string rows;
     for (std::size_t i = 0; i < samples.size(); ++i) AppendTrajectoryRow(rows, samples[i], row_names[i]);
     return rows;
@@ -299,8 +330,11 @@ void RunDirectory::Tick(const MissionCore& core) {
   if (checkpoint_write_.valid() && checkpoint_write_.wait_for(std::chrono::seconds(0)) == std::future_status::ready) {
     checkpoint_cost_s_ += checkpoint_write_.get();  // rethrows its error
   }
+  // A periodic checkpoint waits for a cycle the trajectory records, so that the record reaches it
+  // (a resumed mission restarts vehicles where the record last saw them).
   if (std::chrono::duration<double>(now - last_checkpoint_).count() >=
-      std::max(options_.checkpoint_period_s, kCheckpointCostRatio * checkpoint_cost_s_)) {
+          std::max(options_.checkpoint_period_s, kCheckpointCostRatio * checkpoint_cost_s_) &&
+      RecordedAt(core.time_s())) {
     StartCheckpoint(core, /*wait=*/false);
   } else if (std::chrono::duration<double>(now - last_flush_).count() >= options_.flush_period_s ||
              buffered_bytes() >= options_.flush_bytes) {
@@ -309,6 +343,7 @@ void RunDirectory::Tick(const MissionCore& core) {
 }
 
 void RunDirectory::Checkpoint(const MissionCore& core) {
+  WriteHeldRows();  // the record reaches the checkpoint, on whichever cycle it is taken
   StartCheckpoint(core, /*wait=*/true);
   checkpoint_write_.get();
 }
@@ -342,6 +377,7 @@ void RunDirectory::StartCheckpoint(const MissionCore& core, bool wait) {
 void RunDirectory::Finish(const MissionCore& core, const maps::World& world, double end_s, bool stopped_early,
                           const maps::RiskLayer* risk_layer) {
   if (checkpoint_write_.valid()) checkpoint_write_.get();
+  WriteHeldRows();  // the record ends where the mission did, on a recorded cycle or not
   Flush();
   const maps::Scenario ran = stopped_early ? maps::WithDuration(scenario_, end_s) : scenario_;
   const RunInfo info = Info(core, true, stopped_early);

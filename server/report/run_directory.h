@@ -11,6 +11,7 @@
 #include <future>
 #include <map>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "maps/scenario/scenario.h"
@@ -61,7 +62,8 @@ class RunDirectory final : public MissionRecorder {
   RunDirectory& operator=(const RunDirectory&) = delete;
 
   /// Rows go to trajectory.csv (and the plots' copy) on the cycles the scenario's
-  /// trajectory_rate_hz records, every cycle by default.
+  /// trajectory_rate_hz records, every cycle by default, and at the end (Finish) the mission's
+  /// last cycle if the rate left it out.
   void OnSample(const TrajectorySample& sample, const std::string& vehicle_name) override;
   /// A large fleet's cycle of trajectory rows is formatted on another thread while the mission
   /// goes on (10,000 rows took 12 ms of a 10,000-vehicle cycle); the rows land in order.
@@ -103,7 +105,12 @@ class RunDirectory final : public MissionRecorder {
     int fd = -1;
     std::string buffer;
   };
-  bool Recorded(const TrajectorySample& sample) const;
+  // Whether trajectory.csv records the cycle of mission time t (Scenario::TrajectoryEvery).
+  bool RecordedAt(double time_s) const;
+  // The last cycle the rate leaves out is held, and written at the end (or an explicit
+  // checkpoint) if nothing later was recorded: the record ends where the mission did.
+  void Hold(const TrajectorySample& sample, const std::string& name);
+  void WriteHeldRows();
   void Open(Appender& file, const char* name, const char* header);
   void Flush();
   void CollectRows();
@@ -115,6 +122,8 @@ class RunDirectory final : public MissionRecorder {
   const maps::Scenario& scenario_;
   RunDirectoryOptions options_;
   std::int64_t trajectory_every_;  // control cycles between a vehicle's rows (Scenario::TrajectoryEvery)
+  std::vector<std::pair<TrajectorySample, std::string>> held_;  // the last unrecorded cycle's samples
+  double held_time_s_ = -1.0;
   Appender trajectory_, fleet_events_, risk_events_, regions_;
   std::chrono::steady_clock::time_point last_flush_, last_checkpoint_;
   double pending_until_s_ = -1.0, flushed_until_s_ = -1.0, checkpoint_time_s_ = -1.0;

@@ -151,8 +151,10 @@ RunRecord ReadRunRecord(const std::string& dir, std::size_t max_poses) {
   std::error_code size_error;
   const double bytes = static_cast<double>(fs::file_size(trajectory_path, size_error));
   const double rows_guess = size_error ? 0.0 : bytes / 60.0;  // a row is 60-80 bytes
-  record.pose_period_s = std::max(kBasePosePeriod_s, rows_guess / static_cast<double>(std::max<std::size_t>(1, max_poses)) /
-                                                         record.scenario.control_rate_hz);
+  // A vehicle's rows a second: the control rate, over k under a thinned trajectory_rate_hz.
+  const double row_rate_hz = record.scenario.control_rate_hz / static_cast<double>(record.scenario.TrajectoryEvery());
+  record.pose_period_s = std::max({kBasePosePeriod_s, 1.0 / row_rate_hz,
+                                   rows_guess / static_cast<double>(std::max<std::size_t>(1, max_poses)) / row_rate_hz});
   const double reach = 10.0 * std::max(record.scenario.workspace.width_m, record.scenario.workspace.height_m) + 100.0;
   VisitTracker visits(record.scenario.ValvePositions(), record.scenario.visit_radius_m, record.scenario.rearm_radius_m);
   // Every visit's time, for a replay at any moment (the tracker itself keeps a valve's latest).

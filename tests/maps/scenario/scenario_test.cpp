@@ -190,7 +190,7 @@ TEST(Scenario, VehicleIdsAndEventCycles) {
   EXPECT_EQ(s.VehicleEndCycles(), (std::map<int, std::int64_t>{{1, 4000}}));
   EXPECT_EQ(s.TrajectoryEvery(), 1);  // trajectory_rate_hz 0: every cycle
   Scenario thinned = s;
-  for (const auto& [rate, every] : std::vector<std::pair<double, int>>{{10.0, 1}, {5.0, 2}, {2.0, 5}, {10.0 / 3.0, 3}, {0.1, 100}}) {
+  for (const auto& [rate, every] : std::vector<std::pair<double, int>>{{10.0, 1}, {5.0, 2}, {2.0, 5}, {10.0 / 3.0, 3}, {3.33333, 3}, {0.1, 100}, {1e-4, 100000}}) {
     thinned.trajectory_rate_hz = rate;
     EXPECT_NO_THROW(thinned.Validate()) << rate;
     EXPECT_EQ(thinned.TrajectoryEvery(), every) << rate;
@@ -557,9 +557,11 @@ TEST(Scenario, BadInputsGiveOneLineNamingFieldAndValue) {
       {"rearm_radius_m: 0.6", "rearm_radius_m: 0.2", {"rearm_radius_m = 0.2", "> visit_radius_m = 0.3"}},
       {"physics_rate_hz: 50", "physics_rate_hz: 25", {"physics_rate_hz = 25", "whole multiple"}},
       {"physics_rate_hz: 50", "physics_rate_hz: 50\ntrajectory_rate_hz: 3",
-       {"base.yaml: trajectory_rate_hz = 3: must be control_rate_hz = 10 over a whole number (a row every k-th control "
-        "cycle), or 0 for every cycle"}},
-      {"physics_rate_hz: 50", "physics_rate_hz: 50\ntrajectory_rate_hz: 20", {"trajectory_rate_hz = 20", "over a whole number"}},
+       {"base.yaml: trajectory_rate_hz = 3: must be control_rate_hz = 10 over a whole number k in 1..100000 (a row every "
+        "k-th control cycle; the nearest: 3.3333333333333335 (k = 3) and 2.5 (k = 4)), or 0 for every cycle"}},
+      {"physics_rate_hz: 50", "physics_rate_hz: 50\ntrajectory_rate_hz: 20", {"trajectory_rate_hz = 20", "the nearest: 10 (k = 1))"}},
+      {"physics_rate_hz: 50", "physics_rate_hz: 50\ntrajectory_rate_hz: 1e-300",
+       {"trajectory_rate_hz = 1e-300", "the nearest: 1e-04 (k = 100000))"}},
       {"physics_rate_hz: 50", "physics_rate_hz: 50\ntrajectory_rate_hz: -2", {"trajectory_rate_hz = -2", "or 0 for every"}},
       {"physics_rate_hz: 50", "physics_rate_hz: 50\ntrajectory_rate_hz: .nan", {"trajectory_rate_hz", "over a whole number"}},
       {"basis_order: 10", "basis_order: 65", {"ergodic.basis_order = 65", "1..64"}},
@@ -925,6 +927,7 @@ TEST(Scenario, VehicleFingerprintSeesWhatShapesTheVehiclesOnly) {
   server_only.guard.enabled = false;
   server_only.astar.clearance_m = 0.5;
   server_only.fleet.assignment = FleetAssignment::kPartition;
+  server_only.trajectory_rate_hz = 2.0;  // what the server records: hosts started without it still join
   EXPECT_EQ(VehicleFingerprint(server_only), fingerprint);
 
   std::vector<Scenario> vehicle_side(7, base);

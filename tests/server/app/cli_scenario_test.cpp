@@ -475,6 +475,14 @@ TEST(EvaluateWarnings, SaysWhatGoesBeyondTheRecord) {
       << foreign;
   EXPECT_NE(foreign.find("2 step(s) faster than 2.4 m/s"), std::string::npos) << foreign;
   EXPECT_NE(foreign.find("the fastest 500 m in 1 s, vehicle 0 at t = 3.0 s"), std::string::npos) << foreign;
+  // A thinned record (trajectory_rate_hz 2 of two_xt's 10 Hz), whichever scenario is given: said
+  // from the rows' own spacing; the record at the control rate above says nothing of it.
+  std::ofstream(csv) << "t,vehicle,x,y\n0,0,0.6,0.6\n0,1,1,1\n0.5,0,0.9,0.6\n0.5,1,1.3,1\n1,0,1.2,0.6\n1,1,1.6,1\n";
+  const std::string thinned = warnings("", std::nullopt);
+  EXPECT_NE(thinned.find("a vehicle's rows are 0.5 s apart (the median), the scenario's control cycle 0.1 s: a pass "
+                         "between two rows is not seen"),
+            std::string::npos)
+      << thinned;
   std::filesystem::remove(csv);
 }
 

@@ -261,12 +261,13 @@ TEST_F(RunDirectoryTest, LargeCyclesWriteTheSameRowsInOrder) {
 }
 
 // trajectory_rate_hz thins trajectory.csv, not the mission: at 2 Hz (every 5th cycle at 10 Hz) the
-// file holds exactly the full record's rows of those cycles, byte for byte, and metrics.json the
-// same figures (they count every cycle); a large cycle between them (rows formatted off the
-// cycle) is left out as a small one is.
+// file holds exactly the full record's rows of those cycles and of the last (30.3 s, off the
+// rate: the record ends where the mission did), byte for byte, and metrics.json the same figures
+// (they count every cycle). A large batch (rows formatted off the cycle) is split by each
+// sample's own time, as a batch over DDS may hold late states of the cycle before.
 TEST_F(RunDirectoryTest, TrajectoryRateThinsTheRecordNotTheMetrics) {
   const maps::Scenario full =
-      maps::WithDuration(maps::LoadScenario(std::string(SAGE_SOURCE_DIR) + "/scenarios/fleet_field.yaml"), 30.0);
+      maps::WithDuration(maps::LoadScenario(std::string(SAGE_SOURCE_DIR) + "/scenarios/fleet_field.yaml"), 30.3);
   maps::Scenario thinned = full;
   thinned.trajectory_rate_hz = 2.0;
   thinned.Validate();
@@ -288,9 +289,9 @@ TEST_F(RunDirectoryTest, TrajectoryRateThinsTheRecordNotTheMetrics) {
   int rows = 0;
   while (std::getline(all, line)) {
     const long cycle = std::lround(std::stod(line.substr(0, line.find(','))) * full.control_rate_hz);
-    if (cycle % 5 == 0) expected += line + "\n", ++rows;
+    if (cycle % 5 == 0 || cycle == 303) expected += line + "\n", ++rows;
   }
-  EXPECT_EQ(rows, 4 * (300 / 5 + 1));  // four vehicles, t = 0, 0.5, ..., 30
+  EXPECT_EQ(rows, 4 * (300 / 5 + 1 + 1));  // four vehicles, t = 0, 0.5, ..., 30 and 30.3
   EXPECT_EQ(Read(dir_ / "trajectory.csv"), expected);
   const nlohmann::json a = nlohmann::json::parse(Read(whole / "metrics.json"));
   const nlohmann::json b = nlohmann::json::parse(Read(dir_ / "metrics.json"));
@@ -299,7 +300,8 @@ TEST_F(RunDirectoryTest, TrajectoryRateThinsTheRecordNotTheMetrics) {
   }
   fs::remove_all(whole);
 
-  // A large cycle off the rate leaves no row; one on it leaves all of them.
+  // Large batches: one off the rate (c = 3) leaves no row; one holding cycles 9 and 10 (the first
+  // half late states of cycle 9) leaves cycle 10's 300 rows alone.
   const fs::path large = dir_.string() + "_large";
   fs::remove_all(large);
   std::vector<std::string> names;
@@ -308,16 +310,17 @@ TEST_F(RunDirectoryTest, TrajectoryRateThinsTheRecordNotTheMetrics) {
   for (const std::string& n : names) name_of.push_back(&n);
   {
     RunDirectory run(large.string(), thinned);
-    for (const int c : {3, 10}) {
-      std::vector<TrajectorySample> samples;
-      for (int v = 0; v < 600; ++v) samples.push_back({0.1 * c, v, {0.01 * v, 1.0}, 0.0, {0, 0}, {0, 0}});
-      run.OnSamples(samples, name_of);
-    }
+    std::vector<TrajectorySample> off, mixed;
+    for (int v = 0; v < 600; ++v) off.push_back({0.3, v, {0.01 * v, 1.0}, 0.0, {0, 0}, {0, 0}});
+    for (int v = 0; v < 600; ++v) mixed.push_back({v < 300 ? 0.9 : 1.0, v, {0.01 * v, 1.0}, 0.0, {0, 0}, {0, 0}});
+    run.OnSamples(off, name_of);
+    run.OnSamples(mixed, name_of);
   }
   const std::string rows_large = Read(large / "trajectory.csv");
-  EXPECT_EQ(std::count(rows_large.begin(), rows_large.end(), '\n'), 1 + 600);
-  EXPECT_NE(rows_large.find("\n1,rov0,"), std::string::npos);
+  EXPECT_EQ(std::count(rows_large.begin(), rows_large.end(), '\n'), 1 + 300);
+  EXPECT_NE(rows_large.find("\n1,rov300,"), std::string::npos);
   EXPECT_EQ(rows_large.find("\n0.3,"), std::string::npos);
+  EXPECT_EQ(rows_large.find("\n0.9,"), std::string::npos);
   fs::remove_all(large);
 }
 
