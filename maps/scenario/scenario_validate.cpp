@@ -285,7 +285,8 @@ std::string TrajectoryRateRule(double rate_hz, double control_rate_hz) {
     if (high != low) nearest += " and " + FormatNumber(control_rate_hz / high) + " (k = " + k(high) + ")";
   }
   return "must be control_rate_hz = " + FormatNumber(control_rate_hz) + " over a whole number k in 1.." +
-         std::to_string(static_cast<long long>(kMaxTrajectoryEvery)) + " (a row every k-th control cycle" + nearest + "), or 0 for every cycle";
+         std::to_string(static_cast<long long>(kMaxTrajectoryEvery)) + " (a row every k-th control cycle" + nearest +
+         "), or 0 for every cycle";
 }
 
 std::string NetworkProblem(const NetworkSettings& network, const std::string& where) {
