@@ -376,6 +376,11 @@ SensorSpec FieldSensor(SensorKind kind) {
 
 }  // namespace
 
+int RecordEveryForFleet(int vehicles, double control_rate_hz) {
+  const double rows_per_s = std::max(0, vehicles) * control_rate_hz;
+  return std::max(1, static_cast<int>(std::ceil(rows_per_s / kFieldRecordRowsPerSecond)));
+}
+
 Scenario GenerateField(const FieldOptions& o) {
   CheckOptions(o);
   const double area = std::max(o.xts * o.area_per_xt_m2, o.vehicles * kFieldAreaPerVehicle_m2);
@@ -408,8 +413,7 @@ Scenario GenerateField(const FieldOptions& o) {
   // trajectory.csv at most about 10,000 rows a mission second: every cycle up to 1,000 vehicles,
   // beyond that a vehicle's row every ceil(N / 1,000) cycles (1 Hz at 10,000: a minute's record
   // 88 MB instead of 880). The metrics count every cycle either way.
-  constexpr int kVehiclesRecordedEveryCycle = 1000;
-  const int every = (o.vehicles + kVehiclesRecordedEveryCycle - 1) / kVehiclesRecordedEveryCycle;
+  const int every = RecordEveryForFleet(o.vehicles, s.control_rate_hz);
   s.trajectory_rate_hz = every > 1 ? s.control_rate_hz / every : 0.0;
   s.visit_radius_m = 0.3;
   s.rearm_radius_m = 0.45;

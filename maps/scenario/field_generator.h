@@ -36,6 +36,15 @@ inline constexpr double kFieldValveSigma_m = 0.25;
 inline constexpr double kFieldStartClearance_m = 1.0;
 inline constexpr double kFieldStartSeparation_m = 1.5;
 
+/// Rows of trajectory.csv a mission second a large fleet's record keeps at most (about 150 bytes a
+/// row: 1.5 MB a mission second, 88 MB a 10,000-vehicle minute). The metrics count every cycle
+/// whatever the record keeps.
+inline constexpr double kFieldRecordRowsPerSecond = 10000;
+/// The k of "a vehicle's row every k-th control cycle" that keeps a fleet of `vehicles` at
+/// control_rate_hz within kFieldRecordRowsPerSecond: 1 (every cycle) up to 1,000 vehicles at 10 Hz,
+/// then ceil(vehicles * control_rate_hz / kFieldRecordRowsPerSecond).
+int RecordEveryForFleet(int vehicles, double control_rate_hz);
+
 /// What `sage field generate` asks for; each field is one command-line option.
 /// Leak sensors a generated field's vehicles carry (--sensors).
 enum class FieldSensors {

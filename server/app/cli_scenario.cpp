@@ -10,6 +10,7 @@
 #include <fmt/ranges.h>
 #include <spdlog/spdlog.h>
 
+#include "maps/scenario/field_generator.h"
 #include "maps/seabed/seabed_obstacles.h"
 #include "server/region_split.h"
 
@@ -118,6 +119,18 @@ std::string LeftOutByDuration(const maps::Scenario& scenario, double duration_s,
   if (fleet_events > 0) dropped.push_back(fmt::format("{} fleet event(s)", fleet_events));
   if (dropped.empty()) return "";
   return fmt::format("--duration = {}: left out, as they come after the mission's end: {}", duration_s, fmt::join(dropped, ", "));
+}
+
+void WarnOfLargeRecord(const maps::Scenario& scenario) {
+  const int every = maps::RecordEveryForFleet(static_cast<int>(scenario.vehicles.size()), scenario.control_rate_hz);
+  if (scenario.TrajectoryEvery() != 1 || every == 1) return;
+  constexpr double kBytesPerRow = 150;  // a 10,000-vehicle minute at 1 Hz: 88 MB for 610,000 rows
+  const double rows_per_minute = 60.0 * static_cast<double>(scenario.vehicles.size()) * scenario.control_rate_hz;
+  spdlog::warn("trajectory.csv keeps every control cycle of {} vehicles: about {:.0f} MB a mission minute; "
+               "--trajectory-rate {:g} (trajectory_rate_hz in the scenario) keeps a vehicle's row every {} cycles, "
+               "about {:.0f} MB a minute (the metrics count every cycle either way)",
+               scenario.vehicles.size(), rows_per_minute * kBytesPerRow / 1e6, scenario.control_rate_hz / every,
+               every, rows_per_minute / every * kBytesPerRow / 1e6);
 }
 
 void WarnOfLossySettings(const maps::Scenario& scenario) {

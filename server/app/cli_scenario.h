@@ -71,6 +71,12 @@ std::string ErgodicOnlyOverrides(const ScenarioOverrides& o);
 /// the smallest structure.
 void WarnOfLossySettings(const maps::Scenario& scenario);
 
+/// Warns when trajectory.csv would keep every control cycle of a fleet larger than about 10,000
+/// rows a mission second (over 1,000 vehicles at 10 Hz: a `-n` that grew a field, a scenario
+/// written by hand), with the record's size a mission minute and the --trajectory-rate that keeps
+/// it to that (maps::RecordEveryForFleet, the rule `sage field generate` writes).
+void WarnOfLargeRecord(const maps::Scenario& scenario);
+
 /// What a mission of duration_s leaves out of `scenario` (its leaks, unless they are drawn anew
 /// for the shorter mission, its default profile's risk events and its fleet events after the end), as one
 /// line for the operator; empty if nothing.

@@ -142,6 +142,7 @@ int Launch(const LaunchCommand& c) {
     // Before the run directory is made: a refused mission leaves nothing behind.
     CheckFleetFitsField(scenario, ParseControllerKind(c.controller) == ControllerKind::kAstar);
     WarnOfLossySettings(scenario);
+    WarnOfLargeRecord(scenario);
     if (const std::string unused = ErgodicOnlyOverrides(c.scenario);
         ParseControllerKind(c.controller) == ControllerKind::kAstar && !unused.empty()) {
       spdlog::warn("{}", unused);

@@ -135,6 +135,7 @@ int CmdRun(const RunCommand& c) {
   const ControllerKind kind = ParseControllerKind(c.controller);
   CheckFleetFitsField(scenario, kind == ControllerKind::kAstar);
   WarnOfLossySettings(scenario);
+  WarnOfLargeRecord(scenario);
   if (const std::string unused = ErgodicOnlyOverrides(c.scenario); kind == ControllerKind::kAstar && !unused.empty()) {
     spdlog::warn("{}", unused);
   }
@@ -170,6 +171,7 @@ int CmdCompare(const RunCommand& c) {
   maps::Scenario scenario = LoadWithOverrides(c.scenario);
   CheckFleetFitsField(scenario, /*tours=*/true);  // compare flies the A* tours too
   WarnOfLossySettings(scenario);
+  WarnOfLargeRecord(scenario);
   const std::string profile = c.scenario.profile.empty() ? scenario.default_profile : c.scenario.profile;
   maps::CheckMissionMaps(scenario);  // before the run directories are touched, as run
   const fs::path dir = c.out_dir.empty() ? DefaultOutDir(scenario, profile, "compare") : c.out_dir;

@@ -152,6 +152,17 @@ TEST(FieldGenerator, LargeFleetsRecordAboutTenThousandRowsASecond) {
   }
 }
 
+// The record's rule against a brute-force search for the smallest k whose rows a second fit.
+TEST(FieldGenerator, RecordEveryIsTheSmallestThatFitsTenThousandRowsASecond) {
+  for (const double control_hz : {1.0, 10.0, 20.0, 50.0}) {
+    for (const int vehicles : {0, 1, 200, 999, 1000, 1001, 2500, 10000, 123457}) {
+      int k = 1;
+      while (vehicles * control_hz / k > kFieldRecordRowsPerSecond) ++k;
+      EXPECT_EQ(RecordEveryForFleet(vehicles, control_hz), k) << vehicles << " vehicles at " << control_hz << " Hz";
+    }
+  }
+}
+
 TEST(FieldGenerator, ExactCounts) {
   for (const auto& [xts, valves, vehicles] : std::vector<std::array<int, 3>>{
            {1, 2, 1}, {1, 5, 3}, {6, 20, 4}, {28, 87, 24}, {40, 80, 5}, {40, 200, 100}, {7, 30, 300}}) {

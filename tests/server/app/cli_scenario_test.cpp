@@ -645,6 +645,37 @@ TEST(LossySettings, AreWarnedOfBeforeTheMission) {
   fs::remove_all(root);
 }
 
+// A fleet over 1,000 vehicles recording every 10 Hz cycle (a generated field at --trajectory-rate
+// 0, or one grown by -n) is told the record's size and the rate that keeps ~10,000 rows a second,
+// before anything is written; the generated field as written is not.
+TEST(LargeRecord, IsWarnedOfWithTheRateThatKeepsItSmall) {
+  namespace fs = std::filesystem;
+  const fs::path root = fs::temp_directory_path() / "sage_large_record_test";
+  fs::remove_all(root);
+  fs::create_directories(root);
+  maps::FieldOptions options;
+  options.xts = 30;
+  options.valves = 90;
+  options.vehicles = 2500;  // rows every 3 cycles as generated
+  const fs::path field = root / "field.yaml";
+  std::ofstream(field) << maps::EmitScenario(maps::GenerateField(options));
+  // A file where the run directory would go: refused after the warnings, before any mission.
+  const fs::path blocker = root / "not_a_directory";
+  std::ofstream(blocker) << "x";
+  const SageRun full = RunSage({"run", field.string(), "--trajectory-rate", "0", "-o", blocker.string()});
+  EXPECT_NE(full.status, 0);
+  // 2,500 vehicles x 10 Hz x 60 s x 150 bytes = 225 MB a minute; a row every 3 cycles, 75 MB.
+  EXPECT_NE(full.err.find("[warning] trajectory.csv keeps every control cycle of 2500 vehicles: about 225 MB a mission "
+                          "minute; --trajectory-rate 3.33333 (trajectory_rate_hz in the scenario) keeps a vehicle's row "
+                          "every 3 cycles, about 75 MB a minute"),
+            std::string::npos)
+      << full.err;
+  const SageRun as_generated = RunSage({"run", field.string(), "-o", blocker.string()});
+  EXPECT_NE(as_generated.status, 0);
+  EXPECT_EQ(as_generated.err.find("trajectory.csv keeps every control cycle"), std::string::npos) << as_generated.err;
+  fs::remove_all(root);
+}
+
 // runs/latest names a mission that has ended (a later launch that ended first) while another
 // launch runs: an operator's command that named none is told which mission runs and how to reach
 // it (it had been told only that the mission had ended: start one with sage launch).
