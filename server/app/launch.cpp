@@ -170,7 +170,7 @@ int Launch(const LaunchCommand& c) {
     }
     mission.time_scale = c.time_scale;
     mission.controller = c.controller;
-    mission.profile = c.scenario.profile;
+    mission.profile = scenario.default_profile;  // the profile flown, given or the file's default
   }
   ParseControllerKind(mission.controller);  // checked before anything starts
 
