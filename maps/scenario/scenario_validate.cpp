@@ -265,6 +265,20 @@ bool OnlyOf(const std::string& text, const std::string& punctuation) {
   });
 }
 
+// RFC 1123 host name labels (a fully qualified name's one trailing dot allowed): "a..b", ".a" and
+// "-a" are not names any resolver finds.
+bool HostNameLabels(const std::string& given) {
+  const std::string name = given.size() > 1 && given.back() == '.' ? given.substr(0, given.size() - 1) : given;
+  std::size_t begin = 0;
+  for (;;) {
+    const std::size_t end = std::min(name.find('.', begin), name.size());
+    const std::size_t length = end - begin;
+    if (length == 0 || length > 63 || name[begin] == '-' || name[end - 1] == '-') return false;
+    if (end == name.size()) return true;
+    begin = end + 1;
+  }
+}
+
 // Shown in a one-line error: printable UTF-8, control characters as '?', at most 64 characters.
 std::string Shown(const std::string& text) { return text.empty() ? "\"\"" : PrintableUtf8(text, 64); }
 
@@ -301,9 +315,10 @@ std::string NetworkProblem(const NetworkSettings& network, const std::string& wh
   }
   for (std::size_t i = 0; i < network.peers.size(); ++i) {
     const std::string& peer = network.peers[i];
-    if (!IsIpv4(peer) && (peer.empty() || peer.size() > 253 || !OnlyOf(peer, ".-"))) {
+    if (!IsIpv4(peer) && (peer.empty() || peer.size() > 253 || !OnlyOf(peer, ".-") || !HostNameLabels(peer))) {
       return where + ": network.peers[" + std::to_string(i) + "] = " + Shown(peer) +
-             ": must be an IPv4 address or a host name (letters, digits, . -)";
+             ": must be an IPv4 address or a host name (dot-separated labels of 1-63 letters, digits and -, "
+             "no label starting or ending with -)";
     }
   }
   return {};

@@ -1,5 +1,8 @@
 #include "server/app/cli_scenario.h"
 
+#include <netdb.h>
+#include <sys/socket.h>
+
 #include <algorithm>
 #include <cmath>
 #include <string>
@@ -11,6 +14,7 @@
 #include <spdlog/spdlog.h>
 
 #include "maps/scenario/field_generator.h"
+#include "proto/dds_config.h"
 #include "maps/seabed/seabed_obstacles.h"
 #include "server/region_split.h"
 
@@ -62,7 +66,17 @@ maps::NetworkSettings NetworkOverrides::Applied(maps::NetworkSettings network) c
   if (interface_name) network.interface_name = *interface_name;
   if (!peers.empty()) network.peers = peers;
   if (multicast) network.multicast = *multicast == "on";
-  if (const std::string problem = maps::NetworkProblem(network, "command line"); !problem.empty()) {
+  // The file's network was checked as it was read: a problem here is an option's, said as given
+  // ("--peer = a..b: must be ...", not the scenario field's name).
+  if (std::string problem = maps::NetworkProblem(network, "command line"); !problem.empty()) {
+    for (const auto& [field, option] : {std::pair<std::string, std::string>{"command line: network.interface", "--interface"},
+                                        {"command line: network.peers", "--peer"}}) {
+      if (!problem.starts_with(field)) continue;
+      std::size_t end = field.size();
+      if (end < problem.size() && problem[end] == '[') end = problem.find(']', end) + 1;  // a peer's index
+      problem.replace(0, end, option);
+      break;
+    }
     throw maps::ScenarioError(problem);
   }
   return network;
@@ -131,6 +145,32 @@ void WarnOfLargeRecord(const maps::Scenario& scenario) {
                "about {:.0f} MB a minute (the metrics count every cycle either way)",
                scenario.vehicles.size(), rows_per_minute * kBytesPerRow / 1e6, scenario.control_rate_hz / every,
                every, rows_per_minute / every * kBytesPerRow / 1e6);
+}
+
+void CheckNetworkHere(const maps::Scenario& scenario, const NetworkOverrides& given) {
+  const maps::NetworkSettings& network = scenario.network;
+  const std::string file = scenario.source_path.empty() ? std::string("<scenario>") : scenario.source_path;
+  if (network.interface_name != "lo" && proto::InterfaceAddress(network.interface_name).empty()) {
+    throw maps::ScenarioError(fmt::format(
+        "{} = '{}': no such interface with an IPv4 address on this machine (`ip -4 addr` lists them; lo keeps the "
+        "mission on this machine)",
+        given.interface_name ? std::string("--interface") : file + ": network.interface", network.interface_name));
+  }
+  for (std::size_t i = 0; i < network.peers.size(); ++i) {
+    const std::string& peer = network.peers[i];
+    addrinfo hints{};
+    hints.ai_family = AF_INET;
+    addrinfo* found = nullptr;
+    const int status = ::getaddrinfo(peer.c_str(), nullptr, &hints, &found);
+    if (found != nullptr) ::freeaddrinfo(found);
+    if (status != 0) {
+      throw maps::ScenarioError(fmt::format(
+          "{} = '{}': no IPv4 address for that host name on this machine ({}); give the machine's IPv4 address or a "
+          "name /etc/hosts or DNS resolves",
+          given.peers.empty() ? fmt::format("{}: network.peers[{}]", file, i) : std::string("--peer"), peer,
+          ::gai_strerror(status)));
+    }
+  }
 }
 
 void WarnOfLossySettings(const maps::Scenario& scenario) {

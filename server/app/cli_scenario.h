@@ -77,6 +77,12 @@ void WarnOfLossySettings(const maps::Scenario& scenario);
 /// it to that (maps::RecordEveryForFleet, the rule `sage field generate` writes).
 void WarnOfLargeRecord(const maps::Scenario& scenario);
 
+/// The mission's network as this machine can use it, checked before anything is made: its
+/// interface (unless lo) has an IPv4 address here, and each peer given by name resolves to one.
+/// Throws maps::ScenarioError naming --interface / --peer when the command line gave them, else
+/// the scenario's network field.
+void CheckNetworkHere(const maps::Scenario& scenario, const NetworkOverrides& given);
+
 /// What a mission of duration_s leaves out of `scenario` (its leaks, unless they are drawn anew
 /// for the shorter mission, its default profile's risk events and its fleet events after the end), as one
 /// line for the operator; empty if nothing.

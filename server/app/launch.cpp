@@ -134,6 +134,7 @@ int Launch(const LaunchCommand& c) {
     record_until_s = record.recorded_until_s;
     scenario = maps::LoadScenario((fs::path(out_dir) / "scenario.yaml").string());
     scenario.network = c.scenario.network.Applied(scenario.network);  // resumed on this machine's network
+    CheckNetworkHere(scenario, c.scenario.network);
     to_resume = VehiclesToResume(scenario, out_dir);  // reads the checkpoint: fails here if there is none
     mission = previous;
     mission.resumes = previous.resumes + 1;
@@ -143,6 +144,7 @@ int Launch(const LaunchCommand& c) {
     CheckFleetFitsField(scenario, ParseControllerKind(c.controller) == ControllerKind::kAstar);
     WarnOfLossySettings(scenario);
     WarnOfLargeRecord(scenario);
+    CheckNetworkHere(scenario, c.scenario.network);  // a launch refused here leaves no run directory behind
     if (const std::string unused = ErgodicOnlyOverrides(c.scenario);
         ParseControllerKind(c.controller) == ControllerKind::kAstar && !unused.empty()) {
       spdlog::warn("{}", unused);

@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <string>
+#include <vector>
 
 #include "maps/scenario/scenario.h"
 
@@ -47,6 +48,12 @@ TEST(ScenarioNetwork, BadNamesGiveOneLine) {
       {"network: {interface: \"a\\\"/><x\"}", "must be a network interface name"},
       {"network: {interface: \"\"}", "network.interface = \"\": must be"},
       {"network: {peers: [10.0.0.1, \"b c\"]}", "net.yaml: network.peers[1] = b c: must be an IPv4 address or a host name"},
+      {"network: {peers: [not..a..host]}", "net.yaml: network.peers[0] = not..a..host: must be an IPv4 address or a "
+                                           "host name (dot-separated labels of 1-63 letters, digits and -"},
+      {"network: {peers: [.lead]}", "network.peers[0] = .lead: must be"},
+      {"network: {peers: [a.-b]}", "network.peers[0] = a.-b: must be"},
+      {"network: {peers: [b-.c]}", "network.peers[0] = b-.c: must be"},
+      {"network: {peers: [x" + std::string(64, 'y') + ".org]}", "network.peers[0] = xyyy"},
       {"network: {peers: 10.0.0.1}", "network.peers", },
       {"network: {multicast: sometimes}", "network.multicast = sometimes"},
       {"network: {interfaces: eth0}", "unknown key"},
@@ -65,6 +72,12 @@ TEST(ScenarioNetwork, BadNamesGiveOneLine) {
   many.peers.assign(kMaxPeers + 1, "10.0.0.1");
   EXPECT_NE(NetworkProblem(many, "x").find("at most 32"), std::string::npos);
   EXPECT_EQ(NetworkProblem(NetworkSettings{}, "x"), "");
+  // Host names a resolver could find pass: labels of 63, a fully qualified name's trailing dot.
+  for (const std::string& name : std::vector<std::string>{"ship-2", "rov.ops.example.org.", "a" + std::string(62, 'b') + ".c", "x1.y-2.z3"}) {
+    NetworkSettings named;
+    named.peers = {name};
+    EXPECT_EQ(NetworkProblem(named, "x"), "") << name;
+  }
 }
 
 }  // namespace

@@ -569,6 +569,33 @@ TEST(OutDirectory, ARefusedSeabedTouchesNoRunDirectory) {
   fs::remove_all(root);
 }
 
+// A launch on an interface this machine lacks, or to a peer no resolver finds, is refused before
+// its run directory, security identities or lock are made (one had left security/ behind, which
+// the next launch there refused as files not a run's), naming the option given.
+TEST(OutDirectory, ALaunchRefusedForItsNetworkLeavesNothing) {
+  namespace fs = std::filesystem;
+  const fs::path root = fs::temp_directory_path() / "sage_refused_network_test";
+  fs::remove_all(root);
+  fs::create_directories(root);
+  const std::string scenario = std::string(SAGE_SOURCE_DIR) + "/scenarios/two_xt.yaml";
+  const std::pair<std::vector<std::string>, std::string> cases[] = {
+      {{"--interface", "sagenosuch0"}, "--interface = 'sagenosuch0': no such interface with an IPv4 address on this machine"},
+      {{"--peer", "sage-no-such-host.invalid"}, "--peer = 'sage-no-such-host.invalid': no IPv4 address for that host name"},
+      {{"--peer", "not..a..host"}, "sage: error: --peer = not..a..host: must be an IPv4 address or a host name"},
+      {{"--interface", "eth0/x"}, "sage: error: --interface = eth0/x: must be a network interface name"},
+  };
+  for (const auto& [options, expected] : cases) {
+    std::vector<std::string> args = {"launch", scenario, "--duration", "2", "--http", "off", "--foxglove", "off",
+                                     "--no-latest", "--out", (root / "mission").string()};
+    args.insert(args.end(), options.begin(), options.end());
+    const SageRun refused = RunSage(args);
+    EXPECT_EQ(refused.status, 2) << options.back() << ": " << refused.err;
+    EXPECT_NE(refused.err.find(expected), std::string::npos) << refused.err;
+    EXPECT_FALSE(fs::exists(root / "mission")) << options.back() << ": the refused launch made its run directory";
+  }
+  fs::remove_all(root);
+}
+
 // A crashed launch's directory (mission.json, a record that stops short, its launcher gone) is
 // refused by sage run, compare and evaluate -o as sage launch refuses it: a new user's `sage run
 // -o` there had replaced its checkpoint and record with only a warning. Finished, it may be reused.
