@@ -92,6 +92,11 @@ std::string MustBeWholeNumber(const std::string& text) {
              : Echoed(text, "must be a whole number >= 0 (at most 18446744073709551615)");
 }
 
+// `-o ""` had been read as "not given" (the default run directory, whose run it replaced).
+std::string MustBeAPath(const std::string& text) {
+  return text.empty() ? Echoed("\"\"", "must be a path (leave the option out for the default)") : std::string();
+}
+
 void AddScenarioOverrides(CLI::App& cmd, ScenarioOverrides& o, OverrideSet set, const std::string& example_scenario,
                           bool scenario_required = true) {
   const bool mission = set == OverrideSet::kMission;
@@ -382,14 +387,14 @@ int RunCli(int argc, char** argv) {
                                             "layout) and write DIR/metrics.json, trajectory.csv as it runs, and the charts (plot, metric, revisits: .svg and .png) at the end");
   AddScenarioOverrides(*run, run_cmd.scenario, OverrideSet::kMission, "scenarios/two_xt.yaml");
   AddController(*run, run_cmd.controller);
-  run->add_option("--out,-o", run_cmd.out_dir, "Run directory (default: runs/<scenario>_<profile>_<controller>)");
+  run->add_option("--out,-o", run_cmd.out_dir, "Run directory (default: runs/<scenario>_<profile>_<controller>)")->check(MustBeAPath);
 
   RunCommand compare_cmd;
   std::string calibrate = "on";
   CLI::App* compare = app.add_subcommand("compare", "Run A* and ergodic control on the same mission, side by side; "
                                                     "writes DIR/astar and DIR/ergodic");
   AddScenarioOverrides(*compare, compare_cmd.scenario, OverrideSet::kMission, "scenarios/two_xt.yaml");
-  compare->add_option("--out,-o", compare_cmd.out_dir, "Output directory (default: runs/<scenario>_<profile>_compare)");
+  compare->add_option("--out,-o", compare_cmd.out_dir, "Output directory (default: runs/<scenario>_<profile>_compare)")->check(MustBeAPath);
   compare->add_option("--calibrate-wait", calibrate,
                       "on: set A*'s wait per lap so it spends as long near the dominant valve as ergodic control (the "
                       "paper's protocol); off: use the scenario's astar.wait_per_lap_s")
@@ -403,7 +408,7 @@ int RunCli(int argc, char** argv) {
   evaluate->add_option("--scenario,-s", eval_cmd.scenario_path, "Scenario YAML giving the valves and risk profiles")->required();
   evaluate->add_option("--profile,-p", eval_cmd.profile, "Risk profile (default: the scenario's default_profile)");
   evaluate->add_option("--duration", eval_cmd.duration_s, "Mission length in seconds (default: the last sample's time)");
-  evaluate->add_option("--out,-o", eval_cmd.out_dir, "Also write metrics.json and the charts (plot, metric, revisits: .svg and .png) here");
+  evaluate->add_option("--out,-o", eval_cmd.out_dir, "Also write metrics.json and the charts (plot, metric, revisits: .svg and .png) here")->check(MustBeAPath);
 
   LaunchCommand launch_cmd;
   CLI::App* launch = app.add_subcommand("launch", "Run a fleet mission over Cyclone DDS: the server and agent hosts as "
@@ -415,7 +420,7 @@ int RunCli(int argc, char** argv) {
   launch->add_option("--time-scale", launch_cmd.time_scale, "Mission seconds per wall second (1 = real time)")
       ->check(MustBeTimeScale)
       ->capture_default_str();
-  launch->add_option("--out,-o", launch_cmd.out_dir, "Run directory (default: runs/<scenario>_launch)");
+  launch->add_option("--out,-o", launch_cmd.out_dir, "Run directory (default: runs/<scenario>_launch)")->check(MustBeAPath);
   launch->add_option("--hosts", launch_cmd.hosts, "Agent host processes for the fleet (default: one per 10,000 vehicles; on one machine more only multiply the DDS samples each host reads)")->check(MustBePositive);
   launch->add_option("--domain", launch_cmd.domain,
                      "DDS domain id 0..230 (secured, the default) or 0..232 (--insecure) (default: a free one, reserved "
@@ -446,7 +451,7 @@ int RunCli(int argc, char** argv) {
   server->add_option("--time-scale", server_cmd.time_scale, "Mission seconds per wall second (1 = real time)")
       ->check(MustBeTimeScale)
       ->capture_default_str();
-  server->add_option("--out,-o", server_cmd.out_dir, "Run directory (default: runs/<scenario>_server)");
+  server->add_option("--out,-o", server_cmd.out_dir, "Run directory (default: runs/<scenario>_server)")->check(MustBeAPath);
   server->add_option("--domain", server_cmd.domain, "DDS domain id 0..232")->required();
   server->add_flag("--quiet", server_cmd.quiet, "No progress lines");
   server->add_flag("--launched", server_cmd.launched, "Started by sage launch (which writes mission.json)")->group("");
@@ -591,7 +596,7 @@ int RunCli(int argc, char** argv) {
                    "field can hide leaks (sage run --random-leaks, sage bench leaks) and the vehicles steer on what "
                    "they see")
       ->capture_default_str();
-  generate->add_option("--out,-o", field_out, "Scenario file to write")->required();
+  generate->add_option("--out,-o", field_out, "Scenario file to write")->required()->check(MustBeAPath);
   std::uint64_t seabed_seed = 7;
   std::string seabed_name, seabed_out;
   CLI::App* seabed = field->add_subcommand(
@@ -606,7 +611,7 @@ int RunCli(int argc, char** argv) {
   seabed->add_option("--name", seabed_name,
                      "The scenario's name and its map's file name (NAME.xyz; default: the --out file's name, "
                      "manifold_slope for -o manifold_slope.yaml)");
-  seabed->add_option("--out,-o", seabed_out, "Scenario file to write (the map goes in the same folder)")->required();
+  seabed->add_option("--out,-o", seabed_out, "Scenario file to write (the map goes in the same folder)")->required()->check(MustBeAPath);
 
   BenchScaleCommand bench_cmd;
   CLI::App* bench = app.add_subcommand("bench", "Benchmarks of the whole system");
@@ -634,7 +639,7 @@ int RunCli(int argc, char** argv) {
                    "as processes on Cyclone DDS, at real time) or both")
       ->check(CLI::IsMember({"inproc", "dds", "both"}))
       ->capture_default_str();
-  bench_scale->add_option("--out,-o", bench_cmd.out_dir, "Output directory")->capture_default_str();
+  bench_scale->add_option("--out,-o", bench_cmd.out_dir, "Output directory")->capture_default_str()->check(MustBeAPath);
   bench_scale->add_option("--duration", bench_cmd.duration_s, "Mission seconds of each run")
       ->check(MustBePositive)
       ->capture_default_str();
@@ -683,7 +688,7 @@ int RunCli(int argc, char** argv) {
   bench_leaks->add_option("--assignment", leaks_cmd.scenario.assignment, "Fleet coverage of the ergodic runs")
       ->check(CLI::IsMember({"shared", "partition", "regions"}));
   bench_leaks->add_option("--jobs,-j", leaks_cmd.jobs, "Missions flown at once (each on one thread)")->capture_default_str();
-  bench_leaks->add_option("--out,-o", leaks_cmd.out_dir, "Output directory (default: runs/bench_leaks_<scenario>)");
+  bench_leaks->add_option("--out,-o", leaks_cmd.out_dir, "Output directory (default: runs/bench_leaks_<scenario>)")->check(MustBeAPath);
 
   try {
     app.parse(argc, argv);

@@ -121,6 +121,18 @@ RunOutcome RunInto(const maps::Scenario& scenario, ControllerKind kind, const st
 // a real vehicle's log strays past the box's edges by its navigation error.
 constexpr double kForeignRecordMargin_m = 1.0;
 
+// A directory holding one mission's record (a sage run's or launch's trajectory.csv at its top) is
+// not written into by a command that writes other files of the same names or beside them: an
+// evaluate there had replaced the run's own metrics.json (counted every cycle, its profile) with
+// no word, and a compare put astar/ and ergodic/ beside a single run's files.
+void RefuseAMissionsRecord(const fs::path& dir, const std::string& what) {
+  if (std::error_code ignored; fs::exists(dir / "trajectory.csv", ignored)) {
+    throw maps::ScenarioError(fmt::format("--out = {}: holds a mission's record (trajectory.csv), whose metrics.json and "
+                                          "charts are its own; give {} a directory of its own",
+                                          dir.string(), what));
+  }
+}
+
 void SayStopped(const std::string& what, const RunOutcome& outcome, double duration_s, const fs::path& dir) {
   spdlog::warn("{} stopped by a signal at t = {:.1f} s of {:.0f} s: {} holds the record to there (metrics.json: "
                "stopped_early)",
@@ -177,6 +189,7 @@ int CmdCompare(const RunCommand& c) {
   const fs::path dir = c.out_dir.empty() ? DefaultOutDir(scenario, profile, "compare") : c.out_dir;
   CheckOutDirectory(dir.string());
   CheckNoLaunchThere(dir.string());
+  RefuseAMissionsRecord(dir, "the comparison");
   PrepareRunDirectory(dir.string());
   const RunOutcome first = RunInto(scenario, ControllerKind::kErgodic, profile, dir / "ergodic", c.stop);
   const MissionMetrics& ergodic = first.metrics;
@@ -290,6 +303,14 @@ int CmdEvaluate(const EvaluateCommand& c) {
   LogToStderr();
   const maps::Scenario scenario = maps::LoadScenario(c.scenario_path);
   const maps::RiskProfile* profile = &scenario.ProfileOrThrow(c.profile);
+  if (!c.out_dir.empty()) {  // before the record is read and evaluated
+    CheckOutDirectory(c.out_dir);
+    CheckNoLaunchThere(c.out_dir);
+    RefuseAMissionsRecord(c.out_dir, "the evaluation");
+    if (std::error_code ignored; fs::exists(fs::path(c.out_dir) / "metrics.json", ignored)) {
+      spdlog::warn("{}: replacing the metrics.json and charts written there", c.out_dir);
+    }
+  }
   const Trajectory trajectory = ReadTrajectoryCsv(c.trajectory_path);
   if (trajectory.cut_line) {
     spdlog::warn("{}: its last line, cut short with no newline after it (a record a crash ended), was left out",
@@ -321,8 +342,6 @@ int CmdEvaluate(const EvaluateCommand& c) {
   }
   std::cout << FormatTable({metrics});
   if (!c.out_dir.empty()) {
-    CheckOutDirectory(c.out_dir);
-    CheckNoLaunchThere(c.out_dir);
     PrepareRunDirectory(c.out_dir);
     WriteMetricsJson((fs::path(c.out_dir) / "metrics.json").string(), metrics);
     // The profile's risk changes are marked at their valves, with the share they gave.

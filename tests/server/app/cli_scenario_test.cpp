@@ -637,6 +637,53 @@ TEST(OutDirectory, ACrashedLaunchIsNotWrittenOver) {
   fs::remove_all(dir);
 }
 
+// A mission's own record is not written over by evaluate -o (it had replaced the run's metrics.json,
+// counted every cycle, with a re-scoring under another profile, silently) nor by compare -o (it
+// put astar/ and ergodic/ beside the run's files); an evaluation's own directory is replaced with
+// a word; `-o ""` is refused rather than taken for the default run directory.
+TEST(OutDirectory, AMissionsRecordIsNotEvaluatedOrComparedOver) {
+  namespace fs = std::filesystem;
+  const fs::path root = fs::temp_directory_path() / "sage_record_kept_test";
+  fs::remove_all(root);
+  const std::string scenario = std::string(SAGE_SOURCE_DIR) + "/scenarios/two_xt.yaml";
+  const fs::path run = root / "run";
+  ASSERT_EQ(RunSage({"run", scenario, "--duration", "3", "-o", run.string()}).status, 0);
+  const auto read = [](const fs::path& file) {
+    std::ifstream in(file);
+    return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  };
+  const std::string metrics = read(run / "metrics.json");
+  const std::string csv = (run / "trajectory.csv").string();
+  const SageRun over = RunSage({"evaluate", csv, "-s", scenario, "-p", "graded", "-o", run.string()});
+  EXPECT_EQ(over.status, 2) << over.err;
+  EXPECT_NE(over.err.find("--out = " + run.string() + ": holds a mission's record (trajectory.csv), whose metrics.json "
+                          "and charts are its own; give the evaluation a directory of its own"),
+            std::string::npos)
+      << over.err;
+  EXPECT_EQ(over.out, "") << "scored before the directory was refused";
+  EXPECT_EQ(read(run / "metrics.json"), metrics);
+  const SageRun compared = RunSage({"compare", scenario, "--duration", "3", "-o", run.string()});
+  EXPECT_EQ(compared.status, 2) << compared.err;
+  EXPECT_NE(compared.err.find("give the comparison a directory of its own"), std::string::npos) << compared.err;
+  EXPECT_FALSE(fs::exists(run / "ergodic"));
+  const fs::path scored = root / "graded";
+  const SageRun first = RunSage({"evaluate", csv, "-s", scenario, "-p", "graded", "-o", scored.string()});
+  EXPECT_EQ(first.status, 0) << first.err;
+  EXPECT_EQ(first.err.find("replacing"), std::string::npos) << first.err;
+  const SageRun second = RunSage({"evaluate", csv, "-s", scenario, "-p", "equal", "-o", scored.string()});
+  EXPECT_EQ(second.status, 0) << second.err;
+  EXPECT_NE(second.err.find(scored.string() + ": replacing the metrics.json and charts written there"), std::string::npos)
+      << second.err;
+  EXPECT_NE(read(scored / "metrics.json").find("\"profile\": \"equal\""), std::string::npos);
+  for (const std::string command : {"run", "compare", "launch"}) {
+    const SageRun empty = RunSage({command, scenario, "--duration", "3", "-o", ""});
+    EXPECT_EQ(empty.status, 2) << command;
+    EXPECT_NE(empty.err.find("--out = \"\": must be a path (leave the option out for the default)"), std::string::npos)
+        << empty.err;
+  }
+  fs::remove_all(root);
+}
+
 // What a mission's settings would silently lose is said before it flies: hidden leaks with no
 // sensor to see them (the table had read "detected never" as a fleet that missed them), fusion
 // settings with no sensors, a sensor rate off the control cycles.
