@@ -80,7 +80,7 @@ std::string DefaultOutDir(const maps::Scenario& scenario, const std::string& pro
 }
 
 // One in-process mission with its record streamed into `dir` as it runs, as a launch's server
-// writes it: the same files, the same checkpoints. Stopped by `stop`, it ends at the cycle it has
+// writes it: the same files and partial metrics, but no checkpoint.bin (nothing resumes a run). Stopped by `stop`, it ends at the cycle it has
 // reached as a launch's server does: the final files for the time flown, stopped_early.
 struct RunOutcome {
   MissionMetrics metrics;
@@ -90,7 +90,9 @@ struct RunOutcome {
 
 RunOutcome RunInto(const maps::Scenario& scenario, ControllerKind kind, const std::string& profile, const fs::path& dir,
                    const std::atomic<bool>* stop) {
-  RunDirectory run(dir.string(), scenario);
+  RunDirectoryOptions record;
+  record.resumable = false;  // partial metrics as it runs; no checkpoint.bin, which nothing could resume
+  RunDirectory run(dir.string(), scenario, record);
   MissionOptions options{profile, kind, &run, /*keep_trajectory=*/false};
   Mission mission(scenario, options);
   ProgressPrinter progress(fmt::format("{:>7}", ToString(kind)), scenario.duration_s);

@@ -10,6 +10,7 @@
 #include <charconv>
 #include <cmath>
 #include <cstring>
+#include <optional>
 #include <filesystem>
 #include <fstream>
 #include <string_view>
@@ -361,14 +362,15 @@ void RunDirectory::StartCheckpoint(const MissionCore& core, bool wait) {
   const double copy_from = ThreadCpuSeconds();
   // Copies taken now, on the mission's thread; encoding (metrics.json of 35,000 valves took 125 ms)
   // and writing happen off it.
-  MissionCheckpoint checkpoint = core.Checkpoint();
+  std::optional<MissionCheckpoint> checkpoint;
+  if (options_.resumable) checkpoint = core.Checkpoint();
   MissionMetrics metrics = core.Metrics(core.time_s());
   RunInfo partial = Info(core, false, false);
   checkpoint_cost_s_ = ThreadCpuSeconds() - copy_from;  // the writing's share is added when it ends
   checkpoint_write_ = std::async(std::launch::async, [dir = dir_, checkpoint = std::move(checkpoint),
                                                       metrics = std::move(metrics), partial = std::move(partial)] {
     const double from = ThreadCpuSeconds();
-    WriteCheckpoint(dir, checkpoint);
+    if (checkpoint) WriteCheckpoint(dir, *checkpoint);
     detail::WriteAtomically((fs::path(dir) / "metrics.json").string(), MetricsJson(metrics, &partial));
     return ThreadCpuSeconds() - from;
   });

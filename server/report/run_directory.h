@@ -44,6 +44,10 @@ struct RunDirectoryOptions {
   std::size_t plot_points = 200000;  ///< trajectory samples kept in memory for the final plot
   std::size_t plot_events = 2000;    ///< events kept to mark on it (the rest are counted)
   std::string transport = "in-process";
+  /// checkpoint.bin with the partial metrics: a launch's server, which `sage launch --resume`
+  /// restarts from it. A `sage run` has no resume (run it again: the seed flies the same mission)
+  /// and writes only the partial metrics.json, sparing the copy of the mission's state.
+  bool resumable = true;
   bool resume = false;               ///< append to a crashed mission's record instead of starting one
   int resumes = 0;                   ///< how many times this mission was resumed before
 };

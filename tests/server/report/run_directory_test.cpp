@@ -87,6 +87,33 @@ TEST_F(RunDirectoryTest, PartialWhileRunningCompleteAtTheEnd) {
   EXPECT_EQ(std::count(csv.begin(), csv.end(), '\n'), 1 + 201);
 }
 
+// A record nothing resumes (sage run's) keeps its partial metrics.json as it runs, with no
+// checkpoint.bin beside it; the periodic ones as the explicit ones.
+TEST_F(RunDirectoryTest, ARecordNothingResumesWritesPartialMetricsOnly) {
+  const maps::Scenario s = maps::WithDuration(maps::LoadScenario(kTwoXt), 6.0);
+  RunDirectoryOptions options;
+  options.checkpoint_period_s = 0.0;
+  options.resumable = false;
+  RunDirectory run(dir_.string(), s, options);
+  Mission mission(s, MissionOptions{"", ControllerKind::kErgodic, &run, false});
+  while (mission.time_s() < 3.0) {
+    mission.Step();
+    run.Tick(mission.core());
+  }
+  run.Checkpoint(mission.core());
+  const RecordSummary partial = ReadRecordSummary(dir_.string());
+  EXPECT_FALSE(partial.complete);
+  EXPECT_DOUBLE_EQ(partial.recorded_until_s, mission.core().time_s());
+  EXPECT_FALSE(partial.has_checkpoint);
+  EXPECT_FALSE(fs::exists(dir_ / "checkpoint.bin"));
+  const nlohmann::json metrics = nlohmann::json::parse(Read(dir_ / "metrics.json"));
+  EXPECT_FALSE(metrics.at("complete").get<bool>());
+  EXPECT_NEAR(metrics.at("duration_s").get<double>(), mission.core().time_s(), 1e-9);
+  while (mission.Step()) run.Tick(mission.core());
+  run.Finish(mission.core(), mission.world(), 6.0, false);
+  EXPECT_TRUE(ReadRecordSummary(dir_.string()).complete);
+}
+
 // If one file of the final set cannot be written, none of it appears: metrics.json stays the
 // partial one (complete: false), no plot, no temporaries, and the error names the file.
 TEST_F(RunDirectoryTest, FinalSetIsAllOrNothing) {
