@@ -340,8 +340,9 @@ int CmdBenchScale(const BenchScaleCommand& c) {
   if (c.transport != "inproc" && c.transport != "dds" && c.transport != "both") {
     throw maps::ScenarioError(fmt::format("--transport = {}: must be inproc, dds or both", c.transport));
   }
-  if (!(c.duration_s > 0.0) || !std::isfinite(c.duration_s)) {
-    throw maps::ScenarioError(fmt::format("--duration = {}: must be a finite number > 0", c.duration_s));
+  if (!(c.duration_s > 0.0 && c.duration_s <= maps::kMaxDuration_s)) {
+    throw maps::ScenarioError(fmt::format("--duration = {}: must be > 0 and <= {:.0f} s (a week)", c.duration_s,
+                                          maps::kMaxDuration_s));
   }
   if (c.repeat < 1 || c.repeat > 10) throw maps::ScenarioError(fmt::format("--repeat = {}: must be 1..10", c.repeat));
   std::vector<std::string> transports;

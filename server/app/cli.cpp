@@ -41,14 +41,6 @@ enum class OverrideSet {
   kVehicles,  // what shapes the vehicles' own control (agent hosts)
 };
 
-// CLI11's PositiveNumber prints the whole range of a double; users need "must be > 0".
-std::string MustBePositive(const std::string& text) {
-  try {
-    return std::stod(text) > 0.0 ? std::string() : std::string("must be > 0");
-  } catch (const std::exception&) {
-    return "must be a number > 0";
-  }
-}
 
 // Who says a risk changes, as the server's log and risk_events.csv name them: a name, not empty
 // nor a line of its own (an empty one had been logged as "set to 4 by  at t = 3.6 s").
@@ -73,6 +65,25 @@ std::string MustBeTimeScale(const std::string& text) {
 // "OPTION: " before a check's message, and InOurWords joins the two ("--weight-exponent = 9: ...").
 std::string Echoed(const std::string& text, const std::string& problem) {
   return problem.empty() ? problem : "= " + text + ": " + problem;
+}
+
+// CLI11's PositiveNumber prints the whole range of a double; users need "--x = nan: must be > 0".
+std::string MustBePositive(const std::string& text) {
+  try {
+    const double value = std::stod(text);
+    return value > 0.0 ? std::string() : Echoed(text, "must be > 0");  // NaN too
+  } catch (const std::exception&) {
+    return Echoed(text, "must be a number > 0");
+  }
+}
+
+std::optional<double> NumberIn(const std::string& text);
+
+// A mission's length as a scenario's duration_s may be: "--duration = 1e9: must be > 0 and <= ...".
+std::string MustBeADuration(const std::string& text) {
+  const std::optional<double> value = NumberIn(text);
+  if (value && *value > 0.0 && *value <= maps::kMaxDuration_s) return "";
+  return Echoed(text, fmt::format("must be > 0 and <= {:.0f} s (a week)", maps::kMaxDuration_s));
 }
 
 // A check of a number option's range, in the project's words (RangeProblem).
@@ -640,8 +651,8 @@ int RunCli(int argc, char** argv) {
       ->check(CLI::IsMember({"inproc", "dds", "both"}))
       ->capture_default_str();
   bench_scale->add_option("--out,-o", bench_cmd.out_dir, "Output directory")->capture_default_str()->check(MustBeAPath);
-  bench_scale->add_option("--duration", bench_cmd.duration_s, "Mission seconds of each run")
-      ->check(MustBePositive)
+  bench_scale->add_option("--duration", bench_cmd.duration_s, "Mission seconds of each run (up to a week)")
+      ->check(MustBeADuration)
       ->capture_default_str();
   bench_scale->add_option("--seed", bench_cmd.seed, "Seed of the fields and the missions")
       ->check(MustBeWholeNumber)

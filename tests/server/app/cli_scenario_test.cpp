@@ -257,6 +257,17 @@ TEST(RangeProblem, SaysWhatIsAllowed) {
   const std::string file = std::string(SAGE_SOURCE_DIR) + "/scenarios/two_xt.yaml";
   // Refused with what was typed, as the scenario's refusals are ("--weight-exponent: must be ..." had
   // not said the value).
+  // bench scale's duration at the door, before any field is generated (1e9 had failed each run
+  // after making the fields, and written a table of dashes); positives say the value too.
+  for (const std::string value : {"nan", "1e9", "0", "-1"}) {
+    const SageRun bench = RunSage({"bench", "scale", "--vehicles", "1", "--duration", value});
+    EXPECT_EQ(bench.status, 2) << value;
+    EXPECT_NE(bench.err.find("sage: error: bench scale: --duration = " + value + ": must be > 0 and <= 604800 s (a week)"),
+              std::string::npos)
+        << bench.err;
+  }
+  const SageRun hosts = RunSage({"launch", file, "--hosts", "0"});
+  EXPECT_NE(hosts.err.find("sage: error: launch: --hosts = 0: must be > 0"), std::string::npos) << hosts.err;
   const SageRun five = RunSage({"run", file, "--weight-exponent", "5"});
   EXPECT_EQ(five.status, 2);
   EXPECT_NE(five.err.find("sage: error: run: --weight-exponent = 5: must be a number in [0, 4] (see sage run --help)"),
