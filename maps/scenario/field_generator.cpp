@@ -217,8 +217,12 @@ void CheckOptions(const FieldOptions& o) {
   const auto fail = [](const std::string& option, const std::string& value, const std::string& rule) {
     throw ScenarioError(option + " = " + value + ": " + rule);
   };
-  if (o.xts < 1) fail("--xts", std::to_string(o.xts), "must be >= 1");
-  if (o.vehicles < 1) fail("--vehicles", std::to_string(o.vehicles), "must be >= 1");
+  // Five times the largest fleet sage bench scale measures; a field of 50,000 XTs and 50,000
+  // vehicles is ~37 MB of YAML, within what a scenario may be (kMaxScenarioBytes; a million
+  // vehicles had been written as 116 MB that no command could load).
+  constexpr int kMostCount = 50000;
+  if (o.xts < 1 || o.xts > kMostCount) fail("--xts", std::to_string(o.xts), "must be in 1..50000");
+  if (o.vehicles < 1 || o.vehicles > kMostCount) fail("--vehicles", std::to_string(o.vehicles), "must be in 1..50000");
   const std::int64_t least = 2 * std::int64_t{o.xts}, most = 5 * std::int64_t{o.xts};
   if (o.valves < least || o.valves > most) {
     const std::string bound = o.valves < least ? ">= 2 x --xts = " + std::to_string(least)

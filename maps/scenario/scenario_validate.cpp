@@ -336,6 +336,12 @@ void Scenario::Validate() const {
   c.AtMost("duration_s", duration_s, kMaxDuration_s, "s (a week)");
   c.Positive("control_rate_hz", control_rate_hz);
   c.AtMost("control_rate_hz", control_rate_hz, kMaxControlRate_hz, "Hz");
+  // A mission flies whole control cycles: one shorter than a cycle had flown one anyway (0.01 s
+  // recorded as 0.1 s of mission, "0 s mission simulated").
+  if (duration_s < (1 - 1e-9) / control_rate_hz) {
+    c.Fail("duration_s", FormatNumber(duration_s),
+           "must be at least one control cycle (1 / control_rate_hz = " + FormatNumber(1.0 / control_rate_hz) + " s)");
+  }
   c.Positive("physics_rate_hz", physics_rate_hz);
   c.AtMost("physics_rate_hz", physics_rate_hz, kMaxPhysicsRate_hz, "Hz");
   // Whole number of physics steps per control step, up to rounding of the decimal rates.

@@ -583,13 +583,13 @@ int RunCli(int argc, char** argv) {
                   "second: trajectory_rate_hz), and leak sensors if asked; the same seed gives the same field (the "
                   "field grows with the counts: about 80 m^2 of seabed per XT)");
   CLI::Option* generate_xts = generate->add_option(
-      "--xts", field_options.xts, "Christmas trees (>= 1); without it, as many as --valves needs at the default's rate")
+      "--xts", field_options.xts, "Christmas trees (1..50000); without it, as many as --valves needs at the default's rate")
       ->capture_default_str();
   CLI::Option* generate_valves = generate->add_option(
       "--valves", field_options.valves, "Valves in all, 2 to 5 per XT; without it, about 3.1 per XT (87 for 28)")
       ->capture_default_str();
   CLI::Option* generate_vehicles =
-      generate->add_option("--vehicles", field_options.vehicles, "BlueROV2s (>= 1); without it, 24 for every 28 XTs")
+      generate->add_option("--vehicles", field_options.vehicles, "BlueROV2s (1..50000); without it, 24 for every 28 XTs")
           ->capture_default_str();
   generate->add_option("--seed", field_options.seed, "Same seed, same field; also the mission's seed")
       ->check(MustBeWholeNumber)

@@ -4,6 +4,7 @@
 #include <fstream>
 #include <iterator>
 
+#include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
 #include "server/report/atomic_write.h"
@@ -98,7 +99,14 @@ void WriteScenarioFile(const std::string& dir, const maps::Scenario& scenario) {
 }
 
 void WriteScenarioTo(const std::string& path, const maps::Scenario& scenario) {
-  detail::WriteAtomically(path, maps::EmitScenario(scenario));
+  const std::string text = maps::EmitScenario(scenario);
+  // Nothing is written that the loader would refuse to read back.
+  if (text.size() > maps::kMaxScenarioBytes) {
+    throw maps::ScenarioError(fmt::format("{}: the scenario would be {:.0f} MB, over the {} MB a scenario may be (the "
+                                          "loader refuses larger): fewer XTs, valves or vehicles",
+                                          path, text.size() / 1e6, maps::kMaxScenarioBytes >> 20));
+  }
+  detail::WriteAtomically(path, text);
 }
 
 void WriteFilesTogether(const std::vector<std::pair<std::string, std::string>>& files) {

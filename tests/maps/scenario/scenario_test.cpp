@@ -634,6 +634,8 @@ TEST(Scenario, BadInputsGiveOneLineNamingFieldAndValue) {
       // Bounds on what a scenario costs (probes: physics_rate_hz 5e7 and grid_resolution_m 1e-6
       // hung for minutes, clearance_m 300000 took 16.8 GB).
       {"duration_s: 300", "duration_s: 1e9", {"base.yaml: duration_s = 1e+09: must be <= 604800 s (a week)"}},
+      {"duration_s: 300", "duration_s: 0.01",
+       {"base.yaml: duration_s = 0.01: must be at least one control cycle (1 / control_rate_hz = 0.1 s)"}},
       {"control_rate_hz: 10", "control_rate_hz: 1000", {"control_rate_hz = 1000: must be <= 100 Hz"}},
       {"physics_rate_hz: 50", "physics_rate_hz: 5e7", {"base.yaml: physics_rate_hz = 5e+07: must be <= 1000 Hz"}},
       {"fleet: {", "astar: {grid_resolution_m: 1e-6}\nfleet: {", {"astar.grid_resolution_m = 1e-06: must be >= 0.01 m"}},
