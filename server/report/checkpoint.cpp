@@ -372,8 +372,16 @@ MissionCheckpoint DecodeCheckpoint(const std::vector<std::uint8_t>& bytes, const
       c.risk_loop = ToRiskLoop(j.at("risk_loop"));
     }
     return c;
-  } catch (const std::exception& e) {  // nlohmann's parse, type and out-of-range errors
-    throw maps::ScenarioError(fmt::format("{}: not a readable checkpoint: {}", source, e.what()));
+  } catch (const Json::parse_error& e) {
+    // Written whole and renamed into place: a file cut short was altered or copied in part since.
+    throw maps::ScenarioError(fmt::format("{}: not a readable checkpoint: cut short or damaged at byte {} of {} (a "
+                                          "server writes it whole; copy the run directory again, or start the mission "
+                                          "anew)",
+                                          source, e.byte, bytes.size()));
+  } catch (const std::exception& e) {  // nlohmann's type and out-of-range errors: a field missing or mistyped
+    throw maps::ScenarioError(fmt::format("{}: not a readable checkpoint: a field missing or of the wrong type ({}): "
+                                          "damaged, or not written by this sage",
+                                          source, e.what()));
   }
 }
 

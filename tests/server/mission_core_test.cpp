@@ -400,6 +400,18 @@ TEST(MissionCore, CheckpointRoundTripIsExact) {
   MissionCore wrong(other_world, other, "", ControllerKind::kErgodic);
   EXPECT_THROW(wrong.Restore(decoded), maps::ScenarioError);
   EXPECT_THROW(DecodeCheckpoint({1, 2, 3}, "junk.bin"), maps::ScenarioError);
+  // A checkpoint cut short is said so, where, in the project's words (it had read "[json.exception.
+  // parse_error.110] ... while parsing CBOR binary").
+  const std::vector<std::uint8_t> cut(bytes.begin(), bytes.begin() + static_cast<std::ptrdiff_t>(bytes.size() / 2));
+  try {
+    DecodeCheckpoint(cut, "run/checkpoint.bin");
+    ADD_FAILURE() << "a checkpoint cut in half was read";
+  } catch (const maps::ScenarioError& e) {
+    const std::string message = e.what();
+    EXPECT_EQ(message.rfind("run/checkpoint.bin: not a readable checkpoint: cut short or damaged at byte ", 0), 0u) << message;
+    EXPECT_NE(message.find(" of " + std::to_string(cut.size()) + " (a server writes it whole"), std::string::npos) << message;
+    EXPECT_EQ(message.find("json.exception"), std::string::npos) << message;
+  }
 }
 
 }  // namespace
