@@ -45,13 +45,20 @@ std::string HostStartedLine(int pid, int count, int first_id, const std::string&
                      first_id + 1, first_id + count, first_id, first_id + count - 1, log_path);
 }
 
-std::string VehicleLeftLine(int id, double told_at_s) {
-  return fmt::format("vehicle {} left the mission (told to at t = {:.1f} s)", id, told_at_s);
+namespace {
+// "rov2 (id 1)", or "vehicle 1" when its name is not known.
+std::string Named(int id, const std::string& name) {
+  return name.empty() ? fmt::format("vehicle {}", id) : fmt::format("{} (id {})", name, id);
+}
+}  // namespace
+
+std::string VehicleLeftLine(int id, const std::string& name, double told_at_s) {
+  return fmt::format("{} left the mission (told to at t = {:.1f} s)", Named(id, name), told_at_s);
 }
 
-std::string VehicleNotLeftLine(int id, double told_at_s, double waited_s) {
-  return fmt::format("vehicle {} was told to leave at t = {:.1f} s but had not left within {:.0f} s", id, told_at_s,
-                     waited_s);
+std::string VehicleNotLeftLine(int id, const std::string& name, double told_at_s, double waited_s) {
+  return fmt::format("{} was told to leave at t = {:.1f} s but had not left within {:.0f} s", Named(id, name),
+                     told_at_s, waited_s);
 }
 
 std::string StopLine(double time_s, const std::string& run_dir) {

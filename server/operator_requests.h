@@ -35,10 +35,10 @@ std::string CommandRefusedLine(const std::string& reason);
 /// "started agent host pid 4242 with 2 vehicles: rov9..rov10, ids 8..9 (log: DIR/agents-add-8.log)"; one: "with 1
 /// vehicle: rov3, id 2 (log: ...)"
 std::string HostStartedLine(int pid, int count, int first_id, const std::string& log_path);
-/// "vehicle 3 left the mission (told to at t = 12.0 s)"
-std::string VehicleLeftLine(int id, double told_at_s);
-/// "vehicle 3 was told to leave at t = 12.0 s but had not left within 5 s"
-std::string VehicleNotLeftLine(int id, double told_at_s, double waited_s);
+/// "rov4 (id 3) left the mission (told to at t = 12.0 s)"; "vehicle 3 left ..." with no name known
+std::string VehicleLeftLine(int id, const std::string& name, double told_at_s);
+/// "rov4 (id 3) was told to leave at t = 12.0 s but had not left within 5 s"
+std::string VehicleNotLeftLine(int id, const std::string& name, double told_at_s, double waited_s);
 /// "the mission stops at t = 40.1 s; its server writes runs/x"
 std::string StopLine(double time_s, const std::string& run_dir);
 

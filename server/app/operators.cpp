@@ -189,6 +189,8 @@ int RemoveVehicle(const MissionFile& mission, const std::string& vehicle, bool i
                  vehicle.c_str(), names.empty() ? "none" : names.c_str());
     return 2;
   }
+  const auto heard_name = flying.find(static_cast<std::uint32_t>(id));
+  const std::string name = heard_name != flying.end() ? heard_name->second : std::string();
   const std::optional<CommandAnswer> answer = AskServer(participant, "remove", 0, static_cast<std::uint32_t>(id));
   if (!answer) return NoMission(mission, insecure);
   if (!answer->accepted) {
@@ -207,11 +209,12 @@ int RemoveVehicle(const MissionFile& mission, const std::string& vehicle, bool i
   }
   if (!gone) {
     std::fprintf(stderr, "sage: error: %s\n",
-                 VehicleNotLeftLine(id, answer->mission_time_s, std::chrono::duration<double>(kAnswerTimeout).count()).c_str());
+                 VehicleNotLeftLine(id, name, answer->mission_time_s, std::chrono::duration<double>(kAnswerTimeout).count())
+                     .c_str());
     return 1;
   }
   // The server records the leave when the state is disposed, a cycle or two after its order.
-  std::printf("%s (mission in %s)\n", VehicleLeftLine(id, answer->mission_time_s).c_str(), mission.run_dir.c_str());
+  std::printf("%s (mission in %s)\n", VehicleLeftLine(id, name, answer->mission_time_s).c_str(), mission.run_dir.c_str());
   return 0;
 }
 

@@ -529,11 +529,12 @@ int RunServerNode(const maps::Scenario& scenario, const ServerNodeOptions& optio
       std::erase_if(removals, [&](const PendingRemoval& p) {
         const Roster::Member* m = core.roster().Find(p.id);
         if (m != nullptr && m->status != Roster::Status::kAlive) {
-          p.action->Answer(true, VehicleLeftLine(p.id, p.told_at_s));
+          p.action->Answer(true, VehicleLeftLine(p.id, m->name, p.told_at_s));
           return true;
         }
         if (SteadyClock::now() < p.deadline) return false;
-        p.action->Answer(false, VehicleNotLeftLine(p.id, p.told_at_s, kRemovalWait_s));
+        p.action->Answer(false, VehicleNotLeftLine(p.id, m != nullptr ? m->name : std::string(), p.told_at_s,
+                                                   kRemovalWait_s));
         return true;
       });
     }
@@ -654,7 +655,7 @@ int RunServerNode(const maps::Scenario& scenario, const ServerNodeOptions& optio
                max_cycle_ms, peak_rss_mb, options.out_dir, finish_s);
   // A cycle's wall time against its thread's CPU time: what the other threads and processes on the
   // cores took from it (a page on the mission's own machine shows here).
-  spdlog::info("server: cycle on the CPU {:.2f} ms mean of its {:.2f} ms; switched out {} times preempted, {} waiting",
+  spdlog::info("server: cycle on the CPU {:.3f} ms mean of its {:.3f} ms; switched out {} times preempted, {} waiting",
                total_cycle_cpu_ms / std::max(1L, cycles_run), total_cycle_ms / std::max(1L, cycles_run), cycle_preempted,
                cycle_blocked);
   if (live) {

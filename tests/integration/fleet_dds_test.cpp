@@ -704,7 +704,7 @@ TEST_F(FleetDds, OperatorRiskUpdateReachesServer) {
   const std::optional<int> remove_exit = remove.WaitExit(15s);
   ASSERT_TRUE(remove_exit.has_value()) << "sage vehicle remove hung";
   EXPECT_EQ(*remove_exit, 0) << remove.LogText();
-  EXPECT_TRUE(std::regex_search(remove.LogText(), std::regex(R"(vehicle 0 left the mission \(told to at t = [0-9.]+ s\))")))
+  EXPECT_TRUE(std::regex_search(remove.LogText(), std::regex(R"((rov1 \(id 0\)|vehicle 0) left the mission \(told to at t = [0-9.]+ s\))")))
       << remove.LogText();
   // The server decides and tells the vehicle's agent host, which takes it out.
   const fs::path host_log = out / "agents-0.log";

@@ -50,8 +50,10 @@ TEST(OperatorRequests, OneLineAnswers) {
             "started agent host pid 4242 with 2 vehicles: rov9..rov10, ids 8..9 (log: r/agents-add-8.log)");
   EXPECT_EQ(HostStartedLine(4243, 1, 2, "r/agents-add-2.log"),
             "started agent host pid 4243 with 1 vehicle: rov3, id 2 (log: r/agents-add-2.log)");
-  EXPECT_EQ(VehicleLeftLine(3, 12.0), "vehicle 3 left the mission (told to at t = 12.0 s)");
-  EXPECT_EQ(VehicleNotLeftLine(3, 12.0, 5.0), "vehicle 3 was told to leave at t = 12.0 s but had not left within 5 s");
+  EXPECT_EQ(VehicleLeftLine(3, "rov4", 12.0), "rov4 (id 3) left the mission (told to at t = 12.0 s)");
+  EXPECT_EQ(VehicleLeftLine(3, "", 12.0), "vehicle 3 left the mission (told to at t = 12.0 s)");
+  EXPECT_EQ(VehicleNotLeftLine(3, "rov4", 12.0, 5.0), "rov4 (id 3) was told to leave at t = 12.0 s but had not left within 5 s");
+  EXPECT_EQ(VehicleNotLeftLine(3, "", 12.0, 5.0), "vehicle 3 was told to leave at t = 12.0 s but had not left within 5 s");
   EXPECT_EQ(StopLine(40.06, "/runs/x"), "the mission stops at t = 40.1 s; its server writes /runs/x");
 }
 
