@@ -215,6 +215,10 @@ int CmdCompare(const RunCommand& c) {
   const RunOutcome second = RunInto(scenario, ControllerKind::kAstar, profile, dir / "astar", c.stop);
   const MissionMetrics& astar = second.metrics;
   std::cout << FormatTable({astar, ergodic});
+  // Which way each row is better, for a reader new to the figures (a one-vehicle field can favour
+  // the tour on the fleet's figures while the ergodic vehicle keeps the paper's claims).
+  std::cout << "Shorter is better: intervals, longest gaps, the risk-weighted interval and the expected detection "
+               "delay; corr(visits, weight) +1: visits in proportion to risk (the paper's aim)\n";
   if (second.stopped) {
     SayStopped("the A* mission", second, scenario.duration_s, dir / "astar");
     return 130;

@@ -677,6 +677,14 @@ TEST(OutDirectory, AMissionsRecordIsNotEvaluatedOrComparedOver) {
   EXPECT_EQ(compared.status, 2) << compared.err;
   EXPECT_NE(compared.err.find("give the comparison a directory of its own"), std::string::npos) << compared.err;
   EXPECT_FALSE(fs::exists(run / "ergodic"));
+  // A directory of its own: both missions, their table and which way each row is better.
+  const SageRun fresh = RunSage({"compare", scenario, "--duration", "3", "--calibrate-wait", "off", "-o",
+                                 (root / "compare").string()});
+  EXPECT_EQ(fresh.status, 0) << fresh.err;
+  EXPECT_TRUE(fs::exists(root / "compare" / "ergodic" / "metrics.json"));
+  EXPECT_TRUE(fs::exists(root / "compare" / "astar" / "metrics.json"));
+  EXPECT_NE(fresh.out.find("risk-weighted interval"), std::string::npos) << fresh.out;
+  EXPECT_NE(fresh.out.find("\nShorter is better: intervals, longest gaps"), std::string::npos) << fresh.out;
   const fs::path scored = root / "graded";
   const SageRun first = RunSage({"evaluate", csv, "-s", scenario, "-p", "graded", "-o", scored.string()});
   EXPECT_EQ(first.status, 0) << first.err;
