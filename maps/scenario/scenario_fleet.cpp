@@ -256,12 +256,12 @@ std::uint64_t VehicleFingerprint(const Scenario& scenario) {
 }
 
 std::uint64_t ScenarioHash(const Scenario& scenario) {
-  // The network is each machine's own; the seabed map counts by its content (hashed at the door).
+  // The network is each machine's own; the seabed map counts by its content (hashed at the door),
+  // not by where it lies: a run directory keeps its own copy, and may be moved before a resume.
   Scenario same = scenario;
   same.network = {};
-  std::string text = EmitScenario(same);
-  if (same.seabed && !same.seabed->map.empty()) text += "# map_fnv1a " + std::to_string(same.seabed->map_fnv1a);
-  return Fnv1a(text);
+  if (same.seabed && !same.seabed->map.empty()) same.seabed->map = "fnv1a-" + std::to_string(same.seabed->map_fnv1a) + ".bt";
+  return Fnv1a(EmitScenario(same));
 }
 
 }  // namespace sage::maps

@@ -138,6 +138,14 @@ int Launch(const LaunchCommand& c) {
     to_resume = VehiclesToResume(scenario, out_dir);  // reads the checkpoint: fails here if there is none
     mission = previous;
     mission.resumes = previous.resumes + 1;
+    // A run directory moved since (another disk, another machine) keeps its own identities: those
+    // it made under its old path are taken from where it is now.
+    if (!mission.security_dir.empty() && !previous.run_dir.empty()) {
+      const fs::path inside = fs::path(mission.security_dir).lexically_relative(previous.run_dir);
+      if (!inside.empty() && *inside.begin() != "..") {
+        mission.security_dir = (fs::absolute(out_dir) / inside).lexically_normal().string();
+      }
+    }
   } else {
     scenario = LoadWithOverrides(c.scenario);
     // Before the run directory is made: a refused mission leaves nothing behind.

@@ -32,8 +32,19 @@ MissionFile ReadMissionFile(const std::string& dir);
 /// atomically. Throws std::runtime_error naming the file.
 void WriteRunFile(const std::string& dir, const std::string& name, const std::string& text);
 
-/// Writes DIR/scenario.yaml (the effective scenario every process of the mission reads)
-/// atomically. Throws std::runtime_error naming the file.
+/// The run directory's copy of the scenario's seabed map: "seabed_map" and the map's extension.
+/// Empty without a map.
+std::string RunMapName(const maps::Scenario& scenario);
+
+/// `scenario` as a run directory keeps it: its seabed map (if any) copied into DIR as
+/// RunMapName (replaced only when its bytes differ) and named there relative to DIR, so the
+/// directory flies, resumes and runs again without the file it came from (a run's scenario.yaml
+/// had named the map by its absolute path, and failed once that file changed or was elsewhere).
+/// Throws std::runtime_error naming the file it could not write.
+maps::Scenario KeptInRunDirectory(const std::string& dir, maps::Scenario scenario);
+
+/// Writes DIR/scenario.yaml (the effective scenario every process of the mission reads, as
+/// KeptInRunDirectory keeps it) atomically. Throws std::runtime_error naming the file.
 void WriteScenarioFile(const std::string& dir, const maps::Scenario& scenario);
 
 /// Writes a scenario file at `path` atomically. Throws std::runtime_error naming the file.

@@ -23,6 +23,7 @@
 #include "maps/risk_layer.h"
 #include "server/report/atomic_write.h"
 #include "server/report/checkpoint.h"
+#include "server/report/mission_file.h"
 #include "server/report/record_csv.h"
 
 namespace sage::server {
@@ -112,7 +113,7 @@ RunDirectory::RunDirectory(std::string dir, const maps::Scenario& scenario, RunD
     Open(fleet_events_, "fleet_events.csv", kFleetEventsHeader);
     Open(risk_events_, "risk_events.csv", kRiskEventsHeader);
     Open(regions_, "regions.csv", kRegionsHeader);
-    if (!options_.resume) detail::WriteAtomically((fs::path(dir_) / "scenario.yaml").string(), maps::EmitScenario(scenario_));
+    if (!options_.resume) WriteScenarioFile(dir_, scenario_);
   } catch (const std::runtime_error& e) {
     throw maps::ScenarioError(fmt::format("--out = {}: cannot write there: {}", dir_, e.what()));
   }
@@ -396,7 +397,7 @@ void RunDirectory::Finish(const MissionCore& core, const maps::World& world, dou
   }
   contents.push_back(world.seabed().BinaryBytes());
   contents.push_back((risk_layer ? *risk_layer : core.risk_layer()).OtBytes());
-  contents.push_back(maps::EmitScenario(ran));
+  contents.push_back(maps::EmitScenario(KeptInRunDirectory(dir_, ran)));
   contents.push_back(MetricsJson(metrics, &info));
   for (const char* name : kFinalFiles) paths.push_back((fs::path(dir_) / name).string());
   try {

@@ -1027,29 +1027,33 @@ TEST_F(FleetDds, KilledServerResumesFromItsCheckpoint) {
   EXPECT_EQ(over.WaitExit(15s), std::optional<int>(2)) << over.LogText();
   EXPECT_NE(over.LogText().find("holds a mission that did not finish"), std::string::npos) << over.LogText();
 
-  ChildProcess& resume = Start("resume", {"launch", "--resume", out.string()});
+  // Resumed from where the directory was moved to (another disk, another machine): its identities
+  // and its scenario.yaml go with it (mission.json had named them by the old path).
+  const fs::path moved = run_dir_ / "moved";
+  fs::rename(out, moved);
+  ChildProcess& resume = Start("resume", {"launch", "--resume", moved.string()});
   const std::optional<int> resume_exit = WaitMissionEnd(resume, duration);
   ASSERT_TRUE(resume_exit.has_value()) << "the resumed mission did not end";
   EXPECT_EQ(*resume_exit, 0) << resume.LogText();
-  const Json final_metrics = ReadJson(out / "metrics.json");
+  const Json final_metrics = ReadJson(moved / "metrics.json");
   EXPECT_TRUE(final_metrics.at("complete").get<bool>());
   EXPECT_DOUBLE_EQ(final_metrics.at("duration_s").get<double>(), duration);
   EXPECT_EQ(final_metrics.at("resumes").get<int>(), 1);
-  EXPECT_FALSE(fs::exists(out / "checkpoint.bin"));
+  EXPECT_FALSE(fs::exists(moved / "checkpoint.bin"));
   std::multiset<std::pair<std::string, double>> kept;
   for (const Json& valve : final_metrics.at("valves"))
     for (const Json& t : valve.at("visit_times_s")) kept.insert({valve.at("name").get<std::string>(), t.get<double>()});
   for (const auto& [valve, t] : visits_before) {
     EXPECT_TRUE(kept.count({valve, t})) << "the visit of " << valve << " at t = " << t << " s was lost in the resume";
   }
-  const auto events = ReadFleetEvents(out / "fleet_events.csv");
+  const auto events = ReadFleetEvents(moved / "fleet_events.csv");
   EXPECT_EQ(EventsOf(events, "outage").size(), 1u);
   EXPECT_EQ(EventsOf(events, "resumed").size(), 1u);
   EXPECT_TRUE(EventsOf(events, "lost").empty()) << "a vehicle restarted by the resume is not a fleet loss";
   // The record covers the whole mission: every vehicle has rows to the end, and no hole where
   // the resume was (the restarted vehicles had rejoined 2 s of wall time, 8 mission-s here, after
   // the resumed clock went on: their hosts now start with the server, whose clock waits for them).
-  for (const auto& [name, poses] : ReadTrajectory(out / "trajectory.csv", events)) {
+  for (const auto& [name, poses] : ReadTrajectory(moved / "trajectory.csv", events)) {
     EXPECT_GE(poses.back().t, duration - 0.2) << name;
     double widest = 0.0, at = 0.0;
     for (std::size_t i = 1; i < poses.size(); ++i) {

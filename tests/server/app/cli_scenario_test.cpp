@@ -607,6 +607,37 @@ TEST(OutDirectory, ALaunchRefusedForItsNetworkLeavesNothing) {
   fs::remove_all(root);
 }
 
+// A run directory keeps its own copy of the seabed map, named relative to its scenario.yaml: it
+// runs again after the map it came from is gone (the scenario had named that file by its absolute
+// path), and flies the same mission.
+TEST(OutDirectory, ARunKeepsItsSeabedMap) {
+  namespace fs = std::filesystem;
+  const fs::path root = fs::temp_directory_path() / "sage_run_keeps_map_test";
+  fs::remove_all(root);
+  fs::create_directories(root / "source");
+  const std::string source = std::string(SAGE_SOURCE_DIR) + "/scenarios/";
+  fs::copy_file(source + "manifold_slope.xyz", root / "source" / "manifold_slope.xyz");
+  fs::copy_file(source + "manifold_slope.yaml", root / "source" / "manifold_slope.yaml");
+  const fs::path first = root / "first", again = root / "again";
+  ASSERT_EQ(RunSage({"run", (root / "source" / "manifold_slope.yaml").string(), "--duration", "2", "-o", first.string()})
+                .status,
+            0);
+  const auto read = [](const fs::path& file) {
+    std::ifstream in(file, std::ios::binary);
+    return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  };
+  EXPECT_EQ(read(first / "seabed_map.xyz"), read(source + "manifold_slope.xyz"));
+  const std::string kept = read(first / "scenario.yaml");
+  EXPECT_NE(kept.find("map: seabed_map.xyz"), std::string::npos) << kept;
+  EXPECT_EQ(kept.find((root / "source").string()), std::string::npos) << kept;
+  fs::remove_all(root / "source");
+  const SageRun rerun = RunSage({"run", (first / "scenario.yaml").string(), "-o", again.string()});
+  ASSERT_EQ(rerun.status, 0) << rerun.err;
+  EXPECT_EQ(read(again / "trajectory.csv"), read(first / "trajectory.csv"));
+  EXPECT_EQ(read(again / "seabed_map.xyz"), read(first / "seabed_map.xyz"));
+  fs::remove_all(root);
+}
+
 // A crashed launch's directory (mission.json, a record that stops short, its launcher gone) is
 // refused by sage run, compare and evaluate -o as sage launch refuses it: a new user's `sage run
 // -o` there had replaced its checkpoint and record with only a warning. Finished, it may be reused.
