@@ -582,15 +582,18 @@ int RunCli(int argc, char** argv) {
                   "settings sized for the field (over 1,000 vehicles a trajectory.csv of about 10,000 rows a mission "
                   "second: trajectory_rate_hz), and leak sensors if asked; the same seed gives the same field (the "
                   "field grows with the counts: about 80 m^2 of seabed per XT)");
+  // The three counts size each other (WithCountsSizedToEachOther): no fixed default shown, which a
+  // new user had read as the count given with another ("--valves 2" gives 1 XT, not 28).
   CLI::Option* generate_xts = generate->add_option(
-      "--xts", field_options.xts, "Christmas trees (1..50000); without it, as many as --valves needs at the default's rate")
-      ->capture_default_str();
+      "--xts", field_options.xts,
+      "Christmas trees (1..50000); without it, as many as --valves needs at about 3.1 valves an XT, or 28 with "
+      "neither");
   CLI::Option* generate_valves = generate->add_option(
-      "--valves", field_options.valves, "Valves in all, 2 to 5 per XT; without it, about 3.1 per XT (87 for 28)")
-      ->capture_default_str();
-  CLI::Option* generate_vehicles =
-      generate->add_option("--vehicles", field_options.vehicles, "BlueROV2s (1..50000); without it, 24 for every 28 XTs")
-          ->capture_default_str();
+      "--valves", field_options.valves, "Valves in all, 2 to 5 per XT; without it, about 3.1 per XT (87 for 28)");
+  CLI::Option* generate_vehicles = generate->add_option(
+      "--vehicles", field_options.vehicles,
+      "BlueROV2s (1..50000); without it, 24 for every 28 XTs (24 with no count given); given alone, the field keeps "
+      "28 XTs and 87 valves (use --xts to grow it)");
   generate->add_option("--seed", field_options.seed, "Same seed, same field; also the mission's seed")
       ->check(MustBeWholeNumber)
       ->capture_default_str();
