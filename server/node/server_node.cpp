@@ -617,6 +617,12 @@ int RunServerNode(const maps::Scenario& scenario, const ServerNodeOptions& optio
                core.time_s(), options.out_dir);
     return 1;
   }
+  // Who ended the mission early stands in fleet_events.csv beside the fleet's other events (not for
+  // a launcher gone: that mission is resumable, not ended).
+  if (stopped_early) {
+    core.Note("stopped", stop_requested ? "a stop request (sage stop, the live page, or its launcher: Ctrl-C, the fleet gone)"
+                                        : "a signal to the server (Ctrl-C, SIGTERM)");
+  }
   const double end_time = std::max(1.0 / rate, std::min(scenario.duration_s, core.time_s()));
   // The real-time factor is the mission loop's; writing the final set is timed on its own.
   const double wall_s = std::chrono::duration<double>(SteadyClock::now() - wall_start).count();

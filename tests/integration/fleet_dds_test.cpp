@@ -1092,6 +1092,7 @@ TEST_F(FleetDds, KilledLauncherLeavesTheMissionResumable) {
   const Json partial = ReadJson(out / "metrics.json");
   EXPECT_FALSE(partial.at("complete").get<bool>());
   EXPECT_FALSE(partial.at("stopped_early").get<bool>()) << "nobody stopped the mission";
+  EXPECT_TRUE(EventsOf(ReadFleetEvents(out / "fleet_events.csv"), "stopped").empty()) << "a resumable mission is not ended";
   EXPECT_NEAR(partial.at("duration_s").get<double>(), t_kill, 3.0 * kTimeScale);
   ASSERT_TRUE(fs::exists(out / "checkpoint.bin"));
   // An operator's command is told the mission can be resumed (it had been told it had ended).
@@ -1197,6 +1198,9 @@ TEST_F(FleetDds, LaunchEndsWhenTheFleetIsGone) {
   EXPECT_TRUE(metrics.at("complete").get<bool>());
   EXPECT_TRUE(metrics.at("stopped_early").get<bool>());
   EXPECT_LT(metrics.at("duration_s").get<double>(), 100.0);
+  // Who ended it stands in the fleet's events, after the loss.
+  const auto events = ReadFleetEvents(out / "fleet_events.csv");
+  EXPECT_EQ(EventsOf(events, "stopped").size(), 1u);
 }
 
 // A flood of risk updates from an authenticated sender (this process, on the mission's operator
