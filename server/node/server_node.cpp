@@ -71,7 +71,7 @@ class LoggedRecord final : public MissionRecorder {
       joins_.push_back(e);
     } else if (e.vehicle_id >= 0) {
       spdlog::info("server: {} (id {}) {} at t = {:.1f} s ({})", e.name, e.vehicle_id, e.what, e.time_s, e.detail);
-    } else if (e.what == "tours" || e.what == "regions" || e.what == "resumed") {
+    } else if (e.what == "tours" || e.what == "regions" || e.what == "resumed" || e.what == "stopped") {
       spdlog::info("server: t = {:.1f} s: {}: {}", e.time_s, e.what, e.detail);  // the plan, as it goes
     } else {
       spdlog::warn("server: t = {:.1f} s: {}: {}", e.time_s, e.what, e.detail);  // an outage, a fleet gone
