@@ -221,8 +221,9 @@ void CheckOptions(const FieldOptions& o) {
   // vehicles is ~37 MB of YAML, within what a scenario may be (kMaxScenarioBytes; a million
   // vehicles had been written as 116 MB that no command could load).
   constexpr int kMostCount = 50000;
-  if (o.xts < 1 || o.xts > kMostCount) fail("--xts", std::to_string(o.xts), "must be in 1..50000");
-  if (o.vehicles < 1 || o.vehicles > kMostCount) fail("--vehicles", std::to_string(o.vehicles), "must be in 1..50000");
+  const std::string counts = "must be in 1.." + std::to_string(kMostCount);
+  if (o.xts < 1 || o.xts > kMostCount) fail("--xts", std::to_string(o.xts), counts);
+  if (o.vehicles < 1 || o.vehicles > kMostCount) fail("--vehicles", std::to_string(o.vehicles), counts);
   const std::int64_t least = 2 * std::int64_t{o.xts}, most = 5 * std::int64_t{o.xts};
   if (o.valves < least || o.valves > most) {
     const std::string bound = o.valves < least ? ">= 2 x --xts = " + std::to_string(least)
@@ -412,7 +413,7 @@ Scenario GenerateField(const FieldOptions& o) {
   s.vehicles = PlaceVehicles(rng, s, o.vehicles);
 
   s.duration_s = 600;
-  s.control_rate_hz = 10;
+  s.control_rate_hz = kFieldControlRate_hz;
   s.physics_rate_hz = 50;
   // trajectory.csv at most about 10,000 rows a mission second: every cycle up to 1,000 vehicles,
   // beyond that a vehicle's row every ceil(N / 1,000) cycles (1 Hz at 10,000: a minute's record

@@ -36,6 +36,9 @@ inline constexpr double kFieldValveSigma_m = 0.25;
 inline constexpr double kFieldStartClearance_m = 1.0;
 inline constexpr double kFieldStartSeparation_m = 1.5;
 
+/// The control rate of every generated field (Hz).
+inline constexpr double kFieldControlRate_hz = 10;
+
 /// Rows of trajectory.csv a mission second a large fleet's record keeps at most (about 150 bytes a
 /// row: 1.5 MB a mission second, 88 MB a 10,000-vehicle minute). The metrics count every cycle
 /// whatever the record keeps.

@@ -260,7 +260,9 @@ std::uint64_t ScenarioHash(const Scenario& scenario) {
   // not by where it lies: a run directory keeps its own copy, and may be moved before a resume.
   Scenario same = scenario;
   same.network = {};
-  if (same.seabed && !same.seabed->map.empty()) same.seabed->map = "fnv1a-" + std::to_string(same.seabed->map_fnv1a) + ".bt";
+  if (same.seabed && !same.seabed->map.empty()) {
+    same.seabed->map = "fnv1a-" + std::to_string(same.seabed->map_fnv1a) + ".bt";
+  }
   return Fnv1a(EmitScenario(same));
 }
 

@@ -1,6 +1,7 @@
 // Scenario::Validate: the rules on a loaded scenario. Every broken rule becomes one ScenarioError
 // line "FILE: FIELD = VALUE: RULE", with field paths as in the YAML.
 #include "maps/scenario/scenario.h"
+#include "maps/scenario/duration_rule.h"
 
 #include <algorithm>
 #include <cmath>
@@ -284,6 +285,19 @@ std::string Shown(const std::string& text) { return text.empty() ? "\"\"" : Prin
 
 }  // namespace
 
+std::string DurationRangeProblem(double duration_s) {
+  if (duration_s > 0.0 && duration_s <= kMaxDuration_s) return "";
+  return "must be > 0 and <= " + FormatNumber(kMaxDuration_s) + " s (a week)";
+}
+
+std::string DurationCycleProblem(double duration_s, double control_rate_hz) {
+  // As the mission counts its cycles (std::llround: half a cycle rounds up to one).
+  if (duration_s * control_rate_hz >= 0.5) return "";
+  return "must fly at least one control cycle (>= " + FormatNumber(0.5 / control_rate_hz) +
+         " s at control_rate_hz = " + FormatNumber(control_rate_hz) +
+         ": a mission flies round(duration_s x control_rate_hz) cycles)";
+}
+
 std::string TrajectoryRateRule(double rate_hz, double control_rate_hz) {
   if (rate_hz == 0.0) return "";  // every cycle
   // k to five significant figures, so that 3.33333 reads as 10 Hz / 3.
@@ -336,11 +350,8 @@ void Scenario::Validate() const {
   c.AtMost("duration_s", duration_s, kMaxDuration_s, "s (a week)");
   c.Positive("control_rate_hz", control_rate_hz);
   c.AtMost("control_rate_hz", control_rate_hz, kMaxControlRate_hz, "Hz");
-  // A mission flies whole control cycles: one shorter than a cycle had flown one anyway (0.01 s
-  // recorded as 0.1 s of mission, "0 s mission simulated").
-  if (duration_s < (1 - 1e-9) / control_rate_hz) {
-    c.Fail("duration_s", FormatNumber(duration_s),
-           "must be at least one control cycle (1 / control_rate_hz = " + FormatNumber(1.0 / control_rate_hz) + " s)");
+  if (const std::string problem = DurationCycleProblem(duration_s, control_rate_hz); !problem.empty()) {
+    c.Fail("duration_s", FormatNumber(duration_s), problem);
   }
   c.Positive("physics_rate_hz", physics_rate_hz);
   c.AtMost("physics_rate_hz", physics_rate_hz, kMaxPhysicsRate_hz, "Hz");

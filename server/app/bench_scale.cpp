@@ -21,6 +21,7 @@
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
 
+#include "maps/scenario/duration_rule.h"
 #include "maps/scenario/field_generator.h"
 #include "server/app/cli_scenario.h"
 #include "server/app/processes.h"
@@ -340,9 +341,11 @@ int CmdBenchScale(const BenchScaleCommand& c) {
   if (c.transport != "inproc" && c.transport != "dds" && c.transport != "both") {
     throw maps::ScenarioError(fmt::format("--transport = {}: must be inproc, dds or both", c.transport));
   }
-  if (!(c.duration_s > 0.0 && c.duration_s <= maps::kMaxDuration_s)) {
-    throw maps::ScenarioError(fmt::format("--duration = {}: must be > 0 and <= {:.0f} s (a week)", c.duration_s,
-                                          maps::kMaxDuration_s));
+  // The generated fields' control rate: a duration under one cycle had generated every field and
+  // failed each run.
+  for (const std::string& problem : {maps::DurationRangeProblem(c.duration_s),
+                                     maps::DurationCycleProblem(c.duration_s, maps::kFieldControlRate_hz)}) {
+    if (!problem.empty()) throw maps::ScenarioError(fmt::format("--duration = {}: {}", c.duration_s, problem));
   }
   if (c.repeat < 1 || c.repeat > 10) throw maps::ScenarioError(fmt::format("--repeat = {}: must be 1..10", c.repeat));
   std::vector<std::string> transports;

@@ -30,6 +30,7 @@
 #include "server/app/run_commands.h"
 #include "server/app/security_command.h"
 #include "server/app/view_command.h"
+#include "maps/scenario/duration_rule.h"
 #include "proto/dds_config.h"
 #include "proto/mission_clock.h"
 
@@ -82,8 +83,7 @@ std::optional<double> NumberIn(const std::string& text);
 // A mission's length as a scenario's duration_s may be: "--duration = 1e9: must be > 0 and <= ...".
 std::string MustBeADuration(const std::string& text) {
   const std::optional<double> value = NumberIn(text);
-  if (value && *value > 0.0 && *value <= maps::kMaxDuration_s) return "";
-  return Echoed(text, fmt::format("must be > 0 and <= {:.0f} s (a week)", maps::kMaxDuration_s));
+  return Echoed(text, value ? maps::DurationRangeProblem(*value) : maps::DurationRangeProblem(-1.0));
 }
 
 // A check of a number option's range, in the project's words (RangeProblem).
@@ -105,6 +105,10 @@ std::string MustBeWholeNumber(const std::string& text) {
 
 // `-o ""` had been read as "not given" (the default run directory, whose run it replaced).
 std::string MustBeAPath(const std::string& text) {
+  return text.empty() ? Echoed("\"\"", "must be a path") : std::string();
+}
+// ... of an option with a default: how to get it.
+std::string MustBeAPathOrLeftOut(const std::string& text) {
   return text.empty() ? Echoed("\"\"", "must be a path (leave the option out for the default)") : std::string();
 }
 
@@ -398,14 +402,14 @@ int RunCli(int argc, char** argv) {
                                             "layout) and write DIR/metrics.json, trajectory.csv as it runs, and the charts (plot, metric, revisits: .svg and .png) at the end");
   AddScenarioOverrides(*run, run_cmd.scenario, OverrideSet::kMission, "scenarios/two_xt.yaml");
   AddController(*run, run_cmd.controller);
-  run->add_option("--out,-o", run_cmd.out_dir, "Run directory (default: runs/<scenario>_<profile>_<controller>)")->check(MustBeAPath);
+  run->add_option("--out,-o", run_cmd.out_dir, "Run directory (default: runs/<scenario>_<profile>_<controller>)")->check(MustBeAPathOrLeftOut);
 
   RunCommand compare_cmd;
   std::string calibrate = "on";
   CLI::App* compare = app.add_subcommand("compare", "Run A* and ergodic control on the same mission, side by side; "
                                                     "writes DIR/astar and DIR/ergodic");
   AddScenarioOverrides(*compare, compare_cmd.scenario, OverrideSet::kMission, "scenarios/two_xt.yaml");
-  compare->add_option("--out,-o", compare_cmd.out_dir, "Output directory (default: runs/<scenario>_<profile>_compare)")->check(MustBeAPath);
+  compare->add_option("--out,-o", compare_cmd.out_dir, "Output directory (default: runs/<scenario>_<profile>_compare)")->check(MustBeAPathOrLeftOut);
   compare->add_option("--calibrate-wait", calibrate,
                       "on: set A*'s wait per lap so it spends as long near the dominant valve as ergodic control (the "
                       "paper's protocol); off: use the scenario's astar.wait_per_lap_s")
@@ -431,7 +435,7 @@ int RunCli(int argc, char** argv) {
   launch->add_option("--time-scale", launch_cmd.time_scale, "Mission seconds per wall second (1 = real time)")
       ->check(MustBeTimeScale)
       ->capture_default_str();
-  launch->add_option("--out,-o", launch_cmd.out_dir, "Run directory (default: runs/<scenario>_launch)")->check(MustBeAPath);
+  launch->add_option("--out,-o", launch_cmd.out_dir, "Run directory (default: runs/<scenario>_launch)")->check(MustBeAPathOrLeftOut);
   launch->add_option("--hosts", launch_cmd.hosts, "Agent host processes for the fleet (default: one per 10,000 vehicles; on one machine more only multiply the DDS samples each host reads)")->check(MustBePositive);
   launch->add_option("--domain", launch_cmd.domain,
                      "DDS domain id 0..230 (secured, the default) or 0..232 (--insecure) (default: a free one, reserved "
@@ -462,7 +466,7 @@ int RunCli(int argc, char** argv) {
   server->add_option("--time-scale", server_cmd.time_scale, "Mission seconds per wall second (1 = real time)")
       ->check(MustBeTimeScale)
       ->capture_default_str();
-  server->add_option("--out,-o", server_cmd.out_dir, "Run directory (default: runs/<scenario>_server)")->check(MustBeAPath);
+  server->add_option("--out,-o", server_cmd.out_dir, "Run directory (default: runs/<scenario>_server)")->check(MustBeAPathOrLeftOut);
   server->add_option("--domain", server_cmd.domain, "DDS domain id 0..232")->required();
   server->add_flag("--quiet", server_cmd.quiet, "No progress lines");
   server->add_flag("--launched", server_cmd.launched, "Started by sage launch (which writes mission.json)")->group("");
@@ -653,7 +657,7 @@ int RunCli(int argc, char** argv) {
                    "as processes on Cyclone DDS, at real time) or both")
       ->check(CLI::IsMember({"inproc", "dds", "both"}))
       ->capture_default_str();
-  bench_scale->add_option("--out,-o", bench_cmd.out_dir, "Output directory")->capture_default_str()->check(MustBeAPath);
+  bench_scale->add_option("--out,-o", bench_cmd.out_dir, "Output directory")->capture_default_str()->check(MustBeAPathOrLeftOut);
   bench_scale->add_option("--duration", bench_cmd.duration_s, "Mission seconds of each run (up to a week)")
       ->check(MustBeADuration)
       ->capture_default_str();
@@ -702,7 +706,7 @@ int RunCli(int argc, char** argv) {
   bench_leaks->add_option("--assignment", leaks_cmd.scenario.assignment, "Fleet coverage of the ergodic runs")
       ->check(CLI::IsMember({"shared", "partition", "regions"}));
   bench_leaks->add_option("--jobs,-j", leaks_cmd.jobs, "Missions flown at once (each on one thread)")->capture_default_str();
-  bench_leaks->add_option("--out,-o", leaks_cmd.out_dir, "Output directory (default: runs/bench_leaks_<scenario>)")->check(MustBeAPath);
+  bench_leaks->add_option("--out,-o", leaks_cmd.out_dir, "Output directory (default: runs/bench_leaks_<scenario>)")->check(MustBeAPathOrLeftOut);
 
   try {
     app.parse(argc, argv);

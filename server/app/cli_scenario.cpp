@@ -13,6 +13,7 @@
 #include <fmt/ranges.h>
 #include <spdlog/spdlog.h>
 
+#include "maps/scenario/duration_rule.h"
 #include "maps/scenario/field_generator.h"
 #include "proto/dds_config.h"
 #include "maps/seabed/seabed_obstacles.h"
@@ -26,9 +27,10 @@ namespace {
 // project's words: "--duration = -5: must be > 0".
 void CheckOverrides(const ScenarioOverrides& o) {
   if (o.vehicles && *o.vehicles < 1) throw maps::ScenarioError(fmt::format("--vehicles = {}: must be >= 1", *o.vehicles));
-  if (o.duration_s && !(*o.duration_s > 0.0 && *o.duration_s <= maps::kMaxDuration_s)) {
-    throw maps::ScenarioError(fmt::format("--duration = {}: must be > 0 and <= {:.0f} s (a week)", *o.duration_s,
-                                          maps::kMaxDuration_s));
+  if (o.duration_s) {
+    if (const std::string problem = maps::DurationRangeProblem(*o.duration_s); !problem.empty()) {
+      throw maps::ScenarioError(fmt::format("--duration = {}: {}", *o.duration_s, problem));
+    }
   }
   if (o.basis_order && (*o.basis_order < 1 || *o.basis_order > 64)) {
     throw maps::ScenarioError(fmt::format("--basis-order = {}: must be in 1..64", *o.basis_order));
@@ -240,6 +242,10 @@ maps::Scenario LoadWithOverrides(const ScenarioOverrides& o) {
     scenario.astar.order = *o.order == "looks" ? maps::AstarSettings::Order::kLooks : maps::AstarSettings::Order::kShortest;
   }
   if (o.duration_s) {
+    // Said of the option, not of the file whose control rate it meets.
+    if (const std::string problem = maps::DurationCycleProblem(*o.duration_s, scenario.control_rate_hz); !problem.empty()) {
+      throw maps::ScenarioError(fmt::format("--duration = {}: {}", *o.duration_s, problem));
+    }
     // What starts after the shorter mission's end is left out; say so (a leak that silently went
     // read as "none hidden" in the run's table).
     if (const std::string left_out = LeftOutByDuration(scenario, *o.duration_s, o.random_leaks.has_value()); !left_out.empty()) {

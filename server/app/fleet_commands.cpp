@@ -127,10 +127,10 @@ int CmdServer(const ServerCommand& c) {
     MissionFile mission;
     mission.domain_id = c.domain;
     mission.scenario_path = (fs::absolute(options.out_dir) / "scenario.yaml").string();
-    mission.run_dir = fs::absolute(options.out_dir).string();
+    mission.run_dir = fs::absolute(options.out_dir).lexically_normal().string();
     mission.time_scale = c.time_scale;
     mission.controller = c.controller;
-    mission.profile = c.scenario.profile;
+    mission.profile = scenario.default_profile;  // the profile flown, given or the file's default
     mission.security_dir = security_dir;
     mission.network = scenario.network;
     WriteMissionFile(options.out_dir, mission);

@@ -141,7 +141,9 @@ int Launch(const LaunchCommand& c) {
     // A run directory moved since (another disk, another machine) keeps its own identities: those
     // it made under its old path are taken from where it is now.
     if (!mission.security_dir.empty() && !previous.run_dir.empty()) {
-      const fs::path inside = fs::path(mission.security_dir).lexically_relative(previous.run_dir);
+      const fs::path inside = fs::path(mission.security_dir)
+                                  .lexically_normal()
+                                  .lexically_relative(fs::path(previous.run_dir).lexically_normal());
       if (!inside.empty() && *inside.begin() != "..") {
         mission.security_dir = (fs::absolute(out_dir) / inside).lexically_normal().string();
       }
@@ -243,7 +245,7 @@ int Launch(const LaunchCommand& c) {
   const std::string scenario_file = (fs::absolute(out_dir) / "scenario.yaml").string();
   mission.domain_id = domain;
   mission.scenario_path = scenario_file;
-  mission.run_dir = fs::absolute(out_dir).string();
+  mission.run_dir = fs::absolute(out_dir).lexically_normal().string();
   mission.launcher_pid = getpid();
   mission.network = scenario.network;
   try {

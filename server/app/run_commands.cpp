@@ -174,7 +174,7 @@ int CmdRun(const RunCommand& c) {
     SayStopped("the mission", outcome, scenario.duration_s, dir);
     return 130;
   }
-  spdlog::info("{:.0f} s mission simulated in {:.2f} s wall time; wrote {}/metrics.json, trajectory.csv{}, plot.svg and .png",
+  spdlog::info("{:g} s mission simulated in {:.2f} s wall time; wrote {}/metrics.json, trajectory.csv{}, plot.svg and .png",
                scenario.duration_s, std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(),
                dir.string(), RecordRateNote(scenario));
   return 0;
@@ -217,8 +217,9 @@ int CmdCompare(const RunCommand& c) {
   std::cout << FormatTable({astar, ergodic});
   // Which way each row is better, for a reader new to the figures (a one-vehicle field can favour
   // the tour on the fleet's figures while the ergodic vehicle keeps the paper's claims).
-  std::cout << "Shorter is better: intervals, longest gaps, the risk-weighted interval and the expected detection "
-               "delay; corr(visits, weight) +1: visits in proportion to risk (the paper's aim)\n";
+  std::cout << "Better: shorter intervals, longest gaps, risk-weighted interval and exp. detection delay; fewer "
+               "unvisited valves; a lower ergodic metric and time at boundary; corr(visits, weight) near +1: visits in "
+               "proportion to risk (the paper's aim)\n";
   if (second.stopped) {
     SayStopped("the A* mission", second, scenario.duration_s, dir / "astar");
     return 130;

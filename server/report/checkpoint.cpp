@@ -377,7 +377,7 @@ MissionCheckpoint DecodeCheckpoint(const std::vector<std::uint8_t>& bytes, const
     throw maps::ScenarioError(fmt::format("{}: not a readable checkpoint: cut short or damaged at byte {} of {} (a "
                                           "server writes it whole; copy the run directory again, or start the mission "
                                           "anew)",
-                                          source, e.byte, bytes.size()));
+                                          source, std::min<std::size_t>(e.byte, bytes.size()), bytes.size()));
   } catch (const std::exception& e) {  // nlohmann's type and out-of-range errors: a field missing or mistyped
     throw maps::ScenarioError(fmt::format("{}: not a readable checkpoint: a field missing or of the wrong type ({}): "
                                           "damaged, or not written by this sage",

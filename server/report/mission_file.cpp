@@ -3,6 +3,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iterator>
+#include <vector>
 
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
@@ -99,36 +100,36 @@ std::string RunMapName(const maps::Scenario& scenario) {
   return "seabed_map" + fs::path(scenario.seabed->map).extension().string();
 }
 
-maps::Scenario KeptInRunDirectory(const std::string& dir, maps::Scenario scenario) {
+void KeepSeabedMap(const std::string& dir, const maps::Scenario& scenario) {
   const std::string name = RunMapName(scenario);
-  if (name.empty()) return scenario;
-  const fs::path from(scenario.seabed->map), to = fs::path(dir) / name;
   std::error_code error;
-  const bool same_file = fs::equivalent(from, to, error);  // a resumed mission's map is the copy already
-  // The copy stands if its bytes are the map's (a map is at most maps::kMaxSeabedMapBytes).
-  const auto kept = [&] {
-    if (!fs::exists(to, error) || fs::file_size(to, error) != fs::file_size(from, error) || error) return false;
-    const auto read = [](const fs::path& file) {
-      std::ifstream in(file, std::ios::binary);
-      return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-    };
-    return read(to) == read(from);
-  };
-  if (!same_file && !kept()) {
-    const fs::path temporary = to.string() + ".tmp";
-    if (!fs::copy_file(from, temporary, fs::copy_options::overwrite_existing, error)) {
-      throw std::runtime_error(fmt::format("{}: cannot copy the seabed map {} there: {}", to.string(), from.string(),
-                                           error.message()));
-    }
-    fs::rename(temporary, to, error);
-    if (error) throw std::runtime_error(fmt::format("{}: cannot write: {}", to.string(), error.message()));
+  // A run directory used before with another map (or none) keeps no copy of it to mislead.
+  std::vector<fs::path> stale;
+  for (const fs::directory_entry& entry : fs::directory_iterator(dir, error)) {
+    const std::string file = entry.path().filename().string();
+    if (file.starts_with("seabed_map.") && file != name) stale.push_back(entry.path());
   }
-  scenario.seabed->map = name;  // relative to the run directory, where its scenario.yaml is
+  for (const fs::path& file : stale) fs::remove(file, error);
+  if (name.empty()) return;
+  const fs::path from(scenario.seabed->map), to = fs::path(dir) / name;
+  if (fs::equivalent(from, to, error)) return;  // a resumed mission's map is the copy already
+  const fs::path temporary = to.string() + ".tmp";
+  if (!fs::copy_file(from, temporary, fs::copy_options::overwrite_existing, error)) {
+    throw std::runtime_error(fmt::format("{}: cannot copy the seabed map {} there: {}", to.string(), from.string(),
+                                         error.message()));
+  }
+  fs::rename(temporary, to, error);
+  if (error) throw std::runtime_error(fmt::format("{}: cannot write: {}", to.string(), error.message()));
+}
+
+maps::Scenario WithKeptSeabedMap(maps::Scenario scenario) {
+  if (const std::string name = RunMapName(scenario); !name.empty()) scenario.seabed->map = name;
   return scenario;
 }
 
 void WriteScenarioFile(const std::string& dir, const maps::Scenario& scenario) {
-  WriteScenarioTo((fs::path(dir) / "scenario.yaml").string(), KeptInRunDirectory(dir, scenario));
+  KeepSeabedMap(dir, scenario);
+  WriteScenarioTo((fs::path(dir) / "scenario.yaml").string(), WithKeptSeabedMap(scenario));
 }
 
 void WriteScenarioTo(const std::string& path, const maps::Scenario& scenario) {

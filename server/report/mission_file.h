@@ -36,15 +36,20 @@ void WriteRunFile(const std::string& dir, const std::string& name, const std::st
 /// Empty without a map.
 std::string RunMapName(const maps::Scenario& scenario);
 
-/// `scenario` as a run directory keeps it: its seabed map (if any) copied into DIR as
-/// RunMapName (replaced only when its bytes differ) and named there relative to DIR, so the
+/// Copies the scenario's seabed map into DIR as RunMapName (unless it is that copy already: a
+/// resumed mission's) and removes any other seabed_map.* a mission before left there, so the
 /// directory flies, resumes and runs again without the file it came from (a run's scenario.yaml
 /// had named the map by its absolute path, and failed once that file changed or was elsewhere).
-/// Throws std::runtime_error naming the file it could not write.
-maps::Scenario KeptInRunDirectory(const std::string& dir, maps::Scenario scenario);
+/// Once, as the mission starts: the copy is the map it flew. Throws std::runtime_error naming the
+/// file it could not write.
+void KeepSeabedMap(const std::string& dir, const maps::Scenario& scenario);
 
-/// Writes DIR/scenario.yaml (the effective scenario every process of the mission reads, as
-/// KeptInRunDirectory keeps it) atomically. Throws std::runtime_error naming the file.
+/// `scenario` with its seabed map named as the run directory's copy (RunMapName, relative to the
+/// directory's scenario.yaml).
+maps::Scenario WithKeptSeabedMap(maps::Scenario scenario);
+
+/// Writes DIR/scenario.yaml (the effective scenario every process of the mission reads, its map
+/// kept: KeepSeabedMap, WithKeptSeabedMap) atomically. Throws std::runtime_error naming the file.
 void WriteScenarioFile(const std::string& dir, const maps::Scenario& scenario);
 
 /// Writes a scenario file at `path` atomically. Throws std::runtime_error naming the file.

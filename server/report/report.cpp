@@ -2,6 +2,8 @@
 // the charts are written by trajectory_csv.cpp and plot_files.cpp (drawn in plots/).
 #include "server/report/report.h"
 
+#include <unistd.h>
+
 #include <algorithm>
 #include <cerrno>
 #include <cstdio>
@@ -40,7 +42,22 @@ void PrepareRunDirectory(const std::string& dir) {
 void CheckOutDirectory(const std::string& dir, const std::string& flag) {
   namespace fs = std::filesystem;
   std::error_code error;
-  if (!fs::is_directory(dir, error)) return;  // made for the run (or refused as not a directory)
+  if (!fs::is_directory(dir, error)) {
+    // To be made for the run: where it would be made is a directory this user may write, said
+    // before any work (evaluate had scored a record, then failed on "blk/sub" with blk a file).
+    fs::path existing = fs::absolute(fs::path(dir), error).lexically_normal();
+    while (!existing.empty() && !fs::exists(existing, error) && existing != existing.parent_path()) {
+      existing = existing.parent_path();
+    }
+    const auto fail = [&](const std::string& reason) {
+      throw maps::ScenarioError(fmt::format("{} = {}: cannot write there: {}", flag, dir, reason));
+    };
+    if (fs::exists(existing, error) && !fs::is_directory(existing, error)) fail(existing.string() + " is not a directory");
+    if (fs::is_directory(existing, error) && ::access(existing.c_str(), W_OK | X_OK) != 0) {
+      fail(existing.string() + ": " + std::strerror(errno));
+    }
+    return;
+  }
   const auto holds = [&](const fs::path& inner) { return fs::exists(fs::path(dir) / inner, error); };
   for (const fs::path& mark : {fs::path("metrics.json"), fs::path("trajectory.csv"), fs::path("mission.json"),
                                fs::path("ergodic") / "metrics.json", fs::path("astar") / "metrics.json", fs::path("scale.json"),

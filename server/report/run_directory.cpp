@@ -397,7 +397,7 @@ void RunDirectory::Finish(const MissionCore& core, const maps::World& world, dou
   }
   contents.push_back(world.seabed().BinaryBytes());
   contents.push_back((risk_layer ? *risk_layer : core.risk_layer()).OtBytes());
-  contents.push_back(maps::EmitScenario(KeptInRunDirectory(dir_, ran)));
+  contents.push_back(maps::EmitScenario(WithKeptSeabedMap(ran)));  // the copy taken as the mission started
   contents.push_back(MetricsJson(metrics, &info));
   for (const char* name : kFinalFiles) paths.push_back((fs::path(dir_) / name).string());
   try {

@@ -195,6 +195,15 @@ TEST(Scenario, VehicleIdsAndEventCycles) {
     EXPECT_NO_THROW(thinned.Validate()) << rate;
     EXPECT_EQ(thinned.TrajectoryEvery(), every) << rate;
   }
+  // The shortest mission flies one control cycle, counted as the mission counts them (rounded):
+  // at 3 Hz a third of a second given to four places flies one, a sixth of a second none.
+  Scenario brief = WithDuration(s, 0.3333);
+  brief.fleet_events.clear();
+  brief.control_rate_hz = 3;
+  brief.physics_rate_hz = 60;
+  EXPECT_NO_THROW(brief.Validate());
+  brief.duration_s = 0.16;
+  EXPECT_THROW(brief.Validate(), ScenarioError);
 }
 
 TEST(Scenario, EmitParseRoundTripIsExact) {
@@ -635,7 +644,8 @@ TEST(Scenario, BadInputsGiveOneLineNamingFieldAndValue) {
       // hung for minutes, clearance_m 300000 took 16.8 GB).
       {"duration_s: 300", "duration_s: 1e9", {"base.yaml: duration_s = 1e+09: must be <= 604800 s (a week)"}},
       {"duration_s: 300", "duration_s: 0.01",
-       {"base.yaml: duration_s = 0.01: must be at least one control cycle (1 / control_rate_hz = 0.1 s)"}},
+       {"base.yaml: duration_s = 0.01: must fly at least one control cycle (>= 0.05 s at control_rate_hz = 10: a "
+        "mission flies round(duration_s x control_rate_hz) cycles)"}},
       {"control_rate_hz: 10", "control_rate_hz: 1000", {"control_rate_hz = 1000: must be <= 100 Hz"}},
       {"physics_rate_hz: 50", "physics_rate_hz: 5e7", {"base.yaml: physics_rate_hz = 5e+07: must be <= 1000 Hz"}},
       {"fleet: {", "astar: {grid_resolution_m: 1e-6}\nfleet: {", {"astar.grid_resolution_m = 1e-06: must be >= 0.01 m"}},

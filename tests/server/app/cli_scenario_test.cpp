@@ -266,6 +266,18 @@ TEST(RangeProblem, SaysWhatIsAllowed) {
               std::string::npos)
         << bench.err;
   }
+  // Under one control cycle of the fields it would generate (10 Hz), and of the file given, said
+  // of the option.
+  const SageRun short_bench = RunSage({"bench", "scale", "--vehicles", "1", "--duration", "0.04"});
+  EXPECT_EQ(short_bench.status, 2);
+  EXPECT_NE(short_bench.err.find("--duration = 0.04: must fly at least one control cycle (>= 0.05 s at control_rate_hz "
+                                 "= 10"),
+            std::string::npos)
+      << short_bench.err;
+  const SageRun short_run = RunSage({"run", file, "--duration", "0.02"});
+  EXPECT_EQ(short_run.status, 2);
+  EXPECT_NE(short_run.err.find("sage: error: --duration = 0.02: must fly at least one control cycle"), std::string::npos)
+      << short_run.err;
   const SageRun hosts = RunSage({"launch", file, "--hosts", "0"});
   EXPECT_NE(hosts.err.find("sage: error: launch: --hosts = 0: must be > 0"), std::string::npos) << hosts.err;
   const SageRun five = RunSage({"run", file, "--weight-exponent", "5"});
@@ -715,7 +727,9 @@ TEST(OutDirectory, AMissionsRecordIsNotEvaluatedOrComparedOver) {
   EXPECT_TRUE(fs::exists(root / "compare" / "ergodic" / "metrics.json"));
   EXPECT_TRUE(fs::exists(root / "compare" / "astar" / "metrics.json"));
   EXPECT_NE(fresh.out.find("risk-weighted interval"), std::string::npos) << fresh.out;
-  EXPECT_NE(fresh.out.find("\nShorter is better: intervals, longest gaps"), std::string::npos) << fresh.out;
+  EXPECT_NE(fresh.out.find("\nBetter: shorter intervals, longest gaps, risk-weighted interval and exp. detection delay"),
+            std::string::npos)
+      << fresh.out;
   const fs::path scored = root / "graded";
   const SageRun first = RunSage({"evaluate", csv, "-s", scenario, "-p", "graded", "-o", scored.string()});
   EXPECT_EQ(first.status, 0) << first.err;

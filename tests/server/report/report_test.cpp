@@ -277,6 +277,16 @@ TEST_F(ReportTest, RunDirectoryIsPreparedOrRefusedUpFront) {
   } catch (const maps::ScenarioError& e) {
     EXPECT_EQ(std::string(e.what()).rfind("--out = " + blocked + ": cannot write there: ", 0), 0u) << e.what();
   }
+  // The same said by the check every command makes before its work (evaluate had scored a record
+  // first), naming the file in the way; a directory to be made under one that exists passes.
+  try {
+    CheckOutDirectory(blocked + "/deeper");
+    FAIL() << "no error";
+  } catch (const maps::ScenarioError& e) {
+    EXPECT_EQ(std::string(e.what()), "--out = " + blocked + "/deeper: cannot write there: " +
+                                         fs::absolute(Path("a_file")).lexically_normal().string() + " is not a directory");
+  }
+  EXPECT_NO_THROW(CheckOutDirectory(Path("runs/new/deeper")));
 }
 
 // An --out of the user's own files is refused before anything is written (a scenario run with

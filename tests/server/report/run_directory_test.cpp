@@ -114,6 +114,35 @@ TEST_F(RunDirectoryTest, ARecordNothingResumesWritesPartialMetricsOnly) {
   EXPECT_TRUE(ReadRecordSummary(dir_.string()).complete);
 }
 
+// The run directory's copy of the seabed map is taken as the mission starts and is the map it
+// flew: the source deleted mid-mission does not keep the final set from being written (the end had
+// copied the map again), a copy another mission left there under another extension is removed.
+TEST_F(RunDirectoryTest, TheSeabedMapIsKeptAsTheMissionStarts) {
+  const fs::path source = dir_.string() + "_source";
+  fs::remove_all(source);
+  fs::create_directories(source);
+  const std::string scenarios = std::string(SAGE_SOURCE_DIR) + "/scenarios/";
+  fs::copy_file(scenarios + "manifold_slope.xyz", source / "manifold_slope.xyz");
+  fs::copy_file(scenarios + "manifold_slope.yaml", source / "manifold_slope.yaml");
+  fs::create_directories(dir_);
+  std::ofstream(dir_ / "seabed_map.csv") << "x,y,z\n";  // an earlier mission's
+  const maps::Scenario s = maps::WithDuration(maps::LoadScenario((source / "manifold_slope.yaml").string()), 2.0);
+  RunDirectory run(dir_.string(), s);
+  EXPECT_FALSE(fs::exists(dir_ / "seabed_map.csv"));
+  EXPECT_EQ(Read(dir_ / "seabed_map.xyz"), Read(scenarios + "manifold_slope.xyz"));
+  Mission mission(s, MissionOptions{"", ControllerKind::kErgodic, &run, false});
+  fs::remove_all(source);
+  while (mission.Step()) run.Tick(mission.core());
+  ASSERT_NO_THROW(run.Finish(mission.core(), mission.world(), 2.0, false));
+  EXPECT_TRUE(ReadRecordSummary(dir_.string()).complete);
+  EXPECT_EQ(Read(dir_ / "seabed_map.xyz"), Read(scenarios + "manifold_slope.xyz"));
+  const maps::Scenario kept = maps::LoadScenario((dir_ / "scenario.yaml").string());
+  ASSERT_TRUE(kept.seabed.has_value());
+  EXPECT_EQ(fs::path(kept.seabed->map), dir_ / "seabed_map.xyz");
+  EXPECT_EQ(kept.seabed->map_fnv1a, s.seabed->map_fnv1a);
+  EXPECT_EQ(maps::ScenarioHash(kept), maps::ScenarioHash(s));
+}
+
 // If one file of the final set cannot be written, none of it appears: metrics.json stays the
 // partial one (complete: false), no plot, no temporaries, and the error names the file.
 TEST_F(RunDirectoryTest, FinalSetIsAllOrNothing) {
