@@ -4,7 +4,9 @@
 #include <sys/socket.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
+#include <memory>
 #include <string>
 #include <utility>
 #include <vector>
@@ -158,21 +160,54 @@ void CheckNetworkHere(const maps::Scenario& scenario, const NetworkOverrides& gi
         "mission on this machine)",
         given.interface_name ? std::string("--interface") : file + ": network.interface", network.interface_name));
   }
-  for (std::size_t i = 0; i < network.peers.size(); ++i) {
-    const std::string& peer = network.peers[i];
+  if (network.peers.empty()) return;
+  // Every peer asked at once, all answered within kResolveWait_s: a resolver that does not answer
+  // (no DNS on the mission's network) is said once, not waited for name by name (32 peers at a
+  // resolver's timeouts each). The requests live on the heap and are let go when one cannot be
+  // cancelled: the resolver may still write to it as this process exits with the error.
+  constexpr double kResolveWait_s = 5.0;
+  struct Request {
+    std::string name;
     addrinfo hints{};
-    hints.ai_family = AF_INET;
-    addrinfo* found = nullptr;
-    const int status = ::getaddrinfo(peer.c_str(), nullptr, &hints, &found);
-    if (found != nullptr) ::freeaddrinfo(found);
-    if (status != 0) {
-      throw maps::ScenarioError(fmt::format(
-          "{} = '{}': no IPv4 address for that host name on this machine ({}); give the machine's IPv4 address or a "
-          "name /etc/hosts or DNS resolves",
-          given.peers.empty() ? fmt::format("{}: network.peers[{}]", file, i) : std::string("--peer"), peer,
-          ::gai_strerror(status)));
-    }
+    gaicb call{};
+  };
+  const std::size_t n = network.peers.size();
+  auto requests = std::make_unique<Request[]>(n);
+  std::vector<gaicb*> calls(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    requests[i].name = network.peers[i];
+    requests[i].hints.ai_family = AF_INET;
+    requests[i].call.ar_name = requests[i].name.c_str();
+    requests[i].call.ar_request = &requests[i].hints;
+    calls[i] = &requests[i].call;
   }
+  if (const int status = ::getaddrinfo_a(GAI_NOWAIT, calls.data(), static_cast<int>(n), nullptr); status != 0) {
+    throw maps::ScenarioError(fmt::format("network.peers: cannot ask the resolver ({})", ::gai_strerror(status)));
+  }
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::duration<double>(kResolveWait_s);
+  const auto pending = [&] {
+    return std::any_of(calls.begin(), calls.end(), [](gaicb* c) { return ::gai_error(c) == EAI_INPROGRESS; });
+  };
+  while (pending() && std::chrono::steady_clock::now() < deadline) {
+    const timespec slice{0, 100'000'000};  // re-checked every 0.1 s up to the deadline
+    ::gai_suspend(calls.data(), static_cast<int>(n), &slice);
+  }
+  std::string problem;
+  bool let_go = false;
+  for (std::size_t i = 0; i < n; ++i) {
+    int status = ::gai_error(calls[i]);
+    if (status == EAI_INPROGRESS) let_go = let_go || ::gai_cancel(calls[i]) != EAI_CANCELED;
+    if (status == 0 && calls[i]->ar_result != nullptr) ::freeaddrinfo(calls[i]->ar_result);
+    if (status == 0 || !problem.empty()) continue;
+    const std::string why = status == EAI_INPROGRESS ? fmt::format("no answer from the resolver within {:.0f} s", kResolveWait_s)
+                                                     : std::string(::gai_strerror(status));
+    problem = fmt::format("{} = '{}': no IPv4 address for that host name on this machine ({}); give the machine's "
+                          "IPv4 address or a name /etc/hosts or DNS resolves",
+                          given.peers.empty() ? fmt::format("{}: network.peers[{}]", file, i) : std::string("--peer"),
+                          requests[i].name, why);
+  }
+  if (let_go) static_cast<void>(requests.release());
+  if (!problem.empty()) throw maps::ScenarioError(problem);
 }
 
 void WarnOfLossySettings(const maps::Scenario& scenario) {
