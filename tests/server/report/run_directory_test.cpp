@@ -42,6 +42,14 @@ class RunDirectoryTest : public ::testing::Test {
     fs::remove_all(dir_);
   }
   void TearDown() override { fs::remove_all(dir_); }
+  // Steps the mission to mission time t_s, its record ticking each cycle, and checkpoints there.
+  static void FlyToCheckpoint(Mission& mission, RunDirectory& run, double t_s) {
+    while (mission.time_s() < t_s) {
+      mission.Step();
+      run.Tick(mission.core());
+    }
+    run.Checkpoint(mission.core());
+  }
   fs::path dir_;
 };
 
@@ -55,11 +63,7 @@ TEST_F(RunDirectoryTest, PartialWhileRunningCompleteAtTheEnd) {
   options.checkpoint_period_s = 0.0;
   RunDirectory run(dir_.string(), s, options);
   Mission mission(s, MissionOptions{"", ControllerKind::kErgodic, &run, false});
-  while (mission.time_s() < 10.0) {
-    mission.Step();
-    run.Tick(mission.core());
-  }
-  run.Checkpoint(mission.core());
+  FlyToCheckpoint(mission, run, 10.0);
   const RecordSummary partial = ReadRecordSummary(dir_.string());
   EXPECT_FALSE(partial.complete);
   EXPECT_DOUBLE_EQ(partial.recorded_until_s, mission.core().time_s());
@@ -96,11 +100,7 @@ TEST_F(RunDirectoryTest, ARecordNothingResumesWritesPartialMetricsOnly) {
   options.resumable = false;
   RunDirectory run(dir_.string(), s, options);
   Mission mission(s, MissionOptions{"", ControllerKind::kErgodic, &run, false});
-  while (mission.time_s() < 3.0) {
-    mission.Step();
-    run.Tick(mission.core());
-  }
-  run.Checkpoint(mission.core());
+  FlyToCheckpoint(mission, run, 3.0);
   const RecordSummary partial = ReadRecordSummary(dir_.string());
   EXPECT_FALSE(partial.complete);
   EXPECT_DOUBLE_EQ(partial.recorded_until_s, mission.core().time_s());
