@@ -127,11 +127,16 @@ constexpr double kForeignRecordMargin_m = 1.0;
 // not written into by a command that writes other files of the same names or beside them: an
 // evaluate there had replaced the run's own metrics.json (counted every cycle, its profile) with
 // no word, and a compare put astar/ and ergodic/ beside a single run's files.
-void RefuseAMissionsRecord(const fs::path& dir, const std::string& what) {
-  if (std::error_code ignored; fs::exists(dir / "trajectory.csv", ignored)) {
-    throw maps::ScenarioError(fmt::format("--out = {}: holds a mission's record (trajectory.csv), whose metrics.json and "
-                                          "charts are its own; give {} a directory of its own",
-                                          dir.string(), what));
+// With `compares`, a comparison's directory (ergodic/ and astar/ records) too: an evaluation had
+// dropped its metrics.json and charts beside them.
+void RefuseAMissionsRecord(const fs::path& dir, const std::string& what, bool compares = false) {
+  std::error_code ignored;
+  for (const fs::path record : {fs::path("trajectory.csv"), fs::path("ergodic") / "trajectory.csv",
+                                fs::path("astar") / "trajectory.csv"}) {
+    if (!fs::exists(dir / record, ignored) || (!compares && record.has_parent_path())) continue;
+    throw maps::ScenarioError(fmt::format("--out = {}: holds a mission's record ({}), whose metrics.json and charts are "
+                                          "its own; give {} a directory of its own",
+                                          dir.string(), record.string(), what));
   }
 }
 
@@ -313,7 +318,7 @@ int CmdEvaluate(const EvaluateCommand& c) {
   if (!c.out_dir.empty()) {  // before the record is read and evaluated
     CheckOutDirectory(c.out_dir);
     CheckNoLaunchThere(c.out_dir);
-    RefuseAMissionsRecord(c.out_dir, "the evaluation");
+    RefuseAMissionsRecord(c.out_dir, "the evaluation", /*compares=*/true);
     if (std::error_code ignored; fs::exists(fs::path(c.out_dir) / "metrics.json", ignored)) {
       spdlog::warn("{}: replacing the metrics.json and charts written there", c.out_dir);
     }

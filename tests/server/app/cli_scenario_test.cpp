@@ -730,6 +730,16 @@ TEST(OutDirectory, AMissionsRecordIsNotEvaluatedOrComparedOver) {
   EXPECT_NE(fresh.out.find("\nBetter: shorter intervals, longest gaps, risk-weighted interval and exp. detection delay"),
             std::string::npos)
       << fresh.out;
+  // Nor is an evaluation written into a comparison's directory, beside its two records.
+  const SageRun into_compare = RunSage({"evaluate", csv, "-s", scenario, "-o", (root / "compare").string()});
+  EXPECT_EQ(into_compare.status, 2) << into_compare.err;
+  EXPECT_NE(into_compare.err.find("holds a mission's record (ergodic/trajectory.csv)"), std::string::npos)
+      << into_compare.err;
+  EXPECT_FALSE(fs::exists(root / "compare" / "metrics.json"));
+  // A comparison may replace an earlier one there.
+  EXPECT_EQ(RunSage({"compare", scenario, "--duration", "3", "--calibrate-wait", "off", "-o", (root / "compare").string()})
+                .status,
+            0);
   const fs::path scored = root / "graded";
   const SageRun first = RunSage({"evaluate", csv, "-s", scenario, "-p", "graded", "-o", scored.string()});
   EXPECT_EQ(first.status, 0) << first.err;
