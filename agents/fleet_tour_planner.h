@@ -32,7 +32,11 @@
 //     cluster centroid (the approach is not part of a lap, it only decides who flies what):
 //     exactly (Hungarian) up to 1,200 clusters, beyond by recursive bisection into exactly
 //     matched parts of at most 256 (agents/matching.h), or greedily, shortest pair first, when
-//     there are spare vehicles (agents/greedy_match.h).
+//     there are spare vehicles (agents/greedy_match.h). After step 4 the tours as they came out go
+//     to the vehicles again: up to 1,200 tours so that the fleet's longest first lap (approach
+//     to a tour's nearest valve, then one lap, at the vehicle's speed) is least, each vehicle
+//     within the plan's longest lap (a bottleneck assignment, agents/matching.h), then the
+//     squared approaches as above; beyond, among vehicles of one speed, as above.
 //  3. Min-max local search. A queue of tours, longest lap first; for each valve v of a popped
 //     tour a and each tour b holding one of v's K nearest valves (straight line; every change is
 //     priced on d): move v to b, or swap v with that valve u. A change of tours a, b (, c) is

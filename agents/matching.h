@@ -1,8 +1,10 @@
 #pragma once
 // Tours (clusters) to vehicles: who flies which share of a field (agents/fleet_tour_planner.cpp,
 // step 2). The cost of a pair is the squared straight-line approach time, so that a chain of
-// vehicles moving a few metres each is preferred to one vehicle sent across the field.
+// vehicles moving a few metres each is preferred to one vehicle sent across the field; the
+// bottleneck (the least longest first lap any assignment allows) bounds which pairs may be used.
 #include <algorithm>
+#include <cmath>
 #include <cstddef>
 #include <limits>
 #include <numeric>
@@ -68,6 +70,121 @@ std::vector<int> MinCostMatch(int n, int m, const Cost& raw_cost) {
   for (int j = 1; j <= m; ++j)
     if (p[j] > 0) vehicle_of[p[j] - 1] = j - 1;
   return vehicle_of;
+}
+
+namespace matching_detail {
+
+// Whether rows 0..n-1 can each have a column of its own among 0..m-1 over the pairs (c, k) with
+// k in columns[begin[c] .. begin[c + 1]): Hopcroft-Karp (phases of a breadth-first layering from
+// the free rows, then vertex-disjoint shortest augmenting paths by depth-first search),
+// O(E sqrt(n)). The depth-first search recurses at most n deep (n <= 1,200 where it is used).
+class RowCover {
+ public:
+  RowCover(int n, int m, const std::vector<int>& begin, const std::vector<int>& columns)
+      : n_(n), begin_(begin), columns_(columns), col_of_(n, -1), row_of_(m, -1), layer_(n), next_(n) {}
+
+  bool CoversEveryRow() {
+    int matched = 0;
+    while (Layer()) {
+      for (int c = 0; c < n_; ++c) next_[c] = begin_[c];
+      for (int c = 0; c < n_; ++c) matched += col_of_[c] < 0 && Augment(c);
+    }
+    return matched == n_;
+  }
+
+ private:
+  static constexpr int kUnreached = std::numeric_limits<int>::max();
+  // Layers rows by alternating distance from the free rows; true if some free column is reached.
+  bool Layer() {
+    std::vector<int> queue;
+    queue.reserve(static_cast<std::size_t>(n_));
+    for (int c = 0; c < n_; ++c) {
+      layer_[c] = col_of_[c] < 0 ? 0 : kUnreached;
+      if (col_of_[c] < 0) queue.push_back(c);
+    }
+    bool free_column = false;
+    for (std::size_t head = 0; head < queue.size(); ++head) {
+      const int c = queue[head];
+      for (int e = begin_[c]; e < begin_[c + 1]; ++e) {
+        const int r = row_of_[columns_[e]];
+        if (r < 0) {
+          free_column = true;
+        } else if (layer_[r] == kUnreached) {
+          layer_[r] = layer_[c] + 1;
+          queue.push_back(r);
+        }
+      }
+    }
+    return free_column;
+  }
+  bool Augment(int c) {
+    for (; next_[c] < begin_[c + 1]; ++next_[c]) {
+      const int k = columns_[next_[c]], r = row_of_[k];
+      if (r < 0 || (layer_[r] == layer_[c] + 1 && Augment(r))) {
+        col_of_[c] = k;
+        row_of_[k] = c;
+        return true;
+      }
+    }
+    layer_[c] = kUnreached;  // a dead end this phase
+    return false;
+  }
+
+  int n_;
+  const std::vector<int>& begin_;
+  const std::vector<int>& columns_;
+  std::vector<int> col_of_, row_of_, layer_, next_;
+};
+
+}  // namespace matching_detail
+
+/// The bottleneck of an assignment of rows (tours) 0..n-1 to distinct columns (vehicles) 0..m-1,
+/// n <= m: the least t such that every row can have a column of its own with value(c, k) <= t.
+/// A value that is not finite (NaN, infinite) marks a pair never to be used; +infinity if the
+/// finite pairs hold no such assignment. Bisection over the pairs' distinct values, each bound
+/// tried with Hopcroft-Karp: O(n m log(n m) + log(n m) E sqrt(n)).
+template <typename Value>
+double BottleneckBound(int n, int m, const Value& value) {
+  std::vector<double> values(static_cast<std::size_t>(n) * static_cast<std::size_t>(m));
+  std::vector<double> distinct;
+  double least = -std::numeric_limits<double>::infinity();  // no bound below a row's least value
+  for (int c = 0; c < n; ++c) {
+    double row_least = std::numeric_limits<double>::infinity();
+    for (int k = 0; k < m; ++k) {
+      const double x = value(c, k);
+      const bool usable = std::isfinite(x);
+      values[static_cast<std::size_t>(c) * m + k] = usable ? x : std::numeric_limits<double>::infinity();
+      if (usable) distinct.push_back(x), row_least = std::min(row_least, x);
+    }
+    least = std::max(least, row_least);
+  }
+  if (n == 0) return 0.0;
+  if (!std::isfinite(least)) return std::numeric_limits<double>::infinity();  // a row with no pair
+  std::sort(distinct.begin(), distinct.end());
+  distinct.erase(std::unique(distinct.begin(), distinct.end()), distinct.end());
+  std::vector<int> begin(static_cast<std::size_t>(n) + 1), columns;
+  const auto covers = [&](double bound) {
+    columns.clear();
+    for (int c = 0; c < n; ++c) {
+      begin[c] = static_cast<int>(columns.size());
+      for (int k = 0; k < m; ++k) {
+        if (values[static_cast<std::size_t>(c) * m + k] <= bound) columns.push_back(k);
+      }
+    }
+    begin[n] = static_cast<int>(columns.size());
+    return matching_detail::RowCover(n, m, begin, columns).CoversEveryRow();
+  };
+  auto lo = std::lower_bound(distinct.begin(), distinct.end(), least), hi = distinct.end() - 1;
+  if (!covers(*hi)) return std::numeric_limits<double>::infinity();
+  while (lo < hi) {  // covers(*hi) holds; the answer is in [lo, hi]
+    const auto mid = lo + (hi - lo) / 2;
+    if (covers(*mid)) {
+      hi = mid;
+    } else {
+      lo = mid + 1;
+    }
+  }
+  return *hi;
 }
 
 /// MinCostMatch for fleets too large for O(n^2 m) (10,000 vehicles: 1e12 steps), by recursive

@@ -349,6 +349,16 @@ TEST(FleetTourPlanner, RiskShareGivesTheRiskyValvesSmallerShares) {
 // No two vehicles would both shorten their squared approaches (to their tours' centroids) by
 // swapping tours; the planner's search moves valves between tours after the first match, and
 // without matching again it left such pairs (and, on a 1,000-vehicle field, a tour 330 m off).
+// A vehicle's first sight of every valve of a tour: its straight-line approach to the tour's
+// nearest valve, then one lap (the search's grid length at the vehicle's speed, and the waits).
+double FirstLap(const VehicleTour& vt, const FleetVehicle& vehicle, const Points& valves, double wait_s) {
+  double nearest = std::numeric_limits<double>::infinity();
+  for (int v : vt.valves) nearest = std::min(nearest, (valves[v] - vehicle.position_m).norm());
+  return (nearest + vt.tour.length_m) / vehicle.speed_mps + wait_s;
+}
+
+// Among the assignments that keep the fleet's longest first lap, no two vehicles would both be
+// nearer their tours' centroids (in squared distance summed) by trading tours.
 TEST(FleetTourPlanner, VehiclesGetTheToursNearThem) {
   const OccupancyGrid grid = FieldGrid();
   for (unsigned seed = 31; seed <= 33; ++seed) {
@@ -356,19 +366,67 @@ TEST(FleetTourPlanner, VehiclesGetTheToursNearThem) {
     const Points starts = RandomFreePoints(grid, 12, seed + 100);
     std::vector<FleetVehicle> vehicles;
     for (const Eigen::Vector2d& p : starts) vehicles.push_back({p, 0.5});
-    const FleetTourPlan plan = PlanFleetTours(grid, valves, RandomWeights(60, seed), vehicles, 1.0);
+    FleetTourOptions options;
+    options.legs = false;
+    const FleetTourPlan plan = PlanFleetTours(grid, valves, RandomWeights(60, seed), vehicles, 1.0, options);
     Points centroid;
-    for (const VehicleTour& vt : plan.vehicles) {
+    double bound = 0.0;
+    for (int k = 0; k < 12; ++k) {
+      const VehicleTour& vt = plan.vehicles[k];
       Eigen::Vector2d sum = Eigen::Vector2d::Zero();
       for (int v : vt.valves) sum += valves[v];
       centroid.push_back(sum / static_cast<double>(vt.valves.size()));
+      bound = std::max(bound, FirstLap(vt, vehicles[k], valves, 1.0));
     }
     const auto d2 = [&](int k, int t) { return (starts[k] - centroid[t]).squaredNorm(); };
+    const auto within = [&](int k, int t) { return FirstLap(plan.vehicles[t], vehicles[k], valves, 1.0) <= bound + 1e-9; };
+    int traded = 0;
     for (int a = 0; a < 12; ++a) {
       for (int b = a + 1; b < 12; ++b) {
+        if (!within(a, b) || !within(b, a)) continue;
+        ++traded;
         EXPECT_LE(d2(a, a) + d2(b, b), d2(a, b) + d2(b, a) + 1e-9) << "seed " << seed << ": vehicles " << a << ", " << b;
       }
     }
+    EXPECT_GT(traded, 0) << "seed " << seed << ": no pair could trade, nothing checked";
+  }
+}
+
+// The fleet's longest first lap (approach, then one lap) is the least of every assignment of the
+// plan's tours to its vehicles that keeps each lap within the plan's longest: brute force over
+// the 720 assignments of six tours, vehicles of three speeds started along one edge and in a
+// corner (as a dock would put them).
+TEST(FleetTourPlanner, TheLongestFirstLapIsTheLeastTheLapsAllow) {
+  const OccupancyGrid grid = FieldGrid();
+  const double wait_s = 2.0;
+  for (unsigned seed = 41; seed <= 46; ++seed) {
+    const Points valves = RandomFreePoints(grid, 30, seed);
+    std::vector<FleetVehicle> vehicles;
+    const double speeds[] = {0.7, 0.75, 0.8};
+    for (int k = 0; k < 6; ++k) {
+      const Eigen::Vector2d at = k < 3 ? Eigen::Vector2d(1.0 + 9.0 * k, 0.5) : Eigen::Vector2d(28.5, 17.0 + 0.8 * k - 2.4);
+      vehicles.push_back({at, speeds[(k + seed) % 3]});
+    }
+    FleetTourOptions options;
+    options.legs = false;
+    options.seed = seed;
+    const FleetTourPlan plan = PlanFleetTours(grid, valves, RandomWeights(30, seed), vehicles, wait_s, options);
+    const auto lap = [&](int t, int k) { return plan.vehicles[t].tour.length_m / vehicles[k].speed_mps + wait_s; };
+    double planned = 0.0;
+    for (int k = 0; k < 6; ++k) planned = std::max(planned, FirstLap(plan.vehicles[k], vehicles[k], valves, wait_s));
+    std::vector<int> vehicle_of(6);
+    std::iota(vehicle_of.begin(), vehicle_of.end(), 0);
+    double best = std::numeric_limits<double>::infinity();
+    do {
+      double worst = 0.0;
+      bool allowed = true;
+      for (int t = 0; t < 6; ++t) {
+        allowed = allowed && lap(t, vehicle_of[t]) <= plan.max_lap_s + 1e-6;
+        worst = std::max(worst, FirstLap(plan.vehicles[t], vehicles[vehicle_of[t]], valves, wait_s));
+      }
+      if (allowed) best = std::min(best, worst);
+    } while (std::next_permutation(vehicle_of.begin(), vehicle_of.end()));
+    EXPECT_NEAR(planned, best, 1e-6) << "seed " << seed;
   }
 }
 
@@ -626,6 +684,39 @@ TEST(Matching, BisectionStaysNearTheOptimumAndLeavesNobodyFar) {
     const std::vector<int> greedy = GreedyMatch(n, n, cost);
     EXPECT_LT(longest(bisected), longest(greedy)) << "trial " << trial;
   }
+}
+
+// BottleneckBound against every assignment: the least over injections of n rows into m columns
+// of the largest value used, pairs of a value that is not finite never used (+infinity when no
+// injection avoids them), on small integer values (ties common) and spread ones.
+TEST(Matching, BottleneckBoundIsTheLeastLargestValueOfAnyAssignment) {
+  std::mt19937_64 rng(17);
+  int unassignable = 0;
+  for (int trial = 0; trial < 200; ++trial) {
+    const int m = 1 + static_cast<int>(rng() % 7), n = 1 + static_cast<int>(rng() % m);
+    const int spread = trial % 3 == 0 ? 4 : 1000;
+    std::vector<std::vector<double>> value(n, std::vector<double>(m));
+    for (auto& row : value) {
+      for (double& x : row) {
+        const auto draw = rng() % 10;
+        x = draw == 0 ? std::numeric_limits<double>::infinity()
+                      : draw == 1 ? std::numeric_limits<double>::quiet_NaN() : static_cast<double>(rng() % spread);
+      }
+    }
+    std::vector<int> order(m);
+    std::iota(order.begin(), order.end(), 0);
+    double best = std::numeric_limits<double>::infinity();
+    do {
+      double worst = 0.0;
+      for (int c = 0; c < n; ++c) worst = std::isfinite(value[c][order[c]]) ? std::max(worst, value[c][order[c]]) : INFINITY;
+      best = std::min(best, worst);
+    } while (std::next_permutation(order.begin(), order.end()));
+    unassignable += !std::isfinite(best);
+    EXPECT_EQ(BottleneckBound(n, m, [&](int c, int k) { return value[c][k]; }), best)
+        << "trial " << trial << ": " << n << " rows, " << m << " columns";
+  }
+  EXPECT_GT(unassignable, 0);  // the infeasible case was met
+  EXPECT_LT(unassignable, 100);
 }
 
 }  // namespace
