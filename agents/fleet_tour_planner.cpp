@@ -735,8 +735,9 @@ class Search {
     undo_ = {};
   }
 
-  // The lap the search balances (vehicle k flying a tour of length_m through `order`): travel and waits, times 1 + beta n W for a share holding W of
-  // the field's risk (FleetTourOptions::risk_share; beta = 0: the lap itself).
+  // The lap the search balances (vehicle k flying a tour of length_m through `order`): travel and
+  // waits, times 1 + beta n W for a share holding W of the field's risk
+  // (FleetTourOptions::risk_share; beta = 0: the lap itself).
   double Lap(int k, double length_m, const std::vector<int>& order) const {
     const double lap = length_m / vehicles_[k].speed_mps + wait_s_;
     if (risk_share_ <= 0.0) return lap;
@@ -1096,6 +1097,9 @@ std::vector<int> Match(const Points& centroids, const std::vector<FleetVehicle>&
 // vehicle 31 m to a region whose last valve then waited 68.7 s for its first look, twice the
 // tours' worst gap (its approach 42.7 s; matched so, the fleet's longest approach is 19.7 s and
 // the field's longest gap 42.5 s). It costs the 1,000-vehicle split 0.26 s (0.40 -> 0.66 s).
+// The longest lap as the search priced it (with beta's risk factor) stands; the sum of the laps,
+// the search's tie-break, and the plan's unweighted max_lap_s may rise by a tour's move to a
+// slower vehicle within it.
 std::vector<std::vector<int>> Rematch(const Tours& s, const Search& search, const Points& valves_m,
                                       const std::vector<FleetVehicle>& vehicles, double wait_per_lap_s) {
   const int n = static_cast<int>(vehicles.size());
@@ -1126,16 +1130,22 @@ std::vector<std::vector<int>> Rematch(const Tours& s, const Search& search, cons
   for (int t = 0; t < n; ++t) {
     for (int k = 0; k < n; ++k) {
       if (search.Lap(k, s.length[t], s.order[t]) > longest_lap + kTolerance) continue;
+      const FleetVehicle& vehicle = vehicles[k];
       double nearest2 = kInf;
-      for (int v : s.order[t]) nearest2 = std::min(nearest2, (valves_m[v] - vehicles[k].position_m).squaredNorm());
-      first[static_cast<std::size_t>(t) * n + k] = (std::sqrt(nearest2) + s.length[t]) / vehicles[k].speed_mps + wait_per_lap_s;
+      for (int v : s.order[t]) nearest2 = std::min(nearest2, (valves_m[v] - vehicle.position_m).squaredNorm());
+      const double travel_m = std::sqrt(nearest2) + s.length[t];  // approach, then one lap
+      first[static_cast<std::size_t>(t) * n + k] = travel_m / vehicle.speed_mps + wait_per_lap_s;
     }
   }
   const auto first_of = [&](int t, int k) { return first[static_cast<std::size_t>(t) * n + k]; };
-  const double bound = BottleneckBound(n, n, first_of);  // finite: each tour's own vehicle is within
+  // Finite when every position is: each tour's own vehicle is within the longest lap. A vehicle
+  // reported at no finite place leaves the tours with the vehicles the search gave them.
+  const double bound = BottleneckBound(n, n, first_of);
+  if (!std::isfinite(bound)) return s.order;
   const std::vector<int> vehicle_of = MinCostMatch(n, n, [&](int t, int k) {
     if (!(first_of(t, k) <= bound)) return kMaxMatchCost;
-    return (centroids[t] - vehicles[k].position_m).squaredNorm() / (vehicles[k].speed_mps * vehicles[k].speed_mps);
+    const double speed2 = vehicles[k].speed_mps * vehicles[k].speed_mps;
+    return (centroids[t] - vehicles[k].position_m).squaredNorm() / speed2;
   });
   for (int t = 0; t < n; ++t) orders[vehicle_of[t]] = s.order[t];
   return orders;

@@ -32,11 +32,7 @@
 //     cluster centroid (the approach is not part of a lap, it only decides who flies what):
 //     exactly (Hungarian) up to 1,200 clusters, beyond by recursive bisection into exactly
 //     matched parts of at most 256 (agents/matching.h), or greedily, shortest pair first, when
-//     there are spare vehicles (agents/greedy_match.h). After step 4 the tours as they came out go
-//     to the vehicles again: up to 1,200 tours so that the fleet's longest first lap (approach
-//     to a tour's nearest valve, then one lap, at the vehicle's speed) is least, each vehicle
-//     within the plan's longest lap (a bottleneck assignment, agents/matching.h), then the
-//     squared approaches as above; beyond, among vehicles of one speed, as above.
+//     there are spare vehicles (agents/greedy_match.h).
 //  3. Min-max local search. A queue of tours, longest lap first; for each valve v of a popped
 //     tour a and each tour b holding one of v's K nearest valves (straight line; every change is
 //     priced on d): move v to b, or swap v with that valve u. A change of tours a, b (, c) is
@@ -55,6 +51,12 @@
 //  4. Iterated local search: perturbation_rounds kicks (two chained random moves from the
 //     longest tour, seeded), each followed by step 3 on the touched tours; the best state by
 //     (max, sum) is kept.
+//  4b. The tours as they came out go to the vehicles again: up to 1,200 tours so that the fleet's
+//     longest first lap (approach to a tour's nearest valve, then one lap, at the vehicle's
+//     speed) is least, no vehicle given a tour it would fly beyond the search's longest lap (a
+//     bottleneck assignment: bisection over the pairs' values, each tried by Hopcroft-Karp,
+//     agents/matching.h), then the squared approaches to the centroids as in step 2; beyond,
+//     among vehicles of one speed as in step 2.
 //  5. Each tour is rotated so that order[0] = 0 and legs[i] = PlanGridPath(valve order[i] ->
 //     order[i + 1]) in the direction flown, so the lap time is exactly what TourController flies:
 //     sum_i |legs[i]| / v_k + sum_i W w_i. PlanGridPath searches a window of the grid round
@@ -65,7 +67,8 @@
 // O(C) to copy and label the grid; straight-line neighbours O(M^2); seeding O(M N); a k-medoids
 // round O(M N) (a heap of the medoids per valve) plus O(M q) distances; a local-search pass
 // O(M K) candidate changes, each O(2^q q^2) (q <= 8, memoised) or O(q log q); split-merge O(N)
-// cached merges per call; matching O(N^3) up to 1,200 vehicles, O(N log N + 256^2 N) beyond; legs O(M l^2 log l). A new distance is an A*
+// cached merges per call; matching O(N^3) up to 1,200 vehicles (the bottleneck's
+// O(N^2.5 log N)), O(N log N + 256^2 N) beyond; legs O(M l^2 log l). A new distance is an A*
 // over O(l) cells in open water, more around structures. Memory O(C + pairs priced). Measured
 // (one core of this machine, Release, default options): 20 valves / 4 vehicles (fleet_field)
 // 0.05 s, 87 / 24 and 240 / 100 (fleet_large) 0.08 and 0.11 s, 2,400 / 1,000 (fleet_large

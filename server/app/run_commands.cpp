@@ -131,7 +131,7 @@ constexpr double kForeignRecordMargin_m = 1.0;
 // dropped its metrics.json and charts beside them.
 void RefuseAMissionsRecord(const fs::path& dir, const std::string& what, bool compares = false) {
   std::error_code ignored;
-  for (const fs::path record : {fs::path("trajectory.csv"), fs::path("ergodic") / "trajectory.csv",
+  for (const fs::path& record : {fs::path("trajectory.csv"), fs::path("ergodic") / "trajectory.csv",
                                 fs::path("astar") / "trajectory.csv"}) {
     if (!fs::exists(dir / record, ignored) || (!compares && record.has_parent_path())) continue;
     throw maps::ScenarioError(fmt::format("--out = {}: holds a mission's record ({}), whose metrics.json and charts are "

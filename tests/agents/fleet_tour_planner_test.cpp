@@ -345,10 +345,6 @@ TEST(FleetTourPlanner, RiskShareGivesTheRiskyValvesSmallerShares) {
   }
 }
 
-// Vehicles go to the tours near them: 12 vehicles started at random over the field, 60 valves.
-// No two vehicles would both shorten their squared approaches (to their tours' centroids) by
-// swapping tours; the planner's search moves valves between tours after the first match, and
-// without matching again it left such pairs (and, on a 1,000-vehicle field, a tour 330 m off).
 // A vehicle's first sight of every valve of a tour: its straight-line approach to the tour's
 // nearest valve, then one lap (the search's grid length at the vehicle's speed, and the waits).
 double FirstLap(const VehicleTour& vt, const FleetVehicle& vehicle, const Points& valves, double wait_s) {
@@ -357,8 +353,11 @@ double FirstLap(const VehicleTour& vt, const FleetVehicle& vehicle, const Points
   return (nearest + vt.tour.length_m) / vehicle.speed_mps + wait_s;
 }
 
-// Among the assignments that keep the fleet's longest first lap, no two vehicles would both be
-// nearer their tours' centroids (in squared distance summed) by trading tours.
+// Vehicles go to the tours near them: 12 vehicles started at random over the field, 60 valves.
+// Among the trades of tours that keep the fleet's longest first lap, none would shorten the two
+// vehicles' squared approaches (to their tours' centroids) summed; the planner's search moves
+// valves between tours after the first match, and without matching again it left such pairs
+// (and, on a 1,000-vehicle field, a tour 330 m off).
 TEST(FleetTourPlanner, VehiclesGetTheToursNearThem) {
   const OccupancyGrid grid = FieldGrid();
   for (unsigned seed = 31; seed <= 33; ++seed) {
@@ -708,7 +707,9 @@ TEST(Matching, BottleneckBoundIsTheLeastLargestValueOfAnyAssignment) {
     double best = std::numeric_limits<double>::infinity();
     do {
       double worst = 0.0;
-      for (int c = 0; c < n; ++c) worst = std::isfinite(value[c][order[c]]) ? std::max(worst, value[c][order[c]]) : INFINITY;
+      for (int c = 0; c < n; ++c) {
+        worst = std::isfinite(value[c][order[c]]) ? std::max(worst, value[c][order[c]]) : std::numeric_limits<double>::infinity();
+      }
       best = std::min(best, worst);
     } while (std::next_permutation(order.begin(), order.end()));
     unassignable += !std::isfinite(best);
