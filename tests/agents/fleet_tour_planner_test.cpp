@@ -531,6 +531,25 @@ TEST(FleetTourPlanner, TourControllerFliesEachTour) {
   }
 }
 
+// A vehicle reported at no finite place (the planner does not refuse it; the server's door does)
+// still leaves a partition of closed tours, every vehicle with one, and finite laps near those
+// planned with it at a real place: its first laps are not numbers, the bottleneck bound is
+// infinite, and the re-match keeps the search's matching.
+TEST(FleetTourPlanner, AVehicleAtNoFinitePlaceStillGetsATour) {
+  const OccupancyGrid grid = FieldGrid();
+  const Points valves = RandomFreePoints(grid, 24, 51);
+  std::vector<FleetVehicle> vehicles = Vehicles(5, 0.5);
+  vehicles[1].speed_mps = 0.8;
+  vehicles[3].speed_mps = 0.7;
+  const FleetTourPlan placed = PlanFleetTours(grid, valves, RandomWeights(24, 51), vehicles, 1.0);
+  vehicles[2].position_m = Eigen::Vector2d(std::numeric_limits<double>::quiet_NaN(), 3.0);
+  const FleetTourPlan plan = PlanFleetTours(grid, valves, RandomWeights(24, 51), vehicles, 1.0);
+  ExpectPartitionOfClosedTours(plan, grid, valves);
+  ASSERT_EQ(plan.vehicles.size(), 5u);
+  EXPECT_LE(plan.max_lap_s, placed.max_lap_s * 1.5);  // other seeds and matches, the same field
+  EXPECT_TRUE(std::isfinite(plan.max_lap_s));
+}
+
 TEST(FleetTourPlanner, RejectsInvalidInput) {
   const OccupancyGrid grid = FieldGrid();
   const Points valves = {{3.05, 3.05}, {12.05, 8.05}};
