@@ -75,9 +75,12 @@ std::vector<int> MinCostMatch(int n, int m, const Cost& raw_cost) {
 namespace matching_detail {
 
 // Whether rows 0..n-1 can each have a column of its own among 0..m-1 over the pairs (c, k) with
-// k in columns[begin[c] .. begin[c + 1]): Hopcroft-Karp (phases of a breadth-first layering from
-// the free rows, then vertex-disjoint shortest augmenting paths by depth-first search),
-// O(E sqrt(n)). The depth-first search recurses at most n deep (n <= 1,200 where it is used).
+// k in columns[begin[c] .. begin[c + 1]): Hopcroft-Karp's phases (a breadth-first layering of the
+// rows from the free ones, then vertex-disjoint augmenting paths along the layers by depth-first
+// search). The layering runs to the end rather than stopping at the first layer that reaches a
+// free column, so the paths are not all shortest and O(E sqrt(n)) is not guaranteed; each phase
+// still augments, and the matching found is maximum. The depth-first search recurses at most n
+// deep (n <= 1,200 where it is used).
 class RowCover {
  public:
   RowCover(int n, int m, const std::vector<int>& begin, const std::vector<int>& columns)
