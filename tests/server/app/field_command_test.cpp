@@ -11,6 +11,8 @@
 #include <iterator>
 #include <string>
 
+#include <unistd.h>
+
 #include "maps/scenario/scenario.h"
 
 namespace sage::server {
@@ -26,7 +28,11 @@ std::string Text(const fs::path& path) {
 class FieldSeabedCommand : public ::testing::Test {
  protected:
   void SetUp() override {
-    dir_ = fs::temp_directory_path() / ("sage_field_seabed_" + std::to_string(::testing::UnitTest::GetInstance()->random_seed()));
+    // One folder per test and process: ctest runs this fixture's tests side by side, and a folder
+    // named by gtest's random seed alone (the same in both) was removed by one while the other wrote.
+    dir_ = fs::temp_directory_path() / ("sage_field_seabed_" +
+                                        std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()) +
+                                        "_" + std::to_string(::getpid()));
     fs::remove_all(dir_);
     fs::create_directories(dir_);
   }
