@@ -59,11 +59,16 @@ std::string RecordRateNote(const maps::Scenario& scenario);
 /// and refuses them rather than ignore them. The network options are not among them.
 std::string FirstScenarioOverride(const ScenarioOverrides& o);
 
-/// The overrides given that shape only the ergodic controller (--basis-order, --forgetting,
-/// --turn-radius), as one line to warn an A* tour mission of; empty if none.
-/// "--order: ..." if it was given (to warn of when the controller is ergodic), else "".
-std::string AstarOnlyOverrides(const ScenarioOverrides& o);
-std::string ErgodicOnlyOverrides(const ScenarioOverrides& o);
+/// Which fleets a command flies: the ergodic one, the A* tours (-c astar), or both (sage compare).
+enum class Flown { kErgodic, kTours, kBoth };
+/// The overrides given that the mission will not use, one line each: with tours alone those that
+/// shape only the ergodic fleet (--basis-order, --forgetting, --turn-radius, --final-approach,
+/// --steer, --assignment, --age-weighting, --risk-share); with the ergodic fleet alone --order; and
+/// whenever the ergodic fleet flies, --age-weighting / --risk-share unless its assignment is
+/// regions. Empty if none.
+std::vector<std::string> UnusedOverrides(const ScenarioOverrides& o, const maps::Scenario& scenario, Flown flown);
+/// Warns (spdlog) of each line of UnusedOverrides.
+void WarnOfUnusedOverrides(const ScenarioOverrides& o, const maps::Scenario& scenario, Flown flown);
 
 /// Warns of settings the mission cannot keep as written: a sensor whose rate_hz is not a whole
 /// number of control cycles a scan (it scans at the nearest whole number's rate,
@@ -96,5 +101,13 @@ maps::Scenario LoadWithOverrides(const ScenarioOverrides& o);
 /// plan regions (the ergodic fleet's assignment) or tours (`tours`: -c astar): see
 /// FleetTooSmallForField (server/region_split.h).
 void CheckFleetFitsField(const maps::Scenario& scenario, bool tours);
+
+/// A line to warn of a fleet whose size does not suit how it is flown, or empty: more vehicles than
+/// valves under tours or regions (vehicles sharing a valve keep one another outside its visit
+/// radius), or more than ten valves a vehicle under regions (tours revisit them sooner). Shared
+/// ergodic fleets roam the whole field, and are not warned of.
+std::string FleetDensityNote(const maps::Scenario& scenario, Flown flown);
+/// Warns (spdlog) of FleetDensityNote's line, if any.
+void WarnOfFleetDensity(const maps::Scenario& scenario, Flown flown);
 
 }  // namespace sage::server

@@ -14,6 +14,7 @@
 #include <spdlog/spdlog.h>
 
 #include "maps/scenario/seabed_example.h"
+#include "server/app/cli_scenario.h"
 #include "server/report/mission_file.h"
 
 namespace sage::server {
@@ -100,6 +101,7 @@ int CmdFieldGenerate(const maps::FieldOptions& options, const std::string& out_p
                field.astar.grid_resolution_m, record,
                std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(), out_path,
                sensors.empty() ? "" : " --random-leaks 3 (leaks it must find)", out_path);
+  WarnOfFleetDensity(field, Flown::kBoth);  // the field flies as regions, and is compared with tours
   return 0;
 }
 

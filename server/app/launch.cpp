@@ -155,14 +155,9 @@ int Launch(const LaunchCommand& c) {
     WarnOfLossySettings(scenario);
     WarnOfLargeRecord(scenario);
     CheckNetworkHere(scenario, c.scenario.network);  // a launch refused here leaves no run directory behind
-    if (const std::string unused = ErgodicOnlyOverrides(c.scenario);
-        ParseControllerKind(c.controller) == ControllerKind::kAstar && !unused.empty()) {
-      spdlog::warn("{}", unused);
-    }
-    if (const std::string unused = AstarOnlyOverrides(c.scenario);
-        ParseControllerKind(c.controller) == ControllerKind::kErgodic && !unused.empty()) {
-      spdlog::warn("{}", unused);
-    }
+    WarnOfUnusedOverrides(c.scenario, scenario,
+                          ParseControllerKind(c.controller) == ControllerKind::kAstar ? Flown::kTours : Flown::kErgodic);
+    WarnOfFleetDensity(scenario, ParseControllerKind(c.controller) == ControllerKind::kAstar ? Flown::kTours : Flown::kErgodic);
     maps::CheckMissionMaps(scenario);  // a bad map or an unreachable valve is refused here, not by the server
     out_dir = c.out_dir.empty() ? (fs::path("runs") / (scenario.name + "_launch")).string() : c.out_dir;
     CheckOutDirectory(out_dir);

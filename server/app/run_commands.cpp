@@ -11,9 +11,12 @@
 #include <iostream>
 #include <map>
 #include <memory>
+#include <set>
+#include <string>
 #include <vector>
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 #include <spdlog/spdlog.h>
 
 #include "maps/seabed/seabed_obstacles.h"
@@ -155,12 +158,8 @@ int CmdRun(const RunCommand& c) {
   CheckFleetFitsField(scenario, kind == ControllerKind::kAstar);
   WarnOfLossySettings(scenario);
   WarnOfLargeRecord(scenario);
-  if (const std::string unused = ErgodicOnlyOverrides(c.scenario); kind == ControllerKind::kAstar && !unused.empty()) {
-    spdlog::warn("{}", unused);
-  }
-  if (const std::string unused = AstarOnlyOverrides(c.scenario); kind == ControllerKind::kErgodic && !unused.empty()) {
-    spdlog::warn("{}", unused);
-  }
+  WarnOfUnusedOverrides(c.scenario, scenario, kind == ControllerKind::kAstar ? Flown::kTours : Flown::kErgodic);
+  WarnOfFleetDensity(scenario, kind == ControllerKind::kAstar ? Flown::kTours : Flown::kErgodic);
   const std::string profile = c.scenario.profile.empty() ? scenario.default_profile : c.scenario.profile;
   // A bad seabed map or an unreachable valve is refused before the run directory is touched (an
   // earlier run there had been cut to a stub by the refused mission's record).
@@ -189,6 +188,8 @@ int CmdCompare(const RunCommand& c) {
   LogToStderr();
   maps::Scenario scenario = LoadWithOverrides(c.scenario);
   CheckFleetFitsField(scenario, /*tours=*/true);  // compare flies the A* tours too
+  WarnOfUnusedOverrides(c.scenario, scenario, Flown::kBoth);
+  WarnOfFleetDensity(scenario, Flown::kBoth);
   WarnOfLossySettings(scenario);
   WarnOfLargeRecord(scenario);
   const std::string profile = c.scenario.profile.empty() ? scenario.default_profile : c.scenario.profile;
@@ -283,7 +284,29 @@ void WarnOfAForeignRecord(const Trajectory& trajectory, const maps::Scenario& sc
   if (jumps > 0) {
     spdlog::warn("{}: {} step(s) faster than {:.3g} m/s (3 x the scenario's fastest vehicle); the fastest {:.3g} m in "
                  "{:.3g} s, vehicle {} at t = {:.1f} s: positions of another field, or a broken log?",
-                 record, jumps, limit_mps, worst_m, worst_dt, worst->vehicle, worst->time_s);
+                 record, jumps, limit_mps, worst_m, worst_dt,
+                 static_cast<std::size_t>(worst->vehicle) < trajectory.vehicle_names.size()
+                     ? trajectory.vehicle_names[static_cast<std::size_t>(worst->vehicle)]
+                     : std::to_string(worst->vehicle),
+                 worst->time_s);
+  }
+  // Vehicles by name that the scenario does not name (at its start or joining later): a record of
+  // another fleet, or vehicles an operator added; a new user's misspelt log had gone unremarked.
+  std::set<std::string> named;
+  for (const maps::VehicleSpec& v : scenario.vehicles) named.insert(v.name);
+  for (const maps::FleetEvent& e : scenario.fleet_events)
+    if (e.kind == maps::FleetEvent::Kind::kJoin) named.insert(e.vehicle.name);
+  std::vector<std::string> strangers;
+  for (const std::string& name : trajectory.vehicle_names)
+    if (!named.contains(name)) strangers.push_back(name);
+  if (!strangers.empty()) {
+    constexpr std::size_t kShown = 5;
+    const std::size_t shown = std::min(strangers.size(), kShown);
+    spdlog::warn("{}: {} of its {} vehicle(s) not named in {} ({}{}): a record of another fleet, or vehicles added "
+                 "while it flew? (their passes are counted all the same)",
+                 record, strangers.size(), trajectory.vehicle_names.size(), scenario_path,
+                 fmt::join(strangers.begin(), strangers.begin() + static_cast<std::ptrdiff_t>(shown), ", "),
+                 strangers.size() > shown ? ", ..." : "");
   }
   if (!scenario.leaks.empty()) {
     spdlog::info("{} hides {} leak(s): a recorded trajectory holds no detections, so their times are not evaluated "

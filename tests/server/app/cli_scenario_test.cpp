@@ -17,6 +17,7 @@
 #include <thread>
 #include <vector>
 
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
@@ -128,25 +129,25 @@ TEST(ScenarioOverrides, AShorterMissionSaysWhatItLeavesOut) {
   ASSERT_EQ(file.leaks.size(), 1u);  // at P3 from 120 s; leak_injection's event at 150 s
   // Flying one_extreme (the default, no events), another profile's event is not the mission's.
   EXPECT_EQ(LeftOutByDuration(file, 60.0, false),
-            "--duration = 60: left out, as they come after the mission's end: the leak at P3 from 120 s");
+            "--duration = 60: the mission ends before the leak at P3 from 120 s (left out)");
   EXPECT_EQ(LeftOutByDuration(file, 130.0, false), "");
   file.default_profile = "leak_injection";  // as --profile leak_injection leaves it
   EXPECT_EQ(LeftOutByDuration(file, 60.0, false),
-            "--duration = 60: left out, as they come after the mission's end: the leak at P3 from 120 s, 1 risk event(s) "
-            "of profile leak_injection");
+            "--duration = 60: the mission ends before the leak at P3 from 120 s, 1 risk event(s) "
+            "of profile leak_injection (left out)");
   EXPECT_EQ(LeftOutByDuration(file, 130.0, false),
-            "--duration = 130: left out, as they come after the mission's end: 1 risk event(s) of profile leak_injection");
+            "--duration = 130: the mission ends before 1 risk event(s) of profile leak_injection (left out)");
   EXPECT_EQ(LeftOutByDuration(file, 60.0, true),  // --random-leaks draws the shorter mission's own
-            "--duration = 60: left out, as they come after the mission's end: 1 risk event(s) of profile leak_injection");
+            "--duration = 60: the mission ends before 1 risk event(s) of profile leak_injection (left out)");
   EXPECT_EQ(LeftOutByDuration(file, 200.0, false), "");
   // A leak that starts as the shorter mission ends could only be missed: left out too.
   EXPECT_EQ(LeftOutByDuration(file, 120.0, false),
-            "--duration = 120: left out, as they come after the mission's end: the leak at P3 from 120 s, 1 risk event(s) "
-            "of profile leak_injection");
+            "--duration = 120: the mission ends before the leak at P3 from 120 s, 1 risk event(s) "
+            "of profile leak_injection (left out)");
   EXPECT_TRUE(maps::WithDuration(file, 120.0).leaks.empty());
   // fleet_field: a join at 200 s and a loss at 400 s.
   EXPECT_EQ(LeftOutByDuration(maps::LoadScenario(kFleetField), 300.0, false),
-            "--duration = 300: left out, as they come after the mission's end: 1 fleet event(s)");
+            "--duration = 300: the mission ends before 1 fleet event(s) (left out)");
   ScenarioOverrides o;
   o.scenario_path = std::string(SAGE_SOURCE_DIR) + "/scenarios/two_xt_leaks.yaml";
   o.duration_s = 60.0;
@@ -445,22 +446,96 @@ TEST(ScenarioOverrides, TheProfileGivenIsTheEffectiveScenariosDefault) {
 }
 
 
-// An A* tour mission warns of the options that shape only the ergodic controller (a new user's
-// `-c astar -K 5` had run without a word); none given, nothing to say.
-TEST(ScenarioOverrides, NamesTheErgodicOnlyOptionsGiven) {
+// An A* tour mission warns of the options that shape only the ergodic fleet (a new user's
+// `-c astar -K 5` had run without a word, and `-c astar --assignment regions` too); the ergodic
+// fleet of --order, and of region options when it is not split into regions. None given, nothing to say.
+TEST(ScenarioOverrides, NamesTheOptionsGivenAndNotUsed) {
+  const maps::Scenario shared = maps::LoadScenario(kFleetField);  // assignment: shared
+  ASSERT_NE(shared.fleet.assignment, maps::FleetAssignment::kRegions);
+  maps::Scenario regions = shared;
+  regions.fleet.assignment = maps::FleetAssignment::kRegions;
   ScenarioOverrides o;
-  EXPECT_EQ(ErgodicOnlyOverrides(o), "");
+  for (const Flown flown : {Flown::kErgodic, Flown::kTours, Flown::kBoth}) EXPECT_TRUE(UnusedOverrides(o, shared, flown).empty());
   o.duration_s = 30.0;
   o.guard = "off";
-  EXPECT_EQ(ErgodicOnlyOverrides(o), "");
+  o.weight_exponent = 0.5;  // the SMC target's and the tours' waits: used by both
+  for (const Flown flown : {Flown::kErgodic, Flown::kTours, Flown::kBoth}) EXPECT_TRUE(UnusedOverrides(o, shared, flown).empty());
   o.basis_order = 5;
-  EXPECT_EQ(ErgodicOnlyOverrides(o), "--basis-order: the ergodic controller's; -c astar flies tours without it (given, not used)");
+  EXPECT_EQ(UnusedOverrides(o, shared, Flown::kTours),
+            std::vector<std::string>{"--basis-order: the ergodic controller's; -c astar flies tours without it (given, not used)"});
+  EXPECT_TRUE(UnusedOverrides(o, shared, Flown::kErgodic).empty());
+  EXPECT_TRUE(UnusedOverrides(o, shared, Flown::kBoth).empty());
   o.forgetting_time_s = 10.0;
   o.min_turn_radius_m = 0.2;
-  EXPECT_EQ(ErgodicOnlyOverrides(o).rfind("--basis-order, --forgetting, --turn-radius: ", 0), 0u) << ErgodicOnlyOverrides(o);
+  ASSERT_EQ(UnusedOverrides(o, shared, Flown::kTours).size(), 1u);
+  EXPECT_EQ(UnusedOverrides(o, shared, Flown::kTours)[0].rfind("--basis-order, --forgetting, --turn-radius: ", 0), 0u);
   o = ScenarioOverrides{};
   o.steer = "posterior";  // a tour moves for no detection
-  EXPECT_EQ(ErgodicOnlyOverrides(o), "--steer: the ergodic controller's; -c astar flies tours without it (given, not used)");
+  EXPECT_EQ(UnusedOverrides(o, shared, Flown::kTours),
+            std::vector<std::string>{"--steer: the ergodic controller's; -c astar flies tours without it (given, not used)"});
+  // The tour planner shares the valves out, whatever the ergodic fleet's assignment.
+  o = ScenarioOverrides{};
+  o.assignment = "regions";
+  o.age_weighting_laps = 2.0;
+  ASSERT_EQ(UnusedOverrides(o, regions, Flown::kTours).size(), 1u);
+  EXPECT_EQ(UnusedOverrides(o, regions, Flown::kTours)[0].rfind("--assignment, --age-weighting: ", 0), 0u);
+  EXPECT_TRUE(UnusedOverrides(o, regions, Flown::kErgodic).empty());
+  EXPECT_TRUE(UnusedOverrides(o, regions, Flown::kBoth).empty());
+  // Region options on a shared fleet: unused by the ergodic fleet, and no advice to tours.
+  o = ScenarioOverrides{};
+  o.risk_share = 0.3;
+  for (const Flown flown : {Flown::kErgodic, Flown::kBoth}) {
+    ASSERT_EQ(UnusedOverrides(o, shared, flown).size(), 1u);
+    EXPECT_NE(UnusedOverrides(o, shared, flown)[0].find("shape regions only; this mission's assignment is shared"),
+              std::string::npos);
+  }
+  EXPECT_EQ(UnusedOverrides(o, shared, Flown::kTours).size(), 1u);
+  EXPECT_EQ(UnusedOverrides(o, shared, Flown::kTours)[0].rfind("--risk-share: the ergodic controller's", 0), 0u);
+  // --order steers the A* vehicles: unused by the ergodic fleet alone, used by a comparison.
+  o = ScenarioOverrides{};
+  o.order = "shortest";
+  ASSERT_EQ(UnusedOverrides(o, shared, Flown::kErgodic).size(), 1u);
+  EXPECT_EQ(UnusedOverrides(o, shared, Flown::kErgodic)[0].rfind("--order: ", 0), 0u);
+  EXPECT_TRUE(UnusedOverrides(o, shared, Flown::kTours).empty());
+  EXPECT_TRUE(UnusedOverrides(o, shared, Flown::kBoth).empty());
+}
+
+
+// A fleet whose size does not suit how it flies is said before it flies: more vehicles than valves
+// under tours or regions (vehicles sharing a valve kept one another outside its visit radius: a
+// valve unwatched 590 s with 20 vehicles on 8 valves), and regions with more than ten valves a
+// vehicle. A shared fleet roams the whole field: nothing to say.
+TEST(FleetDensity, SaysWhenTheFleetDoesNotSuitTheField) {
+  maps::Scenario field = maps::LoadScenario(std::string(SAGE_SOURCE_DIR) + "/scenarios/two_xt.yaml");
+  ASSERT_EQ(field.ValveCount(), 5);
+  ASSERT_EQ(field.vehicles.size(), 1u);
+  ASSERT_EQ(field.fleet.assignment, maps::FleetAssignment::kShared);
+  for (const Flown flown : {Flown::kErgodic, Flown::kTours, Flown::kBoth}) EXPECT_EQ(FleetDensityNote(field, flown), "");
+  const maps::VehicleSpec spare = field.vehicles.front();
+  field.vehicles.resize(5, spare);  // five: one a valve is not a surplus
+  for (const Flown flown : {Flown::kErgodic, Flown::kTours, Flown::kBoth}) EXPECT_EQ(FleetDensityNote(field, flown), "");
+  field.vehicles.push_back(spare);  // six for five valves
+  EXPECT_EQ(FleetDensityNote(field, Flown::kErgodic), "");  // shared
+  EXPECT_EQ(FleetDensityNote(field, Flown::kTours).rfind("6 vehicles for 5 valves: tours give a valve more than one", 0), 0u)
+      << FleetDensityNote(field, Flown::kTours);
+  field.fleet.assignment = maps::FleetAssignment::kRegions;
+  EXPECT_EQ(FleetDensityNote(field, Flown::kErgodic).rfind("6 vehicles for 5 valves: regions give", 0), 0u);
+  EXPECT_NE(FleetDensityNote(field, Flown::kErgodic).find("fly at most 5 (-n 5), or --assignment shared"), std::string::npos);
+  EXPECT_EQ(FleetDensityNote(field, Flown::kBoth).rfind("6 vehicles for 5 valves: regions and tours give", 0), 0u);
+  // Sparse: 11 valves a vehicle under regions; tours are what it advises, so tours are not warned.
+  maps::Scenario sparse = maps::LoadScenario(kFleetField);  // 20 valves
+  sparse.fleet.assignment = maps::FleetAssignment::kRegions;
+  sparse.vehicles.resize(2);
+  while (sparse.ValveCount() <= 20) sparse.structures.push_back(sparse.structures.front());
+  const int valves = sparse.ValveCount();
+  EXPECT_EQ(FleetDensityNote(sparse, Flown::kTours), "");
+  EXPECT_EQ(FleetDensityNote(sparse, Flown::kErgodic).rfind(fmt::format("{} valves for 2 vehicles", valves), 0), 0u)
+      << FleetDensityNote(sparse, Flown::kErgodic);
+  sparse.vehicles.resize(1);  // one vehicle: no split to speak of
+  EXPECT_EQ(FleetDensityNote(sparse, Flown::kErgodic), "");
+  sparse.vehicles.resize(2);
+  sparse.fleet.assignment = maps::FleetAssignment::kShared;
+  EXPECT_EQ(FleetDensityNote(sparse, Flown::kErgodic), "");
 }
 
 
@@ -506,6 +581,14 @@ TEST(EvaluateWarnings, SaysWhatGoesBeyondTheRecord) {
                          "between two rows is not seen"),
             std::string::npos)
       << thinned;
+  // Vehicles by name: one the scenario names says nothing; others are named in the warning (a
+  // misspelt log had gone unremarked). two_xt flies rov1.
+  std::ofstream(csv) << "t,vehicle,x,y\n0,rov1,0.6,0.6\n0.1,rov1,0.65,0.6\n";
+  EXPECT_EQ(warnings("", std::nullopt), "");
+  std::ofstream(csv) << "t,vehicle,x,y\n0,rov1,0.6,0.6\n0,rvo2,1,1\n0.1,rov1,0.65,0.6\n0.1,rvo2,1,1.05\n";
+  const std::string strangers = warnings("", std::nullopt);
+  EXPECT_NE(strangers.find("1 of its 2 vehicle(s) not named in "), std::string::npos) << strangers;
+  EXPECT_NE(strangers.find("two_xt.yaml (rvo2): a record of another fleet"), std::string::npos) << strangers;
   std::filesystem::remove(csv);
 }
 
