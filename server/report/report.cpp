@@ -199,7 +199,7 @@ std::vector<std::size_t> ListedValves(const std::vector<std::vector<const ValveM
   // With sensors the valves a leak would have waited longest at (the unseen first): what the
   // scans, not the visits, say was watched least.
   const auto badness = [by_scans](const ValveMetrics& v) {
-    if (!by_scans) return v.max_gap_s;
+    if (!by_scans) return v.longest_unwatched_s;
     // NaN (no estimate): not counted.
     return UnseenByScans(v) ? std::numeric_limits<double>::infinity() : v.expected_detection_by_scans_s;
   };
@@ -288,7 +288,7 @@ std::string BuildTable(const std::vector<MissionMetrics>& runs, const std::vecto
       weight.cells.push_back(m ? WeightText(m->weight) : "-");
       visits.cells.push_back(m ? fmt::format("{}", m->visits) : "-");
       interval.cells.push_back(m ? Seconds(m->mean_interval_s) : "-");
-      gap.cells.push_back(m ? Seconds(m->max_gap_s) : "-");
+      gap.cells.push_back(m ? Seconds(m->longest_unwatched_s) : "-");
       scan_wait.cells.push_back(!m ? "-" : UnseenByScans(*m) ? "unseen" : Seconds(m->expected_detection_by_scans_s));
     }
     if (!same_weights) block.columns.push_back(weight);

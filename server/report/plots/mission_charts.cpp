@@ -119,13 +119,13 @@ std::string RevisitChartSvg(const MissionPlotInput& input) {
   constexpr double kTop = 58.0, kRow = 17.0, kFont = 11.0;
   std::vector<const ValveMetrics*> rows;
   for (const ValveMetrics& v : m.valves) rows.push_back(&v);
-  std::stable_sort(rows.begin(), rows.end(), [](const ValveMetrics* a, const ValveMetrics* b) { return a->max_gap_s > b->max_gap_s; });
+  std::stable_sort(rows.begin(), rows.end(), [](const ValveMetrics* a, const ValveMetrics* b) { return a->longest_unwatched_s > b->longest_unwatched_s; });
   const std::size_t total = rows.size();
   if (rows.size() > kMaxRows) rows.resize(kMaxRows);
   double max_weight = 0.0, longest = 0.0, widest_name = 0.0;
   for (const ValveMetrics* v : rows) {
     max_weight = std::max(max_weight, v->weight);
-    longest = std::max({longest, v->max_gap_s, std::isfinite(v->mean_interval_s) ? v->mean_interval_s : 0.0});
+    longest = std::max({longest, v->longest_unwatched_s, std::isfinite(v->mean_interval_s) ? v->mean_interval_s : 0.0});
     widest_name = std::max(widest_name, TextWidth(v->name + " " + WeightText(v->weight), kFont));
   }
   if (!(longest > 0.0)) longest = m.duration_s > 0.0 ? m.duration_s : 1.0;
@@ -136,7 +136,7 @@ std::string RevisitChartSvg(const MissionPlotInput& input) {
   const auto tx = [&](double s) { return x0 + s / longest * (x1 - x0); };
 
   std::vector<std::string> caption = {
-      "Bars: each valve's longest gap, the longest stretch with no visit (from the start, between visits, to the end), as the "
+      "Bars: each valve's longest gap, the longest stretch with no vehicle within the visit radius (from the start, between visits, to the end; a vehicle holding station watches its valve), as the "
       "run table's longest gap; black ticks: the mean interval between visits; right: visits. Valves sorted by longest gap.",
       "Labels: name and weight averaged over the mission (the run table's Weight); bar shade: the same weight."};
   if (total > rows.size()) {
@@ -156,7 +156,7 @@ std::string RevisitChartSvg(const MissionPlotInput& input) {
     const double y = y0 + r * kRow;
     const Rgb shade = Reds(max_weight > 0.0 ? 0.15 + 0.85 * v.weight / max_weight : 0.5);
     svg.Put("<rect id=\"gap-{}\" x=\"{:.1f}\" y=\"{:.1f}\" width=\"{:.1f}\" height=\"{:.1f}\" fill=\"{}\" stroke=\"#666\" "
-            "stroke-width=\"0.5\"/>\n", r, x0, y + 2.0, std::max(0.0, tx(v.max_gap_s) - x0), kRow - 4.0, Hex(shade));
+            "stroke-width=\"0.5\"/>\n", r, x0, y + 2.0, std::max(0.0, tx(v.longest_unwatched_s) - x0), kRow - 4.0, Hex(shade));
     if (std::isfinite(v.mean_interval_s)) {
       const double x = tx(v.mean_interval_s);
       svg.Put("<line x1=\"{0:.1f}\" y1=\"{1:.1f}\" x2=\"{0:.1f}\" y2=\"{2:.1f}\" stroke=\"black\" stroke-width=\"2.5\"/>\n", x, y + 0.5,

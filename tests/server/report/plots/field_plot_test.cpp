@@ -307,7 +307,7 @@ TEST(FieldPlot, RevisitChartSortedByLongestGap) {
   EXPECT_NE(FormatTable({metrics}).find(" 0.0028 "), std::string::npos) << "the table prints it so too";
   std::vector<const ValveMetrics*> sorted;
   for (const ValveMetrics& v : metrics.valves) sorted.push_back(&v);
-  std::stable_sort(sorted.begin(), sorted.end(), [](auto* a, auto* b) { return a->max_gap_s > b->max_gap_s; });
+  std::stable_sort(sorted.begin(), sorted.end(), [](auto* a, auto* b) { return a->longest_unwatched_s > b->longest_unwatched_s; });
   std::size_t at = 0;
   for (std::size_t r = 0; r < sorted.size(); ++r) {
     const std::string text = fmt::format(">{} {}<", sorted[r]->name, WeightText(sorted[r]->weight));
