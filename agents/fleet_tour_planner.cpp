@@ -1084,6 +1084,13 @@ std::vector<int> Match(const Points& centroids, const std::vector<FleetVehicle>&
   return BisectedMatch(centroids, at, cost, kMatchLeaf);
 }
 
+// The mean position of a share's valves (m); the origin for an empty share.
+Eigen::Vector2d Centroid(const std::vector<int>& share, const Points& valves_m) {
+  Eigen::Vector2d sum = Eigen::Vector2d::Zero();
+  for (int v : share) sum += valves_m[v];
+  return sum / static_cast<double>(std::max<std::size_t>(1, share.size()));
+}
+
 // The search moves valves between tours wherever that shortens the longest lap, so a tour can end
 // far from the vehicle it was matched to (on a generated 1,000-vehicle field, 330 m: a tour
 // unwatched for 8 minutes): the tours as they came out go to the vehicles again (each tour's
@@ -1099,16 +1106,12 @@ std::vector<int> Match(const Points& centroids, const std::vector<FleetVehicle>&
 // the field's longest gap 42.5 s). It costs the 1,000-vehicle split 0.26 s (0.40 -> 0.66 s).
 // The longest lap as the search priced it (with beta's risk factor) stands; the sum of the laps,
 // the search's tie-break, and the plan's unweighted max_lap_s may rise by a tour's move to a
-// slower vehicle within it.
-std::vector<std::vector<int>> Rematch(const Tours& s, const Search& search, const Points& valves_m,
+// slower vehicle within it. s's orders are moved into the result.
+std::vector<std::vector<int>> Rematch(Tours& s, const Search& search, const Points& valves_m,
                                       const std::vector<FleetVehicle>& vehicles, double wait_per_lap_s) {
   const int n = static_cast<int>(vehicles.size());
   Points centroids;
-  for (int t = 0; t < n; ++t) {
-    Eigen::Vector2d sum = Eigen::Vector2d::Zero();
-    for (int v : s.order[t]) sum += valves_m[v];
-    centroids.push_back(sum / static_cast<double>(std::max<std::size_t>(1, s.order[t].size())));
-  }
+  for (int t = 0; t < n; ++t) centroids.push_back(Centroid(s.order[t], valves_m));
   std::vector<std::vector<int>> orders(n);
   if (n > kHungarianMax) {  // among vehicles of one speed (a lap was balanced for its vehicle's speed)
     std::map<double, std::vector<int>> by_speed;
@@ -1118,7 +1121,7 @@ std::vector<std::vector<int>> Rematch(const Tours& s, const Search& search, cons
       std::vector<FleetVehicle> fleet;
       for (int k : group) finals.push_back(centroids[k]), fleet.push_back(vehicles[k]);
       const std::vector<int> rematch = Match(finals, fleet);
-      for (std::size_t g = 0; g < group.size(); ++g) orders[group[rematch[g]]] = s.order[group[g]];
+      for (std::size_t g = 0; g < group.size(); ++g) orders[group[rematch[g]]] = std::move(s.order[group[g]]);
     }
     return orders;
   }
@@ -1141,13 +1144,13 @@ std::vector<std::vector<int>> Rematch(const Tours& s, const Search& search, cons
   // Finite when every position is: each tour's own vehicle is within the longest lap. A vehicle
   // reported at no finite place leaves the tours with the vehicles the search gave them.
   const double bound = BottleneckBound(n, n, first_of);
-  if (!std::isfinite(bound)) return s.order;
+  if (!std::isfinite(bound)) return std::move(s.order);
   const std::vector<int> vehicle_of = MinCostMatch(n, n, [&](int t, int k) {
     if (!(first_of(t, k) <= bound)) return kMaxMatchCost;
     const double speed2 = vehicles[k].speed_mps * vehicles[k].speed_mps;
     return (centroids[t] - vehicles[k].position_m).squaredNorm() / speed2;
   });
-  for (int t = 0; t < n; ++t) orders[vehicle_of[t]] = s.order[t];
+  for (int t = 0; t < n; ++t) orders[vehicle_of[t]] = std::move(s.order[t]);
   return orders;
 }
 
@@ -1180,11 +1183,7 @@ FleetTourPlan Plan(const maps::OccupancyGrid& grid, const Points& valves_m, cons
     for (int v = 0; v < m; ++v) clusters.push_back({v});
   }
   Points centroids;
-  for (const auto& cluster : clusters) {
-    Eigen::Vector2d sum = Eigen::Vector2d::Zero();
-    for (int v : cluster) sum += valves_m[v];
-    centroids.push_back(sum / static_cast<double>(cluster.size()));
-  }
+  for (const auto& cluster : clusters) centroids.push_back(Centroid(cluster, valves_m));
   const std::vector<int> vehicle_of = Match(centroids, vehicles);
   Tours s{std::vector<std::vector<int>>(n), std::vector<double>(n, 0.0), std::vector<int>(m, -1),
           std::vector<std::uint64_t>(n, 0)};
