@@ -171,6 +171,7 @@ struct AgentHost::Impl {
     std::unique_ptr<ObstacleFilter> keep_clear;  // BlueROV2s: structures and edges (SMC), neighbours
     Eigen::Vector2d command = Eigen::Vector2d::Zero();
     double heading = std::numeric_limits<double>::quiet_NaN();  // the gaze's; NaN: face the travel
+    bool reserve = false;  // held in reserve (SetReserve): holds where it is
   };
 
   const maps::Scenario& scenario;
@@ -425,6 +426,7 @@ void AgentHost::SetTour(VehicleId id, const std::vector<int>& valves, const Eige
     throw std::invalid_argument("AgentHost::SetTour: " + std::to_string(valves.size()) + " valves, " +
                                 std::to_string(weights.size()) + " weights, of " + std::to_string(count));
   }
+  v.reserve = false;
   if (v.tour && valves == v.tour_valves) {  // the same tour: new waits from the next lap
     v.tour->SetWeights(weights);
     return;
@@ -456,9 +458,28 @@ void AgentHost::SetTour(VehicleId id, const std::vector<int>& valves, const Eige
   v.tour_valves = valves;
 }
 
+void AgentHost::SetReserve(VehicleId id, bool reserve) {
+  Impl::Vehicle& v = impl_->Find(id);
+  v.reserve = reserve;
+  if (!reserve) return;
+  v.tour.reset();
+  v.tour_valves.clear();
+  v.region.reset();
+  v.region_basis.reset();
+  v.ergodic.reset();  // made again on the field's basis, or a region's, when it has a target
+  v.transit.reset();
+  v.escaping = false;
+  v.anchor_time_s = std::numeric_limits<double>::quiet_NaN();
+  if (v.keep_clear) {
+    v.keep_clear->SetBounds(Eigen::Vector2d::Zero(),
+                            Eigen::Vector2d(impl_->scenario.workspace.width_m, impl_->scenario.workspace.height_m));
+  }
+}
+
 void AgentHost::SetRegion(VehicleId id, const maps::RegionBox& box, double forgetting_time_s) {
   Impl::Vehicle& v = impl_->Find(id);
   if (!v.smc) return;
+  v.reserve = false;
   const double forgetting_s = forgetting_time_s > 0.0 ? forgetting_time_s : impl_->scenario.ergodic.forgetting_time_s;
   if (v.region && v.region->origin_m == box.origin_m && v.region->size_m == box.size_m && v.region->order == box.order &&
       v.ergodic->coverage().forgetting_time_s() == forgetting_s) {
@@ -587,8 +608,9 @@ void AgentHost::Steer(double time_s) {
       impl_->Neighbours(i, positions, around, found, nearby);
       if (v.tour) v.tour->SetNearby(nearby);
       if (v.transit) v.transit->SetNearby(nearby);
-      // An A* vehicle holds station until it has a tour.
-      Eigen::Vector2d command = v.smc ? impl_->ErgodicCommand(v, state, time_s)
+      // An A* vehicle holds station until it has a tour, and any vehicle in reserve.
+      Eigen::Vector2d command = v.reserve ? Eigen::Vector2d::Zero()
+                                : v.smc   ? impl_->ErgodicCommand(v, state, time_s)
                                           : (v.tour ? v.tour->Command(state, time_s) : Eigen::Vector2d::Zero());
       if (v.keep_clear) command = v.keep_clear->Apply(state.position_m, command, nearby);
       v.command = command;

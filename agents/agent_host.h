@@ -68,6 +68,10 @@ class AgentHost {
   /// (from the next lap); another one is flown from where the vehicle is. Throws
   /// std::invalid_argument for a bad valve index or a leg with no path.
   void SetTour(VehicleId id, const std::vector<int>& valves, const Eigen::VectorXd& weights);
+  /// Holds a vehicle in reserve (true: more vehicles than valves, it has no share): it drops its
+  /// tour, region and target and holds where it is (only keeping clear of structures and
+  /// vehicles), until a tour or region (SetTour, SetRegion) or false brings it back.
+  void SetReserve(VehicleId id, bool reserve);
   /// New valve weights (one per scenario valve, as the waits are to be split) for every A* tour,
   /// taken at each tour's next lap.
   void SetTourWeights(const Eigen::VectorXd& weights);

@@ -239,6 +239,8 @@ bool AgentMission::Apply(const Assignment& assignment, std::string& why) {
   m.own_cycle = assignment.cycle;
   m.own_applied = false;
   m.in_region = assignment.region_order > 0;
+  m.reserve = InReserve(assignment);
+  host_.SetReserve(assignment.id, m.reserve);
   if (m.in_region) {
     host_.SetRegion(assignment.id, {assignment.region_origin_m, assignment.region_size_m, assignment.region_order},
                     assignment.region_forgetting_s);
@@ -285,6 +287,7 @@ void AgentMission::OnNewServer() {
 
 std::optional<VehicleTarget> AgentMission::TargetOf(VehicleId id, Member& member, double time_s) const {
   VehicleTarget target;
+  if (member.reserve) return std::nullopt;  // holds where it is
   // Its share already handed over: nothing to ask of the host (a look-up in it and into the
   // vehicle's basis, a cache miss each: 2 of a 10,000-vehicle regions cycle's 40 ms, on one core
   // while the other waited). The share and the host's basis change only by an assignment, and a

@@ -109,6 +109,7 @@ class AgentMission {
     std::uint64_t steered_cycle = 0;
     std::uint64_t seq = 0;
     bool in_region = false;  // steers on a region's own basis
+    bool reserve = false;    // held in reserve (InReserve): no target
     // Its region as made here from the valves a target named (maps::ShareRegion), kept while
     // they stay so that a target that re-weights them costs a product, not a quadrature.
     std::vector<int> region_valves;

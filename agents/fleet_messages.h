@@ -88,4 +88,11 @@ struct Assignment {
   Eigen::VectorXd region_weights;
 };
 
+/// An assignment that holds its vehicle in reserve: not shared and nothing to fly (no phi, tour
+/// or region). Sent to the vehicles left over when the fleet has more vehicles than the field
+/// valves (agents/fleet_tour_planner.h): each valve flies with one vehicle of its own.
+inline bool InReserve(const Assignment& a) {
+  return !a.shared && a.phi.size() == 0 && a.tour.empty() && a.region_order == 0 && a.region_valves.empty();
+}
+
 }  // namespace sage::agents

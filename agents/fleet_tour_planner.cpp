@@ -1197,19 +1197,16 @@ FleetTourPlan Plan(const maps::OccupancyGrid& grid, const Points& valves_m, cons
     Search search(dist, centres, vehicles, wait_per_lap_s, weights, options, rng);
     search.Run(s, std::max(0, options.perturbation_rounds));
     s.order = Rematch(s, search, valves_m, vehicles, wait_per_lap_s);
-  } else {  // spares: the heaviest valves again, heaviest first
-    std::vector<int> heaviest(m);
-    for (int v = 0; v < m; ++v) heaviest[v] = v;
-    std::stable_sort(heaviest.begin(), heaviest.end(), [&](int a, int b) { return weights[a] > weights[b]; });
-    int next = 0;
-    for (auto& order : s.order) {
-      if (order.empty()) order = {heaviest[next++ % m]};
-    }
-  }
+  }  // else each valve has a vehicle of its own, and the vehicles left over none: in reserve
 
   FleetTourPlan plan;
   plan.ok = true;
   for (int k = 0; k < n; ++k) {
+    if (s.order[k].empty()) {  // in reserve
+      ++plan.reserve;
+      plan.vehicles.emplace_back().tour.ok = true;
+      continue;
+    }
     std::vector<int> order = s.order[k];
     std::rotate(order.begin(), std::min_element(order.begin(), order.end()), order.end());
     VehicleTour out;
@@ -1236,9 +1233,10 @@ FleetTourPlan Plan(const maps::OccupancyGrid& grid, const Points& valves_m, cons
     for (int i = 0; i < size; ++i) out.lap_time_s += wait_per_lap_s * out.weights[i];
     plan.ok = plan.ok && out.tour.ok;
     plan.max_lap_s = std::max(plan.max_lap_s, out.lap_time_s);
-    plan.mean_lap_s += out.lap_time_s / n;
+    plan.mean_lap_s += out.lap_time_s;
     plan.vehicles.push_back(std::move(out));
   }
+  plan.mean_lap_s /= std::max(1, n - plan.reserve);
   return plan;
 }
 

@@ -484,9 +484,13 @@ void MissionCore::TakeTours(const agents::FleetTourPlan& tours, const std::vecto
   const std::string how = planning_s < 0.0 ? " (provisional: each valve to its nearest vehicle while the tours are planned)"
                           : planning_s > 0.0 ? fmt::format(", planned over {:.1f} s (laps on grid distances)", planning_s)
                                              : std::string();
-  Note("tours", fmt::format("{} tours planned for {} vehicles{}: laps {:.1f} s at most, {:.1f} s on average{}",
-                            tours.vehicles.size(), planned_for.size(), how, tours.max_lap_s, tours.mean_lap_s,
-                            tours.ok ? "" : " (some leg has no path)"));
+  // A vehicle in reserve (more vehicles than valves) gets an empty tour: it holds where it is.
+  const std::string reserve =
+      tours.reserve > 0 ? fmt::format("; {} vehicle(s) held in reserve (one vehicle a valve flies; a reserve takes a lost one's place)",
+                                          tours.reserve) : std::string();
+  Note("tours", fmt::format("{} tours planned for {} vehicles{}: laps {:.1f} s at most, {:.1f} s on average{}{}",
+                            tours.vehicles.size() - static_cast<std::size_t>(tours.reserve), planned_for.size(), how,
+                            tours.max_lap_s, tours.mean_lap_s, reserve, tours.ok ? "" : " (some leg has no path)"));
 }
 
 // A share of more valves than this flies its shortest tour: the planner's n (n - 1) legs and its
@@ -688,9 +692,15 @@ void MissionCore::TakeSplit(RegionSplit split) {
   std::size_t most = 0;
   double largest = 0.0;
   Eigen::VectorXd bounds = Eigen::VectorXd::Constant(static_cast<Eigen::Index>(valves.size()), scenario_.guard.revisit_bound_s);
+  plan.reserve.clear();
   for (std::size_t k = 0; k < split.regions.size(); ++k) {
     PlannedRegion& region = split.regions[k];
     const int id = split.input.vehicle_ids[k];
+    if (region.valves.empty()) {  // in reserve: more vehicles than valves
+      plan.reserve.push_back(id);
+      if (Roster::Member* m = roster_.Find(id)) m->target_sent = false;
+      continue;
+    }
     RegionShare share;
     share.valves = std::move(region.valves);
     share.lap_time_s = region.lap_time_s;
@@ -722,12 +732,16 @@ void MissionCore::TakeSplit(RegionSplit split) {
   if (recorder_ != nullptr) recorder_->OnRegions(time_s_, records);
   const double planning_s = time_s_ - plan.pending_started_s;
   Note("regions", fmt::format("{} regions for {} vehicles{}{}: up to {} valves and {:.1f} m a side each; the guard "
-                              "boosts a valve after {:.0f}-{:.0f} s",
+                              "boosts a valve after {:.0f}-{:.0f} s{}",
                               plan.shares.size(), split.input.vehicle_ids.size(),
                               split.provisional ? " (provisional: each valve to its nearest vehicle while the split is planned)"
                               : split.input.by_risk ? " (the risk moved)" : "",
                               planning_s > 0.0 ? fmt::format(", planned over {:.1f} s", planning_s) : std::string(),
-                              most, largest, bounds.minCoeff(), bounds.maxCoeff()));
+                              most, largest, bounds.minCoeff(), bounds.maxCoeff(),
+                              plan.reserve.empty() ? std::string()
+                                                   : fmt::format("; {} vehicle(s) held in reserve (one vehicle a valve "
+                                                                 "flies; a reserve takes a lost one's place)",
+                                                                 plan.reserve.size())));
 }
 
 // Regions: the live vehicles split the valves as the fleet's tours would (balanced on travel),
@@ -820,11 +834,13 @@ void MissionCore::AssignRegions(const std::vector<int>& alive, CycleOutput& out)
     Roster::Member& m = *roster_.Find(id);
     while (found != plan.shares.end() && found->first < id) ++found;
     if (found == plan.shares.end() || found->first != id) {
-      // Not in the split yet (it is coming): the field's shared target meanwhile.
+      // Not in the split yet (it is coming): the field's shared target meanwhile. Held in reserve
+      // (more vehicles than valves): an assignment of nothing, on which it holds where it is.
       if (m.target_sent) continue;
       agents::Assignment a;
       a.id = id;
       a.cycle = out.snapshot.cycle;
+      a.shared = !std::binary_search(plan.reserve.begin(), plan.reserve.end(), id);
       out.assignments.push_back(std::move(a));
       m.target_sent = true;
       continue;

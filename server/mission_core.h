@@ -325,6 +325,7 @@ class MissionCore {
     // By vehicle id, ascending: walked every cycle beside the live ids (a map's nodes were a cache
     // miss each at 10,000 vehicles).
     std::vector<std::pair<int, RegionShare>> shares;
+    std::vector<int> reserve;  // vehicles held in reserve by the split (more vehicles than valves), ascending
     // Every share's valves and its sent proportions, share after share in the order of `shares`:
     // the cycle's walk reads them as one run (each share's own two heap arrays were two cache
     // misses a vehicle a cycle at 10,000 vehicles, most of the walk's time).

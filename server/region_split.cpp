@@ -169,6 +169,10 @@ RegionSplit PlanRegionSplit(const maps::OccupancyGrid& astar_grid, const maps::O
   RegionSplit split;
   split.regions.reserve(shares.vehicles.size());
   for (const agents::VehicleTour& share : shares.vehicles) {
+    if (share.valves.empty()) {  // in reserve
+      split.regions.emplace_back();
+      continue;
+    }
     split.regions.push_back(MakeRegion(share.valves, share.lap_time_s, valves, scenario, blocked));
   }
   split.input = std::move(input);

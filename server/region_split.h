@@ -31,11 +31,12 @@ struct RegionSplitInput {
   bool by_risk = false;                        ///< a risk change asked for it (said in the note)
 };
 
-/// One vehicle's region.
+/// One vehicle's region; none (no valves, no field) for a vehicle held in reserve, when the
+/// fleet has more vehicles than the field valves (agents::PlanFleetTours).
 struct PlannedRegion {
-  std::vector<int> valves;                  ///< scenario valve indices, ascending, never empty
+  std::vector<int> valves;                  ///< scenario valve indices, ascending; empty: in reserve
   double lap_time_s = 0.0;                  ///< the lap of its share's tour, as the search priced it
-  std::unique_ptr<maps::RegionField> field; ///< its box, basis and its valves' narrowed targets
+  std::unique_ptr<maps::RegionField> field; ///< its box, basis and its valves' narrowed targets; null in reserve
 };
 
 /// A split of the field: one region per input vehicle, in the input's order.

@@ -386,36 +386,38 @@ void WarnOfUnusedOverrides(const ScenarioOverrides& o, const maps::Scenario& sce
   for (const std::string& line : UnusedOverrides(o, scenario, flown)) spdlog::warn("{}", line);
 }
 
-std::string FleetDensityNote(const maps::Scenario& scenario, Flown flown) {
+FleetNote FleetDensityNote(const maps::Scenario& scenario, Flown flown) {
   const bool regions = flown != Flown::kTours && scenario.fleet.assignment == maps::FleetAssignment::kRegions;
   const bool tours = flown != Flown::kErgodic;
   const std::size_t valves = static_cast<std::size_t>(scenario.ValveCount()), vehicles = scenario.vehicles.size();
   if ((regions || tours) && vehicles > valves) {
-    // Measured (600 s, generated fields of 6-12 valves): every valve's longest unwatched gap
-    // 7-15 s with a vehicle a valve, 40-590 s with twice as many vehicles, tours and regions alike.
-    return fmt::format(
-        "{} vehicles for {} valves: {} give a valve more than one vehicle, and vehicles sharing a valve keep one another "
-        "outside its {} m visit radius (measured on generated fields: a valve unwatched up to 590 s with 20 vehicles on "
-        "8 valves, at most 15 s with 8); fly at most {} (-n {}){}",
-        vehicles, valves, regions && tours ? "regions and tours" : (regions ? "regions" : "tours"), scenario.visit_radius_m,
-        valves, valves, regions ? ", or --assignment shared" : "");
+    return {false, fmt::format("{} vehicles for {} valves: {} fly one vehicle a valve and hold the other {} in reserve, "
+                               "where they start, to take a lost vehicle's place{}",
+                               vehicles, valves, regions && tours ? "regions and tours" : (regions ? "regions" : "tours"),
+                               vehicles - valves, regions ? " (--assignment shared flies them all)" : "")};
   }
   constexpr double kSparseValvesPerVehicle = 10.0;
   const double per_vehicle = static_cast<double>(valves) / static_cast<double>(std::max<std::size_t>(vehicles, 1));
   if (regions && vehicles > 1 && per_vehicle > kSparseValvesPerVehicle) {
-    // Measured (600 s, generated fields): the regions' longest gap 2.3-2.9x the
-    // tours' at 12-23 valves a vehicle (1.99x on the README's 12-a-vehicle field), and 42 valves never
-    // seen with two vehicles (none by tours).
-    return fmt::format(
+    // Measured (600 s, generated fields): the regions' longest gap 2.3-2.9x the tours' at 12-23
+    // valves a vehicle (1.99x on the README's 12-a-vehicle field), and 42 valves never seen with
+    // two vehicles (none by tours).
+    return {true, fmt::format(
         "{} valves for {} vehicles ({:.3g} a vehicle): regions this sparse leave valves unwatched far longer than tours "
         "(measured on generated fields: 2.0-2.9x the tours' longest gap at 12-23 valves a vehicle); -c astar flies tours",
-        valves, vehicles, per_vehicle);
+        valves, vehicles, per_vehicle)};
   }
-  return "";
+  return {};
 }
 
 void WarnOfFleetDensity(const maps::Scenario& scenario, Flown flown) {
-  if (const std::string note = FleetDensityNote(scenario, flown); !note.empty()) spdlog::warn("{}", note);
+  const FleetNote note = FleetDensityNote(scenario, flown);
+  if (note.text.empty()) return;
+  if (note.warning) {
+    spdlog::warn("{}", note.text);
+  } else {
+    spdlog::info("{}", note.text);
+  }
 }
 
 void CheckFleetFitsField(const maps::Scenario& scenario, bool tours) {

@@ -102,12 +102,16 @@ maps::Scenario LoadWithOverrides(const ScenarioOverrides& o);
 /// FleetTooSmallForField (server/region_split.h).
 void CheckFleetFitsField(const maps::Scenario& scenario, bool tours);
 
-/// A line to warn of a fleet whose size does not suit how it is flown, or empty: more vehicles than
-/// valves under tours or regions (vehicles sharing a valve keep one another outside its visit
-/// radius), or more than ten valves a vehicle under regions (tours revisit them sooner). Shared
-/// ergodic fleets roam the whole field, and are not warned of.
-std::string FleetDensityNote(const maps::Scenario& scenario, Flown flown);
-/// Warns (spdlog) of FleetDensityNote's line, if any.
+/// What to tell the operator of a fleet's size against its field, or nothing (empty text): more
+/// vehicles than valves under tours or regions (one a valve flies, the others are held in reserve;
+/// said, not warned), or more than ten valves a vehicle under regions (tours revisit them sooner:
+/// a warning). Shared ergodic fleets roam the whole field, and are not spoken of.
+struct FleetNote {
+  bool warning = false;
+  std::string text;
+};
+FleetNote FleetDensityNote(const maps::Scenario& scenario, Flown flown);
+/// Logs FleetDensityNote's line, if any (spdlog warn or info).
 void WarnOfFleetDensity(const maps::Scenario& scenario, Flown flown);
 
 }  // namespace sage::server

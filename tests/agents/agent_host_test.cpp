@@ -311,6 +311,51 @@ TEST(AgentHost, TourVehicleGoesRoundVehiclesParkedInItsWay) {
   EXPECT_LT(arrived, 60.0);  // 18 s of way at 0.7 m/s, pinned seconds and detours (40 s measured)
 }
 
+// A vehicle held in reserve (more vehicles than valves) drops its tour or region and holds where
+// it is; a tour or region brings it back. Measured on each: it flies off under its tour or
+// region, in reserve it moves no more than its stopping distance, and back on a tour it reaches
+// the valve.
+TEST(AgentHost, AVehicleInReserveHoldsWhereItIs) {
+  const maps::Scenario s = maps::LoadScenario(kTwoXt);
+  const maps::World world(s);
+  const std::vector<maps::Valve> valves = s.AllValves();
+  const auto fly = [](AgentHost& host, double& t, double seconds) {
+    for (const double end = t + seconds; t < end - 1e-9; t += host.control_period_s()) host.Step(t);
+  };
+  for (const Guidance guidance : {Guidance::kAstar, Guidance::kErgodic}) {
+    AgentHost host(world, s, guidance);
+    host.AddVehicle(1, Rov("a", {0.7, 0.6}));
+    double t = 0.0;
+    if (guidance == Guidance::kAstar) {
+      host.SetTour(1, {4}, Eigen::VectorXd::Ones(1));  // P5, 4 m off
+    } else {
+      const maps::RegionBox box{Eigen::Vector2d(3.0, 0.5), Eigen::Vector2d(2.5, 2.5), 8};
+      host.SetRegion(1, box);
+      host.SetTarget(1, {BumpAt(maps::SpectralBasis(2.5, 2.5, 8), valves[4].position_m - box.origin_m), {}, 0.0});
+    }
+    fly(host, t, 3.0);
+    const Eigen::Vector2d before = host.State(1).position_m;
+    ASSERT_GT((before - Eigen::Vector2d(0.7, 0.6)).norm(), 1.0) << "it did not set off";
+    host.SetReserve(1, true);
+    fly(host, t, 1.5);  // it stops: a BlueROV2 at 0.7 m/s within a metre
+    const Eigen::Vector2d stopped = host.State(1).position_m;
+    EXPECT_LT((stopped - before).norm(), 1.0);
+    fly(host, t, 20.0);
+    EXPECT_LT((host.State(1).position_m - stopped).norm(), 0.05) << "in reserve it held";
+    EXPECT_LT(host.LastCommand(1).norm(), 1e-12);
+    EXPECT_EQ(host.Coverage(1), nullptr);  // no target, no coverage kept
+    if (guidance == Guidance::kAstar) {
+      host.SetTour(1, {4}, Eigen::VectorXd::Ones(1));  // back on a tour: off again, to P5
+      double nearest = std::numeric_limits<double>::infinity();
+      for (int i = 0; i < 300; ++i, t += host.control_period_s()) {
+        host.Step(t);
+        nearest = std::min(nearest, (host.State(1).position_m - valves[4].position_m).norm());
+      }
+      EXPECT_LT(nearest, s.visit_radius_m);
+    }
+  }
+}
+
 // A tour the grid cannot fly is refused in the scenario's terms: two_xt with its A* clearance
 // raised to 5 m (the structures grown by it close the way) names the valves and the field, where
 // it had said only "a leg of the tour has no path on the A* grid". With the file's 0.3 m the same

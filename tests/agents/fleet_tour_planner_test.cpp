@@ -485,20 +485,49 @@ TEST(FleetTourPlanner, SameSeedSamePlan) {
   }
 }
 
-// 3 valves, 5 vehicles: each valve has a vehicle of its own and the 2 spares hold the 2
-// heaviest valves; every vehicle has exactly one valve.
-TEST(FleetTourPlanner, SparesTakeTheHeaviestValves) {
+// 3 valves, 5 vehicles: each valve has a vehicle of its own, none farther than a held one
+// (vehicles start along the field's lower edge), and the 2 others are held in reserve: no
+// valve, no tour, no lap. (They had been given the heaviest valves again, where two vehicles
+// keep one another outside the visit radius.) The figures are the flying vehicles'.
+TEST(FleetTourPlanner, VehiclesBeyondOneAValveAreHeldInReserve) {
   const OccupancyGrid grid = FieldGrid();
   const Points valves = {{3.05, 3.05}, {12.05, 8.05}, {20.05, 15.05}};
-  const FleetTourPlan plan = PlanFleetTours(grid, valves, Eigen::Vector3d(0.2, 0.5, 0.3), Vehicles(5, 0.5), 1.0);
+  const std::vector<FleetVehicle> vehicles = Vehicles(5, 0.5);
+  const FleetTourPlan plan = PlanFleetTours(grid, valves, Eigen::Vector3d(0.2, 0.5, 0.3), vehicles, 1.0);
   ASSERT_TRUE(plan.ok);
+  ASSERT_EQ(plan.vehicles.size(), 5u);
+  EXPECT_EQ(plan.reserve, 2);
   std::vector<int> count(3, 0);
-  for (const VehicleTour& vt : plan.vehicles) {
+  int held = 0;
+  for (std::size_t k = 0; k < plan.vehicles.size(); ++k) {
+    const VehicleTour& vt = plan.vehicles[k];
+    if (vt.valves.empty()) {
+      ++held;
+      EXPECT_TRUE(vt.tour.order.empty());
+      EXPECT_TRUE(vt.tour.legs.empty());
+      EXPECT_EQ(vt.lap_time_s, 0.0);
+      continue;
+    }
     ASSERT_EQ(vt.valves.size(), 1u);
     ++count[vt.valves[0]];
     EXPECT_NEAR(vt.lap_time_s, 1.0, 1e-12);  // a single valve: no travel, the whole wait
   }
-  EXPECT_EQ(count, (std::vector<int>{1, 2, 2}));
+  EXPECT_EQ(held, 2);
+  EXPECT_EQ(count, (std::vector<int>{1, 1, 1}));
+  EXPECT_NEAR(plan.max_lap_s, 1.0, 1e-12);
+  EXPECT_NEAR(plan.mean_lap_s, 1.0, 1e-12);  // over the three that fly, not the five
+  // Each valve went to a vehicle no farther than any held one (a reserve is never the nearer).
+  for (int v = 0; v < 3; ++v) {
+    double flying = 0.0, nearest_held = std::numeric_limits<double>::infinity();
+    for (std::size_t k = 0; k < plan.vehicles.size(); ++k) {
+      const double d = (vehicles[k].position_m - valves[static_cast<std::size_t>(v)]).norm();
+      if (plan.vehicles[k].valves.empty()) nearest_held = std::min(nearest_held, d);
+      else if (plan.vehicles[k].valves[0] == v) flying = d;
+    }
+    EXPECT_LE(flying, nearest_held + 1e-9) << "valve " << v;
+  }
+  // As many vehicles as valves: none held.
+  EXPECT_EQ(PlanFleetTours(grid, valves, Eigen::Vector3d(0.2, 0.5, 0.3), Vehicles(3, 0.5), 1.0).reserve, 0);
 }
 
 // Each vehicle's tour goes straight into TourController: a single integrator (x += u dt) from

@@ -501,41 +501,45 @@ TEST(ScenarioOverrides, NamesTheOptionsGivenAndNotUsed) {
 }
 
 
-// A fleet whose size does not suit how it flies is said before it flies: more vehicles than valves
-// under tours or regions (vehicles sharing a valve kept one another outside its visit radius: a
-// valve unwatched 590 s with 20 vehicles on 8 valves), and regions with more than ten valves a
-// vehicle. A shared fleet roams the whole field: nothing to say.
+// A fleet's size against its field is said before it flies: more vehicles than valves under
+// tours or regions (one a valve flies, the others are held in reserve: told, not warned), and a
+// warning for regions with more than ten valves a vehicle. A shared fleet roams the whole field:
+// nothing to say.
 TEST(FleetDensity, SaysWhenTheFleetDoesNotSuitTheField) {
   maps::Scenario field = maps::LoadScenario(std::string(SAGE_SOURCE_DIR) + "/scenarios/two_xt.yaml");
   ASSERT_EQ(field.ValveCount(), 5);
   ASSERT_EQ(field.vehicles.size(), 1u);
   ASSERT_EQ(field.fleet.assignment, maps::FleetAssignment::kShared);
-  for (const Flown flown : {Flown::kErgodic, Flown::kTours, Flown::kBoth}) EXPECT_EQ(FleetDensityNote(field, flown), "");
+  for (const Flown flown : {Flown::kErgodic, Flown::kTours, Flown::kBoth}) EXPECT_EQ(FleetDensityNote(field, flown).text, "");
   const maps::VehicleSpec spare = field.vehicles.front();
-  field.vehicles.resize(5, spare);  // five: one a valve is not a surplus
-  for (const Flown flown : {Flown::kErgodic, Flown::kTours, Flown::kBoth}) EXPECT_EQ(FleetDensityNote(field, flown), "");
+  field.vehicles.resize(5, spare);  // five: one a valve, none held
+  for (const Flown flown : {Flown::kErgodic, Flown::kTours, Flown::kBoth}) EXPECT_EQ(FleetDensityNote(field, flown).text, "");
   field.vehicles.push_back(spare);  // six for five valves
-  EXPECT_EQ(FleetDensityNote(field, Flown::kErgodic), "");  // shared
-  EXPECT_EQ(FleetDensityNote(field, Flown::kTours).rfind("6 vehicles for 5 valves: tours give a valve more than one", 0), 0u)
-      << FleetDensityNote(field, Flown::kTours);
+  EXPECT_EQ(FleetDensityNote(field, Flown::kErgodic).text, "");  // shared
+  const FleetNote tours = FleetDensityNote(field, Flown::kTours);
+  EXPECT_FALSE(tours.warning);
+  EXPECT_EQ(tours.text.rfind("6 vehicles for 5 valves: tours fly one vehicle a valve and hold the other 1 in reserve", 0), 0u)
+      << tours.text;
   field.fleet.assignment = maps::FleetAssignment::kRegions;
-  EXPECT_EQ(FleetDensityNote(field, Flown::kErgodic).rfind("6 vehicles for 5 valves: regions give", 0), 0u);
-  EXPECT_NE(FleetDensityNote(field, Flown::kErgodic).find("fly at most 5 (-n 5), or --assignment shared"), std::string::npos);
-  EXPECT_EQ(FleetDensityNote(field, Flown::kBoth).rfind("6 vehicles for 5 valves: regions and tours give", 0), 0u);
-  // Sparse: 11 valves a vehicle under regions; tours are what it advises, so tours are not warned.
+  EXPECT_EQ(FleetDensityNote(field, Flown::kErgodic).text.rfind("6 vehicles for 5 valves: regions fly", 0), 0u);
+  EXPECT_NE(FleetDensityNote(field, Flown::kErgodic).text.find("(--assignment shared flies them all)"), std::string::npos);
+  EXPECT_EQ(FleetDensityNote(field, Flown::kBoth).text.rfind("6 vehicles for 5 valves: regions and tours fly", 0), 0u);
+  // Sparse: 11 valves a vehicle under regions, a warning; tours are what it advises, so tours
+  // are not warned.
   maps::Scenario sparse = maps::LoadScenario(kFleetField);  // 20 valves
   sparse.fleet.assignment = maps::FleetAssignment::kRegions;
   sparse.vehicles.resize(2);
   while (sparse.ValveCount() <= 20) sparse.structures.push_back(sparse.structures.front());
   const int valves = sparse.ValveCount();
-  EXPECT_EQ(FleetDensityNote(sparse, Flown::kTours), "");
-  EXPECT_EQ(FleetDensityNote(sparse, Flown::kErgodic).rfind(fmt::format("{} valves for 2 vehicles", valves), 0), 0u)
-      << FleetDensityNote(sparse, Flown::kErgodic);
+  EXPECT_EQ(FleetDensityNote(sparse, Flown::kTours).text, "");
+  const FleetNote warned = FleetDensityNote(sparse, Flown::kErgodic);
+  EXPECT_TRUE(warned.warning);
+  EXPECT_EQ(warned.text.rfind(fmt::format("{} valves for 2 vehicles", valves), 0), 0u) << warned.text;
   sparse.vehicles.resize(1);  // one vehicle: no split to speak of
-  EXPECT_EQ(FleetDensityNote(sparse, Flown::kErgodic), "");
+  EXPECT_EQ(FleetDensityNote(sparse, Flown::kErgodic).text, "");
   sparse.vehicles.resize(2);
   sparse.fleet.assignment = maps::FleetAssignment::kShared;
-  EXPECT_EQ(FleetDensityNote(sparse, Flown::kErgodic), "");
+  EXPECT_EQ(FleetDensityNote(sparse, Flown::kErgodic).text, "");
 }
 
 
