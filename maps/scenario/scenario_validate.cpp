@@ -309,8 +309,15 @@ std::string TrajectoryRateRule(double rate_hz, double control_rate_hz) {
     const double low = std::clamp(std::floor(every), 1.0, kMaxTrajectoryEvery);
     const double high = std::clamp(std::ceil(every), 1.0, kMaxTrajectoryEvery);
     const auto k = [](double v) { return std::to_string(static_cast<long long>(v)); };
-    nearest = "; the nearest: " + FormatNumber(control_rate_hz / low) + " (k = " + k(low) + ")";
-    if (high != low) nearest += " and " + FormatNumber(control_rate_hz / high) + " (k = " + k(high) + ")";
+    // Six significant figures: what the rule above takes back (3.33333 for 10 Hz / 3), not the
+    // double's seventeen.
+    const auto rate = [&](double v) {
+      std::ostringstream out;
+      out << std::setprecision(6) << control_rate_hz / v;
+      return out.str();
+    };
+    nearest = "; the nearest: " + rate(low) + " (k = " + k(low) + ")";
+    if (high != low) nearest += " and " + rate(high) + " (k = " + k(high) + ")";
   }
   return "must be control_rate_hz = " + FormatNumber(control_rate_hz) + " over a whole number k in 1.." +
          std::to_string(static_cast<long long>(kMaxTrajectoryEvery)) + " (a row every k-th control cycle" + nearest +

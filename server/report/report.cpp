@@ -187,6 +187,12 @@ bool AnySensing(const std::vector<MissionMetrics>& runs) {
   return std::any_of(runs.begin(), runs.end(), [](const MissionMetrics& m) { return m.sensing; });
 }
 
+// A fleet figure that an unvisited valve makes a floor: ">= 60.0 s" (the valve counted as visited
+// once, its leak as waiting to the end), else as Seconds.
+std::string AtLeastIfUnvisited(const MissionMetrics& run, double seconds) {
+  return run.unvisited_valves > 0 ? ">= " + Seconds(seconds) : Seconds(seconds);
+}
+
 // The valves a table lists, as indices into the first run's (matched: each run's valve for each of
 // them, or null): every valve up to kTableRows, beyond the kTableRowsOfLarge with the longest gap
 // in any run (with sensors the longest scan wait, the unseen first), longest first (ties in
@@ -309,8 +315,10 @@ std::string BuildTable(const std::vector<MissionMetrics>& runs, const std::vecto
             ? fmt::format("{:.1f} %", 100.0 * (run.time_outside_s + run.time_pinned_s) / vehicle_time)
             : "---",
         fmt::format("{} of {}", run.unvisited_valves, run.valves.size()),
-        run.duration_s > 0.0 ? Seconds(run.risk_weighted_interval_s) : "---",
-        run.duration_s > 0.0 ? Seconds(run.expected_detection_delay_s) : "---"};
+        // A valve never visited counts as once in the mission, and its leak as waiting only to
+        // the end: with any unvisited both figures are floors (a log with no visit had read 60 s).
+        run.duration_s > 0.0 ? AtLeastIfUnvisited(run, run.risk_weighted_interval_s) : "---",
+        run.duration_s > 0.0 ? AtLeastIfUnvisited(run, run.expected_detection_delay_s) : "---"};
     if (sensing) {
       block.summary.push_back(run.sensing ? Seconds(run.expected_detection_by_scans_s) : "---");
       const auto unseen = std::count_if(run.valves.begin(), run.valves.end(), UnseenByScans);
@@ -319,6 +327,9 @@ std::string BuildTable(const std::vector<MissionMetrics>& runs, const std::vecto
     blocks.push_back(std::move(block));
   }
   std::string table = RenderTable(blocks, rows, layout.spacing);
+  if (std::any_of(runs.begin(), runs.end(), [](const MissionMetrics& m) { return m.unvisited_valves > 0; })) {
+    table += "(>=: some valve was never visited; it counts as visited once, its leak as waiting only to the end)\n";
+  }
   if (rows < first.valves.size()) {
     table += sensing ? fmt::format("({} of {} valves listed: the longest scan waits; every valve is in metrics.json)\n",
                                    rows, first.valves.size())

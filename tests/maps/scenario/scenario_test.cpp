@@ -567,10 +567,10 @@ TEST(Scenario, BadInputsGiveOneLineNamingFieldAndValue) {
       {"physics_rate_hz: 50", "physics_rate_hz: 25", {"physics_rate_hz = 25", "whole multiple"}},
       {"physics_rate_hz: 50", "physics_rate_hz: 50\ntrajectory_rate_hz: 3",
        {"base.yaml: trajectory_rate_hz = 3: must be control_rate_hz = 10 over a whole number k in 1..100000 (a row every "
-        "k-th control cycle; the nearest: 3.3333333333333335 (k = 3) and 2.5 (k = 4)), or 0 for every cycle"}},
+        "k-th control cycle; the nearest: 3.33333 (k = 3) and 2.5 (k = 4)), or 0 for every cycle"}},
       {"physics_rate_hz: 50", "physics_rate_hz: 50\ntrajectory_rate_hz: 20", {"trajectory_rate_hz = 20", "the nearest: 10 (k = 1))"}},
       {"physics_rate_hz: 50", "physics_rate_hz: 50\ntrajectory_rate_hz: 1e-300",
-       {"trajectory_rate_hz = 1e-300", "the nearest: 1e-04 (k = 100000))"}},
+       {"trajectory_rate_hz = 1e-300", "the nearest: 0.0001 (k = 100000))"}},
       {"physics_rate_hz: 50", "physics_rate_hz: 50\ntrajectory_rate_hz: -2", {"trajectory_rate_hz = -2", "or 0 for every"}},
       {"physics_rate_hz: 50", "physics_rate_hz: 50\ntrajectory_rate_hz: .nan", {"trajectory_rate_hz", "over a whole number"}},
       {"basis_order: 10", "basis_order: 65", {"ergodic.basis_order = 65", "1..64"}},

@@ -490,6 +490,21 @@ TEST(FormatTable, LongestGapIsTheStretchNobodyWatched) {
   EXPECT_EQ(table.find("118.6"), std::string::npos) << table;
 }
 
+// With a valve never visited, the risk-weighted interval and the expected detection delay are
+// floors (the valve counted as visited once, its leak as waiting only to the end): the table
+// marks them ">=" and says why (a log with no visit at all had read 60 s, as one visit a valve).
+TEST(FormatTable, FiguresAnUnvisitedValveCutsShortAreMarked) {
+  MissionMetrics m = SampleMetrics();
+  m.unvisited_valves = 0;
+  const std::string all_seen = FormatTable({m});
+  EXPECT_EQ(all_seen.find(">="), std::string::npos) << all_seen;
+  m.unvisited_valves = 1;
+  const std::string table = FormatTable({m});
+  EXPECT_NE(table.find(">= " + fmt::format("{:.1f} s", m.risk_weighted_interval_s)), std::string::npos) << table;
+  EXPECT_NE(table.find(">= " + fmt::format("{:.1f} s", m.expected_detection_delay_s)), std::string::npos) << table;
+  EXPECT_NE(table.find("(>=: some valve was never visited"), std::string::npos) << table;
+}
+
 // A large field's table lists the 40 valves with the longest gap in any run, longest first,
 // and says where the others are; up to 300 valves it lists every one, in scenario order. Weights
 // below 0.01 keep two significant digits.
