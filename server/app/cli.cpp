@@ -818,7 +818,13 @@ int RunCli(int argc, char** argv) {
     if (*vehicle_remove) return RemoveVehicle(mission(), op.remove_vehicle, op.insecure);
     if (*risk_set) return SetRisk(mission(), op.valve, op.weight, op.source, op.insecure);
     if (*stop) return StopMission(mission(), op.insecure);
-    if (*status) return ShowStatus(mission(), op.status_listen_s, op.status_all, op.insecure);
+    if (*status) {
+      // Status only reads: an ended mission is told, not refused.
+      if (const MissionFile m = FindMission(op.mission_dir); ReadRecordSummary(m.run_dir).complete) {
+        return ShowEndedMission(m.run_dir, ReadRecordSummary(m.run_dir));
+      }
+      return ShowStatus(mission(), op.status_listen_s, op.status_all, op.insecure);
+    }
     if (*security_init) return CmdSecurityInit(security_cmd);
     // Their log lines on stderr, as run's and launch's: stdout holds only what they report (a
     // field's [info] line had gone to stdout, so `2>/dev/null` did not quiet it).

@@ -1,6 +1,7 @@
 #include "server/app/operators.h"
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <functional>
 #include <map>
@@ -260,6 +261,25 @@ int SetRisk(const MissionFile& mission, const std::string& valve, double weight,
   }
   std::printf("%s (mission in %s)\n", RiskAppliedLine(valve, weight, answer->mission_time_s, answer->new_share).c_str(),
               mission.run_dir.c_str());
+  return 0;
+}
+
+int ShowEndedMission(const std::string& run_dir, const RecordSummary& record) {
+  const auto seconds = [](double s) { return std::isfinite(s) ? fmt::format("{:.1f} s", s) : std::string("?"); };
+  std::string out = fmt::format("mission in {}: ended{} at t = {}", run_dir,
+                                record.stopped_early ? " (stopped early)" : "",
+                                seconds(std::isfinite(record.duration_s) ? record.duration_s : record.recorded_until_s));
+  if (record.vehicle_count >= 0) out += fmt::format("; {} vehicle(s)", record.vehicle_count);
+  if (record.unvisited_valves >= 0 && record.valve_count >= 0) {
+    out += fmt::format("; unvisited valves {} of {}", record.unvisited_valves, record.valve_count);
+  }
+  if (std::isfinite(record.risk_weighted_interval_s)) {
+    out += fmt::format("; risk-weighted interval {}{}", record.unvisited_valves > 0 ? ">= " : "",
+                       seconds(record.risk_weighted_interval_s));
+  }
+  if (std::isfinite(record.longest_gap_max_s)) out += "; longest gap " + seconds(record.longest_gap_max_s);
+  std::printf("%s\n(its record: %s/metrics.json, trajectory.csv and the plots; sage launch starts another)\n",
+              out.c_str(), run_dir.c_str());
   return 0;
 }
 

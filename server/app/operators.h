@@ -39,6 +39,10 @@ int SetRisk(const MissionFile& mission, const std::string& valve, double weight,
 /// viewer): mission time, server cycle, vehicles flying and lost, and each vehicle heard within
 /// listen_s (the first 40 by id, every one if `all`). 1 if nothing is heard within 3 s.
 int ShowStatus(const MissionFile& mission, double listen_s, bool all, bool insecure = false);
+/// `sage status` of a mission whose record is complete: that it has ended, when and how, with its
+/// figures from metrics.json, on stdout; 0. (It had been an error, as for the commands that ask
+/// something of a mission, though status only reads.)
+int ShowEndedMission(const std::string& run_dir, const RecordSummary& record);
 /// `sage stop`: the mission ends now; the server writes the run directory.
 int StopMission(const MissionFile& mission, bool insecure = false);
 

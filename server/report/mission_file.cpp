@@ -1,7 +1,9 @@
 #include "server/report/mission_file.h"
 
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <iterator>
 #include <vector>
 
@@ -161,6 +163,24 @@ RecordSummary ReadRecordSummary(const std::string& dir) {
     if (j.is_object()) {
       s.complete = j.value("complete", true);  // a metrics.json without the key is an older, whole run
       if (!s.complete && j.contains("duration_s") && j["duration_s"].is_number()) s.checkpoint_s = j["duration_s"].get<double>();
+      // The end's figures, each only if it is there and a number (a record is read, not trusted).
+      const auto number = [&j](const char* key, double fallback) {
+        return j.contains(key) && j[key].is_number() ? j[key].get<double>() : fallback;
+      };
+      if (s.complete) {
+        const double nan = std::numeric_limits<double>::quiet_NaN();
+        s.stopped_early = j.contains("stopped_early") && j["stopped_early"].is_boolean() && j["stopped_early"].get<bool>();
+        s.duration_s = number("duration_s", nan);
+        const auto count = [&](const char* key) { return static_cast<int>(std::clamp(number(key, -1.0), -1.0, 1e9)); };
+        s.vehicle_count = count("vehicle_count");
+        s.unvisited_valves = count("unvisited_valves");
+        s.valve_count = j.contains("valves") && j["valves"].is_array() ? static_cast<int>(j["valves"].size()) : -1;
+        s.risk_weighted_interval_s = number("risk_weighted_interval_s", nan);
+        if (j.contains("longest_gap_s") && j["longest_gap_s"].is_object()) {
+          const nlohmann::json& gap = j["longest_gap_s"];
+          if (gap.contains("max") && gap["max"].is_number()) s.longest_gap_max_s = gap["max"].get<double>();
+        }
+      }
     }
   }
   return s;

@@ -2,6 +2,7 @@
 // mission.json: what a running (or crashed) launch's run directory says about its mission, so
 // that operators' commands find it (sage risk set, vehicle add, stop) and `sage launch
 // --resume` can bring it back: its DDS domain, scenario, clock pace, controller and profile.
+#include <limits>
 #include <string>
 #include <utility>
 #include <vector>
@@ -65,6 +66,13 @@ struct RecordSummary {
   double recorded_until_s = -1.0;   ///< the last trajectory row's time
   double checkpoint_s = -1.0;       ///< the partial metrics' (and checkpoint's) time; -1 if none
   bool has_checkpoint = false;
+  /// From a complete metrics.json (NaN / -1 where it has none): how the mission ended, for
+  /// `sage status` of an ended mission.
+  bool stopped_early = false;
+  double duration_s = std::numeric_limits<double>::quiet_NaN();
+  int vehicle_count = -1, valve_count = -1, unvisited_valves = -1;
+  double risk_weighted_interval_s = std::numeric_limits<double>::quiet_NaN();
+  double longest_gap_max_s = std::numeric_limits<double>::quiet_NaN();
 };
 RecordSummary ReadRecordSummary(const std::string& dir);
 

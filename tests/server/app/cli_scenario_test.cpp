@@ -622,6 +622,17 @@ TEST(OperatorDoor, AnEndedMissionIsSaidAtOnce) {
               std::string::npos)
         << run.err;
   }
+  // Status only reads: an ended mission is told with its figures, status 0 (it had been refused
+  // as the commands above are).
+  std::ofstream(dir / "metrics.json") << R"({"complete": true, "duration_s": 12.5, "stopped_early": true,
+      "vehicle_count": 4, "unvisited_valves": 2, "valves": [{}, {}, {}, {}, {}], "risk_weighted_interval_s": 8.26,
+      "longest_gap_s": {"median": 3, "p90": 5, "max": 9.04}})";
+  const SageRun ended = RunSage({"status", "--mission", dir.string()});
+  EXPECT_EQ(ended.status, 0) << ended.err;
+  EXPECT_NE(ended.out.find("mission in " + dir.string() + ": ended (stopped early) at t = 12.5 s; 4 vehicle(s); "
+                           "unvisited valves 2 of 5; risk-weighted interval >= 8.3 s; longest gap 9.0 s"),
+            std::string::npos)
+      << ended.out << ended.err;
   // Launched, unfinished, its launcher gone (a server that died): said at once, with the resume
   // (it had waited 3 s and said only that no mission listened on its domain).
   const pid_t gone = fork();
