@@ -63,7 +63,15 @@ class Reader {
     // a scan of the keys seen so far for each made loading it quadratic (5 % of a 10,000-vehicle bench).
     std::unordered_set<std::string> seen;
     for (const auto& entry : node) {
-      if (!entry.first.IsScalar()) Fail(path, entry.first, "keys must be plain names");
+      if (!entry.first.IsScalar()) {
+        // Where, when the parser knows: a stray comma or colon in a flow map makes a null key
+        // ("{width_m: 5.6,, height_m: 4.3}"), and the map's path alone did not find it.
+        const YAML::Mark at = entry.first.Mark().is_null() ? node.Mark() : entry.first.Mark();
+        Fail(path, entry.first,
+             at.is_null() ? std::string("keys must be plain names")
+                          : "keys must be plain names (line " + std::to_string(at.line + 1) + ", column " +
+                                std::to_string(at.column + 1) + ": a stray comma or colon?)");
+      }
       const std::string& key = entry.first.Scalar();
       if (!seen.insert(key).second) Fail(Join(path, key), "duplicate key");
       if (allowed.size() != 0 && std::find(allowed.begin(), allowed.end(), key) == allowed.end()) {

@@ -214,9 +214,18 @@ int CmdCompare(const RunCommand& c) {
                    "lap: mission %d, wait %.2f s\n", mission, wait_s);
     });
     if (tty) std::fprintf(stderr, "\n");
-    spdlog::info("A* wait per lap set to {:.2f} s so that A* spends as long near the dominant valve as ergodic "
-                 "control (the paper's protocol; --calibrate-wait off keeps the scenario's)",
-                 scenario.astar.wait_per_lap_s);
+    const Eigen::VectorXd weights = scenario.ProfileWeights(scenario.ProfileOrThrow(profile));
+    if (weights.size() > 0 && weights.maxCoeff() == weights.minCoeff()) {
+      // Every valve weighs the same: no dominant valve to calibrate on (a new user read of one).
+      spdlog::info("A* wait per lap set to {:.2f} s (profile {} weighs every valve alike: no dominant valve, so "
+                   "A*'s time at the valves is matched to ergodic control's at the first; --calibrate-wait off "
+                   "keeps the scenario's)",
+                   scenario.astar.wait_per_lap_s, profile);
+    } else {
+      spdlog::info("A* wait per lap set to {:.2f} s so that A* spends as long near the dominant valve as ergodic "
+                   "control (the paper's protocol; --calibrate-wait off keeps the scenario's)",
+                   scenario.astar.wait_per_lap_s);
+    }
   }
   const RunOutcome second = RunInto(scenario, ControllerKind::kAstar, profile, dir / "astar", c.stop);
   const MissionMetrics& astar = second.metrics;

@@ -125,7 +125,14 @@ Trajectory ParseTrajectoryCsv(std::istream& in, const std::string& path) {
   }
   for (const char* required : {"t", "vehicle", "x", "y"}) {
     if (!column_of.count(required)) {
-      throw ScenarioError(fmt::format("{}: missing column '{}' (need t, vehicle, x, y)", path, required));
+      // The header as read, so that a file of other columns or separators says what it holds
+      // (a "t;vehicle;x;y" export had read as missing 't' alone).
+      std::string read;
+      for (const std::string& name : header) read += (read.empty() ? "" : ", ") + Shown(name);
+      if (read.size() > 120) read = read.substr(0, 117) + "...";
+      throw ScenarioError(fmt::format("{}: missing column '{}' (need t, vehicle, x, y, comma-separated; its header "
+                                      "reads {} column(s): {})",
+                                      path, required, header.size(), read));
     }
   }
   const auto column = [&](const char* name) {

@@ -565,6 +565,9 @@ TEST(Scenario, BadInputsGiveOneLineNamingFieldAndValue) {
       {"duration_s: 300", "duraton_s: 300", {"duraton_s", "unknown key", "duration_s"}},
       {"rearm_radius_m: 0.6", "rearm_radius_m: 0.2", {"rearm_radius_m = 0.2", "> visit_radius_m = 0.3"}},
       {"physics_rate_hz: 50", "physics_rate_hz: 25", {"physics_rate_hz = 25", "whole multiple"}},
+      // A stray comma in a flow map makes a null key: said with where it is.
+      {"rov1, start_m: [0.5, 0.5],", "rov1,, start_m: [0.5, 0.5],",
+       {"vehicles[0] = null: keys must be plain names (line ", ": a stray comma or colon?)"}},
       {"physics_rate_hz: 50", "physics_rate_hz: 50\ntrajectory_rate_hz: 3",
        {"base.yaml: trajectory_rate_hz = 3: must be control_rate_hz = 10 over a whole number k in 1..100000 (a row every "
         "k-th control cycle; the nearest: 3.33333 (k = 3) and 2.5 (k = 4)), or 0 for every cycle"}},

@@ -130,7 +130,13 @@ TEST_F(ReportTest, CsvErrorsAreOneLineNamingFileAndLine) {
   const std::string file = Path("bad.csv");
   const std::string header = "t,vehicle,x,y\n";
   EXPECT_EQ(ReadError(""), file + ": empty file (need a header with t, vehicle, x, y)");
-  EXPECT_EQ(ReadError("t,vehicle,y\n0,0,1\n"), file + ": missing column 'x' (need t, vehicle, x, y)");
+  EXPECT_EQ(ReadError("t,vehicle,y\n0,0,1\n"),
+            file + ": missing column 'x' (need t, vehicle, x, y, comma-separated; its header reads 3 column(s): t, "
+                   "vehicle, y)");
+  // Another separator: the header as read says so.
+  EXPECT_EQ(ReadError("t;vehicle;x;y\n0;0;1;1\n"),
+            file + ": missing column 't' (need t, vehicle, x, y, comma-separated; its header reads 1 column(s): "
+                   "t;vehicle;x;y)");
   EXPECT_EQ(ReadError(header + "0,0,1,2\n0.1,0,abc,2\n"), file + ":3: column 'x' = 'abc': not a number");
   EXPECT_EQ(ReadError(header + "0,0,,2\n"), file + ":2: column 'x' = '': not a number");
   EXPECT_EQ(ReadError(header + "0,0,1\n"), file + ":2: 3 fields, the header has 4");
