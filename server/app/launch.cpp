@@ -439,8 +439,9 @@ int Launch(const LaunchCommand& c) {
   // The example names a valve of this field (manifold_slope has no P1).
   const std::vector<maps::Valve> valves = scenario.AllValves();
   const std::string example_valve = valves.empty() ? std::string("VALVE") : valves.front().name;
-  terminal.Log("launch: in another shell: sage risk set " + example_valve + " 0.9 | sage vehicle add --count 2 | sage vehicle "
-               "remove NAME | " +
+  // Separated by semicolons: a new user read the bars as a shell pipe.
+  terminal.Log("launch: in another shell: sage risk set " + example_valve + " 0.9; sage vehicle add --count 2; sage vehicle "
+               "remove NAME; " +
                (!c.no_latest ? std::string("sage stop (they find this mission through runs/latest)")
                                : fmt::format("sage stop, each with --mission {}", out_dir)));
   if (c.http != "off") {

@@ -282,7 +282,9 @@ void WarnOfAForeignRecord(const Trajectory& trajectory, const maps::Scenario& sc
   for (const TrajectorySample& s : trajectory.samples) {
     const TrajectorySample*& before = last[s.vehicle];
     if (before != nullptr && s.time_s > before->time_s) {
-      const double dt = s.time_s - before->time_s, d = (s.position_m - before->position_m).norm();
+      // hypot: a position near the double's limit (1e308) gave an "inf m" step.
+      const double dt = s.time_s - before->time_s,
+                   d = std::hypot(s.position_m.x() - before->position_m.x(), s.position_m.y() - before->position_m.y());
       if (d / dt > limit_mps) {
         ++jumps;
         if (d / dt > worst_mps) worst = &s, worst_mps = d / dt, worst_m = d, worst_dt = dt;
