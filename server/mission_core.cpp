@@ -39,6 +39,15 @@ std::string SenderName(int vehicle_id, std::uint64_t writer) {
   return writer == 0 ? fmt::format("vehicle {}", vehicle_id) : fmt::format("vehicle {} (writer {:x})", vehicle_id, writer);
 }
 
+// The tours' and regions' notes on the vehicles held in reserve (more vehicles than valves): ""
+// for none.
+std::string ReserveNote(std::size_t reserve) {
+  return reserve == 0 ? std::string()
+                      : fmt::format("; {} vehicle(s) held in reserve (one vehicle a valve flies; a reserve takes a "
+                                    "lost one's place)",
+                                    reserve);
+}
+
 }  // namespace
 
 const char* ToString(ControllerKind kind) { return kind == ControllerKind::kErgodic ? "ergodic" : "astar"; }
@@ -485,12 +494,10 @@ void MissionCore::TakeTours(const agents::FleetTourPlan& tours, const std::vecto
                           : planning_s > 0.0 ? fmt::format(", planned over {:.1f} s (laps on grid distances)", planning_s)
                                              : std::string();
   // A vehicle in reserve (more vehicles than valves) gets an empty tour: it holds where it is.
-  const std::string reserve =
-      tours.reserve > 0 ? fmt::format("; {} vehicle(s) held in reserve (one vehicle a valve flies; a reserve takes a lost one's place)",
-                                          tours.reserve) : std::string();
   Note("tours", fmt::format("{} tours planned for {} vehicles{}: laps {:.1f} s at most, {:.1f} s on average{}{}",
                             tours.vehicles.size() - static_cast<std::size_t>(tours.reserve), planned_for.size(), how,
-                            tours.max_lap_s, tours.mean_lap_s, reserve, tours.ok ? "" : " (some leg has no path)"));
+                            tours.max_lap_s, tours.mean_lap_s, ReserveNote(static_cast<std::size_t>(tours.reserve)),
+                            tours.ok ? "" : " (some leg has no path)"));
 }
 
 // A share of more valves than this flies its shortest tour: the planner's n (n - 1) legs and its
@@ -737,11 +744,7 @@ void MissionCore::TakeSplit(RegionSplit split) {
                               split.provisional ? " (provisional: each valve to its nearest vehicle while the split is planned)"
                               : split.input.by_risk ? " (the risk moved)" : "",
                               planning_s > 0.0 ? fmt::format(", planned over {:.1f} s", planning_s) : std::string(),
-                              most, largest, bounds.minCoeff(), bounds.maxCoeff(),
-                              plan.reserve.empty() ? std::string()
-                                                   : fmt::format("; {} vehicle(s) held in reserve (one vehicle a valve "
-                                                                 "flies; a reserve takes a lost one's place)",
-                                                                 plan.reserve.size())));
+                              most, largest, bounds.minCoeff(), bounds.maxCoeff(), ReserveNote(plan.reserve.size())));
 }
 
 // Regions: the live vehicles split the valves as the fleet's tours would (balanced on travel),

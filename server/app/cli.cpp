@@ -820,9 +820,8 @@ int RunCli(int argc, char** argv) {
     if (*stop) return StopMission(mission(), op.insecure);
     if (*status) {
       // Status only reads: an ended mission is told, not refused.
-      if (const MissionFile m = FindMission(op.mission_dir); ReadRecordSummary(m.run_dir).complete) {
-        return ShowEndedMission(m.run_dir, ReadRecordSummary(m.run_dir));
-      }
+      const MissionFile m = FindMission(op.mission_dir);
+      if (const RecordSummary record = ReadRecordSummary(m.run_dir); record.complete) return ShowEndedMission(m.run_dir, record);
       return ShowStatus(mission(), op.status_listen_s, op.status_all, op.insecure);
     }
     if (*security_init) return CmdSecurityInit(security_cmd);

@@ -155,9 +155,9 @@ int Launch(const LaunchCommand& c) {
     WarnOfLossySettings(scenario);
     WarnOfLargeRecord(scenario);
     CheckNetworkHere(scenario, c.scenario.network);  // a launch refused here leaves no run directory behind
-    WarnOfUnusedOverrides(c.scenario, scenario,
-                          ParseControllerKind(c.controller) == ControllerKind::kAstar ? Flown::kTours : Flown::kErgodic);
-    WarnOfFleetDensity(scenario, ParseControllerKind(c.controller) == ControllerKind::kAstar ? Flown::kTours : Flown::kErgodic);
+    const Flown flown = ParseControllerKind(c.controller) == ControllerKind::kAstar ? Flown::kTours : Flown::kErgodic;
+    WarnOfUnusedOverrides(c.scenario, scenario, flown);
+    WarnOfFleetDensity(scenario, flown);
     maps::CheckMissionMaps(scenario);  // a bad map or an unreachable valve is refused here, not by the server
     out_dir = c.out_dir.empty() ? (fs::path("runs") / (scenario.name + "_launch")).string() : c.out_dir;
     CheckOutDirectory(out_dir);

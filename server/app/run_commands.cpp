@@ -158,8 +158,9 @@ int CmdRun(const RunCommand& c) {
   CheckFleetFitsField(scenario, kind == ControllerKind::kAstar);
   WarnOfLossySettings(scenario);
   WarnOfLargeRecord(scenario);
-  WarnOfUnusedOverrides(c.scenario, scenario, kind == ControllerKind::kAstar ? Flown::kTours : Flown::kErgodic);
-  WarnOfFleetDensity(scenario, kind == ControllerKind::kAstar ? Flown::kTours : Flown::kErgodic);
+  const Flown flown = kind == ControllerKind::kAstar ? Flown::kTours : Flown::kErgodic;
+  WarnOfUnusedOverrides(c.scenario, scenario, flown);
+  WarnOfFleetDensity(scenario, flown);
   const std::string profile = c.scenario.profile.empty() ? scenario.default_profile : c.scenario.profile;
   // A bad seabed map or an unreachable valve is refused before the run directory is touched (an
   // earlier run there had been cut to a stub by the refused mission's record).
