@@ -33,6 +33,10 @@ using MissionStatus = sage_msgs_msg_dds__MissionStatus_;
 using FleetCommand = sage_msgs_msg_dds__FleetCommand_;
 /// The server's answer to an operator's FleetCommand (unkeyed).
 using FleetCommandResult = sage_msgs_msg_dds__FleetCommandResult_;
+/// Who asks a FleetCommand "stop", in its count: an operator (`sage stop`), or the mission's
+/// launcher, on a signal (Ctrl-C) or with every agent host gone. The server writes it on the
+/// "stopped" line of fleet_events.csv.
+enum class StopBy : std::uint32_t { kOperator = 0, kLauncherSignal = 1, kLauncherFleetGone = 2 };
 /// One scan of a vehicle's leak sensor and its detections (key vehicle_id).
 using Detection = sage_msgs_msg_dds__Detection_;
 

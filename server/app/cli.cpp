@@ -228,8 +228,8 @@ void AddCyclePriority(CLI::App& cmd, int& priority) {
   cmd.add_option("--cycle-priority", priority,
                  "Real-time priority (SCHED_FIFO, 1..99) of the server's cycle, the fleet's critical path, so that the "
                  "vehicles' physics and a browser on the same machine do not hold it up; the threads it starts run at "
-                 "normal priority. Needs root or CAP_SYS_NICE (without, the server says so and runs at normal "
-                 "priority); 0: none")
+                 "normal priority. Needs root or CAP_SYS_NICE (without, it runs at normal priority, and says so when "
+                 "a priority other than the default was asked for); 0: none")
       ->check(MustBeIn(0, 99, /*whole=*/true))
       ->capture_default_str();
 }
@@ -295,6 +295,27 @@ std::size_t EditDistance(const std::string& a, const std::string& b) {
     }
   }
   return row[b.size()];
+}
+
+// The command the parse chose, as typed after "sage" ("run", "field generate"; "" for none).
+std::string ParsedCommand(const CLI::App& app) {
+  std::string path;
+  for (const CLI::App* level = &app;;) {
+    const auto chosen = level->get_subcommands();
+    if (chosen.empty()) return path;
+    level = chosen.front();
+    path += (path.empty() ? "" : " ") + level->get_name();
+  }
+}
+
+// An input error after the parse, as CLI11's are told: an option's value ("--duration = -1: ...")
+// names its command and where its options are explained, so every bad option reads alike
+// ("sage: error: run: --duration = -1: ... (see sage run --help)"); a file's or a field's error
+// is said as it is.
+std::string AsInputError(const CLI::App& app, const std::string& message) {
+  const std::string command = ParsedCommand(app);
+  if (command.empty() || !message.starts_with("--")) return message;
+  return command + ": " + message + " (see sage " + command + " --help)";
 }
 
 // An option the command does not have, said as such with the nearest it does have ("The
@@ -838,10 +859,10 @@ int RunCli(int argc, char** argv) {
     if (*bench_scale) return CmdBenchScale(bench_cmd);
     if (*bench_leaks) return CmdBenchLeaks(leaks_cmd);
   } catch (const maps::ScenarioError& e) {
-    std::cerr << "sage: error: " << e.what() << "\n";
+    std::cerr << "sage: error: " << AsInputError(app, e.what()) << "\n";
     return 2;
   } catch (const std::invalid_argument& e) {  // e.g. a DDS domain out of range
-    std::cerr << "sage: error: " << e.what() << "\n";
+    std::cerr << "sage: error: " << AsInputError(app, e.what()) << "\n";
     return 2;
   } catch (const std::exception& e) {
     std::cerr << "sage: error: " << e.what() << "\n";

@@ -466,9 +466,10 @@ int Launch(const LaunchCommand& c) {
   bool fleet_heard = false;  // a vehicle alive in some status: until then the fleet is joining
   std::uint32_t vehicles_alive = 1;
   auto fleet_gone_since = std::chrono::steady_clock::time_point::max();
-  auto send_stop = [&] {
+  auto send_stop = [&](proto::StopBy by) {
     proto::FleetCommand stop{};
     stop.stamp_ns = proto::NowRealtimeNs();
+    stop.count = static_cast<std::uint32_t>(by);
     std::string verb = "stop";
     stop.verb = proto::BorrowString(verb);
     commands.Write(stop);
@@ -481,7 +482,7 @@ int Launch(const LaunchCommand& c) {
       break;
     }
     if (c.stop && c.stop->load() && !stop_sent) {
-      send_stop();
+      send_stop(proto::StopBy::kLauncherSignal);
       terminal.Log("launch: stopping; the server writes the run directory");
     }
     status.WaitForData(std::chrono::milliseconds(200));
@@ -579,7 +580,7 @@ int Launch(const LaunchCommand& c) {
                                  "the mission (host logs: {}/agents-*.log)",
                                  mission_time, out_dir),
                      /*warning=*/true);
-        send_stop();
+        send_stop(proto::StopBy::kLauncherFleetGone);
         fleet_gone = true;
       }
     } else {

@@ -10,6 +10,15 @@
 
 namespace sage::server {
 
+std::string_view StopByWords(std::uint32_t count) {
+  switch (static_cast<proto::StopBy>(count)) {
+    case proto::StopBy::kOperator: return "sage stop";
+    case proto::StopBy::kLauncherSignal: return "its launcher, on a signal (Ctrl-C, SIGTERM)";
+    case proto::StopBy::kLauncherFleetGone: return "its launcher, every agent host gone";
+  }
+  return {};
+}
+
 std::string ServerDoor::LogSafe(std::string_view text) { return maps::PrintableUtf8(text, 64); }
 
 bool ServerDoor::TakeState(const proto::VehicleState& m, std::uint64_t writer) {
@@ -67,8 +76,14 @@ CommandOutcome ServerDoor::TakeCommand(const proto::FleetCommand& c) {
     return out;
   }
   if (verb == "stop") {
-    out.answer.accepted = true;
-    out.stop = true;
+    const std::string_view by = StopByWords(c.count);
+    if (by.empty()) {
+      out.answer.reason = fmt::format("a stop's count says who asks (0: an operator, 1 and 2: its launcher), not {}", c.count);
+    } else {
+      out.answer.accepted = true;
+      out.stop = true;
+      out.stop_by = by;
+    }
   } else if (verb == "remove") {
     out.answer = core_.RemoveRequest(static_cast<int>(c.vehicle_id));
     out.retire = out.answer.accepted;

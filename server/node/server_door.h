@@ -19,10 +19,15 @@ namespace sage::server {
 struct CommandOutcome {
   OperatorAnswer answer;  ///< the answer to write (FleetCommandResult)
   bool stop = false;      ///< "stop": end the mission after this cycle
+  std::string stop_by;    ///< "stop": who asked, in words ("sage stop", "its launcher on a signal", ...)
   bool retire = false;    ///< "remove" accepted: order the vehicle's host to retire it
   bool repeat = false;    ///< a repeat of a command already executed: answered again, not executed
   bool ignored = false;   ///< not an operator's command (the server's own "retire", an unknown verb): no answer
 };
+
+/// Who asks a "stop", from its count (proto::StopBy), in words for the mission's record; empty for
+/// a count that names no one.
+std::string_view StopByWords(std::uint32_t count);
 
 class ServerDoor {
  public:

@@ -252,6 +252,7 @@ int RunServerNode(const maps::Scenario& scenario, const ServerNodeOptions& optio
   std::vector<double> cycle_ms;  // every cycle's compute time, for the p99
   cycle_ms.reserve(static_cast<std::size_t>(std::max<std::int64_t>(0, cycles_total - first_cycle + 1)));
   bool stop_requested = false;
+  std::string stop_by;  // who asked first, for the record
   auto publish_status = [&](std::int64_t cycle, double t, bool finished) {
     proto::MissionStatus s{};
     s.stamp_ns = NowRealtimeNs();
@@ -304,6 +305,7 @@ int RunServerNode(const maps::Scenario& scenario, const ServerNodeOptions& optio
   // An operator's command from the page: the checks and answers of the door's (DDS) commands.
   auto carry_out = [&](std::string_view verb, std::uint32_t count, std::uint32_t vehicle_id) {
     if (verb == "stop") {
+      if (!stop_requested) stop_by = "the live page";
       stop_requested = true;
       return OperatorAnswer{true, "", 0.0, -1};
     }
@@ -388,7 +390,12 @@ int RunServerNode(const maps::Scenario& scenario, const ServerNodeOptions& optio
     };
   // Every long-lived thread is started by now (DDS, the live view): the cycle's priority is its own.
   const CyclePriority priority(options.cycle_priority);
-  spdlog::info("server: {}", priority.line());
+  // The default refused (a user without root, most launches) is not news on every launch: said in
+  // the debug log only; a priority asked for and refused is warned of.
+  const bool asked = options.cycle_priority != kDefaultCyclePriority && options.cycle_priority > 0;
+  const bool refused = options.cycle_priority > 0 && !priority.realtime();
+  spdlog::log(!refused ? spdlog::level::info : asked ? spdlog::level::warn : spdlog::level::debug, "server: {}",
+              priority.line());
   for (; cycle <= cycles_total; ++cycle) {
     const double t = static_cast<double>(cycle) / rate;
     const auto due = wall_of(t + 0.5 / rate);
@@ -483,6 +490,7 @@ int RunServerNode(const maps::Scenario& scenario, const ServerNodeOptions& optio
       bytes_in += proto::WireBytes(c);
       const CommandOutcome done = door.TakeCommand(c);
       if (done.ignored) return;
+      if (done.stop && !stop_requested) stop_by = done.stop_by;
       stop_requested = stop_requested || done.stop;
       if (done.retire) send_retire(c.vehicle_id);
       answer_command(c, done.answer);
@@ -620,8 +628,7 @@ int RunServerNode(const maps::Scenario& scenario, const ServerNodeOptions& optio
   // Who ended the mission early stands in fleet_events.csv beside the fleet's other events (not for
   // a launcher gone: that mission is resumable, not ended).
   if (stopped_early) {
-    core.Note("stopped", stop_requested ? "a stop request (sage stop, the live page, or its launcher: Ctrl-C, the fleet gone)"
-                                        : "a signal to the server (Ctrl-C, SIGTERM)");
+    core.Note("stopped", stop_requested ? "a stop request from " + stop_by : "a signal to the server (Ctrl-C, SIGTERM)");
   }
   const double end_time = std::max(1.0 / rate, std::min(scenario.duration_s, core.time_s()));
   // The real-time factor is the mission loop's; writing the final set is timed on its own.

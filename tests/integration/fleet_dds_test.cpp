@@ -154,6 +154,7 @@ struct FleetEvent {
   std::string event;  // joined, lost, left
   unsigned vehicle_id;
   std::string name;
+  std::string detail;  // the rest of the row, as written (quoted when it holds a comma)
 };
 
 std::vector<FleetEvent> ReadFleetEvents(const fs::path& path) {
@@ -169,7 +170,9 @@ std::vector<FleetEvent> ReadFleetEvents(const fs::path& path) {
     std::getline(ss, event, ',');
     std::getline(ss, id, ',');
     std::getline(ss, name, ',');
-    events.push_back({std::stod(t), event, static_cast<unsigned>(std::stol(id)), name});
+    std::string detail;
+    std::getline(ss, detail);
+    events.push_back({std::stod(t), event, static_cast<unsigned>(std::stol(id)), name, detail});
   }
   return events;
 }
@@ -1200,7 +1203,10 @@ TEST_F(FleetDds, LaunchEndsWhenTheFleetIsGone) {
   EXPECT_LT(metrics.at("duration_s").get<double>(), 100.0);
   // Who ended it stands in the fleet's events, after the loss.
   const auto events = ReadFleetEvents(out / "fleet_events.csv");
-  EXPECT_EQ(EventsOf(events, "stopped").size(), 1u);
+  const auto stopped = EventsOf(events, "stopped");
+  ASSERT_EQ(stopped.size(), 1u);
+  EXPECT_NE(stopped.front()->detail.find("a stop request from its launcher, every agent host gone"), std::string::npos)
+      << stopped.front()->detail;
 }
 
 // A flood of risk updates from an authenticated sender (this process, on the mission's operator

@@ -277,8 +277,10 @@ TEST(RangeProblem, SaysWhatIsAllowed) {
       << short_bench.err;
   const SageRun short_run = RunSage({"run", file, "--duration", "0.02"});
   EXPECT_EQ(short_run.status, 2);
-  EXPECT_NE(short_run.err.find("sage: error: --duration = 0.02: must fly at least one control cycle"), std::string::npos)
+  // Said as CLI11's option errors are: the command, the option, where the options are explained.
+  EXPECT_NE(short_run.err.find("sage: error: run: --duration = 0.02: must fly at least one control cycle"), std::string::npos)
       << short_run.err;
+  EXPECT_NE(short_run.err.find("(see sage run --help)\n"), std::string::npos) << short_run.err;
   const SageRun hosts = RunSage({"launch", file, "--hosts", "0"});
   EXPECT_NE(hosts.err.find("sage: error: launch: --hosts = 0: must be > 0"), std::string::npos) << hosts.err;
   const SageRun five = RunSage({"run", file, "--weight-exponent", "5"});
@@ -702,8 +704,8 @@ TEST(OutDirectory, ALaunchRefusedForItsNetworkLeavesNothing) {
   const std::pair<std::vector<std::string>, std::string> cases[] = {
       {{"--interface", "sagenosuch0"}, "--interface = 'sagenosuch0': no such interface with an IPv4 address on this machine"},
       {{"--peer", "sage-no-such-host.invalid"}, "--peer = 'sage-no-such-host.invalid': no IPv4 address for that host name"},
-      {{"--peer", "not..a..host"}, "sage: error: --peer = not..a..host: must be an IPv4 address or a host name"},
-      {{"--interface", "eth0/x"}, "sage: error: --interface = eth0/x: must be a network interface name"},
+      {{"--peer", "not..a..host"}, "sage: error: launch: --peer = not..a..host: must be an IPv4 address or a host name"},
+      {{"--interface", "eth0/x"}, "sage: error: launch: --interface = eth0/x: must be a network interface name"},
   };
   for (const auto& [options, expected] : cases) {
     std::vector<std::string> args = {"launch", scenario, "--duration", "2", "--http", "off", "--foxglove", "off",

@@ -111,6 +111,21 @@ TEST_F(ServerDoorTest, CommandsRunOnceAndRepeatsGetTheFirstAnswer) {
   const CommandOutcome stop = door_.TakeCommand(Command("stop", 106));
   EXPECT_TRUE(stop.stop && stop.answer.accepted);
   EXPECT_FALSE(door_.TakeCommand(Command("stop", 106)).stop) << "a repeat is answered, not executed";
+  EXPECT_EQ(stop.stop_by, "sage stop") << "a stop's count 0 is an operator's";
+}
+
+// A stop says who asked (its count: proto::StopBy), for the record's "stopped" line; a count that
+// names no one is refused, not taken as someone's.
+TEST_F(ServerDoorTest, AStopSaysWhoAsked) {
+  const CommandOutcome signal = door_.TakeCommand(Command("stop", 200, static_cast<std::uint32_t>(proto::StopBy::kLauncherSignal)));
+  EXPECT_TRUE(signal.stop);
+  EXPECT_NE(signal.stop_by.find("launcher, on a signal"), std::string::npos) << signal.stop_by;
+  const CommandOutcome gone = door_.TakeCommand(Command("stop", 201, static_cast<std::uint32_t>(proto::StopBy::kLauncherFleetGone)));
+  EXPECT_NE(gone.stop_by.find("every agent host gone"), std::string::npos) << gone.stop_by;
+  const CommandOutcome odd = door_.TakeCommand(Command("stop", 202, 7));
+  EXPECT_FALSE(odd.stop);
+  EXPECT_FALSE(odd.answer.accepted);
+  EXPECT_NE(odd.answer.reason.find("not 7"), std::string::npos) << odd.answer.reason;
 }
 
 // Each writer has its own allowance of risk updates: one writer's flood is refused while another
