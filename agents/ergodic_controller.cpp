@@ -27,7 +27,6 @@ ErgodicController::ErgodicController(const maps::SpectralBasis& basis, double sp
                                                    : std::numeric_limits<double>::infinity()),
       coverage_(basis.size(), forgetting_time_s),
       target_(Eigen::VectorXd::Zero(basis.size())),
-      fleet_sums_(Eigen::VectorXd::Zero(basis.size())),
       lambda_(basis.weights().data()) {
   if (!(speed_mps > 0.0)) throw std::invalid_argument("ErgodicController: speed must be > 0");
   if (!(min_turn_radius_m >= 0.0) || !std::isfinite(min_turn_radius_m)) {
@@ -56,6 +55,7 @@ void ErgodicController::ClearFleetCoverage() {
 Eigen::VectorXd ErgodicController::CoverageError() const {
   const double total_time = coverage_.time_s() + fleet_time_s_;
   if (total_time <= 0.0) return -target_;
+  if (fleet_zero_) return coverage_.sums() / total_time - target_;
   return (coverage_.sums() + fleet_sums_) / total_time - target_;
 }
 

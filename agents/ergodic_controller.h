@@ -89,7 +89,8 @@ class ErgodicController final : public VehicleController {
   Eigen::VectorXd fleet_sums_;
   double fleet_time_s_ = 0.0;
   // The fleet's sums are all zero (a vehicle alone: a region's or partition's): the law reads
-  // its own sums only, one K^2 array less a step (c_k is the same: S_k + 0 = S_k).
+  // its own sums only, one K^2 array less a step (c_k is the same: S_k + 0 = S_k), and
+  // fleet_sums_ is not made until a fleet's coverage comes (2.6 kB a region vehicle at K = 18).
   bool fleet_zero_ = true;
   // Lambda_k / h_k (1/m), fixed by the basis, formed where it is used from the order's one Lambda
   // table (SpectralBasis::SobolevWeights) and 1 / h_k, which takes four values: k1 = 0 or not

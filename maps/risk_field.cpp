@@ -136,7 +136,7 @@ Eigen::VectorXd RiskField::GaussianCoefficients(const SpectralBasis& basis, cons
       const int i = SpectralBasis::Index(k1, k2, order);
       const double cc = cos_x[k1] * cos_y[k2];
       if (s12 == 0.0) {
-        phi[i] = exp_x[k1] * exp_y[k2] * cc / basis.normalizers()[i];
+        phi[i] = exp_x[k1] * exp_y[k2] * cc / basis.Normalizer(k1, k2);
         continue;
       }
       // Correlated: each pattern's exponent whole (a product of factors could overflow where
@@ -145,7 +145,7 @@ Eigen::VectorXd RiskField::GaussianCoefficients(const SpectralBasis& basis, cons
       const double quad_diag = a * a * s11 + b * b * s22;
       const double plus = (cc - ss) * std::exp(-0.5 * (quad_diag + 2 * a * b * s12));
       const double minus = (cc + ss) * std::exp(-0.5 * (quad_diag - 2 * a * b * s12));
-      phi[i] = 0.5 * (plus + minus) / basis.normalizers()[i];
+      phi[i] = 0.5 * (plus + minus) / basis.Normalizer(k1, k2);
     }
   }
   return phi;

@@ -72,36 +72,30 @@ SpectralBasis::SpectralBasis(double width_m, double height_m, int order)
   if (order < 1 || order > kMaxOrder) {
     throw std::invalid_argument("SpectralBasis: order = " + std::to_string(order) + ": must be in 1..64");
   }
-  const int n = size();
   lambda_ = &SobolevWeights(order);
-  h_.resize(n);
-  inv_h_.resize(n);
-  kappa_x_.resize(order);
-  kappa_y_.resize(order);
-  inv_h_x_.resize(order);
-  inv_h_y_.resize(order);
+  const auto n = static_cast<std::size_t>(order);
+  tables_.resize(4 * n);
+  double* kappa_x = tables_.data();
+  double* kappa_y = kappa_x + n;
+  double* inv_h_x = kappa_y + n;
+  double* inv_h_y = inv_h_x + n;
   for (int k = 0; k < order; ++k) {
-    kappa_x_[k] = k * std::numbers::pi / width_m;
-    kappa_y_[k] = k * std::numbers::pi / height_m;
+    kappa_x[k] = k * std::numbers::pi / width_m;
+    kappa_y[k] = k * std::numbers::pi / height_m;
     // h_k = h_x[k1] h_y[k2], h_x[k1]^2 = integral_0^L1 cos^2(k1 pi x / L1) dx = L1 (1/2 if k1 != 0).
-    inv_h_x_[k] = 1.0 / std::sqrt(k == 0 ? width_m : 0.5 * width_m);
-    inv_h_y_[k] = 1.0 / std::sqrt(k == 0 ? height_m : 0.5 * height_m);
+    inv_h_x[k] = 1.0 / std::sqrt(k == 0 ? width_m : 0.5 * width_m);
+    inv_h_y[k] = 1.0 / std::sqrt(k == 0 ? height_m : 0.5 * height_m);
   }
+  // h_k^2 = integral over the box of prod_j cos^2(k_j pi x_j / L_j) = area * (1/2)^(#nonzero k_j):
+  // four values, at (k1, k2) = (0, 0), (0, > 0), (> 0, 0), (> 0, > 0).
   const double area = width_m * height_m;
-  for (int k1 = 0; k1 < order; ++k1) {
-    for (int k2 = 0; k2 < order; ++k2) {
-      const int i = Index(k1, k2, order);
-      // h_k^2 = integral over the box of prod_j cos^2(k_j pi x_j / L_j) = area * (1/2)^(#nonzero k_j).
-      double h2 = area;
-      if (k1 != 0) h2 *= 0.5;
-      if (k2 != 0) h2 *= 0.5;
-      h_[i] = std::sqrt(h2);
-      inv_h_[i] = 1.0 / h_[i];
-    }
+  for (int corner = 0; corner < 4; ++corner) {
+    double h2 = area;
+    if (corner >= 2) h2 *= 0.5;
+    if (corner % 2 == 1) h2 *= 0.5;
+    h_corner_[static_cast<std::size_t>(corner)] = std::sqrt(h2);
+    inv_h_corner_[static_cast<std::size_t>(corner)] = 1.0 / h_corner_[static_cast<std::size_t>(corner)];
   }
-  // 1 / h_k takes four values (k1 = 0 or not, k2 = 0 or not): the same doubles as the table's.
-  inv_h_corner_ = {inv_h_[0], order > 1 ? inv_h_[1] : 0.0, order > 1 ? inv_h_[order] : 0.0,
-                   order > 1 ? inv_h_[order + 1] : 0.0};
 }
 
 void SpectralBasis::EvaluateTrigonometry(const Eigen::Vector2d& x, Trigonometry& t) const {
@@ -130,12 +124,14 @@ void SpectralBasis::Evaluate(const Eigen::Vector2d& x, Eigen::VectorXd& f) const
 SAGE_AVX2_CLONES void SpectralBasis::AddScaled(const Eigen::Vector2d& x, double scale, Eigen::VectorXd& sum) const {
   Trigonometry t;
   EvaluateTrigonometry(x, t);
+  const double* inv_h_x = inverse_normalizers_x().data();
+  const double* inv_h_y = inverse_normalizers_y().data();
   std::array<double, kMaxOrder> y;
-  for (int k2 = 0; k2 < order_; ++k2) y[k2] = t.cos_y[k2] * inv_h_y_[k2];
+  for (int k2 = 0; k2 < order_; ++k2) y[k2] = t.cos_y[k2] * inv_h_y[k2];
   double* out = sum.data();
   for (int k1 = 0; k1 < order_; ++k1) {
     double* row = out + k1 * order_;
-    const double c1 = scale * (t.cos_x[k1] * inv_h_x_[k1]);
+    const double c1 = scale * (t.cos_x[k1] * inv_h_x[k1]);
     for (int k2 = 0; k2 < order_; ++k2) row[k2] += c1 * y[k2];
   }
 }
@@ -151,6 +147,8 @@ SAGE_AVX2_CLONES void SpectralBasis::AddScaledAll(std::span<const std::pair<Eige
   alignas(64) std::array<std::array<double, kBlock>, kMaxOrder> xs;
   alignas(64) std::array<std::array<double, kMaxOrder>, kBlock> ys;
   double* out = sum.data();
+  const double* inv_h_x = inverse_normalizers_x().data();
+  const double* inv_h_y = inverse_normalizers_y().data();
   for (std::size_t begin = 0; begin < samples.size(); begin += kBlock) {
     const std::size_t m = std::min(kBlock, samples.size() - begin);
     for (std::size_t s = 0; s < m; ++s) {
@@ -158,8 +156,8 @@ SAGE_AVX2_CLONES void SpectralBasis::AddScaledAll(std::span<const std::pair<Eige
       Trigonometry t;
       EvaluateTrigonometry(x, t);
       // The factors exactly as AddScaled forms them: c1 = scale (cos_x / h_x), y = cos_y / h_y.
-      for (int k1 = 0; k1 < order_; ++k1) xs[k1][s] = scale * (t.cos_x[k1] * inv_h_x_[k1]);
-      for (int k2 = 0; k2 < order_; ++k2) ys[s][k2] = t.cos_y[k2] * inv_h_y_[k2];
+      for (int k1 = 0; k1 < order_; ++k1) xs[k1][s] = scale * (t.cos_x[k1] * inv_h_x[k1]);
+      for (int k2 = 0; k2 < order_; ++k2) ys[s][k2] = t.cos_y[k2] * inv_h_y[k2];
     }
     for (int k1 = 0; k1 < order_; ++k1) {
       double* row = out + k1 * order_;
@@ -190,6 +188,8 @@ Eigen::Vector2d SpectralBasis::GradientOfSum(const Eigen::Vector2d& x, const Eig
   const auto& sx = t.sin_x;
   const auto& cy = t.cos_y;
   const auto& sy = t.sin_y;
+  const double* kappa_x = this->kappa_x().data();
+  const double* kappa_y = this->kappa_y().data();
   // d/dx1 F_k = -(kappa1 / h_k) sin(kappa1 x1) cos(kappa2 x2), d/dx2 likewise; summed row by row
   // so each k1 costs one pass over k2.
   double gx = 0.0;
@@ -202,9 +202,9 @@ Eigen::Vector2d SpectralBasis::GradientOfSum(const Eigen::Vector2d& x, const Eig
     for (int k2 = 0; k2 < order_; ++k2) {
       const double b = a[row + k2] * (k2 == 0 ? first : rest);
       row_cos += b * cy[k2];
-      row_dsin += b * kappa_y_[k2] * sy[k2];
+      row_dsin += b * kappa_y[k2] * sy[k2];
     }
-    gx -= kappa_x_[k1] * sx[k1] * row_cos;
+    gx -= kappa_x[k1] * sx[k1] * row_cos;
     gy -= cx[k1] * row_dsin;
   }
   return {gx, gy};
@@ -215,11 +215,7 @@ double SpectralBasis::Metric(const Eigen::VectorXd& coverage_error) const {
 }
 
 void SpectralBasis::Prefetch() const {
-  const std::size_t row = sizeof(double) * static_cast<std::size_t>(order_);
-  PrefetchBytes(kappa_x_.data(), row);
-  PrefetchBytes(kappa_y_.data(), row);
-  PrefetchBytes(inv_h_x_.data(), row);
-  PrefetchBytes(inv_h_y_.data(), row);
+  PrefetchBytes(tables_.data(), sizeof(double) * tables_.size());
 }
 
 }  // namespace sage::maps

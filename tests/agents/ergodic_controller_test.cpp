@@ -223,7 +223,7 @@ class ReferenceSmc {
         for (int k2 = 0; k2 < order; ++k2) {
           const int i = maps::SpectralBasis::Index(k1, k2, order);
           f[i] = std::cos(basis_.kappa_x()[k1] * x.x()) * std::cos(basis_.kappa_y()[k2] * x.y()) /
-                 basis_.normalizers()[i];
+                 basis_.Normalizer(k1, k2);
         }
       coverage_.Add(f, dt);
     }
@@ -236,7 +236,7 @@ class ReferenceSmc {
         const double kx = basis_.kappa_x()[k1], ky = basis_.kappa_y()[k2];
         const Eigen::Vector2d grad_f(-kx * std::sin(kx * x.x()) * std::cos(ky * x.y()),
                                      -ky * std::cos(kx * x.x()) * std::sin(ky * x.y()));
-        b += basis_.weights()[i] * error[i] * grad_f / basis_.normalizers()[i];
+        b += basis_.weights()[i] * error[i] * grad_f / basis_.Normalizer(k1, k2);
       }
     if (b.norm() > 1e-12) {
       const Eigen::Vector2d wanted = -b / b.norm();
