@@ -69,8 +69,10 @@ class AgentHost {
   /// std::invalid_argument for a bad valve index or a leg with no path.
   void SetTour(VehicleId id, const std::vector<int>& valves, const Eigen::VectorXd& weights);
   /// Holds a vehicle in reserve (true: more vehicles than valves, it has no share): it drops its
-  /// tour, region and target and holds where it is (only keeping clear of structures and
-  /// vehicles), until a tour or region (SetTour, SetRegion) or false brings it back.
+  /// tour, region and target, flies a grid path out of the valves' way (the nearest free point
+  /// 2.5 m from every valve and 1 m from this host's other reserves' holds, within 20 m) and holds
+  /// there (keeping clear of structures and vehicles), until a tour or region (SetTour,
+  /// SetRegion) or false brings it back.
   void SetReserve(VehicleId id, bool reserve);
   /// New valve weights (one per scenario valve, as the waits are to be split) for every A* tour,
   /// taken at each tour's next lap.

@@ -392,7 +392,7 @@ FleetNote FleetDensityNote(const maps::Scenario& scenario, Flown flown) {
   const std::size_t valves = static_cast<std::size_t>(scenario.ValveCount()), vehicles = scenario.vehicles.size();
   if ((regions || tours) && vehicles > valves) {
     return {false, fmt::format("{} vehicles for {} valves: {} fly one vehicle a valve and hold the other {} in reserve, "
-                               "where they start, to take a lost vehicle's place{}",
+                               "out of the valves' way, to take a lost vehicle's place{}",
                                vehicles, valves, regions && tours ? "regions and tours" : (regions ? "regions" : "tours"),
                                vehicles - valves, regions ? " (--assignment shared flies them all)" : "")};
   }
