@@ -33,6 +33,7 @@
 #include "maps/scenario/duration_rule.h"
 #include "proto/dds_config.h"
 #include "proto/mission_clock.h"
+#include "server/report/view_token.h"
 
 namespace sage::server {
 namespace {
@@ -786,6 +787,14 @@ int RunCli(int argc, char** argv) {
         if (!given.empty()) {
           throw maps::ScenarioError("--resume: resumes the run's own scenario with its own options (its controller and "
                                     "time scale as in its mission.json); give no " + given + " with it");
+        }
+      }
+      // A resumed mission shows what it showed: a live view or Foxglove socket the mission had off
+      // stays off unless given again (both had come back on, on free ports).
+      if (!launch_cmd.resume_dir.empty()) {
+        if (const std::optional<LiveEndpoints> before = ReadLiveEndpoints(launch_cmd.resume_dir)) {
+          if (launch->count("--http") == 0 && before->http_port < 0) launch_cmd.http = "off";
+          if (launch->count("--foxglove") == 0 && before->foxglove_port < 0) launch_cmd.foxglove = "off";
         }
       }
       if (!launch_cmd.resume_dir.empty() && (launch_cmd.insecure || !launch_cmd.security_dir.empty())) {

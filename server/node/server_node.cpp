@@ -201,6 +201,8 @@ int RunServerNode(const maps::Scenario& scenario, const ServerNodeOptions& optio
     WriteLiveEndpoints(options.out_dir, live->http_port(), live->foxglove_port());
     if (options.http_port) spdlog::info("server: live view: {}", live->PageUrl());
     if (options.foxglove_port) spdlog::info("server: Foxglove (foxglove.websocket.v1): {}", live->FoxgloveUrl());
+  } else {
+    WriteLiveEndpoints(options.out_dir, -1, -1);  // both off: a resume keeps them off (sage launch --resume)
   }
   proto::Reader<proto::VehicleState> states(participant, proto::VehicleStateRecordQos());
   proto::Reader<proto::VehicleCoverage> coverage(participant, proto::VehicleCoverageQos());

@@ -992,14 +992,15 @@ std::multiset<std::pair<std::string, double>> VisitsOf(const fs::path& out, cons
 // what the run directory kept, and exits non-zero; the partial record is readable (trajectory to
 // within a mission-second of the kill, metrics marked incomplete, a checkpoint); `sage launch
 // --resume` finishes the mission; the final metrics cover the whole duration and keep every
-// visit made before the kill; the outage is in fleet_events.csv.
+// visit made before the kill; the outage is in fleet_events.csv. The resume shows what the
+// mission showed: its live view, and not the Foxglove socket the launch had off.
 TEST_F(FleetDds, KilledServerResumesFromItsCheckpoint) {
   const int domain_id = FreeDomainForLaunch();
   const fs::path out = run_dir_ / "out";
   const double duration = 60;
   const maps::Scenario scenario = maps::LoadScenario(Scenario("fleet_field.yaml"));
   ChildProcess& launch = StartLaunch("launch", {Scenario("fleet_field.yaml"), "--vehicles", "3", "--duration",
-                                                Num(duration), "--time-scale", Num(kTimeScale)},
+                                                Num(duration), "--time-scale", Num(kTimeScale), "--foxglove", "off"},
                                      out, domain_id);
   const LaunchedFleet launched = WaitForLaunchedFleet(launch, domain_id, out, 3);
   ASSERT_TRUE(launched.failure.empty()) << launched.failure;
@@ -1043,6 +1044,8 @@ TEST_F(FleetDds, KilledServerResumesFromItsCheckpoint) {
   EXPECT_DOUBLE_EQ(final_metrics.at("duration_s").get<double>(), duration);
   EXPECT_EQ(final_metrics.at("resumes").get<int>(), 1);
   EXPECT_FALSE(fs::exists(moved / "checkpoint.bin"));
+  EXPECT_NE(resume.LogText().find("live view: http://127.0.0.1:"), std::string::npos) << resume.LogText();
+  EXPECT_EQ(resume.LogText().find("Foxglove (foxglove.websocket.v1)"), std::string::npos) << "off before the outage, on after";
   std::multiset<std::pair<std::string, double>> kept;
   for (const Json& valve : final_metrics.at("valves"))
     for (const Json& t : valve.at("visit_times_s")) kept.insert({valve.at("name").get<std::string>(), t.get<double>()});
