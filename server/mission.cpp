@@ -162,11 +162,16 @@ MissionResult Mission::Run(const std::function<void(double)>& progress) {
   return result;
 }
 
+std::size_t DominantValve(const MissionMetrics& metrics) {
+  std::size_t dominant = 0;
+  for (std::size_t i = 1; i < metrics.valves.size(); ++i)
+    if (metrics.valves[i].weight > metrics.valves[dominant].weight) dominant = i;
+  return dominant;
+}
+
 double CalibratedAstarWait(maps::Scenario scenario, const std::string& profile, const MissionMetrics& ergodic,
                            const std::function<void(int mission, double wait_s)>& on_try) {
-  std::size_t dominant = 0;
-  for (std::size_t i = 1; i < ergodic.valves.size(); ++i)
-    if (ergodic.valves[i].weight > ergodic.valves[dominant].weight) dominant = i;
+  const std::size_t dominant = DominantValve(ergodic);
   const double target = ergodic.valves[dominant].time_near_s;
   // Time near the valve grows with the wait (longer stops, fewer laps, but the stop dominates).
   int tries = 0;

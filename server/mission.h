@@ -87,6 +87,10 @@ class Mission {
   std::unique_ptr<Impl> impl_;
 };
 
+/// The valve the calibration matches time at: the heaviest (time-averaged weight), the first of
+/// equals. Index into metrics.valves; 0 for none.
+std::size_t DominantValve(const MissionMetrics& metrics);
+
 /// The SAGE paper's protocol for a fair baseline: the A* wait per lap (s) that makes A* spend as
 /// long near the dominant valve (highest time-averaged weight) as the given ergodic run did, to
 /// 0.05 s. Zero if A* already lingers longer without waiting. on_try, if given, is told each A*

@@ -199,6 +199,11 @@ int CmdCompare(const RunCommand& c) {
   CheckOutDirectory(dir.string());
   CheckNoLaunchThere(dir.string());
   RefuseAMissionsRecord(dir, "the comparison");
+  if (std::error_code ignored; fs::exists(dir / "ergodic" / "trajectory.csv", ignored) ||
+                               fs::exists(dir / "astar" / "trajectory.csv", ignored)) {
+    // As run says of its own (a second comparison there had replaced the first in silence).
+    spdlog::warn("{}: replacing the comparison recorded there (give --out another directory to keep it)", dir.string());
+  }
   PrepareRunDirectory(dir.string());
   const RunOutcome first = RunInto(scenario, ControllerKind::kErgodic, profile, dir / "ergodic", c.stop);
   const MissionMetrics& ergodic = first.metrics;
@@ -207,7 +212,14 @@ int CmdCompare(const RunCommand& c) {
     SayStopped("the ergodic mission", first, scenario.duration_s, dir / "ergodic");
     return 130;
   }
-  if (c.calibrate_wait) {
+  const ValveMetrics* dominant = ergodic.valves.empty() ? nullptr : &ergodic.valves[DominantValve(ergodic)];
+  if (c.calibrate_wait && dominant != nullptr && dominant->time_near_s <= 0.0) {
+    // Nothing to match: a wait of 0 s had been set and said to match (a new user's one-vehicle,
+    // 200-valve field, whose ergodic vehicle never reached the dominant valve).
+    spdlog::warn("A* wait per lap left at the scenario's {:.2f} s: ergodic control never came within the visit radius "
+                 "of {}, the dominant valve, so there is no time there to match",
+                 scenario.astar.wait_per_lap_s, dominant->name);
+  } else if (c.calibrate_wait) {
     const bool tty = isatty(fileno(stderr)) != 0;
     scenario.astar.wait_per_lap_s = CalibratedAstarWait(scenario, profile, ergodic, [&](int mission, double wait_s) {
       // One line a try off a terminal, redrawn on one (as the missions' progress).
@@ -216,16 +228,28 @@ int CmdCompare(const RunCommand& c) {
     });
     if (tty) std::fprintf(stderr, "\n");
     const Eigen::VectorXd weights = scenario.ProfileWeights(scenario.ProfileOrThrow(profile));
-    if (weights.size() > 0 && weights.maxCoeff() == weights.minCoeff()) {
+    const double wait_s = scenario.astar.wait_per_lap_s;
+    if (dominant != nullptr && wait_s >= 0.5 * scenario.duration_s) {
+      spdlog::warn("A* wait per lap set to {:.2f} s to match ergodic control's {:.1f} s near {}, the dominant valve: "
+                   "{} the {:.0f} s mission, so the tour barely flies; a longer --duration compares them fairly "
+                   "(--calibrate-wait off keeps the scenario's wait)",
+                   wait_s, dominant->time_near_s, dominant->name,
+                   wait_s >= scenario.duration_s ? "longer than" : "half or more of", scenario.duration_s);
+    } else if (dominant != nullptr && wait_s == 0.0) {
+      spdlog::info("A* wait per lap set to 0 s: without waiting A* already spends as long near {}, the dominant "
+                   "valve, as ergodic control's {:.1f} s (the paper's protocol; --calibrate-wait off keeps the "
+                   "scenario's)",
+                   dominant->name, dominant->time_near_s);
+    } else if (weights.size() > 0 && weights.maxCoeff() == weights.minCoeff()) {
       // Every valve weighs the same: no dominant valve to calibrate on (a new user read of one).
       spdlog::info("A* wait per lap set to {:.2f} s (profile {} weighs every valve alike: no dominant valve, so "
                    "A*'s time at the valves is matched to ergodic control's at the first; --calibrate-wait off "
                    "keeps the scenario's)",
-                   scenario.astar.wait_per_lap_s, profile);
+                   wait_s, profile);
     } else {
       spdlog::info("A* wait per lap set to {:.2f} s so that A* spends as long near the dominant valve as ergodic "
                    "control (the paper's protocol; --calibrate-wait off keeps the scenario's)",
-                   scenario.astar.wait_per_lap_s);
+                   wait_s);
     }
   }
   const RunOutcome second = RunInto(scenario, ControllerKind::kAstar, profile, dir / "astar", c.stop);

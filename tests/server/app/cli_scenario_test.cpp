@@ -791,6 +791,32 @@ TEST(OutDirectory, ACrashedLaunchIsNotWrittenOver) {
   fs::remove_all(dir);
 }
 
+// compare's calibration of the A* wait says when it cannot match the ergodic run's time at the
+// dominant valve: a wait longer than the mission (two valves, 10 s: the tour would sit at its
+// first valve) is warned of, and where the ergodic vehicle never reached that valve (one vehicle,
+// 200 valves, 20 s) the scenario's wait is kept and said to be (both had read as matched).
+TEST(Compare, ACalibrationThatCannotMatchSaysSo) {
+  namespace fs = std::filesystem;
+  const fs::path root = fs::temp_directory_path() / "sage_compare_calibration_test";
+  fs::remove_all(root);
+  fs::create_directories(root);
+  const std::string two = (root / "two.yaml").string(), many = (root / "many.yaml").string();
+  ASSERT_EQ(RunSage({"field", "generate", "--xts", "1", "--valves", "2", "--vehicles", "1", "-o", two}).status, 0);
+  ASSERT_EQ(RunSage({"field", "generate", "--xts", "50", "--valves", "200", "--vehicles", "1", "-o", many}).status, 0);
+  const SageRun short_one = RunSage({"compare", two, "--duration", "10", "-o", (root / "c2").string()});
+  EXPECT_EQ(short_one.status, 0) << short_one.err;
+  EXPECT_NE(short_one.err.find("longer than the 10 s mission, so the tour barely flies"), std::string::npos)
+      << short_one.err;
+  const SageRun sparse = RunSage({"compare", many, "--duration", "20", "-o", (root / "c200").string()});
+  EXPECT_EQ(sparse.status, 0) << sparse.err;
+  EXPECT_NE(sparse.err.find("A* wait per lap left at the scenario's 1.00 s: ergodic control never came within the "
+                            "visit radius of"),
+            std::string::npos)
+      << sparse.err;
+  EXPECT_EQ(sparse.err.find("calibrating"), std::string::npos) << "no A* mission is flown to match nothing";
+  fs::remove_all(root);
+}
+
 // A mission's own record is not written over by evaluate -o (it had replaced the run's metrics.json,
 // counted every cycle, with a re-scoring under another profile, silently) nor by compare -o (it
 // put astar/ and ergodic/ beside the run's files); an evaluation's own directory is replaced with
@@ -836,10 +862,13 @@ TEST(OutDirectory, AMissionsRecordIsNotEvaluatedOrComparedOver) {
   EXPECT_NE(into_compare.err.find("holds a mission's record (ergodic/trajectory.csv)"), std::string::npos)
       << into_compare.err;
   EXPECT_FALSE(fs::exists(root / "compare" / "metrics.json"));
-  // A comparison may replace an earlier one there.
-  EXPECT_EQ(RunSage({"compare", scenario, "--duration", "3", "--calibrate-wait", "off", "-o", (root / "compare").string()})
-                .status,
-            0);
+  EXPECT_EQ(fresh.err.find("replacing"), std::string::npos) << fresh.err;
+  // A comparison may replace an earlier one there, and says so.
+  const SageRun again = RunSage({"compare", scenario, "--duration", "3", "--calibrate-wait", "off", "-o",
+                                 (root / "compare").string()});
+  EXPECT_EQ(again.status, 0) << again.err;
+  EXPECT_NE(again.err.find((root / "compare").string() + ": replacing the comparison recorded there"), std::string::npos)
+      << again.err;
   const fs::path scored = root / "graded";
   const SageRun first = RunSage({"evaluate", csv, "-s", scenario, "-p", "graded", "-o", scored.string()});
   EXPECT_EQ(first.status, 0) << first.err;
