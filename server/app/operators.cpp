@@ -23,6 +23,7 @@
 #include "server/app/security_command.h"
 #include "server/mission_core.h"
 #include "server/operator_requests.h"
+#include "server/report/run_record.h"
 
 namespace sage::server {
 namespace {
@@ -184,9 +185,25 @@ int RemoveVehicle(const MissionFile& mission, const std::string& vehicle, bool i
     }, 1024);
   }
   if (!by_id && id < 0) {
+    // Not flying: a vehicle that joined and has gone is found in the record, and the server says
+    // when it left (`vehicle remove 0` had said so, `vehicle remove rov1` only listed the fleet).
+    try {
+      for (const FleetEventRecord& e : ReadFleetEvents(mission.run_dir))
+        if (e.what == "joined" && e.name == vehicle) id = e.vehicle_id;
+    } catch (const std::exception&) {  // an unreadable record: the name is not known, said below
+    }
+  }
+  if (!by_id && id < 0) {
+    // The vehicles heard, a few of them: the line had named all 60 of a fleet (960 characters).
+    constexpr std::size_t kNamed = 8;
     std::string names;
-    for (const auto& [v, name] : flying) names += fmt::format("{}{} (id {})", names.empty() ? "" : ", ", name, v);
-    std::fprintf(stderr, "sage: error: vehicle remove: no vehicle named %s is flying (heard in 3 s: %s)\n",
+    std::size_t named = 0;
+    for (const auto& [v, name] : flying) {
+      if (named++ == kNamed) break;
+      names += fmt::format("{}{} (id {})", names.empty() ? "" : ", ", name, v);
+    }
+    if (flying.size() > kNamed) names += fmt::format(" and {} more: sage status lists them", flying.size() - kNamed);
+    std::fprintf(stderr, "sage: error: vehicle remove: no vehicle named %s is or was in this mission (heard in 3 s: %s)\n",
                  vehicle.c_str(), names.empty() ? "none" : names.c_str());
     return 2;
   }

@@ -123,6 +123,33 @@ void ReadMetrics(const std::string& dir, RunRecord& record) {
 
 }  // namespace
 
+std::vector<FleetEventRecord> ReadFleetEvents(const std::string& dir, bool* cut_line) {
+  std::vector<FleetEventRecord> events;
+  std::string text;
+  RecordLines fleet((fs::path(dir) / "fleet_events.csv").string(), "t,event,vehicle_id,name,detail", /*required=*/false);
+  while (fleet.Next(text)) {
+    const std::vector<std::string> f = detail::SplitCsvLine(text);
+    if (f.size() != 5) Fail(fleet, fmt::format("{} fields, need 5 (t,event,vehicle_id,name,detail)", f.size()));
+    FleetEventRecord e;
+    e.time_s = Time(fleet, f[0]);
+    e.what = f[1];
+    if (e.what.empty() || e.what.size() > 32 ||
+        e.what.find_first_not_of("abcdefghijklmnopqrstuvwxyz_") != std::string::npos) {
+      Fail(fleet, fmt::format("event = '{}': must be a word of a-z and _", e.what.substr(0, 32)));
+    }
+    const double id = detail::NumberField(f[2], fleet.path(), fleet.line());
+    if (!(id >= -1.0 && id <= 1e9 && id == std::floor(id))) Fail(fleet, fmt::format("vehicle_id = {}: must be a whole number >= -1", f[2]));
+    e.vehicle_id = static_cast<int>(id);
+    if (e.vehicle_id >= 0) CheckName(fleet, "name", f[3]);
+    e.name = f[3];
+    CheckText(fleet, "detail", f[4]);
+    e.detail = f[4];
+    events.push_back(std::move(e));
+  }
+  if (cut_line != nullptr) *cut_line = fleet.cut();
+  return events;
+}
+
 RunRecord ReadRunRecord(const std::string& dir, std::size_t max_poses) {
   if (!fs::exists(dir)) throw maps::ScenarioError(dir + ": no such directory (give a mission's run directory)");
   if (!fs::is_directory(dir)) throw maps::ScenarioError(dir + ": not a directory (give a mission's run directory)");
@@ -211,27 +238,9 @@ RunRecord ReadRunRecord(const std::string& dir, std::size_t max_poses) {
   // Rows come in time order per vehicle, not across vehicles: each valve's visits sorted.
   for (std::vector<double>& times : record.visit_times) std::sort(times.begin(), times.end());
 
-  RecordLines fleet((fs::path(dir) / "fleet_events.csv").string(), "t,event,vehicle_id,name,detail", /*required=*/false);
-  while (fleet.Next(text)) {
-    const std::vector<std::string> f = detail::SplitCsvLine(text);
-    if (f.size() != 5) Fail(fleet, fmt::format("{} fields, need 5 (t,event,vehicle_id,name,detail)", f.size()));
-    FleetEventRecord e;
-    e.time_s = Time(fleet, f[0]);
-    e.what = f[1];
-    if (e.what.empty() || e.what.size() > 32 ||
-        e.what.find_first_not_of("abcdefghijklmnopqrstuvwxyz_") != std::string::npos) {
-      Fail(fleet, fmt::format("event = '{}': must be a word of a-z and _", e.what.substr(0, 32)));
-    }
-    const double id = detail::NumberField(f[2], fleet.path(), fleet.line());
-    if (!(id >= -1.0 && id <= 1e9 && id == std::floor(id))) Fail(fleet, fmt::format("vehicle_id = {}: must be a whole number >= -1", f[2]));
-    e.vehicle_id = static_cast<int>(id);
-    if (e.vehicle_id >= 0) CheckName(fleet, "name", f[3]);
-    e.name = f[3];
-    CheckText(fleet, "detail", f[4]);
-    e.detail = f[4];
-    record.fleet_events.push_back(std::move(e));
-  }
-  record.cut_line = record.cut_line || fleet.cut();
+  bool fleet_cut = false;
+  record.fleet_events = ReadFleetEvents(dir, &fleet_cut);
+  record.cut_line = record.cut_line || fleet_cut;
 
   RecordLines risk((fs::path(dir) / "risk_events.csv").string(), "t,valve,weight,share,source", /*required=*/false);
   while (risk.Next(text)) {

@@ -39,6 +39,11 @@ struct RunRecord {
   bool cut_line = false;                       ///< a last, unterminated line was left out
 };
 
+/// DIR/fleet_events.csv as written (none if there is no such file), checked as ReadRunRecord
+/// checks it; *cut_line (if given) is set when a last, unterminated line was left out. Throws
+/// maps::ScenarioError with one line for a bad row.
+std::vector<FleetEventRecord> ReadFleetEvents(const std::string& dir, bool* cut_line = nullptr);
+
 /// Reads DIR. Tracks keep at most `max_poses` poses in all, 24 bytes each (the pose period grows from 0.2 s to
 /// keep them so). Throws maps::ScenarioError with one line for anything missing or wrong.
 RunRecord ReadRunRecord(const std::string& dir, std::size_t max_poses = 10'000'000);

@@ -723,13 +723,18 @@ TEST_F(FleetDds, OperatorRiskUpdateReachesServer) {
   EXPECT_EQ(again.WaitExit(15s), std::optional<int>(2)) << again.LogText();
   EXPECT_TRUE(std::regex_search(again.LogText(), std::regex(R"(rov1 \(id 0\) already left at t = [0-9.]+ s)")))
       << again.LogText();
+  // By name, a vehicle that has left: found in the record, and the server says when it left.
+  ChildProcess& gone = Start("gone", {"vehicle", "remove", "rov1", "--mission", out.string()});
+  EXPECT_EQ(gone.WaitExit(15s), std::optional<int>(2)) << gone.LogText();
+  EXPECT_TRUE(std::regex_search(gone.LogText(), std::regex(R"(rov1 \(id 0\) already left at t = [0-9.]+ s)")))
+      << gone.LogText();
   // By name as the logs say it: rov2 is id 1, the last one flying.
   ChildProcess& last = Start("last", {"vehicle", "remove", "rov2", "--mission", out.string()});
   EXPECT_EQ(last.WaitExit(15s), std::optional<int>(2)) << last.LogText();
   EXPECT_NE(last.LogText().find("is the mission's last vehicle"), std::string::npos) << last.LogText();
   ChildProcess& nobody = Start("nobody", {"vehicle", "remove", "rov9", "--mission", out.string()});
   EXPECT_EQ(nobody.WaitExit(15s), std::optional<int>(2)) << nobody.LogText();
-  EXPECT_NE(nobody.LogText().find("no vehicle named rov9 is flying (heard in 3 s: rov2 (id 1))"), std::string::npos)
+  EXPECT_NE(nobody.LogText().find("no vehicle named rov9 is or was in this mission (heard in 3 s: rov2 (id 1))"), std::string::npos)
       << nobody.LogText();
   // An operator sends a command again until it is answered; the server executes a stamp once.
   // Two sends of "reserve 2" with one stamp are answered with the same ids, a new stamp with
