@@ -352,20 +352,30 @@ void WarnOfAForeignRecord(const Trajectory& trajectory, const maps::Scenario& sc
 }
 
 // The median time between a vehicle's consecutive rows (0 if no vehicle has two).
-double MedianRowSpacing(const Trajectory& trajectory) {
+// How far apart a vehicle's rows are: the median over every vehicle's successive rows, and the
+// widest hole in any one vehicle's (its vehicle, from and to).
+struct RowSpacing {
+  double median_s = 0.0;
+  int vehicle = -1;
+  double hole_from_s = 0.0, hole_to_s = 0.0;
+};
+RowSpacing RowSpacingOf(const Trajectory& trajectory) {
   std::map<int, double> last_s;
   std::vector<double> spacings;
+  RowSpacing out;
   for (const TrajectorySample& s : trajectory.samples) {
     const auto [it, first] = last_s.try_emplace(s.vehicle, s.time_s);
     if (!first) {
       if (s.time_s > it->second) spacings.push_back(s.time_s - it->second);
+      if (s.time_s - it->second > out.hole_to_s - out.hole_from_s) out = {0.0, s.vehicle, it->second, s.time_s};
       it->second = s.time_s;
     }
   }
-  if (spacings.empty()) return 0.0;
+  if (spacings.empty()) return out;
   auto middle = spacings.begin() + static_cast<std::ptrdiff_t>(spacings.size() / 2);
   std::nth_element(spacings.begin(), middle, spacings.end());
-  return *middle;
+  out.median_s = *middle;
+  return out;
 }
 
 }  // namespace
@@ -405,11 +415,25 @@ int CmdEvaluate(const EvaluateCommand& c) {
   WarnOfAForeignRecord(trajectory, scenario, c.trajectory_path, c.scenario_path);
   // Read from the file itself: whichever scenario is given, a thinned record (trajectory_rate_hz,
   // or a vehicle's log at its own rate) misses passes between its rows.
-  if (const double spacing = MedianRowSpacing(trajectory); spacing > 1.5 / scenario.control_rate_hz) {
+  const RowSpacing spacing = RowSpacingOf(trajectory);
+  if (spacing.median_s > 1.5 / scenario.control_rate_hz) {
     spdlog::warn("{}: a vehicle's rows are {:.3g} s apart (the median), the scenario's control cycle {:.3g} s: a pass "
                  "between two rows is not seen, so the visits here can fall short of what the mission counted (a run's "
                  "metrics.json counts every cycle whatever trajectory_rate_hz keeps)",
-                 c.trajectory_path, spacing, 1.0 / scenario.control_rate_hz);
+                 c.trajectory_path, spacing.median_s, 1.0 / scenario.control_rate_hz);
+  }
+  // A hole in one vehicle's rows (a log cut and resumed, a row far out of line): each row holds
+  // until the next, so the vehicle counts as where it was all through (a new user's row at
+  // t = 5,000 s after a log that ended at 60 s had been scored in silence).
+  if (const double hole = spacing.hole_to_s - spacing.hole_from_s;
+      spacing.vehicle >= 0 && hole > std::max(5.0, 20.0 * spacing.median_s)) {
+    const auto index = static_cast<std::size_t>(spacing.vehicle);
+    const std::string name = index < trajectory.vehicle_names.size() ? trajectory.vehicle_names[index]
+                                                                     : fmt::format("vehicle {}", spacing.vehicle);
+    spdlog::warn("{}: {} has no rows from t = {:.1f} s to {:.1f} s ({:.1f} s; the record's rows are {:.3g} s apart otherwise): it "
+                 "counts as where it was at {:.1f} s all through",
+                 c.trajectory_path, name, spacing.hole_from_s, spacing.hole_to_s, hole, spacing.median_s,
+                 spacing.hole_from_s);
   }
   std::cout << FormatTable({metrics});
   if (!c.out_dir.empty()) {

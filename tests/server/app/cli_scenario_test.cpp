@@ -587,6 +587,19 @@ TEST(EvaluateWarnings, SaysWhatGoesBeyondTheRecord) {
                          "between two rows is not seen"),
             std::string::npos)
       << thinned;
+  // A hole in a vehicle's rows (a row at 60 s after a log that ended at 0.5 s) is said, with what
+  // the evaluation makes of it; rows at the control rate throughout say nothing of holes.
+  {
+    std::ofstream hole(csv);
+    hole << "t,vehicle,x,y\n";
+    for (int i = 0; i <= 5; ++i) hole << 0.1 * i << ",rov1," << 0.6 + 0.05 * i << ",0.6\n";
+    hole << "60,rov1,0.9,0.6\n";
+  }
+  const std::string holed = warnings("", std::nullopt);
+  EXPECT_NE(holed.find("rov1 has no rows from t = 0.5 s to 60.0 s (59.5 s; the record's rows are 0.1 s apart otherwise): "
+                       "it counts as where it was at 0.5 s all through"),
+            std::string::npos)
+      << holed;
   // Vehicles by name: one the scenario names says nothing; others are named in the warning (a
   // misspelt log had gone unremarked). two_xt flies rov1.
   std::ofstream(csv) << "t,vehicle,x,y\n0,rov1,0.6,0.6\n0.1,rov1,0.65,0.6\n";
