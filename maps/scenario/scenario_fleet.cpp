@@ -143,9 +143,33 @@ Scenario WithVehicleCount(const Scenario& scenario, int count) {
       taken.push_back(start);
       s.vehicles.push_back(vehicle);
     };
-    if (added > kLineStartsMax) {
-      // A large fleet (scale runs): fill a lattice row by row from the bottom edge, 1.0 m apart,
-      // or 0.8 m (still clear of a 0.73 m hull diagonal) if that is the only way to fit them.
+    // `count` vehicles along the bottom edge, evenly from x = 0.5 to width - 0.5, each moved to the
+    // nearest free point 1 m from the others; nothing where one finds none.
+    const auto on_a_line = [&](std::size_t count) -> std::optional<std::vector<Eigen::Vector2d>> {
+      std::vector<Eigen::Vector2d> starts, near = taken;
+      for (std::size_t k = 0; k < count; ++k) {
+        const double x = (count == 1 || width <= 2 * kStartEdgeMargin_m)
+                             ? width / 2
+                             : kStartEdgeMargin_m + (width - 2 * kStartEdgeMargin_m) * static_cast<double>(k) /
+                                                        static_cast<double>(count - 1);
+        const std::optional<Eigen::Vector2d> start = NearestFreeStart(s, near, Eigen::Vector2d(x, y), separation);
+        if (!start) return std::nullopt;
+        starts.push_back(*start);
+        near.push_back(*start);
+      }
+      return starts;
+    };
+    std::optional<std::vector<Eigen::Vector2d>> line;
+    if (added <= kLineStartsMax) line = on_a_line(added);
+    if (line) {
+      for (const Eigen::Vector2d& start : *line) make_vehicle(start);
+    }
+    // Many vehicles (scale runs), or a few the line has no room for: the lattice, which also says
+    // how many the workspace holds (the line had refused 15 vehicles on two_xt, flown 16, and the
+    // lattice's limit said 15).
+    if (!line) {
+      // Fill a lattice row by row from the bottom edge, 1.0 m apart, or 0.8 m (still clear of a
+      // 0.73 m hull diagonal) if that is the only way to fit them.
       const std::size_t existing = taken.size();
       std::size_t dense_room = 0;  // free lattice points at the dense spacing (all of them when too few)
       // Each lattice point is checked against the structures and the starts near it, not all of
@@ -201,27 +225,25 @@ Scenario WithVehicleCount(const Scenario& scenario, int count) {
         const std::string besides = joins == 0 ? std::string()
                                                : " at the start, besides the " + std::to_string(joins) +
                                                      (joins == 1 ? " that joins later" : " that join later");
+        // As many as a line of fewer holds, if that is more (a small workspace: a trial per count).
+        std::size_t room = std::min(dense_room, by_area);
+        double room_spacing = dense_separation;
+        if (room < kLineStartsMax) {
+          for (std::size_t fewer = std::min(added - 1, kLineStartsMax); fewer > room; --fewer) {
+            if (on_a_line(fewer)) {
+              room = std::min(fewer, by_area);
+              room_spacing = separation;
+              break;
+            }
+          }
+        }
         throw ScenarioError(option + ": the workspace has room for at most " +
-                            std::to_string(s.vehicles.size() + std::min(dense_room, by_area)) + " vehicles" + besides +
+                            std::to_string(s.vehicles.size() + room) + " vehicles" + besides +
                             " (starts " +
-                            FormatNumber(dense_separation) + " m apart and " +
+                            FormatNumber(room_spacing) + " m apart and " +
                             FormatNumber(std::round(StartFootprintMargin(s) * 100.0) / 100.0) + " m from structures, " +
                             FormatNumber(area_of(first)) + " m^2 of workspace each)");
       }
-    }
-    for (std::size_t k = 0; s.vehicles.size() < wanted; ++k) {
-      // Evenly from x = 0.5 to width - 0.5 along y = 0.5, each then moved to the nearest free point.
-      const double x = (added == 1 || width <= 2 * kStartEdgeMargin_m)
-                           ? width / 2
-                           : kStartEdgeMargin_m + (width - 2 * kStartEdgeMargin_m) * static_cast<double>(k) /
-                                                      static_cast<double>(added - 1);
-      const std::optional<Eigen::Vector2d> start = NearestFreeStart(s, taken, Eigen::Vector2d(x, y), separation);
-      if (!start) {
-        throw ScenarioError(option + ": no free start for rov" + std::to_string(number) + " in the workspace (" +
-                            FormatNumber(separation) + " m from other vehicles, " +
-                            FormatNumber(std::round(StartFootprintMargin(s) * 100.0) / 100.0) + " m from structures)");
-      }
-      make_vehicle(*start);
     }
   }
   // Dropping vehicles can make a kept vehicle's loss leave the fleet empty; say which option did it.

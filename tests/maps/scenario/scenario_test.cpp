@@ -899,6 +899,28 @@ TEST(Scenario, WithVehicleCountPacksPointVehiclesCloser) {
   EXPECT_LT(closest, 1.0);
 }
 
+// On a small workspace every fleet up to the limit it states fits and every larger one is
+// refused with that same limit (two_xt had taken 14 and 16 vehicles, refused 15 for want of a
+// start on its line, and said it had room for 15).
+TEST(Scenario, WithVehicleCountFitsEveryCountUpToItsLimit) {
+  const Scenario field = LoadScenario(kTwoXtPath);
+  const auto limit_of = [&](int count) {
+    try {
+      WithVehicleCount(field, count);
+    } catch (const ScenarioError& e) {
+      const std::string message = e.what();
+      std::smatch most;
+      if (std::regex_search(message, most, std::regex("room for at most ([0-9]+) vehicles"))) return std::stoi(most[1]);
+      ADD_FAILURE() << count << ": " << message;
+    }
+    return -1;
+  };
+  const int fit = limit_of(1000);
+  ASSERT_GT(fit, 5);
+  for (int n = 1; n <= fit; ++n) EXPECT_NO_THROW(WithVehicleCount(field, n)) << n << " of the " << fit << " said to fit";
+  for (int n = fit + 1; n <= fit + 60; n += 7) EXPECT_EQ(limit_of(n), fit) << n;
+}
+
 // A fleet too large for the workspace is refused with how many fit (it had said "room for fewer
 // vehicles" and left the user to guess): that many fit, one more does not.
 TEST(Scenario, WithVehicleCountSaysHowManyFit) {
