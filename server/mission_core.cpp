@@ -253,9 +253,9 @@ OperatorAnswer MissionCore::ReserveIds(int count) {
   const std::size_t room = Room();
   const std::size_t alive = roster_.alive_count();
   if (alive + static_cast<std::size_t>(count) > room) {
-    answer.reason = fmt::format("count = {}: the {} x {} m workspace holds {} vehicles ({} m^2 each) and {} are in the mission",
+    answer.reason = fmt::format("count = {}: the {} x {} m workspace holds {} vehicles ({} m^2 each) and {} {} in the mission",
                                 count, scenario_.workspace.width_m, scenario_.workspace.height_m, room,
-                                maps::kMinAreaPerBlueRov2_m2, alive);
+                                maps::kMinAreaPerBlueRov2_m2, alive, alive == 1 ? "is" : "are");
     return answer;
   }
   if (roster_.next_id() > kMaxVehicleId + 1 - count) {
@@ -493,9 +493,10 @@ void MissionCore::TakeTours(const agents::FleetTourPlan& tours, const std::vecto
   const std::string how = planning_s < 0.0 ? " (provisional: each valve to its nearest vehicle while the tours are planned)"
                           : planning_s > 0.0 ? fmt::format(", planned over {:.1f} s (laps on grid distances)", planning_s)
                                              : std::string();
-  // A vehicle in reserve (more vehicles than valves) gets an empty tour: it holds where it is.
-  Note("tours", fmt::format("{} tours planned for {} vehicles{}: laps {:.1f} s at most, {:.1f} s on average{}{}",
-                            tours.vehicles.size() - static_cast<std::size_t>(tours.reserve), planned_for.size(), how,
+  // A vehicle in reserve (more vehicles than valves) gets an empty tour: it holds out of the valves' way.
+  const std::size_t flown = tours.vehicles.size() - static_cast<std::size_t>(tours.reserve);
+  Note("tours", fmt::format("{} tour{} planned for {} vehicle{}{}: laps {:.1f} s at most, {:.1f} s on average{}{}",
+                            flown, flown == 1 ? "" : "s", planned_for.size(), planned_for.size() == 1 ? "" : "s", how,
                             tours.max_lap_s, tours.mean_lap_s, ReserveNote(static_cast<std::size_t>(tours.reserve)),
                             tours.ok ? "" : " (some leg has no path)"));
 }
@@ -738,13 +739,17 @@ void MissionCore::TakeSplit(RegionSplit split) {
   fleet_.SetRevisitBounds(bounds);
   if (recorder_ != nullptr) recorder_->OnRegions(time_s_, records);
   const double planning_s = time_s_ - plan.pending_started_s;
-  Note("regions", fmt::format("{} regions for {} vehicles{}{}: up to {} valves and {:.1f} m a side each; the guard "
-                              "boosts a valve after {:.0f}-{:.0f} s{}",
-                              plan.shares.size(), split.input.vehicle_ids.size(),
+  const std::string boost = std::lround(bounds.minCoeff()) == std::lround(bounds.maxCoeff())
+                                ? fmt::format("{:.0f} s", bounds.minCoeff())
+                                : fmt::format("{:.0f}-{:.0f} s", bounds.minCoeff(), bounds.maxCoeff());
+  Note("regions", fmt::format("{} region{} for {} vehicle{}{}{}: up to {} valve{} and {:.1f} m a side each; the guard "
+                              "boosts a valve after {}{}",
+                              plan.shares.size(), plan.shares.size() == 1 ? "" : "s", split.input.vehicle_ids.size(),
+                              split.input.vehicle_ids.size() == 1 ? "" : "s",
                               split.provisional ? " (provisional: each valve to its nearest vehicle while the split is planned)"
                               : split.input.by_risk ? " (the risk moved)" : "",
                               planning_s > 0.0 ? fmt::format(", planned over {:.1f} s", planning_s) : std::string(),
-                              most, largest, bounds.minCoeff(), bounds.maxCoeff(), ReserveNote(plan.reserve.size())));
+                              most, most == 1 ? "" : "s", largest, boost, ReserveNote(plan.reserve.size())));
 }
 
 // Regions: the live vehicles split the valves as the fleet's tours would (balanced on travel),

@@ -375,9 +375,9 @@ int CmdBenchScale(const BenchScaleCommand& c) {
     const maps::Scenario field = maps::GenerateField(ScaleFieldOptions(n, c.seed));
     const std::string field_path = (out / "fields" / (field.name + ".yaml")).string();
     WriteScenarioTo(field_path, field);
-    spdlog::info("bench scale: N = {}: field {} ({} XTs, {} valves, {:.0f} x {:.0f} m, K = {}, {} coverage) generated "
+    spdlog::info("bench scale: N = {}: field {} ({} XT{}, {} valves, {:.0f} x {:.0f} m, K = {}, {} coverage) generated "
                  "in {:.2f} s",
-                 n, field_path, field.structures.size(), field.ValveCount(), field.workspace.width_m,
+                 n, field_path, field.structures.size(), field.structures.size() == 1 ? "" : "s", field.ValveCount(), field.workspace.width_m,
                  field.workspace.height_m, field.ergodic.basis_order, ToString(field.fleet.assignment),
                  Since(generate_start));
     ScaleRow base;

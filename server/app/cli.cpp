@@ -354,8 +354,12 @@ bool ReportUnknownOption(const CLI::App& app, int argc, char** argv) {
         if (d < best) best = d, nearest = "--" + name;
       }
     }
+    // compare flies both controllers: a controller given is not wanted, rather than unknown.
+    const bool controller = path == "sage compare" && (word == "-c" || word == "--controller");
     std::cerr << "sage: error: " << (path == "sage" ? "" : path.substr(5) + ": ") << word << ": no such option"
-              << (nearest.empty() ? "" : "; did you mean " + nearest + "?") << " (see " << path << " --help)\n";
+              << (controller ? "; compare flies both controllers, ergodic and then A* (sage run -c flies one)"
+                  : nearest.empty() ? "" : "; did you mean " + nearest + "?")
+              << " (see " << path << " --help)\n";
     return true;
   }
   return false;
@@ -392,6 +396,16 @@ std::string InOurWords(const std::string& message) {
   if (colon == std::string::npos || message.find_first_of(" \t\n") < colon) return message;
   const std::string option = message.substr(0, colon), rest = message.substr(colon + 2);
   if (rest.starts_with("= ")) return option + " " + rest;  // Echoed's "OPTION: = VALUE: ..."
+  // A check that names its option itself ("--vehicles: --vehicles = 0: ..." had said it twice).
+  if (rest.starts_with(option + " = ")) return rest;
+  // "--duration: 1 required FLOAT missing": the option given with no value after it.
+  constexpr std::string_view kMissing = " missing";
+  if (rest.ends_with(kMissing) && rest.find(" required ") != std::string::npos) {
+    const std::size_t required = rest.find(" required ");
+    const std::string type = rest.substr(required + 10, rest.size() - kMissing.size() - required - 10);
+    const std::string what = type == "FLOAT" ? "a number" : type == "INT" || type == "UINT" ? "a whole number" : "a value";
+    return option + ": needs " + what + " after it";
+  }
   constexpr std::string_view kRepeated = "At Most 1 required but received ";
   if (rest.starts_with(kRepeated)) {
     const std::string count = rest.substr(kRepeated.size());
@@ -742,7 +756,9 @@ int RunCli(int argc, char** argv) {
     // Bad arguments: one line, like every other input error.
     std::string path;
     if (ReportUnknownCommand(app, argc, argv, path)) return 2;
-    if (dynamic_cast<const CLI::ExtrasError*>(&e) != nullptr && ReportUnknownOption(app, argc, argv)) return 2;
+    // An option the command does not have is said first, whatever CLI11 stopped at (`sage run
+    // --helpp` had said only that the scenario was required).
+    if (ReportUnknownOption(app, argc, argv)) return 2;
     std::string words = InOurWords(e.what());
     // `sage vehicle add 2 --count 3`: the argument and --count are one option to CLI11.
     if (constexpr std::string_view kCount = "--count: given "; path == "sage vehicle add" && words.starts_with(kCount)) {
@@ -758,8 +774,10 @@ int RunCli(int argc, char** argv) {
   try {
     for (const int domain : {server_cmd.domain, agents_cmd.domain, launch_cmd.domain.value_or(0)}) {
       if (domain < 0 || domain > proto::kMaxDomainId) {
-        throw maps::ScenarioError(fmt::format("--domain = {}: must be in 0..{} (0..{} for a secured mission, the default)",
-                                              domain, proto::kMaxDomainId, proto::kMaxSecureDomainId));
+        // A launch is secured unless --insecure; a server or host only with --security.
+        throw maps::ScenarioError(fmt::format("--domain = {}: must be in 0..{} (0..{} for a secured mission{})", domain,
+                                              proto::kMaxDomainId, proto::kMaxSecureDomainId,
+                                              *launch ? ", the default" : ": --security"));
       }
     }
     if (*run || *compare) {

@@ -365,8 +365,8 @@ std::vector<std::string> UnusedOverrides(const ScenarioOverrides& o, const maps:
     if (o.age_weighting_laps) given.emplace_back("--age-weighting");
     if (o.risk_share) given.emplace_back("--risk-share");
     if (!given.empty()) {
-      unused.push_back(fmt::format("{}: the ergodic controller's; -c astar flies tours without it (given, not used)",
-                                   fmt::join(given, ", ")));
+      unused.push_back(fmt::format("{}: the ergodic controller's; -c astar flies tours without {} (given, not used)",
+                                   fmt::join(given, ", "), given.size() == 1 ? "it" : "them"));
     }
     return unused;
   }

@@ -106,6 +106,11 @@ int CmdFieldGenerate(const maps::FieldOptions& options, const std::string& out_p
 }
 
 int CmdFieldSeabed(std::uint64_t seed, const std::string& requested_name, const std::string& out_path) {
+  // A directory for --out names no file (the map's name, taken from it, had been blamed as --name).
+  if (out_path.empty() || out_path.back() == '/' || std::filesystem::is_directory(out_path)) {
+    throw maps::ScenarioError("--out = " + out_path + ": a directory; give the scenario file to write (e.g. " +
+                              (std::filesystem::path(out_path) / "slope.yaml").lexically_normal().string() + ")");
+  }
   // The name is also the map's file name, beside the scenario: by default the scenario file's own
   // (slope11.yaml and slope11.xyz), so that two examples in one folder do not share one map.
   const std::string name = requested_name.empty() ? std::filesystem::path(out_path).stem().string() : requested_name;

@@ -103,7 +103,15 @@ MissionFile FindMission(const std::string& dir) {
   std::string where = dir;
   if (where.empty()) {
     const char* env = std::getenv("SAGE_MISSION");
-    where = env ? env : "runs/latest";
+    if (env != nullptr) {
+      // Said as the environment's (its value alone had read as if typed on the command line).
+      try {
+        return ReadMissionFile(env);
+      } catch (const maps::ScenarioError& e) {
+        throw maps::ScenarioError(std::string("SAGE_MISSION = ") + e.what());
+      }
+    }
+    where = "runs/latest";
   }
   return ReadMissionFile(where);
 }

@@ -21,8 +21,9 @@ int CmdView(const ViewCommand& c) {
   const auto started = std::chrono::steady_clock::now();
   RunRecord record = ReadRunRecord(c.run_dir);
   const double read_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
-  std::printf("view: %s: '%s', %zu vehicles, %.1f s of mission%s (%zu rows read in %.1f s; poses kept every %.1f s)\n",
-              c.run_dir.c_str(), record.scenario.name.c_str(), record.vehicle_names.size(), record.end_s,
+  std::printf("view: %s: '%s', %zu vehicle%s, %.1f s of mission%s (%zu rows read in %.1f s; poses kept every %.1f s)\n",
+              c.run_dir.c_str(), record.scenario.name.c_str(), record.vehicle_names.size(),
+              record.vehicle_names.size() == 1 ? "" : "s", record.end_s,
               record.complete ? "" : ", not complete (a partial record)", record.rows, read_s, record.pose_period_s);
   if (record.cut_line) std::printf("view: a last line still being written was left out\n");
   live::Replay replay(std::move(record));

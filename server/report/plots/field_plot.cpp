@@ -658,8 +658,10 @@ std::string FieldPlotSvg(const MissionPlotInput& input, FieldPlotLayout* layout_
                                   crowded ? "the heaviest valves, then XTs" : "XTs, then valves by weight"));
   }
   if (xt_labels_not_tried > 0) {
-    caption.push_back(fmt::format("{} XTs are too small at this scale to hold their names and are not named.",
-                                  Grouped(xt_labels_not_tried)));
+    caption.push_back(xt_labels_not_tried == 1
+                          ? std::string("1 XT is too small at this scale to hold its name and is not named.")
+                          : fmt::format("{} XTs are too small at this scale to hold their names and are not named.",
+                                        Grouped(xt_labels_not_tried)));
   }
   if (valve_labels_tried < valves.size()) {
     caption.push_back(fmt::format("Of {} valves, the {} of highest weight are labelled (where there is room){}.",

@@ -301,12 +301,26 @@ TEST(RangeProblem, SaysWhatIsAllowed) {
   const SageRun nested = RunSage({"bench", "leaks", file, "--run", "5"});
   EXPECT_EQ(nested.status, 2);
   EXPECT_NE(nested.err.find("bench leaks: --run: no such option; did you mean --runs?"), std::string::npos) << nested.err;
+  // Unknown options are said before anything CLI11 stopped at, and an option with no value says
+  // what it wants; compare names why it has no --controller.
+  const SageRun helpp = RunSage({"run", "--helpp"});
+  EXPECT_NE(helpp.err.find("run: --helpp: no such option; did you mean --help?"), std::string::npos) << helpp.err;
+  const SageRun bare = RunSage({"run", file, "--duration"});
+  EXPECT_NE(bare.err.find("run: --duration: needs a number after it"), std::string::npos) << bare.err;
+  const SageRun both = RunSage({"compare", file, "-c", "astar"});
+  EXPECT_NE(both.err.find("compare: -c: no such option; compare flies both controllers"), std::string::npos) << both.err;
   // A launch's domain past the secured range says both ranges (0..232 had been followed by 0..230).
   const SageRun domain = RunSage({"launch", file, "--domain", "999"});
   EXPECT_EQ(domain.status, 2);
   EXPECT_NE(domain.err.find("--domain = 999: must be in 0..232 (0..230 for a secured mission, the default)"),
             std::string::npos)
       << domain.err;
+  // A host's is plain DDS unless --security: not said to be secured by default.
+  const SageRun host_domain = RunSage({"agents", file, "--domain", "300"});
+  EXPECT_EQ(host_domain.status, 2);
+  EXPECT_NE(host_domain.err.find("--domain = 300: must be in 0..232 (0..230 for a secured mission: --security)"),
+            std::string::npos)
+      << host_domain.err;
   // An option given twice is said so (CLI11's "At Most 1 required but received 2" had read as
   // if a second value were wanted).
   const SageRun twice = RunSage({"run", file, "--duration", "30", "--duration", "60"});
