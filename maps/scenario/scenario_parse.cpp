@@ -50,7 +50,7 @@ class Reader {
   explicit Reader(std::string file) : file_(std::move(file)) {}
 
   [[noreturn]] void Fail(const std::string& path, const std::string& rule) const {
-    throw ScenarioError(OneLine(file_ + ": " + path + ": " + rule));
+    throw ScenarioError(OneLine(file_ + ": " + (path.empty() ? "" : path + ": ") + rule));
   }
   [[noreturn]] void Fail(const std::string& path, const YAML::Node& node, const std::string& rule) const {
     throw ScenarioError(OneLine(file_ + ": " + path + " = " + Show(node) + ": " + rule));
@@ -73,7 +73,12 @@ class Reader {
                                 std::to_string(at.column + 1) + ": a stray comma or colon?)");
       }
       const std::string& key = entry.first.Scalar();
-      if (!seen.insert(key).second) Fail(Join(path, key), "duplicate key");
+      if (!seen.insert(key).second) {
+        // Which of the two: the second's line (a long profile's repeated valve had been hard to find).
+        const YAML::Mark at = entry.first.Mark();
+        Fail(Join(path, key), at.is_null() ? std::string("duplicate key")
+                                           : "duplicate key (again on line " + std::to_string(at.line + 1) + ")");
+      }
       if (allowed.size() != 0 && std::find(allowed.begin(), allowed.end(), key) == allowed.end()) {
         std::string list;
         for (std::string_view name : allowed) list += (list.empty() ? "" : ", ") + std::string(name);
@@ -410,6 +415,7 @@ void ReadPerception(const Reader& r, const YAML::Node& root, Scenario& s) {
 }
 
 Scenario ReadScenario(const Reader& r, const YAML::Node& root, const std::string& source) {
+  if (root.IsNull()) r.Fail("", "holds no scenario (empty, or comments only; a scenario is a YAML map of sections: workspace, structures, ...)");
   if (!root.IsMap()) r.Fail("scenario", root, "must be a YAML map of sections (workspace, structures, ...)");
   r.ExpectMap(root, "", {"name", "workspace", "duration_s", "control_rate_hz", "physics_rate_hz", "trajectory_rate_hz",
                          "visit_radius_m", "rearm_radius_m", "seed", "start_jitter_m", "ergodic", "guard", "astar",

@@ -309,7 +309,9 @@ maps::Scenario LoadWithOverrides(const ScenarioOverrides& o) {
     if (*o.steer != "posterior" && *o.steer != "prior") {
       throw maps::ScenarioError("--steer = " + *o.steer + ": must be posterior (the Bayesian loop) or prior");
     }
-    scenario.fusion.steer = *o.steer == "posterior";
+    // Without sensors it changes nothing and is warned of below, alone (taken, it had also set off
+    // the warning of fusion settings that weigh no scans).
+    if (!scenario.sensors.empty()) scenario.fusion.steer = *o.steer == "posterior";
   }
   // Drawn last, from the effective seed and duration, so `sage run DIR/scenario.yaml` (which holds
   // them) and agent hosts given the same options meet the same leaks.

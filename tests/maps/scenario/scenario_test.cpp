@@ -742,6 +742,23 @@ TEST(Scenario, SyntaxErrorAndMissingFile) {
     EXPECT_EQ(std::string(e.what()), "map.xyz: scenario = easting northing depth 431180.25 6478323.75 117.091 "
                                      "431180.2...: must be a YAML map of sections (workspace, structures, ...)");
   }
+  // An empty file, or one of comments, is said to be so (it had read "scenario = null").
+  for (const std::string empty : {"", "# nothing yet\n"}) {
+    try {
+      ParseScenario(empty, "new.yaml");
+      ADD_FAILURE() << "no error";
+    } catch (const ScenarioError& e) {
+      EXPECT_EQ(std::string(e.what()), "new.yaml: holds no scenario (empty, or comments only; a scenario is a YAML map "
+                                       "of sections: workspace, structures, ...)");
+    }
+  }
+  // A key given twice names the line it is given again on.
+  try {
+    ParseScenario("name: x\nduration_s: 5\nduration_s: 6\n", "twice.yaml");
+    ADD_FAILURE() << "no error";
+  } catch (const ScenarioError& e) {
+    EXPECT_EQ(std::string(e.what()), "twice.yaml: duration_s: duplicate key (again on line 3)");
+  }
 }
 
 // Validate() on a scenario built in code gives the same style of message.
