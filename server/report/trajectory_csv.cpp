@@ -117,6 +117,16 @@ Trajectory ParseTrajectoryCsv(std::istream& in, const std::string& path) {
   if (header.empty()) {
     throw ScenarioError(fmt::format("{}: empty file (need a header with t, vehicle, x, y)", path));
   }
+  // A first line of numbers is a row, not a header: said as such (a headerless log had read as a
+  // duplicate column '0').
+  if (std::all_of(header.begin(), header.end(), [](const std::string& name) {
+        const std::string_view cell = Trim(name);
+        return !cell.empty() && cell.find_first_not_of("0123456789.+-eE") == std::string::npos;
+      })) {
+    throw ScenarioError(fmt::format("{}:{}: no header: the first line holds numbers (need a header line naming the "
+                                    "columns, e.g. t,vehicle,x,y)",
+                                    path, line_number));
+  }
   std::map<std::string, int> column_of;
   for (std::size_t c = 0; c < header.size(); ++c) {
     if (!column_of.emplace(header[c], static_cast<int>(c)).second) {

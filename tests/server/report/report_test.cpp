@@ -130,6 +130,11 @@ TEST_F(ReportTest, CsvErrorsAreOneLineNamingFileAndLine) {
   const std::string file = Path("bad.csv");
   const std::string header = "t,vehicle,x,y\n";
   EXPECT_EQ(ReadError(""), file + ": empty file (need a header with t, vehicle, x, y)");
+  // A log with no header: its first row is not taken for column names (it had read as a
+  // duplicate column '0').
+  EXPECT_EQ(ReadError("0,0,1,2\n0.1,0,1.1,2\n"),
+            file + ":1: no header: the first line holds numbers (need a header line naming the columns, e.g. "
+                   "t,vehicle,x,y)");
   EXPECT_EQ(ReadError("t,vehicle,y\n0,0,1\n"),
             file + ": missing column 'x' (need t, vehicle, x, y, comma-separated; its header reads 3 column(s): t, "
                    "vehicle, y)");
