@@ -164,6 +164,10 @@ std::string TableText(const std::vector<ScaleRow>& all_rows) {
         std::isfinite(r.longest_gap_max_s)
             ? fmt::format("{:.0f} / {:.0f} / {:.0f} s", r.longest_gap_median_s, r.longest_gap_p90_s, r.longest_gap_max_s)
             : "-";
+    // A valve never visited makes these a floor (">=", as sage run's table marks them).
+    const auto at_least = [](const ScaleRow& row, double seconds) {
+      return row.unvisited_valves > 0 && std::isfinite(seconds) ? ">= " + Secs(seconds) : Secs(seconds);
+    };
     const std::string corr = std::isfinite(r.visit_weight_correlation)
                                  ? fmt::format("{:+.2f}", r.visit_weight_correlation)
                                  : (r.unvisited_valves >= 0 ? "undefined" : "-");
@@ -173,8 +177,11 @@ std::string TableText(const std::vector<ScaleRow>& all_rows) {
                        Ms(r.server_cycle_mean_ms), Ms(r.server_cycle_p99_ms), Ms(r.server_cycle_max_ms),
                        with_late(cpu_ms(r.cpu_s_per_vehicle_s), r.cpu_s_per_vehicle_s_late, cpu_ms(r.cpu_s_per_vehicle_s_late)),
                        rss, dds, moved, r.unvisited_valves >= 0 ? std::to_string(r.unvisited_valves) : "-", gaps,
-                       Secs(r.risk_weighted_interval_s), Secs(r.expected_detection_delay_s), Secs(r.dominant_interval_s),
-                       corr);
+                       at_least(r, r.risk_weighted_interval_s), at_least(r, r.expected_detection_delay_s),
+                       Secs(r.dominant_interval_s), corr);
+  }
+  if (std::any_of(rows.begin(), rows.end(), [](const ScaleRow& r) { return r.unvisited_valves > 0; })) {
+    out += "\n(>=: some valve was never visited; it counts as visited once, its leak as waiting only to the end)\n";
   }
   // Said under the table, where a reader meets it (a new user read 0.124 / 0.036 / 35.0 ms as wrong).
   // As shown: two cells that read alike are not called apart.

@@ -119,6 +119,13 @@ TEST(ScaleTable, OneRowPerRunErgodicNextToTours) {
   EXPECT_NE(lines[2].find("| 15308x (30616x) |"), std::string::npos) << lines[2];  // the second half in brackets
   EXPECT_NE(lines[2].find("| 0.300 ms (0.200 ms) |"), std::string::npos) << lines[2];
   EXPECT_NE(lines[6].find("| 1.00x |"), std::string::npos) << lines[6];  // over DDS: none
+  // Two valves never visited: the risk-weighted interval is a floor, marked and explained as in
+  // sage run's table; with every valve visited it is not.
+  EXPECT_NE(lines[2].find("| >= 14.0 s |"), std::string::npos) << lines[2];
+  EXPECT_NE(table.find("\n(>=: some valve was never visited;"), std::string::npos) << table;
+  std::vector<ScaleRow> all_seen = rows;
+  for (ScaleRow& r : all_seen) r.unvisited_valves = 0;
+  EXPECT_EQ(ScaleTable(all_seen).find(">="), std::string::npos);
   // A mean above the p99 (one long first cycle) is explained under the table, only then.
   EXPECT_EQ(table.find("mean above its p99"), std::string::npos) << table;
   std::vector<ScaleRow> long_first = rows;
