@@ -330,6 +330,19 @@ std::string BuildTable(const std::vector<MissionMetrics>& runs, const std::vecto
   if (std::any_of(runs.begin(), runs.end(), [](const MissionMetrics& m) { return m.unvisited_valves > 0; })) {
     table += "(>=: some valve was never visited; it counts as visited once, its leak as waiting only to the end)\n";
   }
+  // A vehicle that stays at its valve (a fleet of one vehicle a valve: the tours park) makes one
+  // long visit: its interval reads as the mission's length while the valve was never unwatched (a
+  // new user read a risk-weighted interval of 60 s beside a detection delay of 0 s as a contradiction).
+  const auto kept_watch = [](const MissionMetrics& m) {
+    return std::any_of(m.valves.begin(), m.valves.end(), [&](const ValveMetrics& v) {
+      return m.duration_s > 0.0 && v.visits >= 1 && v.visits <= 2 && v.time_near_s >= 0.5 * m.duration_s;
+    });
+  };
+  if (std::any_of(runs.begin(), runs.end(), kept_watch)) {
+    table += "(a valve watched most of the mission in one or two long visits counts those visits alone: its interval, "
+             "and so the risk-weighted interval, read long; its longest gap and the detection delay say how it was "
+             "watched)\n";
+  }
   if (rows < first.valves.size()) {
     table += sensing ? fmt::format("({} of {} valves listed: the longest scan waits; every valve is in metrics.json)\n",
                                    rows, first.valves.size())

@@ -516,6 +516,18 @@ TEST(FormatTable, FiguresAnUnvisitedValveCutsShortAreMarked) {
   EXPECT_NE(table.find("(>=: some valve was never visited"), std::string::npos) << table;
 }
 
+// A valve watched most of the mission in one long visit (a vehicle parked at it) is footnoted:
+// its interval reads as the mission's length while it was never unwatched.
+TEST(FormatTable, AValveWatchedThroughoutIsFootnoted) {
+  MissionMetrics m = SampleMetrics();
+  const std::string plain = FormatTable({m});
+  EXPECT_EQ(plain.find("watched most of the mission"), std::string::npos) << plain;
+  m.valves.front().visits = 1;
+  m.valves.front().time_near_s = 0.9 * m.duration_s;
+  const std::string parked = FormatTable({m});
+  EXPECT_NE(parked.find("(a valve watched most of the mission in one or two long visits"), std::string::npos) << parked;
+}
+
 // A large field's table lists the 40 valves with the longest gap in any run, longest first,
 // and says where the others are; up to 300 valves it lists every one, in scenario order. Weights
 // below 0.01 keep two significant digits.
