@@ -125,11 +125,17 @@ std::string StatusReport(const HeardStatus& heard, const std::string& mission, c
     }
     out += fmt::format("{}: t = {:.1f} of {:.1f} s ({:.0f} %), {}\n", name, heard.time_s, heard.duration_s, 100.0 * done, pace);
     out += "run directory " + run_dir + "\n";
-    out += fmt::format("server cycle {:.2f} ms; ergodic metric {}; {} vehicle{} flying, {} lost\n", heard.cycle_ms,
+    out += fmt::format("server cycle {:.2f} ms; ergodic metric {}; {} vehicle{} flying, {} lost{}\n", heard.cycle_ms,
                        std::isnan(heard.ergodic_metric) ? std::string("not yet") : fmt::format("{:.4g}", heard.ergodic_metric),
-                       heard.alive, heard.alive == 1 ? "" : "s", heard.lost);
+                       heard.alive, heard.alive == 1 ? "" : "s", heard.lost,
+                       heard.left >= 0 ? fmt::format(", {} left", heard.left) : std::string());
   } else {
     out += fmt::format("{}: no mission status heard in {:.1f} s\nrun directory {}\n", name, heard.listened_s, run_dir);
+  }
+  // Which plan the fleet flies, as the record has it: a vehicle in reserve holds with no speed
+  // (95 of them read as a fleet that had stopped).
+  if (!heard.plan.empty()) {
+    out += fmt::format("the plan flown, of t = {:.1f} s:\n  {}\n", heard.plan_time_s, maps::PrintableUtf8(heard.plan, 400));
   }
   if (heard.vehicles.empty()) {
     out += fmt::format("no vehicle heard in {:.1f} s\n", heard.listened_s);

@@ -63,6 +63,12 @@ struct HeardStatus {
   double listened_s = 0.0;
   std::size_t refused = 0;  ///< samples refused at the door
   std::string last_refusal;
+  /// From the run directory's record (fleet_events.csv), where it could be read: vehicles that
+  /// left (-1: not read) and the latest tour or region plan's line (its time and what it says,
+  /// how many are held in reserve among it; empty: none).
+  std::int64_t left = -1;
+  double plan_time_s = 0.0;
+  std::string plan;
 };
 
 /// Why a vehicle's state heard on the mission's domain is not believed (empty: it is): an id in

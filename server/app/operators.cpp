@@ -375,6 +375,14 @@ int ShowStatus(const MissionFile& mission, double listen_s, bool all, bool insec
   // Nothing believed: no mission answered, unless what came was refused (then the report says so).
   if (!heard.has_status && vehicles.empty() && heard.refused == 0) return NoMission(mission, insecure);
   for (auto& [id, v] : vehicles) heard.vehicles.push_back(std::move(v));
+  try {  // the record beside what was heard: who left, and the plan flown
+    const std::vector<FleetEventRecord> events = ReadFleetEvents(mission.run_dir);
+    heard.left = std::count_if(events.begin(), events.end(), [](const FleetEventRecord& e) { return e.what == "left"; });
+    for (const FleetEventRecord& e : events) {
+      if (e.what == "regions" || e.what == "tours") heard.plan_time_s = e.time_s, heard.plan = e.what + ": " + e.detail;
+    }
+  } catch (const std::exception&) {  // a record not readable here: the status without it
+  }
   std::fputs(StatusReport(heard, scenario.name, mission.run_dir, all ? heard.vehicles.size() : std::size_t{40}).c_str(),
              stdout);
   return heard.has_status || !heard.vehicles.empty() ? 0 : 1;

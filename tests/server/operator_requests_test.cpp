@@ -126,12 +126,21 @@ TEST(OperatorRequests, StatusReportListsWhatWasHeard) {
   heard.vehicles.push_back({7, std::string(40, 'x'), 149.9, Eigen::Vector2d(1.0, 2.5), 0.7});
   heard.refused = 2;
   heard.last_refusal = "rov9: position (nan, 1) m is far outside the 12 x 10 m workspace";
+  heard.left = 2;
+  heard.plan_time_s = 100.5;
+  heard.plan = "regions: 3 regions for 4 vehicles; 1 vehicle(s) held in reserve";
   const std::string report = StatusReport(heard, "fleet_field", "runs/fleet_field_launch", 2);
   EXPECT_NE(report.find("fleet_field: t = 150.0 of 600.0 s (25 %), running at 1.73x real time (asked 2x)\n"
                         "run directory runs/fleet_field_launch\n"),
             std::string::npos)
       << report;
-  EXPECT_NE(report.find("server cycle 0.41 ms; ergodic metric 0.01235; 4 vehicles flying, 1 lost\n"), std::string::npos)
+  EXPECT_NE(report.find("server cycle 0.41 ms; ergodic metric 0.01235; 4 vehicles flying, 1 lost, 2 left\n"),
+            std::string::npos)
+      << report;
+  // The record's latest plan, which says how many are held in reserve (they hold, at no speed).
+  EXPECT_NE(report.find("the plan flown, of t = 100.5 s:\n  regions: 3 regions for 4 vehicles; 1 vehicle(s) held in "
+                        "reserve\n"),
+            std::string::npos)
       << report;
   EXPECT_NE(report.find("vehicles heard in 1.0 s (4 of 4 flying):"), std::string::npos) << report;
   EXPECT_NE(report.find("       0  rov1      1.00     -2.50        0.70     149.9\n"), std::string::npos) << report;
@@ -152,6 +161,8 @@ TEST(OperatorRequests, StatusReportListsWhatWasHeard) {
   }
 
   heard.finished = true;
+  heard.left = -1;  // no record read: nothing said of it
+  heard.plan.clear();
   heard.time_s = 600.0;
   heard.ergodic_metric = NAN;
   heard.refused = 0;
@@ -161,6 +172,8 @@ TEST(OperatorRequests, StatusReportListsWhatWasHeard) {
   EXPECT_NE(done.find("ergodic metric not yet"), std::string::npos) << done;
   EXPECT_NE(done.find("no vehicle heard in 1.0 s"), std::string::npos) << done;
   EXPECT_EQ(done.find("refused"), std::string::npos) << done;
+  EXPECT_EQ(done.find("left"), std::string::npos) << done;
+  EXPECT_EQ(done.find("plan"), std::string::npos) << done;
   heard.finished = false;
   heard.measured_rate = NAN;  // one status heard: the pace asked
   EXPECT_NE(StatusReport(heard, "m", "r").find("running, asked 2x real time"), std::string::npos);
