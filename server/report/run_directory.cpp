@@ -389,7 +389,8 @@ void RunDirectory::Finish(const MissionCore& core, const maps::World& world, dou
                   core.fleet().profile().name, core.roster().members().size(),
                   core.roster().members().size() == 1 ? "" : "s", end_s);
   const MissionMetrics metrics = core.Metrics(end_s);
-  plots::MissionPlotInput plot{&scenario_, &metrics, &plot_.trajectory(), plot_.Events(), plot_.events_not_kept(), title};
+  plots::MissionPlotInput plot{&scenario_, &metrics, &plot_.trajectory(), plot_.Events(), plot_.events_not_kept(), title,
+                               plot_.resumed_at_s()};
   std::vector<std::string> contents, paths;
   for (plots::PlotFile& f : plots::MissionPlotFiles(plot)) {
     paths.push_back((fs::path(dir_) / f.name).string());

@@ -73,6 +73,11 @@ std::string MetricChartSvg(const MissionPlotInput& input) {
       std::isfinite(m.ergodic_metric) ? fmt::format("At the end: {:.2e} (the run table's ergodic metric).", m.ergodic_metric)
                                       : std::string("At the end: undefined.")};
   if (!input.events.empty()) caption.push_back("Vertical lines: risk changes, vehicles joining, lost or leaving, at their times.");
+  if (!input.resumed_at_s.empty()) {
+    caption.push_back(fmt::format("Solid purple line{}: the mission resumed from its checkpoint after its server stopped "
+                                  "(fleet_events.csv: outage, resumed).",
+                                  input.resumed_at_s.size() == 1 ? "" : "s"));
+  }
   if (samples.empty()) caption.push_back("No metric samples were recorded.");
   const std::vector<std::string> lines = Wrapped(caption);
   const double caption_top = y1 + 62.0;
@@ -93,6 +98,17 @@ std::string MetricChartSvg(const MissionPlotInput& input) {
     const double w = TextWidth(text, 10.0), h = (kAscentEm + kDescentEm) * 10.0;
     const auto at = strip.Place(Box{x - 0.5, y0 - 1.0, x + 0.5, y0}, w, h, 2.0);
     if (at) svg.Text(at->box.x0, at->box.y0 + kAscentEm * 10.0, text, 10.0, "start", fmt::format("fill=\"{}\"", MarkerColour(e.kind)));
+  }
+  // A resume: a solid line, labelled.
+  for (const double t : input.resumed_at_s) {
+    if (!(t >= 0.0 && t <= duration)) continue;
+    const double x = tx(t);
+    svg.Put("<line class=\"resumed\" x1=\"{0:.1f}\" y1=\"{1:.1f}\" x2=\"{0:.1f}\" y2=\"{2:.1f}\" stroke=\"#7b3294\" "
+            "stroke-width=\"1.5\"/>\n", x, y0, y1);
+    // Inside the plot, at the line's top (the strip above is the place events' and may be full).
+    const std::string text = fmt::format("resumed at {:.1f} s", t);
+    const bool left = x + 4.0 + TextWidth(text, 10.0) > x1;
+    svg.Text(left ? x - 4.0 : x + 4.0, y0 + 14.0, text, 10.0, left ? "end" : "start", "fill=\"#7b3294\"");
   }
   svg.Put("<rect x=\"{:.1f}\" y=\"{:.1f}\" width=\"{:.1f}\" height=\"{:.1f}\" fill=\"none\" stroke=\"#222\"/>\n", x0, y0, x1 - x0,
           y1 - y0);

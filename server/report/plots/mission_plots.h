@@ -45,6 +45,9 @@ struct MissionPlotInput {
   std::vector<EventMarker> events;
   std::size_t events_not_kept = 0;          ///< events beyond what the record kept for the plot
   std::string title;
+  /// Mission times the mission was resumed at after its server stopped (fleet_events' "resumed"):
+  /// marked on the metric chart, whose curve restarts from the checkpoint there.
+  std::vector<double> resumed_at_s;
 };
 
 struct FieldPlotOptions {

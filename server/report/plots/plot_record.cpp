@@ -57,6 +57,10 @@ void PlotRecord::Keep(EventMarker marker, bool placed) {
 }
 
 void PlotRecord::OnFleetEvent(const FleetEventRecord& e) {
+  if (e.what == "resumed") {  // a time, not a place: the metric chart's
+    if (resumed_at_s_.size() < max_events_) resumed_at_s_.push_back(e.time_s);
+    return;
+  }
   EventMarker marker;
   marker.time_s = e.time_s;
   marker.who = e.name;

@@ -35,6 +35,8 @@ class PlotRecord {
   /// The events placed so far, in time order (a join not yet followed by a sample is not).
   std::vector<EventMarker> Events() const;
   std::size_t events_not_kept() const { return events_not_kept_; }
+  /// The mission times it was resumed at (a server outage before each).
+  const std::vector<double>& resumed_at_s() const { return resumed_at_s_; }
   int stride() const { return stride_; }
 
  private:
@@ -55,6 +57,7 @@ class PlotRecord {
   std::vector<Pending> events_;
   std::size_t unplaced_joins_ = 0;
   std::size_t events_not_kept_ = 0;
+  std::vector<double> resumed_at_s_;
 };
 
 }  // namespace sage::server::plots

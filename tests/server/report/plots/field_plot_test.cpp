@@ -212,6 +212,20 @@ TEST(FieldPlot, EventsMarkedWhereAndWhenTheyHappened) {
   const std::string metric = MetricChartSvg(FleetField().Input());
   EXPECT_EQ(Count(metric, "stroke-dasharray=\"4 3\""), 3);
   EXPECT_EQ(Count(metric, "P9 \u2192 0.51"), 1);
+  EXPECT_EQ(Count(metric, "class=\"resumed\""), 0);
+  // A resumed mission's chart marks where it resumed (a record's "resumed" event, as the plot
+  // record keeps it), and says what the line is.
+  PlotRecord record(FleetField().scenario);
+  record.OnFleetEvent({412.5, "outage", -1, "", "no server for 3.0 s of wall time"});
+  record.OnFleetEvent({412.5, "resumed", -1, "", "from the checkpoint at t = 412.5 s"});
+  ASSERT_EQ(record.resumed_at_s(), std::vector<double>{412.5});
+  EXPECT_TRUE(record.Events().empty()) << "a resume is a time, not a place on the field";
+  MissionPlotInput resumed = FleetField().Input();
+  resumed.resumed_at_s = record.resumed_at_s();
+  const std::string chart = MetricChartSvg(resumed);
+  EXPECT_EQ(Count(chart, "class=\"resumed\""), 1);
+  EXPECT_EQ(Count(chart, ">resumed at 412.5 s<"), 1);
+  EXPECT_NE(chart.find("Solid purple line: the mission resumed from its checkpoint"), std::string::npos);
 }
 
 // Up to 12 vehicles every track has its legend entry; above, the fleet's time as density,
