@@ -369,15 +369,16 @@ bool ReportUnknownOption(const CLI::App& app, int argc, char** argv) {
 // Most 1 required but received 2" had read as if a second value were wanted).
 // The finite number `text` is, all of it; nullopt for anything else ("2.5x", "abc", "inf", "").
 std::optional<double> NumberIn(const std::string& text) {
+  // Decimal as typed, all of it (std::stod had taken "  2" and "0x10" as numbers); a leading '+'
+  // allowed; -0 is 0 (it had been said back as "risk -0 ... now -0.0 %").
+  const std::string_view digits = text.starts_with('+') ? std::string_view(text).substr(1) : std::string_view(text);
   double value = 0.0;
-  std::size_t used = 0;
-  try {
-    value = std::stod(text, &used);
-  } catch (const std::exception&) {
+  const auto [end, error] = std::from_chars(digits.data(), digits.data() + digits.size(), value, std::chars_format::general);
+  if (digits.empty() || (digits.front() == '-' && text.starts_with('+')) || error != std::errc() ||
+      end != digits.data() + digits.size() || !std::isfinite(value)) {
     return std::nullopt;
   }
-  if (used == 0 || used != text.size() || !std::isfinite(value)) return std::nullopt;
-  return value;
+  return value == 0.0 ? 0.0 : value;
 }
 
 std::string InOurWords(const std::string& message) {
@@ -580,7 +581,11 @@ int RunCli(int argc, char** argv) {
   risk->require_subcommand(1);
   CLI::App* risk_set = risk->add_subcommand("set", "Set a valve's raw risk weight; vehicles re-allocate on the next cycle");
   risk_set->add_option("valve", op.valve, "Valve name, e.g. P1")->required();
-  risk_set->add_option("weight", op.weight, "Raw weight in [0, 1e12] (weights are normalised over all valves)")->required();
+  // Checked as typed: CLI11 had read an empty weight (an unset shell variable) as 0, taking the
+  // valve out of the field.
+  risk_set->add_option("weight", op.weight, "Raw weight in [0, 1e12] (weights are normalised over all valves)")
+      ->required()
+      ->check(MustBeIn(0.0, 1e12));
   risk_set->add_option("--source", op.source, "Who says so (logged by the server; 1 to 64 characters)")
       ->capture_default_str()
       ->check(MustBeASourceName);

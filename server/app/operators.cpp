@@ -246,6 +246,7 @@ int RemoveVehicle(const MissionFile& mission, const std::string& vehicle, bool i
 
 int SetRisk(const MissionFile& mission, const std::string& valve, double weight, const std::string& source,
             bool insecure) {
+  if (weight == 0.0) weight = 0.0;  // -0 is 0 ("risk -0 applied ... now -0.0 %")
   const maps::Scenario scenario = maps::LoadScenario(mission.scenario_path);
   CheckRiskRequest(scenario, valve, weight);
   proto::Participant participant = OperatorParticipant(mission, insecure);

@@ -364,6 +364,13 @@ TEST(RangeProblem, SaysWhatIsAllowed) {
     EXPECT_EQ(said.status, 2) << source;
     EXPECT_NE(said.err.find("risk set: --source: must be 1 to 64 characters"), std::string::npos) << said.err;
   }
+  // A weight is a decimal number as typed: an empty one (an unset shell variable) had set the
+  // valve's risk to 0, and hex or padded ones had been taken.
+  for (const std::string& weight : {std::string(""), std::string(" 2"), std::string("0x10"), std::string("2x")}) {
+    const SageRun said = RunSage({"risk", "set", "P1", weight, "--mission", "/nonexistent_sage_mission"});
+    EXPECT_EQ(said.status, 2) << weight;
+    EXPECT_NE(said.err.find("risk set: weight = " + weight + ": must be a number in [0, "), std::string::npos) << said.err;
+  }
 }
 
 
