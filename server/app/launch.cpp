@@ -166,6 +166,11 @@ int Launch(const LaunchCommand& c) {
     }
     take_lock("--out", out_dir);
     CheckRunDirectoryFree(out_dir);
+    // The mission's record is its owner's alone, as its token and identities are (the directory had
+    // been 0755, its trajectory, scenario and hidden leaks readable by every user of the machine).
+    if (std::error_code ec; fs::permissions(out_dir, fs::perms::owner_all, fs::perm_options::replace, ec), ec) {
+      throw maps::ScenarioError(fmt::format("--out = {}: cannot keep it to its owner: {}", out_dir, ec.message()));
+    }
     if (std::error_code ignored; fs::exists(fs::path(out_dir) / "trajectory.csv", ignored)) {
       spdlog::warn("launch: {}: replacing the mission recorded there (give --out another directory to keep it)", out_dir);
     }

@@ -1211,6 +1211,8 @@ TEST_F(FleetDds, LaunchEndsWhenTheFleetIsGone) {
   EXPECT_LT(metrics.at("duration_s").get<double>(), 100.0);
   // Who ended it stands in the fleet's events, after the loss.
   const auto events = ReadFleetEvents(out / "fleet_events.csv");
+  // The record is its owner's alone, as its token and identities are.
+  EXPECT_EQ(fs::status(out).permissions() & fs::perms::all, fs::perms::owner_all);
   const auto stopped = EventsOf(events, "stopped");
   ASSERT_EQ(stopped.size(), 1u);
   EXPECT_NE(stopped.front()->detail.find("a stop request from its launcher, every agent host gone"), std::string::npos)
