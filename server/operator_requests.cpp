@@ -65,6 +65,16 @@ std::string StopLine(double time_s, const std::string& run_dir) {
   return fmt::format("the mission stops at t = {:.1f} s; its server writes {}", time_s, run_dir);
 }
 
+std::string RiskSourceProblem(std::string_view source) {
+  for (const std::string_view own : {std::string_view("scenario"), std::string_view("operator (live view)")}) {
+    if (source == own) return fmt::format("'{}' is the mission's own (its record keeps who changed what); name yourself", own);
+  }
+  if (!source.empty() && std::string_view("=+-@").find(source.front()) != std::string_view::npos) {
+    return "must not start with =, +, - or @ (a spreadsheet reads risk_events.csv's cell as a formula)";
+  }
+  return {};
+}
+
 std::string HeardStateProblem(std::uint64_t id, const std::string& name, double time_s, const Eigen::Vector2d& position_m,
                               const Eigen::Vector2d& velocity_mps, const maps::Scenario& scenario, std::int64_t max_id) {
   if (id > static_cast<std::uint64_t>(max_id)) return fmt::format("id {}: not one a mission issues (0..{})", id, max_id);

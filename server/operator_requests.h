@@ -9,6 +9,7 @@
 #include <limits>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include <Eigen/Core>
@@ -70,6 +71,13 @@ struct HeardStatus {
   double plan_time_s = 0.0;
   std::string plan;
 };
+
+/// Why an operator's risk update may not carry this source (empty: it may): the names the mission
+/// records its own changes under ("scenario": the profile's timed events, which a resume replays
+/// from the scenario and not from the record, so an operator's change under it was lost on a resume;
+/// "operator (live view)": the page's), and a first character a spreadsheet reads as a formula
+/// (=, +, -, @) in risk_events.csv.
+std::string RiskSourceProblem(std::string_view source);
 
 /// Why a vehicle's state heard on the mission's domain is not believed (empty: it is): an id in
 /// 0..max_id, a name as a scenario's (1..64 characters of UTF-8, no control character), a finite

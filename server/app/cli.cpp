@@ -30,6 +30,7 @@
 #include "server/app/run_commands.h"
 #include "server/app/security_command.h"
 #include "server/app/view_command.h"
+#include "server/operator_requests.h"
 #include "maps/scenario/duration_rule.h"
 #include "proto/dds_config.h"
 #include "proto/mission_clock.h"
@@ -49,7 +50,7 @@ enum class OverrideSet {
 std::string MustBeASourceName(const std::string& text) {
   const bool printable =
       std::all_of(text.begin(), text.end(), [](char c) { return static_cast<unsigned char>(c) >= 0x20 && c != 0x7f; });
-  if (!text.empty() && text.size() <= 64 && printable) return {};
+  if (!text.empty() && text.size() <= 64 && printable) return RiskSourceProblem(text);
   return "must be 1 to 64 characters, none a control character (who says so, e.g. 'leak detector 3')";
 }
 

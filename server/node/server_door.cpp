@@ -7,6 +7,7 @@
 
 #include "agents/node/wire.h"
 #include "maps/scenario/printable_text.h"
+#include "server/operator_requests.h"
 
 namespace sage::server {
 
@@ -46,6 +47,14 @@ std::optional<OperatorAnswer> ServerDoor::TakeRiskUpdate(const proto::RiskUpdate
   // The source as the record keeps it (risk_events.csv, metrics.json): printable UTF-8.
   const std::string source = LogSafe(proto::AsStringView(r.source));
   const std::string sender = fmt::format("{} (writer {:x})", source, writer);
+  if (const std::string why = RiskSourceProblem(source); !why.empty()) {
+    // Refused at the door, counted with the operator's other refusals (a source of the mission's
+    // own had been recorded as if the mission made the change).
+    OperatorAnswer refused;
+    refused.reason = fmt::format("source = {}: {}", source, why);
+    spdlog::warn("server: ignored a risk update from {}: {}", LogSafe(sender), LogSafe(refused.reason));
+    return refused;
+  }
   const std::uint64_t limited = core_.risk_limits().refused(sender);
   const OperatorAnswer a = core_.OnRiskUpdate(std::string(proto::AsStringView(r.valve)), r.weight, source, sender);
   const std::uint64_t refused = core_.risk_limits().refused(sender);

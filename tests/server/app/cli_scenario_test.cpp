@@ -364,6 +364,10 @@ TEST(RangeProblem, SaysWhatIsAllowed) {
     EXPECT_EQ(said.status, 2) << source;
     EXPECT_NE(said.err.find("risk set: --source: must be 1 to 64 characters"), std::string::npos) << said.err;
   }
+  // Nor the mission's own name for its changes, nor a spreadsheet formula.
+  const SageRun own = RunSage({"risk", "set", "P1", "2", "--source", "scenario"});
+  EXPECT_EQ(own.status, 2);
+  EXPECT_NE(own.err.find("risk set: --source: 'scenario' is the mission's own"), std::string::npos) << own.err;
   // A weight is a decimal number as typed: an empty one (an unset shell variable) had set the
   // valve's risk to 0, and hex or padded ones had been taken.
   for (const std::string& weight : {std::string(""), std::string(" 2"), std::string("0x10"), std::string("2x")}) {

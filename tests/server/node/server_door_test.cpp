@@ -128,6 +128,33 @@ TEST_F(ServerDoorTest, AStopSaysWhoAsked) {
   EXPECT_NE(odd.answer.reason.find("not 7"), std::string::npos) << odd.answer.reason;
 }
 
+// A risk update may not carry a source the mission records its own changes under ("scenario",
+// which a resume replays from the scenario, not the record; the page's), nor one a spreadsheet
+// reads as a formula: refused at the door with why, the weights untouched; another source is taken.
+TEST_F(ServerDoorTest, RiskUpdatesUnderTheMissionsOwnNamesAreRefused) {
+  std::string valve = scenario_.AllValves().front().name;
+  for (const std::string& bad : {std::string("scenario"), std::string("operator (live view)"), std::string("=cmd|calc")}) {
+    std::string source = bad;
+    proto::RiskUpdate r{};
+    r.valve = proto::BorrowString(valve);
+    r.weight = 3.0;
+    r.source = proto::BorrowString(source);
+    const std::optional<OperatorAnswer> a = door_.TakeRiskUpdate(r, 7);
+    ASSERT_TRUE(a.has_value()) << bad;
+    EXPECT_FALSE(a->accepted) << bad;
+    EXPECT_NE(a->reason.find("source = " + bad + ": "), std::string::npos) << a->reason;
+    EXPECT_TRUE(core_.fleet().responses().empty()) << bad << " changed the weights";
+  }
+  std::string valid = "leak detector 3";
+  proto::RiskUpdate ok{};
+  ok.valve = proto::BorrowString(valve);
+  ok.weight = 3.0;
+  ok.source = proto::BorrowString(valid);
+  const std::optional<OperatorAnswer> taken = door_.TakeRiskUpdate(ok, 7);
+  ASSERT_TRUE(taken.has_value());
+  EXPECT_TRUE(taken->accepted) << taken->reason;
+}
+
 // Each writer has its own allowance of risk updates: one writer's flood is refused while another
 // writer's update is applied, and the flood is counted under its writer.
 TEST_F(ServerDoorTest, RiskUpdatesAreLimitedPerWriter) {
