@@ -4,10 +4,14 @@
 #include <fcntl.h>
 #include <ifaddrs.h>
 #include <netinet/in.h>
+#include <pwd.h>
 #include <sys/file.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <cstdint>
+#include <fstream>
+#include <sstream>
 #include <stdexcept>
 #include <utility>
 
@@ -184,6 +188,36 @@ int MissionDomainId(std::optional<int> explicit_domain, std::string_view run_key
   return 1 + static_cast<int>(hash % static_cast<uint64_t>(max_domain_id));
 }
 
+std::string DomainLockPath(int domain_id) { return "/tmp/sage_dds_domain_" + std::to_string(domain_id) + ".lock"; }
+
+std::string DomainLockHolder(int domain_id) {
+  const std::string path = DomainLockPath(domain_id);
+  struct stat file {};
+  if (::stat(path.c_str(), &file) != 0) return {};
+  // /proc/locks: "1: FLOCK  ADVISORY  WRITE 4242 08:01:1234567 0 EOF" (pid, then major:minor:inode).
+  std::ifstream locks("/proc/locks");
+  for (std::string line; std::getline(locks, line);) {
+    std::istringstream words(line);
+    std::string number, kind, advisory, mode, pid, where;
+    if (!(words >> number >> kind)) continue;
+    if (kind == "->") words >> kind;  // a waiter's line
+    if (!(words >> advisory >> mode >> pid >> where) || kind != "FLOCK") continue;
+    const std::size_t colon = where.rfind(':');
+    if (colon == std::string::npos || where.substr(colon + 1) != std::to_string(file.st_ino)) continue;
+    std::string command;
+    std::ifstream cmdline("/proc/" + pid + "/cmdline");
+    std::getline(cmdline, command, '\0');
+    struct stat proc {};
+    std::string user = "?";
+    if (::stat(("/proc/" + pid).c_str(), &proc) == 0) {
+      const passwd* who = ::getpwuid(proc.st_uid);
+      user = who != nullptr ? who->pw_name : std::to_string(proc.st_uid);
+    }
+    return "pid " + pid + " (user " + user + ", " + (command.empty() ? std::string("?") : command) + ")";
+  }
+  return {};
+}
+
 DomainReservation DomainReservation::Acquire(int preferred, int first, int last) {
   if (first < 0 || last > kMaxDomainId || first > preferred || preferred > last) {
     throw std::invalid_argument("DomainReservation: need 0 <= first (" + std::to_string(first) +
@@ -193,15 +227,21 @@ DomainReservation DomainReservation::Acquire(int preferred, int first, int last)
   const int range = last - first + 1;
   for (int step = 0; step < range; ++step) {
     const int domain_id = first + (preferred - first + step) % range;
-    const std::string path = "/tmp/sage_dds_domain_" + std::to_string(domain_id) + ".lock";
+    const std::string path = DomainLockPath(domain_id);
     // O_RDONLY suffices for flock, and works on a lock file another user created.
     const int fd = ::open(path.c_str(), O_RDONLY | O_CREAT | O_CLOEXEC, 0666);
     if (fd < 0) continue;
     if (::flock(fd, LOCK_EX | LOCK_NB) == 0) return DomainReservation(domain_id, fd);
     ::close(fd);
   }
-  throw std::runtime_error("DomainReservation: every domain id in " + std::to_string(first) + ".." +
-                           std::to_string(last) + " is reserved by another process");
+  // Who holds them, so that an operator can find it (any user of the machine can hold a lock:
+  // one that holds them all blocks every launch, and had been named only "another process").
+  const std::string holder = DomainLockHolder(preferred);
+  throw std::runtime_error("every DDS domain id in " + std::to_string(first) + ".." + std::to_string(last) +
+                           " is reserved (locks " + DomainLockPath(first) + " .. " + DomainLockPath(last) + "; " +
+                           (holder.empty() ? "that of " + std::to_string(preferred) + " by another process"
+                                           : "that of " + std::to_string(preferred) + " by " + holder) +
+                           "): stop missions no longer wanted, or ask who holds them");
 }
 
 DomainReservation::DomainReservation(DomainReservation&& other) noexcept

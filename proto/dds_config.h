@@ -116,6 +116,11 @@ std::string LocalhostConfigXml(int max_participants,
 int MissionDomainId(std::optional<int> explicit_domain, std::string_view run_key,
                     int max_domain_id = kMaxDomainId);
 
+/// The lock file of a DDS domain id's reservation, and who holds its lock ("pid P (user U,
+/// COMMAND)", from /proc/locks; empty when nobody does or it cannot be told).
+std::string DomainLockPath(int domain_id);
+std::string DomainLockHolder(int domain_id);
+
 /// A machine-wide claim on a DDS domain id, held with an advisory lock (flock) on
 /// /tmp/sage_dds_domain_<id>.lock until destruction or process death (also kill -9). Missions
 /// and tests that reserve their domain never share one. Move-only.

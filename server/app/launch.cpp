@@ -218,9 +218,11 @@ int Launch(const LaunchCommand& c) {
     try {
       return proto::DomainReservation::Acquire(preferred, preferred, preferred);
     } catch (const std::runtime_error&) {
-      throw maps::ScenarioError(fmt::format("--domain = {}: another mission on this machine holds it; leave --domain "
-                                            "out to get a free one",
-                                            preferred));
+      const std::string holder = proto::DomainLockHolder(preferred);
+      throw maps::ScenarioError(fmt::format("--domain = {}: held ({} locked by {}): another mission on this machine, or "
+                                            "whoever holds that lock; leave --domain out to get a free one",
+                                            preferred, proto::DomainLockPath(preferred),
+                                            holder.empty() ? std::string("another process") : holder));
     }
   };
   const proto::DomainReservation reservation = reserve();

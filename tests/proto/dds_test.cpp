@@ -473,6 +473,16 @@ TEST(DdsConfig, DomainIdsAreValidStableAndExclusive) {
   const DomainReservation first = DomainReservation::Acquire(100);
   const DomainReservation second = DomainReservation::Acquire(first.domain_id());
   EXPECT_NE(first.domain_id(), second.domain_id());
+  // Who holds a domain is told (this process, from /proc/locks), in the refusal too: any user can
+  // hold a lock, and "another process" had left an operator no way to find it.
+  EXPECT_NE(DomainLockHolder(first.domain_id()).find("pid " + std::to_string(getpid()) + " (user "), std::string::npos)
+      << DomainLockHolder(first.domain_id());
+  try {
+    DomainReservation::Acquire(first.domain_id(), first.domain_id(), first.domain_id());
+    ADD_FAILURE() << "a held domain was reserved again";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("by pid " + std::to_string(getpid())), std::string::npos) << e.what();
+  }
   EXPECT_THROW(LocalhostConfigXml(0), std::invalid_argument);
   EXPECT_THROW(LocalhostConfigXml(kMaxLocalParticipants + 1), std::invalid_argument);
   EXPECT_NE(LocalhostConfigXml(20).find("<MaxAutoParticipantIndex>20<"), std::string::npos);
