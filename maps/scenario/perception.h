@@ -170,6 +170,9 @@ const char* ToString(Gaze gaze);
 /// Most sensors a vehicle may carry, most leaks a scenario may hide.
 inline constexpr std::size_t kMaxSensors = 8;
 inline constexpr std::size_t kMaxLeaks = 1000;
+/// A sensor's false alarms a scan on average (false_alarms_per_s / rate_hz) at most: a scan and
+/// its detections go to the server whole.
+inline constexpr double kMaxFalseAlarmsPerScan = 1000.0;
 /// Two leaks closer than this (m; the least association radius) are one site, whose detections
 /// the scoring could not tell apart: a scenario's are refused, random ones are drawn apart (a new
 /// user's three random joint leaks had all fallen on one joint, one "confirmed" before it was

@@ -128,6 +128,13 @@ void ValidatePerception(const Scenario& s, const std::string& file) {
     in_range(path + ".position_sigma_m", sensor.position_sigma_m, 0.0, 10.0, true, false, "must be in (0, 10] m");
     in_range(path + ".rate_hz", sensor.rate_hz, 0.0, s.control_rate_hz, true, false,
              "must be in (0, control_rate_hz = " + FormatNumber(s.control_rate_hz) + "] (scans fall on control cycles)");
+    // A scan's false alarms on average: what a scan may carry to the server is bounded.
+    if (sensor.rate_hz > 0.0 && sensor.false_alarms_per_s / sensor.rate_hz > kMaxFalseAlarmsPerScan) {
+      fail(path + ".false_alarms_per_s", FormatNumber(sensor.false_alarms_per_s),
+           "at rate_hz = " + FormatNumber(sensor.rate_hz) + " that is " +
+               FormatNumber(sensor.false_alarms_per_s / sensor.rate_hz) + " false alarms a scan; at most " +
+               FormatNumber(kMaxFalseAlarmsPerScan) + " (scan more often, or fewer false alarms)");
+    }
   }
 
   if (s.leaks.size() > kMaxLeaks) {

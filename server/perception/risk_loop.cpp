@@ -27,8 +27,19 @@ constexpr double kNegligibleMass = 1e-5;
 
 }  // namespace
 
+std::size_t RiskLoop::MaxDetectionsPerScan(const maps::Scenario& scenario) {
+  double clutter = 0.0;  // the busiest sensor's mean false alarms a scan
+  for (const maps::SensorSpec& sensor : scenario.sensors) {
+    if (sensor.rate_hz > 0.0) clutter = std::max(clutter, sensor.false_alarms_per_s / sensor.rate_hz);
+  }
+  const double honest = static_cast<double>(scenario.leaks.size()) + clutter + 10.0 * std::sqrt(clutter) + 10.0;
+  return static_cast<std::size_t>(std::clamp(std::ceil(honest), static_cast<double>(kMinDetectionsPerScan),
+                                             static_cast<double>(kMostDetectionsPerScan)));
+}
+
 RiskLoop::RiskLoop(const maps::Scenario& scenario, const maps::World& world, maps::RiskLayer& layer)
     : scenario_(scenario),
+      max_detections_(MaxDetectionsPerScan(scenario)),
       world_(world),
       layer_(layer),
       belief_(scenario, world, layer.resolution_m()),
@@ -73,7 +84,7 @@ const char* RiskLoop::Take(const agents::ScanReport& s, double latest_s) {
   const Eigen::Vector2d workspace(scenario_.workspace.width_m, scenario_.workspace.height_m);
   const auto inside = [&](const Eigen::Vector2d& p) { return (p.array() >= 0.0).all() && (p.array() <= workspace.array()).all(); };
   if (!inside(s.position_m)) return "scan from outside the workspace";
-  if (s.detections_m.size() > kMaxDetectionsPerScan) return "scan with too many detections";
+  if (s.detections_m.size() > max_detections_) return "scan with too many detections";
   const double reach = model.spec().range_m + 4.0 * model.spec().position_sigma_m;
   for (const Eigen::Vector2d& z : s.detections_m) {
     if (!inside(z) || (z - s.position_m).norm() > reach) return "detection out of its sensor's reach";

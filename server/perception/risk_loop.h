@@ -41,8 +41,12 @@ namespace sage::server {
 
 class RiskLoop {
  public:
-  /// Detections a scan may carry; more is refused at the door.
-  static constexpr std::size_t kMaxDetectionsPerScan = 64;
+  /// Detections a scan may carry, more refused at the door: 64, or what the scenario's own sensors
+  /// can honestly report (every hidden leak, and the busiest sensor's false alarms a scan, mean
+  /// plus ten standard deviations; a camera at 100 false alarms a second scanning once a second had
+  /// its own scans refused), up to kMostDetectionsPerScan.
+  static constexpr std::size_t kMinDetectionsPerScan = 64, kMostDetectionsPerScan = 4096;
+  static std::size_t MaxDetectionsPerScan(const maps::Scenario& scenario);
 
   /// scenario, world and layer outlive the loop; the loop writes the layer's excess.
   RiskLoop(const maps::Scenario& scenario, const maps::World& world, maps::RiskLayer& layer);
@@ -111,6 +115,7 @@ class RiskLoop {
   void Score(const std::vector<agents::ScanReport>& fused, double time_s);
 
   const maps::Scenario& scenario_;
+  std::size_t max_detections_;  // MaxDetectionsPerScan(scenario_)
   const maps::World& world_;
   maps::RiskLayer& layer_;
   LeakBelief belief_;

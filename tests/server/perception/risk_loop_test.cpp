@@ -109,6 +109,29 @@ TEST(RiskLoop, ScansCheckedAtTheDoor) {
   EXPECT_EQ(core.Metrics(0.4).scans, 1u) << "only the good scan was fused";
 }
 
+// A scan may carry what the scenario's own sensors can honestly report: a camera at 100 false
+// alarms a second scanning once a second (allowed by the scenario) had its own scans refused at 64
+// detections. The limit covers every leak and the clutter's mean plus ten deviations; a sensor
+// whose mean clutter a scan passes 1,000 is refused with the scenario.
+TEST(RiskLoop, AScanMayCarryWhatItsSensorsReport) {
+  maps::Scenario s = maps::LoadScenario(kTwoXtLeaks);
+  EXPECT_EQ(RiskLoop::MaxDetectionsPerScan(s), RiskLoop::kMinDetectionsPerScan);
+  ASSERT_FALSE(s.sensors.empty());
+  s.sensors.front().false_alarms_per_s = 100.0;
+  s.sensors.front().rate_hz = 1.0;
+  EXPECT_NO_THROW(s.Validate());
+  const std::size_t busy = RiskLoop::MaxDetectionsPerScan(s);
+  EXPECT_GE(busy, s.leaks.size() + 100 + 100);  // every leak, the mean and ten deviations (sqrt 100 = 10)
+  EXPECT_LE(busy, RiskLoop::kMostDetectionsPerScan);
+  s.sensors.front().rate_hz = 0.05;  // 2,000 false alarms a scan on average
+  try {
+    s.Validate();
+    ADD_FAILURE() << "2,000 false alarms a scan taken";
+  } catch (const maps::ScenarioError& e) {
+    EXPECT_NE(std::string(e.what()).find("that is 2000 false alarms a scan; at most 1000"), std::string::npos) << e.what();
+  }
+}
+
 // A detection raises the layer at once: the next snapshot's phi is the layer's, denser at the
 // leak; a scan that sees nothing only lowers (the valve it looked at weighs less) and raises no leaf.
 TEST(RiskLoop, ADetectionRaisesTheLayerAtOnce) {
