@@ -32,7 +32,22 @@ namespace fs = std::filesystem;
 constexpr auto kAnswerTimeout = std::chrono::seconds(5);
 constexpr auto kResendEvery = std::chrono::seconds(1);
 
+// How long an operator's command waits to meet the mission's server: 3 s, or 15 s while the
+// mission's launcher runs (the mission is there: on a loaded machine its secured handshake takes
+// longer; 30 commands at once had been told, a third of them, that no mission was listening). A
+// plain command to a secured mission never meets it: 3 s, and it is told why.
+std::chrono::seconds MatchWait(const MissionFile& mission, bool insecure) {
+  const bool never = insecure && !mission.security_dir.empty();
+  return std::chrono::seconds(!never && mission.launcher_pid > 0 && IsRunningLauncher(mission.launcher_pid) ? 15 : 3);
+}
+
 int NoMission(const MissionFile& mission, bool insecure) {
+  if (!insecure && mission.launcher_pid > 0 && IsRunningLauncher(mission.launcher_pid)) {
+    std::fprintf(stderr, "sage: error: the mission's launcher (pid %d) runs, but its server on DDS domain %d did not "
+                 "answer within %lld s (the machine is loaded, or the server is stuck: try again, or see sage status)\n",
+                 mission.launcher_pid, mission.domain_id, static_cast<long long>(MatchWait(mission, insecure).count()));
+    return 1;
+  }
   if (insecure && !mission.security_dir.empty()) {
     std::fprintf(stderr, "sage: error: no answer on DDS domain %d: the mission is secured (DDS Security, identities in %s) "
                  "and an --insecure command cannot reach it\n", mission.domain_id, mission.security_dir.c_str());
@@ -62,10 +77,10 @@ struct CommandAnswer {
 
 // Sends a fleet command to the server and waits for its answer (matched by the stamp).
 std::optional<CommandAnswer> AskServer(proto::Participant& participant, const std::string& verb, std::uint32_t count,
-                                       std::uint32_t vehicle_id) {
+                                       std::uint32_t vehicle_id, std::chrono::seconds match_wait) {
   proto::Reader<proto::FleetCommandResult> results(participant, proto::FleetCommandResultQos());
   proto::Writer<proto::FleetCommand> writer(participant, proto::FleetCommandQos());
-  if (!writer.WaitForReaders(1, std::chrono::seconds(3)) || !results.WaitForWriters(1, std::chrono::seconds(3))) {
+  if (!writer.WaitForReaders(1, match_wait) || !results.WaitForWriters(1, match_wait)) {
     return std::nullopt;
   }
   proto::FleetCommand c{};
@@ -152,7 +167,8 @@ std::string StartAddedHost(const MissionFile& mission, int first_id, int count) 
 int AddVehicles(const MissionFile& mission, int count, bool insecure) {
   CheckAddCount(count);
   proto::Participant participant = OperatorParticipant(mission, insecure);
-  const std::optional<CommandAnswer> answer = AskServer(participant, "reserve", static_cast<std::uint32_t>(count), 0);
+  const std::optional<CommandAnswer> answer =
+      AskServer(participant, "reserve", static_cast<std::uint32_t>(count), 0, MatchWait(mission, insecure));
   if (!answer) return NoMission(mission, insecure);
   if (!answer->accepted) {
     std::fprintf(stderr, "sage: error: %s\n", CommandRefusedLine(answer->reason).c_str());
@@ -217,7 +233,8 @@ int RemoveVehicle(const MissionFile& mission, const std::string& vehicle, bool i
   }
   const auto heard_name = flying.find(static_cast<std::uint32_t>(id));
   const std::string name = heard_name != flying.end() ? heard_name->second : std::string();
-  const std::optional<CommandAnswer> answer = AskServer(participant, "remove", 0, static_cast<std::uint32_t>(id));
+  const std::optional<CommandAnswer> answer =
+      AskServer(participant, "remove", 0, static_cast<std::uint32_t>(id), MatchWait(mission, insecure));
   if (!answer) return NoMission(mission, insecure);
   if (!answer->accepted) {
     std::fprintf(stderr, "sage: error: %s\n", CommandRefusedLine(answer->reason).c_str());
@@ -253,7 +270,7 @@ int SetRisk(const MissionFile& mission, const std::string& valve, double weight,
   // The answer's reader exists before the update is written, so the answer reaches it.
   proto::Reader<proto::RiskUpdateResult> results(participant, proto::RiskUpdateResultQos());
   proto::Writer<proto::RiskUpdate> writer(participant, proto::RiskUpdateQos());
-  if (!writer.WaitForReaders(1, std::chrono::seconds(3)) || !results.WaitForWriters(1, std::chrono::seconds(3))) {
+  if (!writer.WaitForReaders(1, MatchWait(mission, insecure)) || !results.WaitForWriters(1, MatchWait(mission, insecure))) {
     return NoMission(mission, insecure);
   }
   proto::RiskUpdate r{};
@@ -391,7 +408,7 @@ int ShowStatus(const MissionFile& mission, double listen_s, bool all, bool insec
 
 int StopMission(const MissionFile& mission, bool insecure) {
   proto::Participant participant = OperatorParticipant(mission, insecure);
-  const std::optional<CommandAnswer> answer = AskServer(participant, "stop", 0, 0);
+  const std::optional<CommandAnswer> answer = AskServer(participant, "stop", 0, 0, MatchWait(mission, insecure));
   if (!answer) return NoMission(mission, insecure);
   if (!answer->accepted) {
     std::fprintf(stderr, "sage: error: %s\n", answer->reason.c_str());
