@@ -69,6 +69,7 @@ proto::Participant OperatorParticipant(const MissionFile& mission, bool insecure
 }
 
 struct CommandAnswer {
+  bool answered = true;  ///< false: the server met the command but said nothing within 5 s
   bool accepted = false;
   std::string reason;
   int first_id = -1;
@@ -105,10 +106,10 @@ std::optional<CommandAnswer> AskServer(proto::Participant& participant, const st
     results.WaitForData(std::chrono::milliseconds(100));
     results.TakeEach([&](const proto::FleetCommandResult& r, const dds_sample_info_t& info) {
       if (!info.valid_data || r.command_stamp_ns != c.stamp_ns) return;
-      answer = CommandAnswer{r.accepted, std::string(proto::AsStringView(r.reason)), r.first_id, r.mission_time_s};
+      answer = CommandAnswer{true, r.accepted, std::string(proto::AsStringView(r.reason)), r.first_id, r.mission_time_s};
     });
   }
-  if (!answer) answer = CommandAnswer{false, "the server did not answer within 5 s", -1, 0.0};
+  if (!answer) answer = CommandAnswer{false, false, "the server did not answer within 5 s", -1, 0.0};
   return answer;
 }
 
@@ -409,7 +410,21 @@ int ShowStatus(const MissionFile& mission, double listen_s, bool all, bool insec
 int StopMission(const MissionFile& mission, bool insecure) {
   proto::Participant participant = OperatorParticipant(mission, insecure);
   const std::optional<CommandAnswer> answer = AskServer(participant, "stop", 0, 0, MatchWait(mission, insecure));
-  if (!answer) return NoMission(mission, insecure);
+  if (!answer || !answer->answered) {
+    // A stop that came while the mission was already stopping (a second `sage stop`): its server
+    // writes the final set and answers no more; said as the ended mission it is, once its record is
+    // complete (it had been an error after 5 s).
+    for (int tries = 0; tries < 50; ++tries) {
+      if (const RecordSummary record = ReadRecordSummary(mission.run_dir); record.complete) {
+        std::printf("the mission had already stopped, at t = %.1f s; its record is in %s\n",
+                    std::isfinite(record.duration_s) ? record.duration_s : record.recorded_until_s, mission.run_dir.c_str());
+        return 0;
+      }
+      if (!(mission.launcher_pid > 0 && IsRunningLauncher(mission.launcher_pid))) break;
+      std::this_thread::sleep_for(std::chrono::milliseconds(200));
+    }
+    if (!answer) return NoMission(mission, insecure);
+  }
   if (!answer->accepted) {
     std::fprintf(stderr, "sage: error: %s\n", answer->reason.c_str());
     return 1;

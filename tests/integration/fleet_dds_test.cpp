@@ -1219,6 +1219,33 @@ TEST_F(FleetDds, LaunchEndsWhenTheFleetIsGone) {
       << stopped.front()->detail;
 }
 
+// 10b. An operator's `sage stop` ends the mission where it is: told when, the record complete and
+// marked stopped early by `sage stop`; a second stop, made while the server writes its final set
+// (it answers no more), is told the mission had already stopped (it had been an error after 5 s).
+TEST_F(FleetDds, AnOperatorStopsTheMissionOnceAndIsToldSoAgain) {
+  const int domain_id = FreeDomainForLaunch();
+  const fs::path out = run_dir_ / "out";
+  ChildProcess& launch = StartLaunch("launch", {Scenario("two_xt.yaml"), "--duration", "200", "--time-scale",
+                                                Num(kTimeScale), "--http", "off", "--foxglove", "off"},
+                                     out, domain_id);
+  MissionWatcher watcher(domain_id, OperatorIdentityOf(out));
+  ASSERT_TRUE(WaitForFleet(watcher, 1, 5.0));
+  ChildProcess& stop = Start("stop", {"stop", "--mission", out.string()});
+  EXPECT_EQ(stop.WaitExit(20s), std::optional<int>(0)) << stop.LogText();
+  EXPECT_NE(stop.LogText().find("the mission stops at t = "), std::string::npos) << stop.LogText();
+  ChildProcess& again = Start("again", {"stop", "--mission", out.string()});
+  EXPECT_EQ(again.WaitExit(30s), std::optional<int>(0)) << again.LogText();
+  EXPECT_NE(again.LogText().find("the mission had already stopped, at t = "), std::string::npos) << again.LogText();
+  ASSERT_TRUE(launch.WaitExit(20s).has_value()) << "the launcher ran on after the stop";
+  const Json metrics = ReadJson(out / "metrics.json");
+  EXPECT_TRUE(metrics.at("complete").get<bool>());
+  EXPECT_TRUE(metrics.at("stopped_early").get<bool>());
+  const std::vector<FleetEvent> events = ReadFleetEvents(out / "fleet_events.csv");
+  const auto stopped = EventsOf(events, "stopped");
+  ASSERT_EQ(stopped.size(), 1u);
+  EXPECT_NE(stopped.front()->detail.find("a stop request from sage stop"), std::string::npos) << stopped.front()->detail;
+}
+
 // A flood of risk updates from an authenticated sender (this process, on the mission's operator
 // identity, writing as fast as it can) leaves another operator answered: an operator's update
 // during the flood is applied and answered within 1 s of its write (median of five; each within 5 s), a `sage risk set` started
