@@ -112,6 +112,18 @@ int Launch(const LaunchCommand& c) {
   MissionFile mission;
   std::vector<ResumedVehicle> to_resume;
   double record_until_s = -1.0;  // a resumed mission's record: where its server goes on from
+  // A run directory this launch made, removed again if the launch is refused before its server
+  // starts (a refused --domain, a security directory that does not load): refused launches had left
+  // empty directories, and ones holding fresh private keys, behind.
+  struct MadeHere {
+    std::string dir;
+    bool keep = false;
+    ~MadeHere() {
+      if (dir.empty() || keep) return;
+      std::error_code ignored;
+      fs::remove_all(dir, ignored);
+    }
+  } made_here;
   std::optional<RunDirectoryLock> lock;  // held while this launch runs the directory's mission
   const auto take_lock = [&](const std::string& option, const std::string& dir) {
     lock = RunDirectoryLock::TryTake(dir);
@@ -161,8 +173,11 @@ int Launch(const LaunchCommand& c) {
     maps::CheckMissionMaps(scenario);  // a bad map or an unreachable valve is refused here, not by the server
     out_dir = c.out_dir.empty() ? (fs::path("runs") / (scenario.name + "_launch")).string() : c.out_dir;
     CheckOutDirectory(out_dir);
-    if (std::error_code ec; !fs::create_directories(out_dir, ec) && ec) {
-      throw maps::ScenarioError(fmt::format("--out = {}: cannot make the directory: {}", out_dir, ec.message()));
+    std::error_code made_error;
+    if (fs::create_directories(out_dir, made_error)) {
+      made_here.dir = out_dir;
+    } else if (made_error) {
+      throw maps::ScenarioError(fmt::format("--out = {}: cannot make the directory: {}", out_dir, made_error.message()));
     }
     take_lock("--out", out_dir);
     CheckRunDirectoryFree(out_dir);
@@ -312,6 +327,7 @@ int Launch(const LaunchCommand& c) {
   server_args.insert(server_args.end(), {"--cycle-priority", std::to_string(c.cycle_priority)});
   server_args.insert(server_args.end(), common.begin(), common.end());
   int server_stdout = -1;
+  made_here.keep = true;  // from here the directory holds the mission's record
   const pid_t server = Spawn(server_args, "", false, &server_stdout);
 
   proto::Reader<proto::MissionStatus> status(participant, proto::MissionStatusQos());

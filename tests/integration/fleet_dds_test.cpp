@@ -1353,6 +1353,7 @@ TEST_F(FleetDds, LaunchedMissionIsSecuredByDefault) {
   EXPECT_EQ(high.WaitExit(15s), std::optional<int>(2)) << high.LogText();
   EXPECT_NE(high.LogText().find("--domain = 231: a secured mission's domain must be in 0..230"), std::string::npos)
       << high.LogText();
+  EXPECT_FALSE(fs::exists(run_dir_ / "high")) << "the refused launch left its run directory (and identities) behind";
 
   const int domain_id = FreeDomainForLaunch();
   const fs::path out = run_dir_ / "out";
