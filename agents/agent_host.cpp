@@ -173,6 +173,7 @@ struct AgentHost::Impl {
     Eigen::Vector2d command = Eigen::Vector2d::Zero();
     double heading = std::numeric_limits<double>::quiet_NaN();  // the gaze's; NaN: face the travel
     bool reserve = false;  // held in reserve (SetReserve): waits at hold_m, out of the valves' way
+    bool hold_pending = false;  // in reserve, its hold not chosen yet (at the next Steer, in vehicle order)
     Eigen::Vector2d hold_m = Eigen::Vector2d::Zero();
   };
 
@@ -393,7 +394,7 @@ struct AgentHost::Impl {
     // Asked only of a point that would be taken (a scan of the host's vehicles).
     const auto crowded = [&](const Eigen::Vector2d& x) {
       return std::any_of(vehicles.begin(), vehicles.end(), [&](const Vehicle& other) {
-        return other.reserve && &other != &for_vehicle && (other.hold_m - x).norm() < kHoldsApart_m;
+        return other.reserve && !other.hold_pending && &other != &for_vehicle && (other.hold_m - x).norm() < kHoldsApart_m;
       });
     };
     Eigen::Vector2d best = from;
@@ -533,13 +534,10 @@ void AgentHost::SetReserve(VehicleId id, bool reserve) {
     v.keep_clear->SetBounds(Eigen::Vector2d::Zero(),
                             Eigen::Vector2d(impl_->scenario.workspace.width_m, impl_->scenario.workspace.height_m));
   }
-  // Out of the valves' way on a grid path, then held there.
-  const Eigen::Vector2d at = impl_->world.State(v.body).position_m;
-  v.hold_m = impl_->HoldingPoint(v, at);
-  if ((v.hold_m - at).norm() > 0.1) {
-    v.transit = std::make_unique<GridFlight>(impl_->grid, v.speed_mps, 0.2);
-    v.transit->Start(v.hold_m);
-  }
+  // Out of the valves' way on a grid path, then held there: the hold is chosen at the next Steer,
+  // from where the cycle starts, in vehicle order (here the physics may be stepping beside the
+  // server, and the order reserves are told in is the transport's).
+  v.hold_pending = true;
 }
 
 void AgentHost::SetRegion(VehicleId id, const maps::RegionBox& box, double forgetting_time_s) {
@@ -658,6 +656,18 @@ void AgentHost::Steer(double time_s) {
   for (std::size_t i = 0; i < impl_->vehicles.size(); ++i) {
     if (i + kBodyAhead < impl_->vehicles.size()) impl_->world.Prefetch(impl_->vehicles[i + kBodyAhead].body);
     positions.push_back(impl_->world.State(impl_->vehicles[i].body).position_m);
+  }
+  // Holds for the vehicles newly in reserve, one after another in vehicle order (each keeps clear
+  // of the holds before it), before the guidance splits over threads.
+  for (std::size_t i = 0; i < impl_->vehicles.size(); ++i) {
+    Impl::Vehicle& v = impl_->vehicles[i];
+    if (!v.reserve || !v.hold_pending) continue;
+    v.hold_m = impl_->HoldingPoint(v, positions[i]);
+    v.hold_pending = false;
+    if ((v.hold_m - positions[i]).norm() > 0.1) {
+      v.transit = std::make_unique<GridFlight>(impl_->grid, v.speed_mps, 0.2);
+      v.transit->Start(v.hold_m);
+    }
   }
   Impl::Surroundings around;
   impl_->Gather(positions, around);
